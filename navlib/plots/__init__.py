@@ -1,0 +1,1 @@
+"""Matplotlib figure builders, one module per domain; each returns a Figure."""

@@ -1,0 +1,44 @@
+"""Unit conversions: the one place where degrees, deg/h, mg, ppm and friends meet SI.
+
+Inside navlib everything is SI with angles in radians. Names at the edges carry a suffix
+(``lat_deg``, ``sigma_bg_deg_h``); convert them here and nowhere else.
+"""
+
+import numpy as np
+
+G0 = 9.80665
+"""Standard gravity, m/s^2 (used only to convert g, mg and ug)."""
+
+DEG = np.pi / 180.0
+"""One degree in radians."""
+HOUR = 3600.0
+"""One hour in seconds."""
+
+DEG_PER_HOUR = DEG / HOUR
+"""One deg/h in rad/s."""
+DEG_PER_SQRT_HOUR = DEG / np.sqrt(HOUR)
+"""One deg/sqrt(h) (angle random walk) in rad/sqrt(s)."""
+DEG_PER_HOUR_PER_SQRT_HZ = DEG_PER_HOUR
+"""One deg/h/sqrt(Hz) in rad/s/sqrt(Hz) = rad/sqrt(s)."""
+MG = 1e-3 * G0
+"""One milli-g in m/s^2."""
+UG = 1e-6 * G0
+"""One micro-g in m/s^2."""
+UG_PER_SQRT_HZ = UG
+"""One ug/sqrt(Hz) in m/s^2/sqrt(Hz) = m/s/sqrt(s)."""
+MG_PER_SQRT_HZ = MG
+"""One mg/sqrt(Hz) in m/s/sqrt(s)."""
+M_S_PER_SQRT_HOUR = 1.0 / np.sqrt(HOUR)
+"""One m/s/sqrt(h) (velocity random walk) in m/s/sqrt(s)."""
+PPM = 1e-6
+"""One part per million, dimensionless."""
+
+
+def deg2rad(x):
+    """Degrees to radians (arrays welcome)."""
+    return np.asarray(x, dtype=float) * DEG
+
+
+def rad2deg(x):
+    """Radians to degrees (arrays welcome)."""
+    return np.asarray(x, dtype=float) / DEG
