@@ -1,0 +1,10 @@
+"""Linear error models (spec api.md "Models").
+
+``LinearModel`` (continuous, with ``subset`` and ``discretize``) and ``DiscreteModel``
+(``t, F, Q, H, R`` at epochs). Builders: ``ssac``, ``launcher``, ``simplified_gps_bias``,
+``ecef21`` live in their own modules and are exported here.
+"""
+
+from navlib.models.base import DiscreteModel, LinearModel
+
+__all__ = ["DiscreteModel", "LinearModel"]

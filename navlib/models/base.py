@@ -1,0 +1,187 @@
+"""Linear error models: the continuous model type and its discrete form.
+
+Every model carries ``state_names``; :meth:`LinearModel.subset` deletes rows and columns
+consistently (Beaudoin et al. 2018 §2.1: "corresponding lines and columns are
+eliminated"); :meth:`LinearModel.discretize` returns a :class:`DiscreteModel` with the
+arrays that ``navlib.observability`` and ``navlib.metrics`` take (spec api.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from navlib.discretize import chain, discretize_steps
+from navlib.errors import NavlibInputError
+
+
+def _stack(matrix, n_samples: int) -> np.ndarray:
+    matrix = np.asarray(matrix, dtype=float)
+    return np.broadcast_to(matrix, (n_samples, *matrix.shape)) if matrix.ndim == 2 else matrix
+
+
+@dataclass(frozen=True, eq=False)
+class DiscreteModel:
+    """A discrete error model at its step or measurement epochs (spec api.md).
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        Epoch times, s.
+    F, Q : ndarray (N-1, n, n)
+        ``F[k]`` maps epoch k to k+1; ``Q[k]`` is the process noise added over that step.
+    H : ndarray (N, m, n)
+    R : ndarray (N, m, m)
+    state_names, measurement_names : tuple of str
+    P0 : ndarray (n, n) or None
+        Default initial covariance, when the model has one.
+    """
+
+    t: np.ndarray
+    F: np.ndarray
+    Q: np.ndarray
+    H: np.ndarray
+    R: np.ndarray
+    state_names: tuple[str, ...]
+    measurement_names: tuple[str, ...] = ()
+    P0: np.ndarray | None = None
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    def window(self, t_start: float, t_end: float) -> DiscreteModel:
+        """The epochs inside the closed interval ``[t_start, t_end]`` (spec A12)."""
+        sel = np.flatnonzero((self.t >= t_start - 1e-9) & (self.t <= t_end + 1e-9))
+        if sel.size < 2:
+            raise NavlibInputError(
+                f"window [{t_start}, {t_end}] s holds {sel.size} epoch(s); need at least 2 "
+                f"(model spans {self.t[0]:.3g}..{self.t[-1]:.3g} s)"
+            )
+        return replace(self, t=self.t[sel], F=self.F[sel[:-1]], Q=self.Q[sel[:-1]],
+                       H=self.H[sel], R=self.R[sel])
+
+    def index(self, names: Sequence[str]) -> np.ndarray:
+        """Positions of ``names`` in ``state_names``."""
+        return _indices(self.state_names, names)
+
+
+def _indices(state_names: Sequence[str], names: Sequence[str]) -> np.ndarray:
+    lookup = {name: i for i, name in enumerate(state_names)}
+    missing = [name for name in names if name not in lookup]
+    if missing:
+        raise NavlibInputError(f"unknown state name(s) {missing}; model has {list(state_names)}")
+    return np.array([lookup[name] for name in names], dtype=int)
+
+
+@dataclass(frozen=True, eq=False)
+class LinearModel:
+    """Continuous linear error model ``dx/dt = A x + G w``, ``y_k = H x_k + v_k``.
+
+    Constant models hold single matrices; trajectory models hold stacks over ``t`` (the
+    matrices at each sample, held constant over the following step).
+
+    Attributes
+    ----------
+    state_names : tuple of str
+    A : ndarray (n, n) or (N, n, n)
+    G : ndarray (n, q) or (N, n, q)
+    Qc : ndarray (q, q)
+        Power spectral density of ``w``.
+    H : ndarray (m, n) or (N, m, n)
+    R : ndarray (m, m) or (N, m, m)
+        Discrete measurement-noise covariance.
+    t : ndarray (N,) or None
+        Sample times of a trajectory model; None for a constant model.
+    P0 : ndarray (n, n) or None
+        Default initial covariance.
+    measurement_names, noise_names : tuple of str
+    name : str
+    parameters : dict
+        The assumed values the builder used.
+    """
+
+    state_names: tuple[str, ...]
+    A: np.ndarray
+    G: np.ndarray
+    Qc: np.ndarray
+    H: np.ndarray
+    R: np.ndarray
+    t: np.ndarray | None = None
+    P0: np.ndarray | None = None
+    measurement_names: tuple[str, ...] = ()
+    noise_names: tuple[str, ...] = ()
+    name: str = ""
+    parameters: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def time_varying(self) -> bool:
+        return self.t is not None
+
+    def index(self, names: Sequence[str]) -> np.ndarray:
+        """Positions of ``names`` in ``state_names``."""
+        return _indices(self.state_names, names)
+
+    def subset(self, names: Sequence[str]) -> LinearModel:
+        """Keep only the states ``names`` (in that order), deleting rows and columns."""
+        keep = self.index(names)
+        P0 = None if self.P0 is None else self.P0[np.ix_(keep, keep)]
+        return replace(
+            self, state_names=tuple(names), A=self.A[..., keep[:, None], keep],
+            G=self.G[..., keep, :], H=self.H[..., :, keep], P0=P0,
+        )
+
+    def discretize(self, dt: float | None = None, n_epochs: int | None = None,
+                   method: str = "expm", epochs=None) -> DiscreteModel:
+        """Discrete ``F_k, Q_k`` (and ``H_k, R_k``) at steps or measurement epochs.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Step for a constant model (required then); ignored for trajectory models,
+            whose steps come from ``t``.
+        n_epochs : int, optional
+            Number of epochs for a constant model (default ``n + 1``).
+        method : {"expm", "euler"}
+            Matrix exponential + Van Loan (default) or the papers' Euler form.
+        epochs : array of int, optional
+            Sample indices of the measurement epochs of a trajectory model; per-step
+            transitions are chained between them (spec excitability.md A8). Default: every
+            sample.
+        """
+        if self.t is None:
+            if dt is None:
+                raise NavlibInputError("dt: a constant model needs a step length")
+            n_epochs = self.n + 1 if n_epochs is None else int(n_epochs)
+            if n_epochs < 2:
+                raise NavlibInputError(f"n_epochs: need at least 2, got {n_epochs}")
+            F1, Q1 = discretize_steps(self.A[None], self.G, self.Qc, dt, method)
+            t = np.arange(n_epochs) * float(dt)
+            F = np.broadcast_to(F1, (n_epochs - 1, self.n, self.n))
+            Q = np.broadcast_to(Q1, (n_epochs - 1, self.n, self.n))
+            return DiscreteModel(t, F, Q, _stack(self.H, n_epochs), _stack(self.R, n_epochs),
+                                 self.state_names, self.measurement_names, self.P0)
+        n_samples = self.t.size
+        A = _stack(self.A, n_samples)[:-1]
+        G = _stack(self.G, n_samples)[:-1]
+        F_steps, Q_steps = discretize_steps(A, G, self.Qc, np.diff(self.t), method)
+        epochs = np.arange(n_samples) if epochs is None else np.asarray(epochs, dtype=int)
+        if epochs.size == n_samples and np.array_equal(epochs, np.arange(n_samples)):
+            F, Q = F_steps, Q_steps
+        else:
+            F, Q = chain(F_steps, Q_steps, epochs)
+        return DiscreteModel(self.t[epochs], F, Q, _stack(self.H, n_samples)[epochs],
+                             _stack(self.R, n_samples)[epochs], self.state_names,
+                             self.measurement_names, self.P0)
+
+    def describe(self) -> pd.DataFrame:
+        """One row per state: name and initial standard deviation when P0 is known."""
+        sigma = np.sqrt(np.diag(self.P0)) if self.P0 is not None else np.full(self.n, np.nan)
+        return pd.DataFrame({"state": list(self.state_names), "sigma0": sigma})
