@@ -42,3 +42,18 @@ def deg2rad(x):
 def rad2deg(x):
     """Radians to degrees (arrays welcome)."""
     return np.asarray(x, dtype=float) / DEG
+
+
+# Added for flight-data import (navlib.io): time stamps, lengths and PX4 integer angles.
+MILLISECOND = 1e-3
+"""One millisecond in seconds."""
+MICROSECOND = 1e-6
+"""One microsecond in seconds (PX4 ULog time stamps)."""
+NANOSECOND = 1e-9
+"""One nanosecond in seconds."""
+MILLIMETRE = 1e-3
+"""One millimetre in metres (PX4 ``alt`` fields)."""
+KILOMETRE = 1e3
+"""One kilometre in metres."""
+DEG_E7 = 1e-7 * DEG
+"""One step of the integer 1e-7-degree angle encoding (PX4 ``lat``/``lon``, MAVLink), in rad."""
