@@ -1,0 +1,668 @@
+"""Excitability and sensability of navigation states (España, Carrizo & Giribet 2019).
+
+Both metrics take plain arrays in physical units (spec api.md "Metrics"), so any model can
+feed them, and both work in the normalised coordinates of the corrected Eq. 11
+(spec excitability.md A10)::
+
+    D0 = diag(diag(P0)),   F~ = D0^-1/2 F D0^1/2,   H~ = R0^-1/2 H D0^1/2,
+    P~ = D0^-1/2 P D0^-1/2,   Q~ = D0^-1/2 Q D0^-1/2,   I~ = P~^-1 = D0^1/2 I D0^1/2.
+
+* :func:`excitability` (Eqs. 17-22, Defs. 3-4): SVD of the normalised extended observability
+  matrix ``O~ = [H~0; H~1 F~0; ...]``; the energy spectrum ``S(u^i) = n sigma^i / tr M``;
+  ``ne`` from ``eta`` (A14); ``e^j`` = norm of the projection of the canonical vector ``e_j``
+  on the excited subspace ``span{u^i : i < ne}``.
+* :func:`sensability` (Eqs. 10, 12-16, Defs. 1-2): the Kalman information recursion, the
+  eigen-decomposition of ``I~_k`` at every epoch, ``r^i_k`` (Eq. 15), ``nr_k`` from ``nu``
+  and ``s^j_k`` = norm of the projection of ``e_j`` on the practically sensible subspace.
+
+Helpers: :func:`nu_for` / :func:`nu_range` (spec A11), model wrappers
+:func:`excitability_segment` (segments, D0 choice of A19) and :func:`sensability_model`, and
+:func:`physical_bands` (the k-sigma bands of Figs. 3-5).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+from scipy.linalg import cho_factor, cho_solve
+
+from navlib._validation import finite_array, finite_scalar
+from navlib.errors import NavlibInputError
+
+__all__ = [
+    "ExcitabilityResult",
+    "SensabilityResult",
+    "excitability",
+    "excitability_segment",
+    "nu_for",
+    "nu_range",
+    "physical_bands",
+    "sensability",
+    "sensability_model",
+]
+
+D0_CHOICES = ("global", "filter")
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def _square_stack(value, name: str) -> np.ndarray:
+    arr = finite_array(value, name, ndim=3)
+    if arr.shape[1] != arr.shape[2]:
+        raise NavlibInputError(f"{name}: expected a stack of square matrices (K, n, n), "
+                               f"got shape {arr.shape}")
+    return arr
+
+
+def _system(F, H) -> tuple[np.ndarray, np.ndarray]:
+    """``F`` (N-1, n, n) and ``H`` (N, m, n); a single (m, n) ``H`` is used at every epoch."""
+    F = _square_stack(F, "F")
+    n_epochs, n = F.shape[0] + 1, F.shape[-1]
+    H = finite_array(H, "H")
+    if H.ndim == 2:
+        H = np.broadcast_to(H, (n_epochs, *H.shape))
+    if H.ndim != 3 or H.shape[0] != n_epochs or H.shape[2] != n or H.shape[1] < 1:
+        raise NavlibInputError(
+            f"H: expected shape (N, m, n) = ({n_epochs}, m, {n}) with N = len(F) + 1, "
+            f"or one (m, {n}) matrix; got {H.shape}"
+        )
+    return F, H
+
+
+def _spd(value, name: str, size: int | None = None) -> np.ndarray:
+    """A symmetric positive-definite (size, size) matrix, else NavlibInputError naming it."""
+    arr = finite_array(value, name, ndim=2)
+    if arr.shape[0] != arr.shape[1] or (size is not None and arr.shape[0] != size):
+        want = f"({size}, {size})" if size is not None else "square"
+        raise NavlibInputError(f"{name}: expected a {want} matrix, got shape {arr.shape}")
+    _check_spd_stack(arr[None], name)
+    return 0.5 * (arr + arr.T)
+
+
+def _check_spd_stack(stack: np.ndarray, name: str) -> None:
+    scale = np.max(np.abs(stack), axis=(1, 2), keepdims=True)
+    asym = np.abs(stack - np.swapaxes(stack, 1, 2)) > 1e-9 * np.maximum(scale, np.finfo(float).tiny)
+    if np.any(asym):
+        k = int(np.flatnonzero(asym.any(axis=(1, 2)))[0])
+        where = f"{name}[{k}]" if stack.shape[0] > 1 else name
+        raise NavlibInputError(f"{where}: must be symmetric")
+    try:
+        np.linalg.cholesky(stack)
+    except np.linalg.LinAlgError:
+        bad = [k for k in range(stack.shape[0]) if np.linalg.eigvalsh(stack[k])[0] <= 0]
+        where = f"{name}[{bad[0]}]" if stack.shape[0] > 1 and bad else name
+        raise NavlibInputError(f"{where}: must be positive definite") from None
+
+
+def _measurement_noise(R, n_epochs: int, m: int) -> np.ndarray:
+    """``R`` as an (N, m, m) stack of SPD matrices (one (m, m) matrix is repeated)."""
+    R = finite_array(R, "R")
+    if R.ndim == 2:
+        R = np.broadcast_to(R, (n_epochs, *R.shape))
+    if R.ndim != 3 or R.shape != (n_epochs, m, m):
+        raise NavlibInputError(
+            f"R: expected shape ({m}, {m}) or ({n_epochs}, {m}, {m}), got {R.shape}"
+        )
+    _check_spd_stack(R, "R")
+    return 0.5 * (R + np.swapaxes(R, 1, 2))
+
+
+def _variances(d0, P0: np.ndarray) -> np.ndarray:
+    """Diagonal of ``D0``: from ``P0`` by default, else ``d0`` as (n,) variances or (n, n)."""
+    n = P0.shape[0]
+    if d0 is None:
+        return np.diag(P0).copy()
+    d = finite_array(d0, "d0")
+    if d.shape == (n, n):
+        d = np.diag(d).copy()
+    if d.shape != (n,):
+        raise NavlibInputError(f"d0: expected ({n},) variances or an ({n}, {n}) covariance, "
+                               f"got shape {d.shape}")
+    if np.any(d <= 0):
+        raise NavlibInputError(f"d0: variances must be positive, got min {d.min():g}")
+    return d
+
+
+def _state_names(state_names, n: int) -> tuple[str, ...] | None:
+    if state_names is None:
+        return None
+    names = tuple(str(name) for name in state_names)
+    if len(names) != n:
+        raise NavlibInputError(f"state_names: expected {n} names, got {len(names)}")
+    return names
+
+
+def _frame_names(state_names, n: int) -> list[str]:
+    return list(state_names) if state_names is not None else [f"x{j + 1}" for j in range(n)]
+
+
+def _eta(eta) -> float:
+    eta = finite_scalar(eta, "eta", 0.0, 1.0, low_open=True)
+    if eta >= 1.0:
+        raise NavlibInputError(f"eta: must lie in (0, 1), got {eta}")
+    return eta
+
+
+def _nu(nu) -> float:
+    return finite_scalar(nu, "nu", 0.0, 1.0, low_open=True)
+
+
+# --------------------------------------------------------------------------- normalisation
+
+
+def _whiten(H: np.ndarray, R: np.ndarray, sqrt_d: np.ndarray) -> np.ndarray:
+    """``L^-1 H D0^1/2`` with ``R = L L'`` (Cholesky), batched over epochs.
+
+    Cholesky whitening differs from the symmetric ``R^-1/2`` by an orthogonal factor on the
+    left, which changes neither ``H~' H~`` nor the right singular vectors and singular values
+    of the stacked ``O~`` (spec excitability.md A10).
+    """
+    L = np.linalg.cholesky(R)
+    return np.linalg.solve(L, H * sqrt_d)
+
+
+def _transition_products(F: np.ndarray) -> np.ndarray:
+    """``Phi[k] = F[k-1] ... F[0]`` (``Phi[0] = I``) by a log-depth batched prefix product."""
+    n_steps, n = F.shape[0], F.shape[-1]
+    Phi = np.empty((n_steps + 1, n, n))
+    Phi[0] = np.eye(n)
+    Phi[1:] = F
+    offset = 1
+    while offset <= n_steps:
+        Phi[offset:] = Phi[offset:] @ Phi[:-offset]
+        offset *= 2
+    return Phi
+
+
+# --------------------------------------------------------------------------- excitability
+
+
+@dataclass(frozen=True, eq=False)
+class ExcitabilityResult:
+    """Excitability of each state over one segment (España et al. Defs. 3-4).
+
+    Attributes
+    ----------
+    e : ndarray (n,)
+        ``e^j = ||pi^O(e_j)||`` in [0, 1]: share of state ``j`` in the excited subspace.
+    S : ndarray (n,)
+        Energy spectrum ``S(u^i) = n sigma^i / sum(sigma)`` (Eq. 19), non-increasing; sums to n.
+    U : ndarray (n, n)
+        Columns ``u^i``: right singular vectors of ``O~`` (eigenvectors of the Gramian).
+    ne : int
+        First 1-based index with ``S[i] <= eta`` (``n + 1`` when none, spec A14); the excited
+        subspace is ``span{u^i : i < ne}``.
+    sigma : ndarray (n,)
+        Squared singular values of ``O~`` (eigenvalues of ``M = O~' O~``), descending.
+    eta : float
+    O : ndarray (N m, n)
+        The normalised extended observability matrix ``O~`` (Eq. 17 with A10).
+    d0 : ndarray (n,)
+        Diagonal of ``D0`` (variances) used for the normalisation.
+    state_names : tuple of str or None
+    t_start, t_end : float or None
+        Segment limits, when known.
+    """
+
+    e: np.ndarray
+    S: np.ndarray
+    U: np.ndarray
+    ne: int
+    sigma: np.ndarray
+    eta: float
+    O: np.ndarray
+    d0: np.ndarray
+    state_names: tuple[str, ...] | None = None
+    t_start: float | None = None
+    t_end: float | None = None
+
+    @property
+    def n(self) -> int:
+        return self.e.size
+
+    @property
+    def ispc(self) -> np.ndarray:
+        """Output principal components ``o^i = O~ u^i`` as columns (Eq. 18)."""
+        return self.O @ self.U
+
+    def with_eta(self, eta: float) -> ExcitabilityResult:
+        """The same segment with another threshold ``eta`` (no new SVD)."""
+        eta = _eta(eta)
+        ne, e = _excited(self.S, self.U, eta)
+        return replace(self, eta=eta, ne=ne, e=e)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per index j: ``state``, its excitability ``e``, and the j-th direction of
+        the spectrum (``direction`` = j, 1-based; ``sigma``, ``S``, ``excited`` = j < ne),
+        plus ``eta``, ``ne`` and the segment limits."""
+        n = self.n
+        return pd.DataFrame({
+            "state": _frame_names(self.state_names, n),
+            "e": self.e,
+            "direction": np.arange(1, n + 1),
+            "sigma": self.sigma,
+            "S": self.S,
+            "excited": np.arange(1, n + 1) < self.ne,
+            "eta": self.eta,
+            "ne": self.ne,
+            "t_start": np.nan if self.t_start is None else self.t_start,
+            "t_end": np.nan if self.t_end is None else self.t_end,
+        })
+
+
+def _excited(S: np.ndarray, U: np.ndarray, eta: float) -> tuple[int, np.ndarray]:
+    """``ne`` (spec A14) and ``e^j = sqrt(sum_{i<ne} U[j, i]^2)`` (Def. 4)."""
+    below = np.flatnonzero(S <= eta)
+    ne = int(below[0]) + 1 if below.size else S.size + 1
+    return ne, np.linalg.norm(U[:, : ne - 1], axis=1)
+
+
+def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | None = None,
+                 d0=None) -> ExcitabilityResult:
+    """Excitability of each state over the epochs of one segment (España et al. Eqs. 17-22).
+
+    Parameters
+    ----------
+    F : array (N-1, n, n)
+        Transitions between the measurement epochs of the segment, physical units.
+    H : array (N, m, n) or (m, n)
+        Measurement matrices at the N epochs (all are stacked, spec A12).
+    P0 : array (n, n)
+        Symmetric positive-definite covariance whose diagonal gives ``D0`` (Eq. 11).
+    R0 : array (m, m)
+        Symmetric positive-definite normalising measurement covariance (may be non-diagonal).
+    eta : float in (0, 1)
+        Energy threshold: ``ne`` is the first 1-based ``i`` with ``S[i] <= eta`` (A14).
+    state_names : sequence of str, optional
+    d0 : array (n,) or (n, n), optional
+        Variances (or a covariance whose diagonal is used) for ``D0`` instead of ``diag(P0)``,
+        e.g. the filter covariance at the segment start (spec A19, option B).
+
+    Returns
+    -------
+    ExcitabilityResult
+
+    Notes
+    -----
+    Normalisation per the corrected Eq. 11 (spec A10): ``F~ = D0^-1/2 F D0^1/2``,
+    ``H~ = R0^-1/2 H D0^1/2``. ``O~ = [H~0; H~1 F~0; H~2 F~1 F~0; ...]`` is built with a
+    batched prefix product, reduced by QR and decomposed by SVD, never by eigenvalues of
+    ``O~' O~`` whose spectrum spans tens of decades (spec A12). ``sigma^i`` are the squared
+    singular values (zero-padded when ``N m < n``), ``S = n sigma / sum(sigma)`` (Eq. 19).
+    """
+    F, H = _system(F, H)
+    n, m = F.shape[-1], H.shape[1]
+    P0 = _spd(P0, "P0", n)
+    R0 = _spd(R0, "R0", m)
+    eta = _eta(eta)
+    names = _state_names(state_names, n)
+    d = _variances(d0, P0)
+    sqrt_d = np.sqrt(d)
+
+    F_n = F * sqrt_d / sqrt_d[:, None]
+    H_n = _whiten(H, np.broadcast_to(R0, (H.shape[0], m, m)), sqrt_d)
+    O = (H_n @ _transition_products(F_n)).reshape(-1, n)
+    if not np.all(np.isfinite(O)):
+        raise NavlibInputError("F: the normalised transition products overflow; "
+                               "check the units of F and P0")
+    R_factor = np.linalg.qr(O, mode="r")
+    _, singular, Vh = np.linalg.svd(R_factor, full_matrices=True)
+    sigma = np.zeros(n)
+    sigma[: singular.size] = singular**2
+    total = sigma.sum()
+    if not total > 0:
+        raise NavlibInputError("F, H: the observability matrix is zero (no state reaches any "
+                               "measurement), so the energy spectrum S is undefined")
+    S = n * sigma / total
+    U = Vh.T
+    ne, e = _excited(S, U, eta)
+    return ExcitabilityResult(e=e, S=S, U=U, ne=ne, sigma=sigma, eta=eta, O=O, d0=d,
+                              state_names=names)
+
+
+# --------------------------------------------------------------------------- sensability
+
+
+@dataclass(frozen=True, eq=False)
+class SensabilityResult:
+    """Sensability of each state at every epoch (España et al. Defs. 1-2).
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        Epoch times, s (epoch indices when no times were given).
+    s : ndarray (N, n)
+        ``s^j_k = ||pi_s(e_j)||`` in [0, 1] (Eq. 16).
+    eigenvalues : ndarray (N, n)
+        Eigenvalues ``lambda^i_k`` of the normalised information ``I~_k``, descending.
+    V : ndarray (N, n, n)
+        Matching eigenvectors ``v^i_k`` as columns.
+    r : ndarray (N, n)
+        ``r^i_k = sqrt(sum_{j<=i} lambda^j / sum_j lambda^j)`` (Eq. 15); ``r^n = 1``.
+    nr : ndarray (N,) of int
+        First 1-based ``i`` with ``r^i_k >= nu`` (Def. 1).
+    sigma : ndarray (N, n)
+        Physical posterior standard deviations ``sqrt(diag P_k)``.
+    P : ndarray (N, n, n)
+        Physical posterior covariances.
+    information : ndarray (N, n, n)
+        Normalised information ``I~_k = D0^1/2 P_k^-1 D0^1/2``.
+    d0 : ndarray (n,)
+        Diagonal of ``D0``.
+    nu : float
+    prior_update : bool
+        False: ``P0`` is the posterior at the first epoch (spec A9, literal reading);
+        True: ``P0`` is a prior updated with the first measurement.
+    state_names : tuple of str or None
+    """
+
+    t: np.ndarray
+    s: np.ndarray
+    eigenvalues: np.ndarray
+    V: np.ndarray
+    r: np.ndarray
+    nr: np.ndarray
+    sigma: np.ndarray
+    P: np.ndarray
+    information: np.ndarray
+    d0: np.ndarray
+    nu: float
+    prior_update: bool
+    state_names: tuple[str, ...] | None = None
+
+    @property
+    def n(self) -> int:
+        return self.s.shape[1]
+
+    def with_nu(self, nu: float) -> SensabilityResult:
+        """The same recursion with another threshold ``nu`` (no new eigen-decomposition)."""
+        nu = _nu(nu)
+        nr, s = _sensible(self.r, self.V, nu)
+        return replace(self, nu=nu, nr=nr, s=s)
+
+    def to_frame(self) -> pd.DataFrame:
+        """Tidy long format: one row per (epoch, state) with ``t``, ``state``, ``s``,
+        ``sigma`` (physical 1-sigma) and ``nr``."""
+        N, n = self.s.shape
+        return pd.DataFrame({
+            "t": np.repeat(self.t, n),
+            "state": np.tile(_frame_names(self.state_names, n), N),
+            "s": self.s.ravel(),
+            "sigma": self.sigma.ravel(),
+            "nr": np.repeat(self.nr, n),
+        })
+
+
+def _sensible(r: np.ndarray, V: np.ndarray, nu: float) -> tuple[np.ndarray, np.ndarray]:
+    """``nr_k`` (Def. 1) and ``s^j_k = sqrt(sum_{i<=nr} V[k, j, i]^2)`` (Eq. 16)."""
+    nr = np.argmax(r >= nu, axis=1) + 1
+    keep = np.arange(r.shape[1]) < nr[:, None]
+    s = np.sqrt(np.einsum("kji,ki->kj", V**2, keep))
+    return nr, s
+
+
+def _cho_inverse(matrix: np.ndarray) -> np.ndarray:
+    inverse = cho_solve(cho_factor(matrix, lower=True), np.eye(matrix.shape[0]))
+    return 0.5 * (inverse + inverse.T)
+
+
+def _covariance_recursion(F_n, Q_n, W, P0_n, prior_update: bool):
+    """Normalised posterior covariances and information at every epoch (Eq. 10).
+
+    ``W[k] = R_k^-1/2 H_k D0^1/2`` (whitened, so the measurement noise is I). The update is
+    the Joseph form ``P = (I - K W) P- (I - K W)' + K K'``, the information its Cholesky
+    inverse: algebraically ``I_k = (P-_k)^-1 + W' W`` (Eq. 10b) without inverting ``P-``.
+    """
+    n_epochs, n = W.shape[0], W.shape[-1]
+    eye_n = np.eye(n)
+    P_all = np.empty((n_epochs, n, n))
+    I_all = np.empty((n_epochs, n, n))
+
+    def update(P_prior, W_k):
+        S = W_k @ P_prior @ W_k.T + np.eye(W_k.shape[0])
+        K = np.linalg.solve(S, W_k @ P_prior).T
+        A = eye_n - K @ W_k
+        P_post = A @ P_prior @ A.T + K @ K.T
+        return 0.5 * (P_post + P_post.T)
+
+    P = update(P0_n, W[0]) if prior_update else P0_n
+    for k in range(n_epochs):
+        if k > 0:
+            P = F_n[k - 1] @ P @ F_n[k - 1].T + Q_n[k - 1]
+            P = update(0.5 * (P + P.T), W[k])
+        try:
+            I_all[k] = _cho_inverse(P)
+        except np.linalg.LinAlgError:
+            raise NavlibInputError(
+                f"F, Q: the posterior covariance at epoch {k} is not positive definite "
+                "(singular F with zero Q?), so the information matrix is undefined"
+            ) from None
+        P_all[k] = P
+    return P_all, I_all
+
+
+def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
+                state_names: Sequence[str] | None = None, t=None) -> SensabilityResult:
+    """Sensability of each state at every measurement epoch (España et al. Eqs. 10-16).
+
+    Parameters
+    ----------
+    F : array (N-1, n, n)
+        ``F[k]`` maps epoch k to k+1, physical units.
+    H : array (N, m, n) or (m, n)
+    Q : array (N-1, n, n)
+        Process noise added over each step (symmetric positive semi-definite).
+    R : array (N, m, m) or (m, m)
+        Measurement-noise covariance, symmetric positive definite.
+    P0 : array (n, n)
+        Symmetric positive-definite covariance at the first epoch; ``D0 = diag(diag(P0))``.
+    nu : float in (0, 1]
+        Threshold for ``nr`` (Def. 1); see :func:`nu_for` for the proposed value (spec A11).
+    prior_update : bool
+        False (default, literal reading of spec A9): ``P0`` is the posterior at epoch 0, so
+        ``I_0 = P0^-1`` and, with a diagonal ``P0`` and an admissible ``nu``, every
+        sensability is 1 at epoch 0. True: ``P0`` is a prior updated with ``H_0, R_0``.
+    state_names : sequence of str, optional
+    t : array (N,), optional
+        Epoch times, s.
+
+    Returns
+    -------
+    SensabilityResult
+
+    Notes
+    -----
+    Recursion (Eq. 10): ``P-_{k+1} = F_k P_k F_k' + Q_k``, ``I_{k+1} = (P-_{k+1})^-1 +
+    H' R^-1 H``, run in the normalised coordinates of the corrected Eq. 11 (spec A10), where it
+    is the transformed physical recursion: ``I~ = D0^1/2 I D0^1/2``. ``R0`` cancels from
+    ``H~' R~^-1 H~``, so sensability needs none. The ``I~_k`` are eigen-decomposed in one
+    batched ``eigh`` after the recursion.
+    """
+    F, H = _system(F, H)
+    n_epochs, m, n = H.shape
+    Q = _square_stack(Q, "Q")
+    if Q.shape != F.shape:
+        raise NavlibInputError(f"Q: expected shape {F.shape} like F, got {Q.shape}")
+    if np.any(np.abs(Q - np.swapaxes(Q, 1, 2)) > 1e-9 * max(np.max(np.abs(Q), initial=0), 1e-300)):
+        raise NavlibInputError("Q: must be symmetric")
+    R = _measurement_noise(R, n_epochs, m)
+    P0 = _spd(P0, "P0", n)
+    nu = _nu(nu)
+    names = _state_names(state_names, n)
+    if t is None:
+        t = np.arange(n_epochs, dtype=float)
+    else:
+        t = finite_array(t, "t", shape=(n_epochs,))
+
+    d = np.diag(P0).copy()
+    sqrt_d = np.sqrt(d)
+    F_n = F * sqrt_d / sqrt_d[:, None]
+    Q_n = Q / np.outer(sqrt_d, sqrt_d)
+    W = _whiten(H, R, sqrt_d)
+    P_n, info = _covariance_recursion(F_n, Q_n, W, P0 / np.outer(sqrt_d, sqrt_d),
+                                      bool(prior_update))
+
+    lam, V = np.linalg.eigh(info)
+    lam, V = lam[:, ::-1], V[:, :, ::-1]
+    cumulative = np.cumsum(np.clip(lam, 0.0, None), axis=1)
+    r = np.sqrt(cumulative / cumulative[:, -1:])
+    nr, s = _sensible(r, V, nu)
+    P = P_n * np.outer(sqrt_d, sqrt_d)
+    sigma = np.sqrt(np.diagonal(P, axis1=1, axis2=2))
+    return SensabilityResult(t=t, s=s, eigenvalues=lam, V=V, r=r, nr=nr, sigma=sigma, P=P,
+                             information=info, d0=d, nu=nu, prior_update=bool(prior_update),
+                             state_names=names)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def nu_range(n: int) -> tuple[float, float]:
+    """Open interval of admissible ``nu`` for n states: ``(sqrt(1 - 1/n), 1)`` (spec A11).
+
+    Below the lower bound, equal eigenvalues (``r^i = sqrt(i/n)``) would leave a component
+    outside the sensible subspace.
+    """
+    n = _n_states(n)
+    return float(np.sqrt(1.0 - 1.0 / n)), 1.0
+
+
+def nu_for(n: int, eps: float) -> float:
+    """The paper's proposed ``nu = sqrt(1 - 1/n + eps)``, valid for ``0 < eps < 1/n`` (A11).
+
+    For n = 21 the paper's ``nu = 0.985`` corresponds to ``eps = 0.0178``.
+    """
+    n = _n_states(n)
+    eps = finite_scalar(eps, "eps", 0.0, low_open=True)
+    if eps >= 1.0 / n:
+        raise NavlibInputError(f"eps: must lie in (0, 1/n) = (0, {1.0 / n:.6g}), got {eps}")
+    return float(np.sqrt(1.0 - 1.0 / n + eps))
+
+
+def _n_states(n) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise NavlibInputError(f"n: expected a positive integer number of states, got {n!r}")
+    return int(n)
+
+
+def physical_bands(result: SensabilityResult, k: float = 2.0) -> pd.DataFrame:
+    """Tidy frame of the physical ``±k sigma`` bands beside the sensability (Figs. 3-5).
+
+    Columns ``t``, ``state``, ``s``, ``sigma``, ``lower`` (= -k sigma), ``upper`` (= +k sigma).
+    """
+    if not isinstance(result, SensabilityResult):
+        raise NavlibInputError(f"result: expected a SensabilityResult, got "
+                               f"{type(result).__name__}")
+    k = finite_scalar(k, "k", 0.0, low_open=True)
+    frame = result.to_frame().drop(columns="nr")
+    frame["lower"] = -k * frame["sigma"]
+    frame["upper"] = k * frame["sigma"]
+    return frame
+
+
+def _model_P0(model, P0) -> np.ndarray:
+    if P0 is not None:
+        return P0
+    if getattr(model, "P0", None) is None:
+        raise NavlibInputError("P0: the model has no default P0; pass one")
+    return model.P0
+
+
+def _check_model(model) -> None:
+    missing = [a for a in ("t", "F", "Q", "H", "R", "state_names", "window")
+               if not hasattr(model, a)]
+    if missing:
+        raise NavlibInputError(f"model: expected a DiscreteModel (missing {missing}); call "
+                               "model.discretize(...) first")
+
+
+def sensability_model(model, P0=None, nu: float = 0.985, prior_update: bool = False,
+                      t_start: float | None = None, t_end: float | None = None
+                      ) -> SensabilityResult:
+    """:func:`sensability` of a :class:`~navlib.models.DiscreteModel` (its ``t``, ``F``,
+    ``Q``, ``H``, ``R`` and ``state_names``; ``P0`` defaults to ``model.P0``).
+
+    ``t_start``/``t_end`` restrict it to the epochs in that closed interval; ``P0`` then
+    applies at the first of them.
+    """
+    _check_model(model)
+    if t_start is not None or t_end is not None:
+        model = model.window(model.t[0] if t_start is None else t_start,
+                             model.t[-1] if t_end is None else t_end)
+    return sensability(model.F, model.H, model.Q, model.R, _model_P0(model, P0), nu=nu,
+                       prior_update=prior_update, state_names=model.state_names, t=model.t)
+
+
+def _filter_variances(P_filter, model, P0, k: int, t_a: float) -> np.ndarray:
+    """Variances at model epoch ``k`` (time ``t_a``) from a filter covariance (spec A19)."""
+    n = len(model.state_names)
+    if P_filter is None:
+        return sensability_model(model, P0).sigma[k] ** 2
+    if hasattr(P_filter, "t"):
+        t = np.asarray(P_filter.t, dtype=float)
+        hit = np.flatnonzero(np.abs(t - model.t[k]) <= 1e-6)
+        if hit.size == 0:
+            raise NavlibInputError(f"P_filter: has no epoch at the segment start {t_a} s "
+                                   f"(model epoch {model.t[k]} s)")
+        for attribute in ("P", "covariance"):
+            if hasattr(P_filter, attribute):
+                return np.diagonal(np.asarray(getattr(P_filter, attribute))[hit[0]]).copy()
+        if hasattr(P_filter, "sigma"):
+            return np.asarray(P_filter.sigma, dtype=float)[hit[0]] ** 2
+        raise NavlibInputError("P_filter: a result object needs `P`, `covariance` or `sigma`")
+    P = finite_array(P_filter, "P_filter")
+    if P.shape == (n, n):
+        return np.diag(P).copy()
+    if P.ndim == 3 and P.shape == (model.t.size, n, n):
+        return np.diag(P[k]).copy()
+    raise NavlibInputError(f"P_filter: expected ({n}, {n}) at the segment start or "
+                           f"({model.t.size}, {n}, {n}) along the model epochs, got {P.shape}")
+
+
+def excitability_segment(model, t_a: float, t_b: float, P0=None, R0=None, eta: float = 1e-3,
+                         d0: str = "global", P_filter=None) -> ExcitabilityResult:
+    """:func:`excitability` of a :class:`~navlib.models.DiscreteModel` over ``[t_a, t_b]``.
+
+    Parameters
+    ----------
+    model : DiscreteModel
+        Discretised at its measurement epochs; all epochs in the closed interval are stacked
+        (spec A12).
+    t_a, t_b : float
+        Segment limits, s.
+    P0 : array (n, n), optional
+        Global covariance (default ``model.P0``).
+    R0 : array (m, m), optional
+        Normalising measurement covariance (default ``model.R[0]``, the same for every
+        segment so that segments compare).
+    eta : float in (0, 1)
+    d0 : {"global", "filter"}
+        Spec A19: ``"global"`` (option A, default) takes ``D0`` from ``P0``; ``"filter"``
+        (option B) from the filter covariance at the segment start.
+    P_filter : optional
+        For ``d0="filter"``: an (n, n) covariance at the segment start, an (N, n, n) stack
+        along the model epochs, or a result with ``t`` and ``P``/``covariance``/``sigma``
+        (e.g. :class:`SensabilityResult`). Default: the recursion of :func:`sensability_model`
+        from ``P0`` at the model's first epoch.
+    """
+    _check_model(model)
+    if d0 not in D0_CHOICES:
+        raise NavlibInputError(f"d0: expected one of {D0_CHOICES}, got {d0!r}")
+    t_a = finite_scalar(t_a, "t_a")
+    t_b = finite_scalar(t_b, "t_b")
+    if t_b <= t_a:
+        raise NavlibInputError(f"t_b: must be after t_a = {t_a}, got {t_b}")
+    P0 = _model_P0(model, P0)
+    R0 = np.asarray(model.R[0]) if R0 is None else R0
+    segment = model.window(t_a, t_b)
+    variances = None
+    if d0 == "filter":
+        k = int(np.flatnonzero(model.t >= segment.t[0] - 1e-9)[0])
+        variances = _filter_variances(P_filter, model, P0, k, t_a)
+    result = excitability(segment.F, segment.H, P0, R0, eta=eta,
+                          state_names=model.state_names, d0=variances)
+    return replace(result, t_start=t_a, t_end=t_b)
