@@ -1,0 +1,104 @@
+"""Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]``.
+
+Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
+2 for bad command-line input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from navlib import reports
+from navlib.errors import NavlibInputError
+
+_TRACEBACK_LINES = 12
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m navlib",
+                                     description="navlib workbook commands")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    rep = sub.add_parser(
+        "report", help="execute the notebooks and write HTML reports",
+        description="Execute notebooks/NN_*.ipynb with papermill (working directory: the "
+                    "notebooks folder) and write executed notebooks, HTML pages and an "
+                    "index.html. The output folder is replaced only when every notebook "
+                    "succeeds.")
+    rep.add_argument("--quick", action="store_true",
+                     help="inject quick=True: shrunken durations for a fast smoke run")
+    rep.add_argument("--only", nargs="+", action="extend", metavar="NAME",
+                     help="run only these notebooks: stem (07_assess_flight), number (07) "
+                          "or file name; other pages of an existing report are kept")
+    rep.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
+                     metavar=("KEY", "VALUE"),
+                     help="inject a parameter into the notebooks whose parameters cell "
+                          "defines KEY; VALUE is parsed as JSON or a Python literal, else "
+                          "taken as a string; existing relative paths are made absolute")
+    rep.add_argument("--output", type=Path, default=None, metavar="DIR",
+                     help="report folder (default: reports/ of the navlib checkout)")
+    rep.add_argument("--notebooks", type=Path, default=None, metavar="DIR",
+                     help="notebooks folder (default: notebooks/ of the navlib checkout)")
+    rep.add_argument("--list", action="store_true",
+                     help="list the notebooks and their parameters, run nothing")
+    rep.add_argument("--fail-fast", action="store_true",
+                     help="stop at the first failing notebook")
+    rep.add_argument("--timeout", type=float, default=None, metavar="S",
+                     help="per-cell execution timeout in seconds (default: none)")
+    return parser
+
+
+def _print_progress(position: int, total: int, name: str, run) -> None:
+    if run is None:
+        print(f"[{position}/{total}] {name} ... ", end="", file=sys.stderr, flush=True)
+    else:
+        print(f"{run.status} ({run.seconds:.1f} s)", file=sys.stderr, flush=True)
+
+
+def _list(notebooks: Path, only) -> None:
+    for info in reports.select_notebooks(reports.list_notebooks(notebooks), only):
+        print(f"{info.name}  {info.title}")
+        for key, default in info.parameters.items():
+            print(f"    {key} = {default}")
+
+
+def _report(args) -> int:
+    notebooks = args.notebooks or reports.default_notebooks_dir()
+    output = args.output or reports.default_output_dir()
+    if args.list:
+        _list(notebooks, args.only)
+        return 0
+    parameters = reports.parse_parameters(args.parameter)
+    try:
+        runs = reports.run_reports(notebooks, output, quick=args.quick, only=args.only,
+                                   parameters=parameters, progress=_print_progress,
+                                   fail_fast=args.fail_fast, timeout_s=args.timeout)
+    except reports.ReportError as exc:
+        for run in exc.runs:
+            if run.failure and run.failure.traceback:
+                tail = run.failure.traceback.strip().splitlines()[-_TRACEBACK_LINES:]
+                print(f"\n--- {run.name} traceback (last lines) ---", file=sys.stderr)
+                print("\n".join(tail), file=sys.stderr)
+        print(f"\nerror: {exc}", file=sys.stderr)
+        return 1
+    total = sum(r.seconds for r in runs)
+    index = Path(output).resolve() / reports.INDEX
+    print(f"{len(runs)} notebook(s) ok in {total:.1f} s; report: {index}", file=sys.stderr)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m navlib``; returns the exit status."""
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "report":
+            return _report(args)
+    except NavlibInputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 2  # pragma: no cover - argparse rejects unknown commands
+
+
+if __name__ == "__main__":
+    sys.exit(main())

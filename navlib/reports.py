@@ -1,0 +1,602 @@
+"""Run the workbook notebooks headlessly and publish them as HTML (the report command).
+
+Contract: spec/api.md "Reports — command line". :func:`run_reports` executes every
+``NN_*.ipynb`` of a notebooks folder with papermill (kernel ``python3``, always launched with
+the interpreter running navlib, cwd = the notebooks folder so relative paths work), exports
+each executed notebook to HTML with nbconvert (inputs shown) and writes an ``index.html``
+linking the pages with their status and run time.
+
+Publishing is all-or-nothing: pages are written to a staging folder next to the output
+folder and swapped into place only when every selected notebook succeeded. On failure the
+staging folder is deleted, the previous report stays untouched and :class:`ReportError`
+names the notebook and the failing cell.
+
+Output layout (flat, inside the output folder)::
+
+    index.html            table: notebook, title, status, time, mode, parameters
+    NN_name.html          the executed notebook as a static page (inputs shown)
+    NN_name.ipynb         the executed notebook (papermill output, with parameters cell)
+    manifest.json         machine-readable status of every page in the folder
+    README*               any README already there is kept
+
+A run restricted with ``only`` refreshes the selected pages and keeps the other pages of the
+previous report (the index lists all of them, each with the date and mode it was made in).
+
+Parameters: ``quick=True`` and explicit ``parameters`` are injected only into notebooks whose
+tagged ``parameters`` cell assigns that name (so papermill never warns about unknown
+parameters and ``-p imu_path x.csv`` reaches only the notebooks that read flight data); a
+parameter that no selected notebook defines is rejected as a likely typo.
+"""
+
+from __future__ import annotations
+
+import ast
+import datetime as _dt
+import functools
+import html
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from navlib.errors import NavlibInputError
+
+NOTEBOOK_PATTERN = re.compile(r"^(\d{2})_\w+\.ipynb$")
+"""Notebooks taking part in the report: ``NN_name.ipynb`` (two digits, underscore)."""
+
+KERNEL_NAME = "python3"
+MANIFEST = "manifest.json"
+INDEX = "index.html"
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+
+
+# --------------------------------------------------------------------------- results
+
+
+@dataclass(frozen=True)
+class NotebookInfo:
+    """A report notebook found on disk.
+
+    Attributes
+    ----------
+    name : str
+        File stem, e.g. ``"07_assess_flight"``.
+    path : Path
+        Absolute path of the source notebook.
+    title : str
+        Text of the first markdown heading (the stem when there is none).
+    parameters : dict
+        Name -> default source text of each assignment in the tagged ``parameters`` cell
+        (empty when the notebook has no such cell).
+    """
+
+    name: str
+    path: Path
+    title: str
+    parameters: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CellFailure:
+    """Where and how a notebook failed.
+
+    ``cell_index`` is the 0-based index in the *source* notebook (markdown cells count).
+    ``-1`` marks a failure not located in a cell (kernel died, HTML export error).
+    """
+
+    cell_index: int
+    ename: str
+    evalue: str
+    source: str = ""
+    traceback: str = ""
+
+    def describe(self) -> str:
+        """One-line description: cell, first source line, exception."""
+        if self.cell_index < 0:
+            where = "outside a cell"
+        else:
+            first = next((ln.strip() for ln in self.source.splitlines() if ln.strip()), "")
+            if len(first) > 60:
+                first = first[:57] + "..."
+            where = f"cell {self.cell_index} (0-based)" + (f" `{first}`" if first else "")
+        return f"{where}: {self.ename}: {self.evalue}"
+
+
+@dataclass(frozen=True)
+class NotebookRun:
+    """Outcome of executing one notebook.
+
+    Attributes
+    ----------
+    name : str
+        Notebook stem.
+    status : str
+        ``"ok"`` or ``"failed"``.
+    seconds : float
+        Wall time of the papermill execution (kernel start included), s.
+    parameters : dict
+        The parameters injected into this notebook.
+    html : str or None
+        File name of the HTML page inside the output folder (None when failed).
+    ipynb : str or None
+        File name of the executed notebook inside the output folder (None when failed).
+    failure : CellFailure or None
+        Set when ``status == "failed"``.
+    """
+
+    name: str
+    status: str
+    seconds: float
+    parameters: dict[str, object]
+    html: str | None = None
+    ipynb: str | None = None
+    failure: CellFailure | None = None
+    title: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+class ReportError(RuntimeError):
+    """At least one notebook failed; nothing was published.
+
+    ``runs`` holds every :class:`NotebookRun` attempted, failed ones with their
+    :class:`CellFailure`.
+    """
+
+    def __init__(self, runs: Sequence[NotebookRun]):
+        self.runs = list(runs)
+        failed = [r for r in self.runs if not r.ok]
+        lines = [f"{len(failed)} notebook(s) failed; the previous report was left untouched"]
+        lines += [f"  {r.name}: {r.failure.describe()}" for r in failed if r.failure]
+        super().__init__("\n".join(lines))
+
+
+Progress = Callable[[int, int, str, "NotebookRun | None"], None]
+"""``progress(position, total, name, run)``: called with ``run=None`` when notebook number
+``position`` (1-based) starts and with its :class:`NotebookRun` when it ends."""
+
+
+# --------------------------------------------------------------------------- discovery
+
+
+def _parameter_defaults(nb) -> dict[str, str]:
+    """Name -> default source text of the assignments in the tagged ``parameters`` cell."""
+    for cell in nb.cells:
+        if cell.cell_type == "code" and "parameters" in cell.get("metadata", {}).get("tags", []):
+            source = cell.source
+            try:
+                tree = ast.parse(source)
+            except SyntaxError:
+                return {}
+            out: dict[str, str] = {}
+            for node in tree.body:
+                targets = node.targets if isinstance(node, ast.Assign) else (
+                    [node.target] if isinstance(node, ast.AnnAssign) and node.value else [])
+                for target in targets:
+                    if isinstance(target, ast.Name):
+                        out[target.id] = ast.get_source_segment(source, node.value) or ""
+            return out
+    return {}
+
+
+def _title(nb, fallback: str) -> str:
+    for cell in nb.cells:
+        if cell.cell_type == "markdown":
+            for line in cell.source.splitlines():
+                if line.startswith("#"):
+                    return line.lstrip("#").strip()
+    return fallback
+
+
+def _read_notebook(path: Path):
+    import nbformat
+
+    try:
+        return nbformat.read(path, as_version=4)
+    except Exception as exc:  # nbformat raises several unrelated types for bad files
+        raise NavlibInputError(f"notebook {path}: cannot be read ({exc})") from exc
+
+
+def list_notebooks(notebooks_dir) -> list[NotebookInfo]:
+    """The report notebooks (``NN_*.ipynb``) of ``notebooks_dir``, sorted by name."""
+    folder = Path(notebooks_dir)
+    if not folder.is_dir():
+        raise NavlibInputError(f"notebooks_dir: {folder} is not a folder")
+    infos = []
+    for path in sorted(folder.iterdir()):
+        if path.is_file() and NOTEBOOK_PATTERN.match(path.name):
+            nb = _read_notebook(path)
+            infos.append(NotebookInfo(path.stem, path.resolve(), _title(nb, path.stem),
+                                      _parameter_defaults(nb)))
+    return infos
+
+
+def select_notebooks(available: Sequence[NotebookInfo],
+                     only: Iterable[str] | None) -> list[NotebookInfo]:
+    """Filter ``available`` by ``only`` entries (stem, ``NN`` prefix, file name or path).
+
+    Raises NavlibInputError listing the available notebooks for an entry matching none.
+    """
+    if only is None:
+        return list(available)
+    only = [only] if isinstance(only, str) else list(only)
+    wanted: set[str] = set()
+    for entry in only:
+        key = Path(str(entry)).name.removesuffix(".ipynb")
+        hits = [nb.name for nb in available
+                if nb.name == key or (key.isdigit() and int(nb.name[:2]) == int(key))]
+        if not hits:
+            names = ", ".join(nb.name for nb in available) or "(none)"
+            raise NavlibInputError(
+                f"only: no notebook matches {entry!r}; available: {names}")
+        wanted.update(hits)
+    return [nb for nb in available if nb.name in wanted]
+
+
+# --------------------------------------------------------------------------- parameters
+
+
+def parse_parameter_value(text: str):
+    """A ``-p`` value: a JSON or Python literal when it parses as one, else the string.
+
+    ``2.5`` -> float, ``true``/``True`` -> bool, ``[1, 2]`` -> list, ``null``/``None`` ->
+    None, ``Churchill`` -> ``"Churchill"``. Text that starts like a container (``[ { (``) but
+    does not parse raises NavlibInputError rather than silently becoming a string.
+    """
+    for parse in (json.loads, ast.literal_eval):
+        try:
+            return parse(text)
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+            pass
+    if text.strip()[:1] in "[{(" and text.strip():
+        raise NavlibInputError(f"parameter value {text!r}: looks like a list/dict/tuple but "
+                               "does not parse as JSON or a Python literal")
+    return text
+
+
+def parse_parameters(pairs: Iterable[Sequence[str]], cwd=None) -> dict[str, object]:
+    """Turn ``-p key value`` pairs into a parameter dict.
+
+    Values go through :func:`parse_parameter_value`. A string value naming an existing file
+    or folder relative to ``cwd`` (default: the current directory) is made absolute, because
+    notebooks run with the notebooks folder as their working directory.
+    """
+    base = Path.cwd() if cwd is None else Path(cwd)
+    out: dict[str, object] = {}
+    for pair in pairs:
+        if len(pair) != 2:
+            raise NavlibInputError(f"parameter: expected 'key value', got {list(pair)}")
+        key, text = pair
+        if not key.isidentifier():
+            hint = ""
+            if "=" in key:
+                k, _, v = key.partition("=")
+                hint = f" (write: -p {k} {v})"
+            raise NavlibInputError(
+                f"parameter name {key!r}: must be a Python identifier{hint}")
+        value = parse_parameter_value(text)
+        if isinstance(value, str) and value and not Path(value).is_absolute():
+            candidate = base / value
+            if candidate.exists():
+                value = str(candidate.resolve())
+        out[key] = value
+    return out
+
+
+def _parameters_for(info: NotebookInfo, quick: bool,
+                    parameters: Mapping[str, object]) -> dict[str, object]:
+    chosen: dict[str, object] = {}
+    if quick and "quick" in info.parameters:
+        chosen["quick"] = True
+    chosen.update({k: v for k, v in parameters.items() if k in info.parameters})
+    return chosen
+
+
+# --------------------------------------------------------------------------- execution
+
+
+@functools.cache
+def _kernel_manager_class():
+    """A kernel manager that always starts ipykernel with ``sys.executable``.
+
+    Whatever ``python3`` kernelspecs are installed per user or system-wide, the notebooks run
+    in the interpreter (and virtual environment) that runs the report, with the inline
+    matplotlib backend. On POSIX the kernel
+    talks over IPC sockets (local only, and no "TCP without encryption" warning).
+    """
+    from ipykernel.kernelspec import get_kernel_dict
+    from jupyter_client.kernelspec import KernelSpec
+    from jupyter_client.manager import AsyncKernelManager
+    from traitlets import default
+
+    class CurrentPythonKernelManager(AsyncKernelManager):
+        @default("transport")
+        def _transport_default(self):
+            return "ipc" if os.name == "posix" else "tcp"
+
+        @property
+        def kernel_spec(self):
+            if self._kernel_spec is None:
+                spec = get_kernel_dict()
+                # inline figures even when the caller exports MPLBACKEND=Agg (headless CI)
+                spec["env"] = {"MPLBACKEND": "module://matplotlib_inline.backend_inline"}
+                self._kernel_spec = KernelSpec(resource_dir="", **spec)
+            return self._kernel_spec
+
+    return CurrentPythonKernelManager
+
+
+def _failure_from(exc: BaseException, executed_path: Path, source_nb) -> CellFailure:
+    """Map a papermill error (or any other) to a CellFailure with a source-notebook index.
+
+    papermill's ``cell_index`` counts its injected-parameters cell and the saved notebook
+    also gains error-banner cells, so the failing cell is located by its error output in the
+    saved notebook and mapped to the source notebook through its cell id (by source text if
+    ids are missing).
+    """
+    import nbformat
+    from papermill.exceptions import PapermillExecutionError
+
+    if not isinstance(exc, PapermillExecutionError):
+        return CellFailure(-1, type(exc).__name__, str(exc))
+    index = -1
+    try:
+        executed = nbformat.read(executed_path, as_version=4)
+        failing = next(c for c in executed.cells if c.cell_type == "code"
+                       and any(o.get("output_type") == "error" for o in c.get("outputs", [])))
+        ids = [c.get("id") for c in source_nb.cells]
+        if failing.get("id") in ids:
+            index = ids.index(failing.get("id"))
+    except (OSError, StopIteration, ValueError):
+        pass
+    if index < 0:
+        sources = [c.source for c in source_nb.cells]
+        index = sources.index(exc.source) if exc.source in sources else -1
+    tb = _ANSI.sub("", "\n".join(exc.traceback or []))
+    return CellFailure(index, exc.ename, exc.evalue, exc.source or "", tb)
+
+
+def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
+    import nbformat
+    from nbconvert import HTMLExporter
+
+    nb = nbformat.read(executed_path, as_version=4)
+    exporter = HTMLExporter(template_name="lab", exclude_input=False)
+    body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
+    html_path.write_text(body, encoding="utf-8")
+
+
+def _execute(info: NotebookInfo, staging: Path, params: dict,
+             timeout_s: float | None) -> NotebookRun:
+    import papermill
+
+    executed = staging / f"{info.name}.ipynb"
+    source_nb = _read_notebook(info.path)
+    start = time.perf_counter()
+    try:
+        papermill.execute_notebook(
+            str(info.path), str(executed), parameters=params, kernel_name=KERNEL_NAME,
+            cwd=str(info.path.parent), progress_bar=False, log_output=False,
+            execution_timeout=timeout_s, kernel_manager_class=_kernel_manager_class(),
+        )
+    except Exception as exc:  # any failure of the run is reported, not raised
+        seconds = time.perf_counter() - start
+        return NotebookRun(info.name, "failed", seconds, params,
+                           failure=_failure_from(exc, executed, source_nb), title=info.title)
+    seconds = time.perf_counter() - start
+    try:
+        _export_html(executed, staging / f"{info.name}.html", info.title)
+    except Exception as exc:  # nbconvert errors are varied; report them as a failed page
+        return NotebookRun(info.name, "failed", seconds, params,
+                           failure=CellFailure(-1, type(exc).__name__, f"HTML export: {exc}"),
+                           title=info.title)
+    return NotebookRun(info.name, "ok", seconds, params, html=f"{info.name}.html",
+                       ipynb=f"{info.name}.ipynb", title=info.title)
+
+
+# --------------------------------------------------------------------------- publishing
+
+
+def _check_output_dir(output: Path, notebooks_dir: Path) -> None:
+    """Refuse output folders that are not (or could not become) a report folder."""
+    if output == notebooks_dir or output in notebooks_dir.parents or output == Path.cwd():
+        raise NavlibInputError(
+            f"output_dir: {output} would replace the notebooks or the working folder")
+    if output.exists() and not output.is_dir():
+        raise NavlibInputError(f"output_dir: {output} exists and is not a folder")
+    if output.is_dir() and not (output / MANIFEST).exists():
+        foreign = [p.name for p in output.iterdir() if not p.name.upper().startswith("README")]
+        if foreign:
+            raise NavlibInputError(
+                f"output_dir: {output} holds files that are not a navlib report "
+                f"({', '.join(sorted(foreign)[:5])}); choose an empty or new folder")
+
+
+def _load_manifest(output: Path) -> dict:
+    try:
+        data = json.loads((output / MANIFEST).read_text(encoding="utf-8"))
+        return data if isinstance(data, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _entry(run: NotebookRun, finished: str) -> dict:
+    return {"title": run.title, "status": run.status, "seconds": round(run.seconds, 3),
+            "quick": run.parameters.get("quick") is True,
+            "parameters": {k: repr(v) for k, v in run.parameters.items()},
+            "html": run.html, "ipynb": run.ipynb, "finished": finished}
+
+
+def _index_html(entries: Mapping[str, dict], generated: str) -> str:
+    from navlib import __version__
+
+    rows = []
+    for position, (name, e) in enumerate(sorted(entries.items()), start=1):
+        link = (f'<a href="{html.escape(e["html"])}">{html.escape(name)}</a>'
+                if e.get("html") else html.escape(name))
+        nb_link = (f'<a href="{html.escape(e["ipynb"])}">.ipynb</a>' if e.get("ipynb") else "")
+        params = ", ".join(f"{k}={v}" for k, v in e.get("parameters", {}).items())
+        status = html.escape(str(e.get("status", "?")))
+        rows.append(
+            f'<tr class="{status}"><td>{position}</td><td>{link}</td>'
+            f'<td>{html.escape(str(e.get("title", "")))}</td><td>{status}</td>'
+            f'<td class="num">{float(e.get("seconds", 0.0)):.1f}</td>'
+            f'<td>{"quick" if e.get("quick") else "full"}</td>'
+            f'<td><code>{html.escape(params)}</code></td>'
+            f'<td>{html.escape(str(e.get("finished", "")))}</td><td>{nb_link}</td></tr>')
+    body = "\n".join(rows)
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>navlib reports</title>
+<style>
+body {{ font-family: system-ui, sans-serif; margin: 2em; }}
+table {{ border-collapse: collapse; }}
+th, td {{ border-bottom: 1px solid #ccc; padding: 0.3em 0.8em; text-align: left; }}
+td.num {{ text-align: right; }} tr.failed {{ background: #fdd; }}
+</style></head><body>
+<h1>navlib reports</h1>
+<p>Generated {html.escape(generated)} by <code>python -m navlib report</code>
+(navlib {html.escape(__version__)}, Python {html.escape(sys.version.split()[0])}).
+Each page is an executed notebook; “quick” pages ran with shrunken durations for
+smoke testing.</p>
+<table><thead><tr><th>#</th><th>notebook</th><th>title</th><th>status</th><th>time, s</th>
+<th>mode</th><th>parameters</th><th>finished</th><th>source</th></tr></thead>
+<tbody>
+{body}
+</tbody></table></body></html>
+"""
+
+
+def _publish(staging: Path, output: Path, runs: Sequence[NotebookRun]) -> None:
+    """Carry over the untouched part of the old report, write index + manifest, swap in."""
+    finished = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+    old_entries: dict = {}
+    if output.is_dir():
+        old_entries = _load_manifest(output).get("notebooks", {})
+        for item in output.iterdir():
+            target = staging / item.name
+            if item.name in (MANIFEST, INDEX) or target.exists():
+                continue
+            if item.is_dir():
+                shutil.copytree(item, target, symlinks=True)
+            else:
+                shutil.copy2(item, target, follow_symlinks=False)
+    entries = {name: e for name, e in old_entries.items()
+               if isinstance(e, dict) and e.get("html") and (staging / e["html"]).exists()}
+    entries.update({r.name: _entry(r, finished) for r in runs})
+    manifest = {"generator": "navlib report", "generated": finished, "notebooks": entries}
+    (staging / MANIFEST).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    (staging / INDEX).write_text(_index_html(entries, finished), encoding="utf-8")
+
+    if not output.exists():
+        os.replace(staging, output)
+        return
+    retired = Path(tempfile.mkdtemp(prefix=f".{output.name}.old-", dir=output.parent))
+    retired.rmdir()
+    os.replace(output, retired)
+    try:
+        os.replace(staging, output)
+    except OSError:
+        os.replace(retired, output)  # put the good report back
+        raise
+    shutil.rmtree(retired, ignore_errors=True)
+
+
+def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
+                only: Iterable[str] | None = None,
+                parameters: Mapping[str, object] | None = None,
+                progress: Progress | None = None, fail_fast: bool = False,
+                timeout_s: float | None = None) -> list[NotebookRun]:
+    """Execute the report notebooks and publish them into ``output_dir``.
+
+    Parameters
+    ----------
+    notebooks_dir : path
+        Folder holding ``NN_*.ipynb``; it is also the notebooks' working directory.
+    output_dir : path
+        Report folder; created, or replaced as a whole on success (see module docstring).
+    quick : bool
+        Inject ``quick=True`` (into notebooks that define ``quick``).
+    only : iterable of str, optional
+        Notebook stems or ``NN`` prefixes (see :func:`select_notebooks`).
+    parameters : mapping, optional
+        Extra parameters, each injected into the notebooks whose parameters cell defines it;
+        they override ``quick``.
+    progress : callable, optional
+        See :data:`Progress`.
+    fail_fast : bool
+        Stop at the first failing notebook instead of running the rest.
+    timeout_s : float, optional
+        Per-cell execution timeout, s (None: no limit).
+
+    Returns
+    -------
+    list of NotebookRun
+        One per selected notebook, in order; all ``ok``.
+
+    Raises
+    ------
+    NavlibInputError
+        Unknown ``only`` entry, parameter defined by no selected notebook, bad folders.
+    ReportError
+        A notebook failed; the output folder was not touched.
+    """
+    notebooks = Path(notebooks_dir).resolve()
+    output = Path(output_dir).resolve()
+    parameters = dict(parameters or {})
+    for key in parameters:
+        if not isinstance(key, str) or not key.isidentifier():
+            raise NavlibInputError(f"parameters: name {key!r} is not a Python identifier")
+    if timeout_s is not None and not timeout_s > 0:
+        raise NavlibInputError(f"timeout_s: must be > 0 s, got {timeout_s}")
+    selected = select_notebooks(list_notebooks(notebooks), only)
+    if not selected:
+        raise NavlibInputError(f"notebooks_dir: no NN_*.ipynb notebooks in {notebooks}")
+    defined = set().union(*(nb.parameters for nb in selected))
+    unknown = sorted(set(parameters) - defined)
+    if unknown:
+        raise NavlibInputError(
+            f"parameters: {unknown} defined by none of the selected notebooks; "
+            f"their parameters are {sorted(defined)}")
+    _check_output_dir(output, notebooks)
+    output.parent.mkdir(parents=True, exist_ok=True)
+
+    staging = Path(tempfile.mkdtemp(prefix=f".{output.name}.tmp-", dir=output.parent))
+    umask = os.umask(0)
+    os.umask(umask)
+    staging.chmod(0o777 & ~umask)  # mkdtemp makes it private; a report folder is not
+    try:
+        runs: list[NotebookRun] = []
+        for position, info in enumerate(selected, start=1):
+            if progress:
+                progress(position, len(selected), info.name, None)
+            run = _execute(info, staging, _parameters_for(info, quick, parameters), timeout_s)
+            runs.append(run)
+            if progress:
+                progress(position, len(selected), info.name, run)
+            if fail_fast and not run.ok:
+                break
+        if not all(r.ok for r in runs):
+            raise ReportError(runs)
+        _publish(staging, output, runs)
+        return runs
+    finally:
+        if staging.exists():
+            shutil.rmtree(staging, ignore_errors=True)
+
+
+def default_notebooks_dir() -> Path:
+    """``notebooks/`` of the source checkout navlib is imported from."""
+    return Path(__file__).resolve().parent.parent / "notebooks"
+
+
+def default_output_dir() -> Path:
+    """``reports/`` of the source checkout navlib is imported from."""
+    return Path(__file__).resolve().parent.parent / "reports"

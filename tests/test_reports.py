@@ -1,0 +1,242 @@
+"""The report runner (navlib.reports, ``python -m navlib report``) on throwaway notebooks.
+
+Kernel starts cost about a second each, so one good report is built per module and copied
+into each test's own folder before a test modifies it.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from navlib import NavlibInputError, reports
+from navlib.__main__ import main
+
+PROBE = (
+    "import os, sys  # probe-input-marker\n"
+    "print('exe=' + sys.executable)\n"
+    "print('cwd=' + os.getcwd())\n"
+    "print('quick=%r scale=%r' % (quick, globals().get('scale')))"
+)
+
+
+def _write(path: Path, cells) -> None:
+    """Write a notebook from (kind, source[, tag]) tuples."""
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                 "language": "python"}
+    for kind, source, *tags in cells:
+        cell = (nbformat.v4.new_markdown_cell(source) if kind == "md"
+                else nbformat.v4.new_code_cell(source))
+        if tags:
+            cell.metadata["tags"] = list(tags)
+        nb.cells.append(cell)
+    nbformat.write(nb, path)
+
+
+def _make_notebooks(folder: Path) -> Path:
+    folder.mkdir()
+    _write(folder / "01_good.ipynb", [
+        ("md", "# Good notebook\nThe question."),
+        ("code", "quick = False\nscale = 2.0  # a factor", "parameters"),
+        ("code", PROBE),
+    ])
+    _write(folder / "02_other.ipynb", [
+        ("md", "# Other notebook"),
+        ("code", "quick = False", "parameters"),
+        ("code", PROBE),
+    ])
+    _write(folder / "03_bad.ipynb", [
+        ("md", "# Failing notebook"),
+        ("code", "quick = False", "parameters"),
+        ("code", "x = 1"),
+        ("code", "raise ValueError('boom ' + str(x))"),
+    ])
+    _write(folder / "scratch.ipynb", [("code", "raise SystemExit('not a report notebook')")])
+    return folder
+
+
+def _stdout(executed: Path) -> str:
+    nb = nbformat.read(executed, as_version=4)
+    return "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code"
+                   for o in c.get("outputs", []) if o.get("output_type") == "stream")
+
+
+def _snapshot(folder: Path) -> dict:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory):
+    """A successful report of 01 and 02 with ``quick`` and ``scale=3`` requested."""
+    root = tmp_path_factory.mktemp("reports")
+    nbdir = _make_notebooks(root / "notebooks")
+    out = root / "out"
+    out.mkdir()
+    (out / "README.md").write_text("keep me\n")
+    events = []
+
+    def progress(position, total, name, run):
+        events.append((position, total, name, None if run is None else run.status))
+
+    runs = reports.run_reports(nbdir, out, quick=True, only=["01", "02_other"],
+                               parameters={"scale": 3}, progress=progress)
+    return nbdir, out, runs, events
+
+
+def test_success_writes_pages_index_and_manifest(good):
+    _, out, runs, events = good
+    assert [r.name for r in runs] == ["01_good", "02_other"]
+    assert all(r.ok and r.seconds > 0 for r in runs)
+    assert events == [(1, 2, "01_good", None), (1, 2, "01_good", "ok"),
+                      (2, 2, "02_other", None), (2, 2, "02_other", "ok")]
+    names = {p.name for p in out.iterdir()}
+    assert names == {"README.md", "index.html", "manifest.json", "01_good.html",
+                     "01_good.ipynb", "02_other.html", "02_other.ipynb"}
+    assert (out / "README.md").read_text() == "keep me\n"
+    index = (out / "index.html").read_text()
+    assert 'href="01_good.html"' in index and 'href="02_other.html"' in index
+    assert "Good notebook" in index and "quick" in index and "scale=3" in index
+    page = (out / "01_good.html").read_text()
+    assert "<html" in page and "probe-input-marker" in page  # inputs are shown
+    manifest = json.loads((out / "manifest.json").read_text())["notebooks"]
+    assert manifest["01_good"]["status"] == "ok" and manifest["01_good"]["quick"] is True
+    assert not list(out.parent.glob(".out.*")), "staging folder left behind"
+
+
+def test_parameters_kernel_and_working_directory(good):
+    nbdir, out, runs, _ = good
+    assert runs[0].parameters == {"quick": True, "scale": 3}
+    assert runs[1].parameters == {"quick": True}  # scale is not a parameter of 02
+    first, second = _stdout(out / "01_good.ipynb"), _stdout(out / "02_other.ipynb")
+    assert "quick=True scale=3" in first
+    assert "quick=True scale=None" in second
+    assert f"exe={sys.executable}" in first
+    assert f"cwd={nbdir.resolve()}" in first
+
+
+def test_failure_names_notebook_and_cell_and_keeps_old_report(good, tmp_path):
+    nbdir, good_out, _, _ = good
+    out = tmp_path / "out"
+    shutil.copytree(good_out, out)
+    before = _snapshot(out)
+    with pytest.raises(reports.ReportError) as info:
+        reports.run_reports(nbdir, out, only=["02", "03"])
+    err = info.value
+    assert [r.status for r in err.runs] == ["ok", "failed"]
+    failure = err.runs[1].failure
+    assert (failure.cell_index, failure.ename, failure.evalue) == (3, "ValueError", "boom 1")
+    assert "boom" in failure.traceback
+    assert "03_bad" in str(err) and "cell 3" in str(err) and "raise ValueError" in str(err)
+    assert _snapshot(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_only_refreshes_selected_pages_and_keeps_the_rest(good, tmp_path):
+    nbdir, good_out, _, _ = good
+    out = tmp_path / "out"
+    shutil.copytree(good_out, out)
+    before = _snapshot(out)
+    runs = reports.run_reports(nbdir, out, only=["02_other.ipynb"])
+    assert [r.name for r in runs] == ["02_other"]
+    after = _snapshot(out)
+    assert after["01_good.html"] == before["01_good.html"]
+    assert after["02_other.ipynb"] != before["02_other.ipynb"]
+    assert "quick=False" in _stdout(out / "02_other.ipynb")
+    manifest = json.loads(after["manifest.json"])["notebooks"]
+    assert manifest["01_good"]["quick"] is True and manifest["02_other"]["quick"] is False
+    assert 'href="01_good.html"' in after["index.html"].decode()
+
+
+def test_fail_fast_stops_at_first_failure(good, tmp_path):
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    shutil.copy(good[0] / "03_bad.ipynb", nbdir / "01_bad.ipynb")
+    shutil.copy(good[0] / "01_good.ipynb", nbdir / "02_good.ipynb")
+    with pytest.raises(reports.ReportError) as info:
+        reports.run_reports(nbdir, tmp_path / "out", fail_fast=True)
+    assert [r.name for r in info.value.runs] == ["01_bad"]
+    assert not (tmp_path / "out").exists()
+
+
+def test_listing_and_selection(good):
+    infos = reports.list_notebooks(good[0])
+    assert [i.name for i in infos] == ["01_good", "02_other", "03_bad"]  # scratch skipped
+    assert infos[0].title == "Good notebook"
+    assert infos[0].parameters == {"quick": "False", "scale": "2.0"}
+    pick = lambda only: [i.name for i in reports.select_notebooks(infos, only)]  # noqa: E731
+    assert pick(None) == ["01_good", "02_other", "03_bad"]
+    assert pick(["3", "01_good"]) == ["01_good", "03_bad"]
+    assert pick("notebooks/02_other.ipynb") == ["02_other"]
+    with pytest.raises(NavlibInputError, match="available: 01_good, 02_other, 03_bad"):
+        pick(["07"])
+
+
+def test_parameter_parsing(tmp_path):
+    (tmp_path / "flight.csv").write_text("t\n")
+    got = reports.parse_parameters(
+        [("a", "2.5"), ("b", "true"), ("c", "[1, 2]"), ("d", "None"), ("e", "Churchill"),
+         ("f", "flight.csv"), ("g", "missing.csv"), ("h", "'7'")], cwd=tmp_path)
+    assert got == {"a": 2.5, "b": True, "c": [1, 2], "d": None, "e": "Churchill",
+                   "f": str((tmp_path / "flight.csv").resolve()), "g": "missing.csv", "h": "7"}
+    with pytest.raises(NavlibInputError, match=r"write: -p x 3"):
+        reports.parse_parameters([("x=3", "1")])
+    with pytest.raises(NavlibInputError, match="does not parse"):
+        reports.parse_parameters([("x", "[1, 2")])
+
+
+def test_bad_requests_fail_before_running(good, tmp_path):
+    nbdir = good[0]
+    with pytest.raises(NavlibInputError, match=r"\['nope'\] defined by none.*'quick', 'scale'"):
+        reports.run_reports(nbdir, tmp_path / "out", parameters={"nope": 1})
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("x")
+    with pytest.raises(NavlibInputError, match="not a navlib report"):
+        reports.run_reports(nbdir, foreign, only=["01"])
+    with pytest.raises(NavlibInputError, match="would replace the notebooks"):
+        reports.run_reports(nbdir, nbdir.parent, only=["01"])
+    assert not (tmp_path / "out").exists() and (foreign / "thesis.tex").exists()
+
+
+def test_cli_input_errors_exit_2(good, tmp_path, capsys):
+    nbdir = str(good[0])
+    assert main(["report", "--notebooks", nbdir, "--output", str(tmp_path / "o"),
+                 "--only", "9"]) == 2
+    assert "available: 01_good, 02_other, 03_bad" in capsys.readouterr().err
+    assert main(["report", "--notebooks", nbdir, "-p", "scale=3", "01"]) == 2
+    assert "write: -p scale 3" in capsys.readouterr().err
+    assert main(["report", "--notebooks", nbdir, "--list", "--only", "01"]) == 0
+    assert "scale = 2.0" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as info:  # argparse: -p needs two words
+        main(["report", "-p", "scale"])
+    assert info.value.code == 2
+
+
+def _cli(*args, cwd):
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    return subprocess.run([sys.executable, "-m", "navlib", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_cli_help():
+    proc = _cli("report", "--help", cwd=Path.cwd())
+    assert proc.returncode == 0
+    for option in ("--quick", "--only", "--output", "-p KEY VALUE", "--list"):
+        assert option in proc.stdout
+
+
+def test_cli_failure_exits_nonzero_naming_notebook_and_cell(good, tmp_path):
+    nbdir = good[0]
+    proc = _cli("report", "--notebooks", str(nbdir), "--output", "out", "--quick",
+                "--only", "03", cwd=tmp_path)
+    assert proc.returncode == 1
+    assert "[1/1] 03_bad ... failed (" in proc.stderr
+    assert "03_bad: cell 3 (0-based) `raise ValueError('boom ' + str(x))`: ValueError: boom 1" \
+        in proc.stderr
+    assert not (tmp_path / "out").exists()
