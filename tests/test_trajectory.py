@@ -1,0 +1,206 @@
+"""Trajectory generators: paper event markers, pad statics, and construction-independent
+consistency checks (finite differences of position, attitude increments vs gyro)."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from navlib import NavlibInputError, earth
+from navlib.trajectory import sounding_rocket, stationary
+from navlib.units import DEG
+
+
+@pytest.fixture(scope="module")
+def rocket():
+    return sounding_rocket()
+
+
+def _at(traj, t):
+    return int(np.argmin(np.abs(traj.t - t)))
+
+
+# --- sounding rocket: paper magnitudes (spec excitability.md §3) -------------------------
+
+def test_rocket_sampling_and_events(rocket):
+    assert rocket.t[0] == 0.0 and rocket.t[-1] == pytest.approx(86.0)
+    assert rocket.rate_hz == pytest.approx(100.0)
+    assert np.allclose(np.diff(rocket.t), 0.01)
+    ev = rocket.events
+    for name, value in [("ignition", 18.0), ("burnout", 46.0), ("free_flight", 60.0),
+                        ("despin", 73.0), ("end", 86.0)]:
+        assert ev[name] == value
+    assert 18.0 < ev["liftoff"] < ev["rail_exit"] < 20.0
+
+
+def test_rocket_peak_axial_specific_force_near_burnout(rocket):
+    f_x = rocket.specific_force[:, 0]
+    k = int(np.argmax(f_x))
+    assert f_x[k] == pytest.approx(110.0, rel=0.03)
+    assert 44.0 <= rocket.t[k] <= 46.0
+
+
+def test_rocket_axial_force_changes_sign_at_burnout(rocket):
+    f_x = rocket.specific_force[:, 0]
+    boost = (rocket.t > 19.0) & (rocket.t < 45.0)
+    assert np.all(f_x[boost] > 40.0)
+    crossing = rocket.t[np.flatnonzero((f_x[:-1] > 0) & (f_x[1:] <= 0))]
+    crossing = crossing[crossing > 19.0]
+    assert crossing.size == 1 and 45.0 < crossing[0] <= 46.0
+    coast = (rocket.t >= 46.0) & (rocket.t < 55.0)
+    assert np.all(f_x[coast] < 0.0)
+    assert -15.0 < f_x[_at(rocket, 46.0)] < -5.0
+
+
+def test_rocket_free_flight_above_40_km(rocket):
+    free = rocket.t >= 60.0
+    assert np.linalg.norm(rocket.specific_force[free], axis=1).max() < 0.5
+    _, _, alt = rocket.geodetic
+    assert alt[_at(rocket, 60.0)] > 40e3
+    assert np.all(np.diff(alt[rocket.t > 18.5]) > 0)  # still climbing at 86 s
+
+
+def test_rocket_despin_halves_axial_rate(rocket):
+    w_x = rocket.angular_rate[:, 0]
+    before, after = w_x[_at(rocket, 72.0)], w_x[_at(rocket, 74.0)]
+    assert after / before == pytest.approx(0.5, rel=1e-3)
+    assert before == pytest.approx(2 * np.pi * 2.0, rel=1e-3)
+    # the step is smooth: its steepest slope is that of the C^3 ramp (35/16 x step / 0.5 s)
+    window = (rocket.t[1:] > 72.0) & (rocket.t[1:] < 74.0)
+    max_slope = 35.0 / 16.0 * (before - after) / 0.5
+    assert np.abs(np.diff(w_x) / 0.01)[window].max() < 1.02 * max_slope
+
+
+def test_rocket_spin_ramps_with_speed(rocket):
+    w_x = rocket.angular_rate[:, 0]
+    speed = np.linalg.norm(rocket.velocity, axis=1)
+    boost = (rocket.t > 18.5) & (rocket.t < 30.0)
+    assert np.all(np.diff(w_x[boost]) > -1e-6)
+    assert np.all(np.diff(speed[boost]) > 0)
+    assert w_x[_at(rocket, 19.0)] < 0.2 * w_x[_at(rocket, 40.0)]
+
+
+def test_rocket_lateral_specific_force_small_in_flight(rocket):
+    flight = rocket.t > rocket.events["rail_exit"] + 1.0
+    assert np.abs(rocket.specific_force[flight, 1:]).max() < 0.05
+
+
+def test_rocket_pad_statics(rocket):
+    pad = rocket.t < rocket.events["ignition"]
+    assert np.all(rocket.velocity[pad] == 0.0)
+    assert np.all(rocket.position[pad] == rocket.position[0])
+    gamma = earth.normal_gravity_ecef(rocket.position[pad])
+    f_expect = rocket.attitude[pad].inv().apply(-gamma)
+    assert np.allclose(rocket.specific_force[pad], f_expect, atol=1e-12)
+    assert np.allclose(np.linalg.norm(rocket.angular_rate[pad], axis=1), earth.OMEGA_E,
+                       rtol=1e-12)
+    # body x along the rail: 84 deg elevation, 100 deg azimuth
+    lat, lon, _ = earth.ecef_to_geodetic(rocket.position[0])
+    x_n = earth.ned_to_ecef_matrix(lat, lon).T @ rocket.attitude[0].apply([1.0, 0.0, 0.0])
+    assert np.degrees(np.arcsin(-x_n[2])) == pytest.approx(84.0, abs=1e-9)
+    assert np.degrees(np.arctan2(x_n[1], x_n[0])) == pytest.approx(100.0, abs=1e-9)
+
+
+def test_rocket_site_default(rocket):
+    lat, lon, alt = rocket.geodetic
+    assert alt[0] == pytest.approx(30.0, abs=1e-6)
+    assert np.degrees(lat[0]) == pytest.approx(-5.92, abs=1e-9)
+    assert np.degrees(lon[0]) == pytest.approx(-35.16, abs=1e-9)
+
+
+# --- construction-independent consistency -----------------------------------------------
+
+def test_rocket_velocity_matches_position_differences(rocket):
+    t, P, V = rocket.t, rocket.position, rocket.velocity
+    fd = (P[2:] - P[:-2]) / (t[2:] - t[:-2])[:, None]
+    # central-difference error ~ h^2/6 |jerk|: jerk peaks near 270 m/s^3 in the 1 s tail-off
+    err = np.abs(fd - V[1:-1]).max(axis=1)
+    assert err.max() < 1e-2
+    steady = (t[1:-1] > 20.0) & (t[1:-1] < 44.0)
+    assert err[steady].max() < 1e-4
+
+
+def test_rocket_specific_force_matches_velocity_differences(rocket):
+    t, P, V, C = rocket.t, rocket.position, rocket.velocity, rocket.attitude
+    dv = (V[2:] - V[:-2]) / (t[2:] - t[:-2])[:, None]
+    f_e = dv + 2 * np.cross(earth.EARTH_RATE_ECEF, V[1:-1]) - earth.normal_gravity_ecef(P[1:-1])
+    f_e_imu = C[1:-1].apply(rocket.specific_force[1:-1])
+    err = np.linalg.norm(f_e - f_e_imu, axis=1)
+    tc, lift = t[1:-1], rocket.events["liftoff"]
+    # the jerk jumps at lift-off (acceleration is only C^0 there): central differences of V
+    # are off by ~h |jump| / 4 right at it, so the check skips half a second after it
+    assert err[(tc < lift - 0.015) | (tc > lift + 0.5)].max() < 0.05
+    steady = ((tc > 19.5) & (tc < 44.0)) | (tc > 47.0)
+    assert err[steady].max() < 1e-4
+
+
+def test_rocket_attitude_increments_match_gyro():
+    traj = sounding_rocket(rate_hz=400.0)
+    t, w, C = traj.t, traj.angular_rate, traj.attitude
+    dt = np.diff(t)[:, None]
+    # body increment: trapezoid + coning term; Earth rotation applied on the ECEF side
+    body = Rotation.from_rotvec(0.5 * (w[:-1] + w[1:]) * dt
+                                + np.cross(w[:-1], w[1:]) * dt**2 / 12.0)
+    earth_step = Rotation.from_rotvec(-dt * earth.EARTH_RATE_ECEF)
+    predicted = earth_step * C[:-1] * body
+    err = (predicted.inv() * C[1:]).magnitude()
+    assert err.max() < 1e-6
+    # and integrating the gyro over the whole flight keeps the attitude within 0.1 mrad
+    att = C[0]
+    for k in range(len(t) - 1):
+        att = earth_step[k] * att * body[k]
+    assert (att.inv() * C[-1]).magnitude() < 1e-4
+
+
+def test_rocket_keyword_overrides_change_flight():
+    slow = sounding_rocket(spin_hz=1.0, rate_hz=50.0, end_s=70.0, despin_s=65.0)
+    assert slow.t[-1] == pytest.approx(70.0) and slow.rate_hz == pytest.approx(50.0)
+    assert slow.angular_rate[_at(slow, 60.0), 0] == pytest.approx(2 * np.pi, rel=1e-3)
+    assert slow.parameters["spin_hz"] == 1.0
+    again = sounding_rocket()
+    assert again.angular_rate[_at(again, 60.0), 0] == pytest.approx(4 * np.pi, rel=1e-3)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"burnout_s": 10.0}, "burnout_s"),
+    ({"despin_s": 90.0}, "despin_s"),
+    ({"free_flight_s": 40.0}, "free_flight_s"),
+    ({"lat_deg": 95.0}, "lat_deg"),
+    ({"spin_hz": float("nan")}, "spin_hz"),
+    ({"mass_burnout_kg": 2000.0}, "mass_burnout_kg"),
+    ({"thrust_n": 1000.0}, "thrust_n"),
+    ({"rail_elevation_deg": 0.0}, "rail_elevation_deg"),
+    ({"rate_hz": -1.0}, "rate_hz"),
+    ({"spinn_hz": 1.0}, "spinn_hz"),
+])
+def test_rocket_bad_input(kwargs, name):
+    with pytest.raises(NavlibInputError, match=name):
+        sounding_rocket(**kwargs)
+
+
+# --- stationary --------------------------------------------------------------------------
+
+def test_stationary_statics():
+    traj = stationary(duration_s=10.0)
+    assert len(traj) == 1001 and traj.rate_hz == pytest.approx(100.0)
+    lat, lon = -23.213056 * DEG, -45.860556 * DEG
+    C_n_e = earth.ned_to_ecef_matrix(lat, lon)
+    assert np.allclose(traj.C_b_e(), C_n_e, atol=1e-15)
+    assert np.all(traj.velocity == 0.0)
+    w_n = earth.OMEGA_E * np.array([np.cos(lat), 0.0, -np.sin(lat)])
+    assert np.allclose(traj.angular_rate, w_n, atol=1e-18)
+    gamma_n = C_n_e.T @ earth.normal_gravity_ecef(traj.position[0])
+    assert np.allclose(traj.specific_force, -gamma_n, atol=1e-12)
+    assert traj.specific_force[0, 2] == pytest.approx(-9.787, abs=5e-3)
+    _, _, alt = traj.geodetic
+    assert np.allclose(alt, 629.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"lat_deg": -91.0}, "lat_deg"),
+    ({"duration_s": 0.0}, "duration_s"),
+    ({"rate_hz": float("inf")}, "rate_hz"),
+    ({"alt_m": "high"}, "alt_m"),
+])
+def test_stationary_bad_input(kwargs, name):
+    with pytest.raises(NavlibInputError, match=name):
+        stationary(**kwargs)
