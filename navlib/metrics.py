@@ -27,10 +27,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
-from scipy.linalg import cho_factor, cho_solve
 
 from navlib._validation import finite_array, finite_scalar
+from navlib.covariance import kalman_covariance
 from navlib.errors import NavlibInputError
+from navlib.observability import observability_matrix
 
 __all__ = [
     "ExcitabilityResult",
@@ -79,23 +80,37 @@ def _spd(value, name: str, size: int | None = None) -> np.ndarray:
     if arr.shape[0] != arr.shape[1] or (size is not None and arr.shape[0] != size):
         want = f"({size}, {size})" if size is not None else "square"
         raise NavlibInputError(f"{name}: expected a {want} matrix, got shape {arr.shape}")
-    _check_spd_stack(arr[None], name)
+    _check_covariances(arr[None], name)
     return 0.5 * (arr + arr.T)
 
 
-def _check_spd_stack(stack: np.ndarray, name: str) -> None:
-    scale = np.max(np.abs(stack), axis=(1, 2), keepdims=True)
-    asym = np.abs(stack - np.swapaxes(stack, 1, 2)) > 1e-9 * np.maximum(scale, np.finfo(float).tiny)
+def _check_covariances(stack: np.ndarray, name: str, definite: bool = True) -> None:
+    """Symmetric (to round-off) positive definite, or semi-definite when ``definite`` is False,
+    matrices; else a NavlibInputError naming the first bad one (``name[k]`` in a stack)."""
+    if stack.shape[0] == 0:
+        return
+
+    def label(k) -> str:
+        return f"{name}[{int(k)}]" if stack.shape[0] > 1 else name
+
+    scale = np.maximum(np.max(np.abs(stack), axis=(1, 2)), np.finfo(float).tiny)
+    asym = np.max(np.abs(stack - np.swapaxes(stack, 1, 2)), axis=(1, 2)) > 1e-9 * scale
     if np.any(asym):
-        k = int(np.flatnonzero(asym.any(axis=(1, 2)))[0])
-        where = f"{name}[{k}]" if stack.shape[0] > 1 else name
-        raise NavlibInputError(f"{where}: must be symmetric")
-    try:
-        np.linalg.cholesky(stack)
-    except np.linalg.LinAlgError:
-        bad = [k for k in range(stack.shape[0]) if np.linalg.eigvalsh(stack[k])[0] <= 0]
-        where = f"{name}[{bad[0]}]" if stack.shape[0] > 1 and bad else name
-        raise NavlibInputError(f"{where}: must be positive definite") from None
+        raise NavlibInputError(f"{label(np.flatnonzero(asym)[0])}: must be symmetric")
+    if definite:
+        try:
+            np.linalg.cholesky(stack)
+            return
+        except np.linalg.LinAlgError:
+            low = np.linalg.eigvalsh(stack)[:, 0]
+            k = np.argmin(low / scale)
+            raise NavlibInputError(f"{label(k)}: must be positive definite (smallest "
+                                   f"eigenvalue {low[k]:g})") from None
+    low = np.linalg.eigvalsh(0.5 * (stack + np.swapaxes(stack, 1, 2)))[:, 0]
+    bad = np.flatnonzero(low < -1e-9 * scale)
+    if bad.size:
+        raise NavlibInputError(f"{label(bad[0])}: must be positive semi-definite "
+                               f"(smallest eigenvalue {low[bad[0]]:g})")
 
 
 def _measurement_noise(R, n_epochs: int, m: int) -> np.ndarray:
@@ -107,7 +122,7 @@ def _measurement_noise(R, n_epochs: int, m: int) -> np.ndarray:
         raise NavlibInputError(
             f"R: expected shape ({m}, {m}) or ({n_epochs}, {m}, {m}), got {R.shape}"
         )
-    _check_spd_stack(R, "R")
+    _check_covariances(R, "R")
     return 0.5 * (R + np.swapaxes(R, 1, 2))
 
 
@@ -163,19 +178,6 @@ def _whiten(H: np.ndarray, R: np.ndarray, sqrt_d: np.ndarray) -> np.ndarray:
     """
     L = np.linalg.cholesky(R)
     return np.linalg.solve(L, H * sqrt_d)
-
-
-def _transition_products(F: np.ndarray) -> np.ndarray:
-    """``Phi[k] = F[k-1] ... F[0]`` (``Phi[0] = I``) by a log-depth batched prefix product."""
-    n_steps, n = F.shape[0], F.shape[-1]
-    Phi = np.empty((n_steps + 1, n, n))
-    Phi[0] = np.eye(n)
-    Phi[1:] = F
-    offset = 1
-    while offset <= n_steps:
-        Phi[offset:] = Phi[offset:] @ Phi[:-offset]
-        offset *= 2
-    return Phi
 
 
 # --------------------------------------------------------------------------- excitability
@@ -289,8 +291,9 @@ def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | N
     Notes
     -----
     Normalisation per the corrected Eq. 11 (spec A10): ``F~ = D0^-1/2 F D0^1/2``,
-    ``H~ = R0^-1/2 H D0^1/2``. ``O~ = [H~0; H~1 F~0; H~2 F~1 F~0; ...]`` is built with a
-    batched prefix product, reduced by QR and decomposed by SVD, never by eigenvalues of
+    ``H~ = R0^-1/2 H D0^1/2``. ``O~ = [H~0; H~1 F~0; H~2 F~1 F~0; ...]`` is stacked by
+    :func:`navlib.observability.observability_matrix`, reduced by QR and decomposed by SVD
+    (full right basis also when ``N m < n``), never by eigenvalues of
     ``O~' O~`` whose spectrum spans tens of decades (spec A12). ``sigma^i`` are the squared
     singular values (zero-padded when ``N m < n``), ``S = n sigma / sum(sigma)`` (Eq. 19).
     """
@@ -305,7 +308,7 @@ def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | N
 
     F_n = F * sqrt_d / sqrt_d[:, None]
     H_n = _whiten(H, np.broadcast_to(R0, (H.shape[0], m, m)), sqrt_d)
-    O = (H_n @ _transition_products(F_n)).reshape(-1, n)
+    O = observability_matrix(F_n, H_n)
     if not np.all(np.isfinite(O)):
         raise NavlibInputError("F: the normalised transition products overflow; "
                                "check the units of F and P0")
@@ -405,44 +408,19 @@ def _sensible(r: np.ndarray, V: np.ndarray, nu: float) -> tuple[np.ndarray, np.n
     return nr, s
 
 
-def _cho_inverse(matrix: np.ndarray) -> np.ndarray:
-    inverse = cho_solve(cho_factor(matrix, lower=True), np.eye(matrix.shape[0]))
-    return 0.5 * (inverse + inverse.T)
-
-
-def _covariance_recursion(F_n, Q_n, W, P0_n, prior_update: bool):
-    """Normalised posterior covariances and information at every epoch (Eq. 10).
-
-    ``W[k] = R_k^-1/2 H_k D0^1/2`` (whitened, so the measurement noise is I). The update is
-    the Joseph form ``P = (I - K W) P- (I - K W)' + K K'``, the information its Cholesky
-    inverse: algebraically ``I_k = (P-_k)^-1 + W' W`` (Eq. 10b) without inverting ``P-``.
-    """
-    n_epochs, n = W.shape[0], W.shape[-1]
-    eye_n = np.eye(n)
-    P_all = np.empty((n_epochs, n, n))
-    I_all = np.empty((n_epochs, n, n))
-
-    def update(P_prior, W_k):
-        S = W_k @ P_prior @ W_k.T + np.eye(W_k.shape[0])
-        K = np.linalg.solve(S, W_k @ P_prior).T
-        A = eye_n - K @ W_k
-        P_post = A @ P_prior @ A.T + K @ K.T
-        return 0.5 * (P_post + P_post.T)
-
-    P = update(P0_n, W[0]) if prior_update else P0_n
-    for k in range(n_epochs):
-        if k > 0:
-            P = F_n[k - 1] @ P @ F_n[k - 1].T + Q_n[k - 1]
-            P = update(0.5 * (P + P.T), W[k])
-        try:
-            I_all[k] = _cho_inverse(P)
-        except np.linalg.LinAlgError:
-            raise NavlibInputError(
-                f"F, Q: the posterior covariance at epoch {k} is not positive definite "
-                "(singular F with zero Q?), so the information matrix is undefined"
-            ) from None
-        P_all[k] = P
-    return P_all, I_all
+def _information(P_n: np.ndarray) -> np.ndarray:
+    """Batched ``P~^-1`` through Cholesky factors; a non-definite ``P~`` names its epoch."""
+    try:
+        L = np.linalg.cholesky(P_n)
+    except np.linalg.LinAlgError:
+        bad = int(np.flatnonzero(np.linalg.eigvalsh(P_n)[:, 0] <= 0)[0])
+        raise NavlibInputError(
+            f"F, Q: the posterior covariance at epoch {bad} is not positive definite "
+            "(singular F with zero Q?), so the information matrix is undefined"
+        ) from None
+    L_inv = np.linalg.inv(L)
+    info = np.swapaxes(L_inv, 1, 2) @ L_inv
+    return 0.5 * (info + np.swapaxes(info, 1, 2))
 
 
 def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
@@ -479,16 +457,19 @@ def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
     Recursion (Eq. 10): ``P-_{k+1} = F_k P_k F_k' + Q_k``, ``I_{k+1} = (P-_{k+1})^-1 +
     H' R^-1 H``, run in the normalised coordinates of the corrected Eq. 11 (spec A10), where it
     is the transformed physical recursion: ``I~ = D0^1/2 I D0^1/2``. ``R0`` cancels from
-    ``H~' R~^-1 H~``, so sensability needs none. The ``I~_k`` are eigen-decomposed in one
-    batched ``eigh`` after the recursion.
+    ``H~' R~^-1 H~``, so sensability needs none. Numerically the measurements are whitened
+    (``W_k = L_k^-1 H_k D0^1/2`` with ``R_k = L_k L_k'``), the covariance form with the
+    Joseph update (:func:`navlib.covariance.kalman_covariance`) gives ``P~_k`` without
+    inverting ``P-``, and ``I~_k = P~_k^-1`` follows by batched Cholesky inversion
+    (algebraically equal to the information form of Eq. 10b). The ``I~_k`` are
+    eigen-decomposed in one batched ``eigh`` after the recursion.
     """
     F, H = _system(F, H)
     n_epochs, m, n = H.shape
     Q = _square_stack(Q, "Q")
     if Q.shape != F.shape:
         raise NavlibInputError(f"Q: expected shape {F.shape} like F, got {Q.shape}")
-    if np.any(np.abs(Q - np.swapaxes(Q, 1, 2)) > 1e-9 * max(np.max(np.abs(Q), initial=0), 1e-300)):
-        raise NavlibInputError("Q: must be symmetric")
+    _check_covariances(Q, "Q", definite=False)
     R = _measurement_noise(R, n_epochs, m)
     P0 = _spd(P0, "P0", n)
     nu = _nu(nu)
@@ -503,8 +484,10 @@ def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
     F_n = F * sqrt_d / sqrt_d[:, None]
     Q_n = Q / np.outer(sqrt_d, sqrt_d)
     W = _whiten(H, R, sqrt_d)
-    P_n, info = _covariance_recursion(F_n, Q_n, W, P0 / np.outer(sqrt_d, sqrt_d),
-                                      bool(prior_update))
+    covariance = kalman_covariance(F_n, Q_n, W, np.eye(m), P0 / np.outer(sqrt_d, sqrt_d),
+                                   update_first=bool(prior_update))
+    P_n = covariance.P_post
+    info = _information(P_n)
 
     lam, V = np.linalg.eigh(info)
     lam, V = lam[:, ::-1], V[:, :, ::-1]
@@ -608,12 +591,13 @@ def _filter_variances(P_filter, model, P0, k: int, t_a: float) -> np.ndarray:
         if hit.size == 0:
             raise NavlibInputError(f"P_filter: has no epoch at the segment start {t_a} s "
                                    f"(model epoch {model.t[k]} s)")
-        for attribute in ("P", "covariance"):
+        for attribute in ("P_post", "P", "covariance"):
             if hasattr(P_filter, attribute):
                 return np.diagonal(np.asarray(getattr(P_filter, attribute))[hit[0]]).copy()
         if hasattr(P_filter, "sigma"):
             return np.asarray(P_filter.sigma, dtype=float)[hit[0]] ** 2
-        raise NavlibInputError("P_filter: a result object needs `P`, `covariance` or `sigma`")
+        raise NavlibInputError("P_filter: a result object needs `P_post`, `P`, `covariance` "
+                               "or `sigma`")
     P = finite_array(P_filter, "P_filter")
     if P.shape == (n, n):
         return np.diag(P).copy()
@@ -645,9 +629,10 @@ def excitability_segment(model, t_a: float, t_b: float, P0=None, R0=None, eta: f
         (option B) from the filter covariance at the segment start.
     P_filter : optional
         For ``d0="filter"``: an (n, n) covariance at the segment start, an (N, n, n) stack
-        along the model epochs, or a result with ``t`` and ``P``/``covariance``/``sigma``
-        (e.g. :class:`SensabilityResult`). Default: the recursion of :func:`sensability_model`
-        from ``P0`` at the model's first epoch.
+        along the model epochs, or a result with ``t`` and ``P_post``/``P``/``sigma`` (a
+        :class:`navlib.covariance.CovarianceResult` or :class:`SensabilityResult`).
+        Default: the recursion of :func:`sensability_model` from ``P0`` at the model's first
+        epoch.
     """
     _check_model(model)
     if d0 not in D0_CHOICES:
