@@ -156,3 +156,79 @@ def test_analyze_rejects_bad_arguments():
         analyze(np.eye(2), scale=[1.0, 0.0])
     with pytest.raises(NavlibInputError, match="O"):
         analyze(np.ones(3))
+
+
+# ---------------------------------------------------------------- local observability
+def random_discrete(seed=0, N=40, n=4, m=2):
+    from navlib.models import DiscreteModel
+
+    rng = np.random.default_rng(seed)
+    F = np.eye(n) + 0.1 * rng.normal(size=(N - 1, n, n))
+    H = rng.normal(size=(N, m, n))
+    return DiscreteModel(t=0.5 * np.arange(N), F=F, Q=np.zeros_like(F), H=H,
+                         R=np.broadcast_to(np.eye(m), (N, m, m)),
+                         state_names=tuple(f"s{i}" for i in range(n)))
+
+
+@pytest.mark.parametrize("stride", [1, 3])
+@pytest.mark.parametrize("n_jobs", [1, 2])
+def test_local_time_varying_matches_per_step_matrices(stride, n_jobs):
+    from navlib.observability import local_matrix, local_observability
+
+    model = random_discrete()
+    res = local_observability(model, stride=stride, n_jobs=n_jobs, chunk=5)
+    N, n = model.t.size, model.n
+    np.testing.assert_array_equal(res.step, np.arange(0, N - n + 1, stride))
+    for i, k in enumerate(res.step):
+        O = observability_matrix(model.F[k:k + n - 1], model.H[k:k + n])
+        np.testing.assert_allclose(local_matrix(model, k), O, rtol=1e-12, atol=1e-12)
+        s = np.linalg.svd(O, compute_uv=False)
+        np.testing.assert_allclose(res.singular_values[i], s, rtol=1e-10)
+        assert res.rank[i] == np.linalg.matrix_rank(O)
+        assert np.isclose(res.cond[i], s[0] / s[-1])
+    assert res.t[1] == model.t[stride]
+
+
+def test_local_frozen_matches_pwcs_matrices():
+    from navlib.observability import local_matrix, local_observability
+
+    model = random_discrete(seed=4)
+    res = local_observability(model, variant="frozen", window=3, stride=2)
+    assert res.step[-1] <= model.t.size - 2
+    for i, k in enumerate(res.step):
+        O = observability_matrix(model.F[k], model.H[k], n_rows=3)
+        np.testing.assert_allclose(local_matrix(model, k, window=3, variant="frozen"), O)
+        np.testing.assert_allclose(res.singular_values[i], np.linalg.svd(O, compute_uv=False),
+                                   rtol=1e-10)
+
+
+def test_local_rank_drops_when_state_unobservable_and_rtol_rerank():
+    from navlib.observability import local_observability
+
+    model = random_discrete(seed=5, n=3, m=1)
+    H = np.array(model.H)
+    H[:, 0, 2] = 0.0                     # never measure state 2 ...
+    F = np.array(model.F)
+    F[:, :, 2] = 0.0                     # ... and let it feed nothing
+    F[:, 2, 2] = 1.0
+    from dataclasses import replace
+
+    res = local_observability(replace(model, H=H, F=F))
+    assert np.all(res.rank == 2) and res.rank_constant and res.n_unobservable == 1
+    assert res.log10_max_cond > 14
+    loose = res.with_rtol(0.5)
+    assert loose.rank.max() <= 2 and loose.rtol == 0.5
+    frame = res.to_frame()
+    assert list(frame.columns) == ["t", "step", "rank", "n_unobservable", "cond", "log10_cond"]
+
+
+def test_local_observability_rejects_bad_input():
+    from navlib.observability import local_observability
+
+    model = random_discrete(N=5)
+    with pytest.raises(NavlibInputError, match="variant"):
+        local_observability(model, variant="pwcs")
+    with pytest.raises(NavlibInputError, match="window"):
+        local_observability(model, window=9)
+    with pytest.raises(NavlibInputError, match="model"):
+        local_observability(np.eye(3))
