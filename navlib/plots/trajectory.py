@@ -1,0 +1,167 @@
+"""Figures for reference trajectories and the strapdown closure check (notebook 01).
+
+Each builder takes library results (a :class:`navlib.trajectory.Trajectory` or a
+:class:`navlib.strapdown.ClosureError`) and returns a new matplotlib Figure; nothing is
+computed here beyond unit conversion and the body-axis elevation used for display.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from navlib import earth
+from navlib.units import DEG, DEG_PER_HOUR
+
+ROCKET_MARKERS = ("ignition", "burnout", "free_flight", "despin")
+"""Events marked on the Fig. 1 analogue (paper: 18, 46, 60 and 73 s)."""
+
+_TWO_PI = 2.0 * np.pi
+
+
+def _mark_events(ax, events: dict, which: Iterable[str] | None, label: bool) -> None:
+    """Dotted vertical lines at the chosen events, names written along the top axis."""
+    names = list(events) if which is None else [w for w in which if w in events]
+    for name in names:
+        t = events[name]
+        ax.axvline(t, color="0.4", linestyle=":", linewidth=1.0)
+        if label:
+            ax.annotate(f"{name} {t:g} s", (t, 1.0), xycoords=("data", "axes fraction"),
+                        xytext=(2, -2), textcoords="offset points", rotation=90,
+                        va="top", ha="left", fontsize=7, color="0.3")
+
+
+def _title(traj) -> str:
+    return traj.name or "trajectory"
+
+
+def axial_imu_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
+    """Fig. 1 analogue (España et al. 2019): axial specific force f_x and rate w_x vs time.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        Body x is the rocket axis.
+    markers : iterable of str or None
+        Event names to mark (None: every event of ``traj``).
+    """
+    fig, (ax_f, ax_w) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5), layout="constrained")
+    ax_f.plot(traj.t, traj.specific_force[:, 0], color="C0")
+    ax_f.axhline(0.0, color="0.7", linewidth=0.8)
+    ax_f.set_ylabel("axial specific force $f_x$ [m/s²]")
+    ax_w.plot(traj.t, traj.angular_rate[:, 0], color="C1")
+    ax_w.set_ylabel(r"axial rate $\omega_{x}$ [rad/s]")
+    ax_w.set_xlabel("time [s]")
+    hz = ax_w.secondary_yaxis("right", functions=(lambda w: w / _TWO_PI, lambda h: h * _TWO_PI))
+    hz.set_ylabel("[rev/s]")
+    _mark_events(ax_f, traj.events, markers, label=True)
+    _mark_events(ax_w, traj.events, markers, label=False)
+    fig.suptitle(f"{_title(traj)}: axial IMU signals (Fig. 1 analogue)")
+    return fig
+
+
+def altitude_speed_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
+    """Ellipsoidal height (km) and ECEF speed (m/s) vs time with event markers."""
+    _, _, alt = traj.geodetic
+    speed = np.linalg.norm(traj.velocity, axis=1)
+    fig, (ax_h, ax_v) = plt.subplots(2, 1, sharex=True, figsize=(8, 5), layout="constrained")
+    ax_h.plot(traj.t, alt / 1e3, color="C2")
+    ax_h.set_ylabel("height [km]")
+    ax_v.plot(traj.t, speed, color="C3")
+    ax_v.set_ylabel("speed (ECEF) [m/s]")
+    ax_v.set_xlabel("time [s]")
+    _mark_events(ax_h, traj.events, markers, label=True)
+    _mark_events(ax_v, traj.events, markers, label=False)
+    fig.suptitle(f"{_title(traj)}: height and speed")
+    return fig
+
+
+def body_x_elevation(traj) -> np.ndarray:
+    """Elevation (rad) of the body x axis above the local horizontal plane, per sample.
+
+    The display "pitch" of an ascending vehicle; unlike a ZYX Euler pitch it stays defined
+    whatever the roll.
+    """
+    lat, lon, _ = traj.geodetic
+    up = -earth.ned_to_ecef_matrix(lat, lon)[:, :, 2]
+    x_e = traj.attitude.apply(np.array([1.0, 0.0, 0.0]))
+    return np.arcsin(np.clip(np.einsum("ni,ni->n", x_e, up), -1.0, 1.0))
+
+
+def launcher_figure(traj, markers: Iterable[str] | None = None):
+    """Launcher ascent: body specific force, body-x elevation (pitch) and height vs time."""
+    _, _, alt = traj.geodetic
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), layout="constrained")
+    for i, axis in enumerate("xyz"):
+        axes[0].plot(traj.t, traj.specific_force[:, i], label=f"$f_{axis}$")
+    axes[0].plot(traj.t, np.linalg.norm(traj.specific_force, axis=1), "k--", lw=0.8,
+                 label="|f|")
+    axes[0].set_ylabel("specific force [m/s²]")
+    axes[0].legend(ncol=4, fontsize=8)
+    axes[1].plot(traj.t, body_x_elevation(traj) / DEG, color="C4")
+    axes[1].set_ylabel("body-x elevation [deg]")
+    axes[2].plot(traj.t, alt / 1e3, color="C2")
+    axes[2].set_ylabel("height [km]")
+    axes[2].set_xlabel("time [s]")
+    for k, ax in enumerate(axes):
+        _mark_events(ax, traj.events, markers, label=k == 0)
+    fig.suptitle(f"{_title(traj)}: specific force, pitch and height")
+    return fig
+
+
+def stationary_figure(traj):
+    """Vehicle at rest: |f| against normal gravity and |w_ib| against the Earth rate.
+
+    The lower half of each panel shows the difference, which for an exact IMU is round-off.
+    """
+    g_ref = np.linalg.norm(earth.normal_gravity_ecef(traj.position), axis=1)
+    f_mag = np.linalg.norm(traj.specific_force, axis=1)
+    w_mag = np.linalg.norm(traj.angular_rate, axis=1)
+    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(9, 5), layout="constrained")
+    axes[0, 0].plot(traj.t, f_mag, label="|f| (accelerometers)")
+    axes[0, 0].plot(traj.t, g_ref, "k--", lw=0.8, label="|γ| normal gravity")
+    axes[0, 0].set_ylabel("[m/s²]")
+    axes[0, 0].legend(fontsize=8)
+    axes[1, 0].plot(traj.t, f_mag - g_ref, color="C0")
+    axes[1, 0].set_ylabel("|f| − |γ| [m/s²]")
+    axes[0, 1].plot(traj.t, w_mag / DEG_PER_HOUR, color="C1", label="|ω_ib| (gyros)")
+    axes[0, 1].axhline(earth.OMEGA_E / DEG_PER_HOUR, color="k", ls="--", lw=0.8,
+                       label="Ω Earth rate")
+    axes[0, 1].set_ylabel("[deg/h]")
+    axes[0, 1].legend(fontsize=8)
+    axes[1, 1].plot(traj.t, (w_mag - earth.OMEGA_E) / DEG_PER_HOUR, color="C1")
+    axes[1, 1].set_ylabel("|ω_ib| − Ω [deg/h]")
+    for ax in axes[1]:
+        ax.set_xlabel("time [s]")
+        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
+    fig.suptitle(f"{_title(traj)}: the IMU at rest senses gravity and the Earth rate")
+    return fig
+
+
+def closure_error_figure(closure, position_tol_m: float | None = 1.0,
+                         attitude_tol_rad: float | None = 1e-4, events: dict | None = None):
+    """Strapdown closure: position (m), velocity (m/s) and attitude (mrad) error vs time.
+
+    Dashed lines show the tolerances (issue 2: 1 m and 0.1 mrad at the end of the flight).
+    """
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6), layout="constrained")
+    axes[0].plot(closure.t, closure.position_error, color="C0")
+    axes[0].set_ylabel("position [m]")
+    axes[1].plot(closure.t, closure.velocity_error, color="C3")
+    axes[1].set_ylabel("velocity [m/s]")
+    axes[2].plot(closure.t, closure.attitude_error * 1e3, color="C1")
+    axes[2].set_ylabel("attitude [mrad]")
+    axes[2].set_xlabel("time [s]")
+    if position_tol_m is not None:
+        axes[0].axhline(position_tol_m, color="k", ls="--", lw=0.8, label="tolerance")
+        axes[0].legend(fontsize=8)
+    if attitude_tol_rad is not None:
+        axes[2].axhline(attitude_tol_rad * 1e3, color="k", ls="--", lw=0.8, label="tolerance")
+        axes[2].legend(fontsize=8)
+    if events:
+        for k, ax in enumerate(axes):
+            _mark_events(ax, events, ROCKET_MARKERS, label=k == 0)
+    fig.suptitle("strapdown re-integration of the exact IMU: error against the truth")
+    return fig
