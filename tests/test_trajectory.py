@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, earth
-from navlib.trajectory import sounding_rocket, stationary
+from navlib.trajectory import launcher_ascent, sounding_rocket, stationary
 from navlib.units import DEG
 
 
@@ -175,6 +175,90 @@ def test_rocket_keyword_overrides_change_flight():
 def test_rocket_bad_input(kwargs, name):
     with pytest.raises(NavlibInputError, match=name):
         sounding_rocket(**kwargs)
+
+
+# --- launcher (spec launcher.md §4) ------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def launcher():
+    return launcher_ascent()
+
+
+def test_launcher_sampling_and_events(launcher):
+    assert launcher.rate_hz == pytest.approx(200.0)
+    assert launcher.t[-1] == pytest.approx(150.0) and len(launcher) == 30001
+    ev = launcher.events
+    assert ev["liftoff"] == 0.0 and ev["stage1_burnout"] == 109.0
+    assert ev["stage1_burnout"] <= ev["separation"] < ev["stage2_ignition"] < ev["end"]
+
+
+def test_launcher_liftoff_vertical_thrust_over_mass(launcher):
+    p = launcher.parameters
+    assert np.abs(launcher.velocity[0]).max() < 1e-12
+    f0 = launcher.specific_force[0]
+    assert f0[0] == pytest.approx(p["stage1_thrust_n"] / p["mass_liftoff_kg"], rel=1e-9)
+    assert np.abs(f0[1:]).max() < 1e-9
+    lat, lon, _ = earth.ecef_to_geodetic(launcher.position[0])
+    x_n = earth.ned_to_ecef_matrix(lat, lon).T @ launcher.attitude[0].apply([1.0, 0, 0])
+    assert x_n[2] == pytest.approx(-1.0, abs=1e-12)   # body x straight up: no gimbal lock
+    assert np.degrees(lat) == pytest.approx(58.73) and np.degrees(lon) == pytest.approx(-93.82)
+
+
+def test_launcher_near_zero_lateral_specific_force(launcher):
+    f = launcher.specific_force
+    assert np.abs(f[:, 1:]).max() < 0.05
+    assert np.all(np.abs(f[:, 0]) > 0.0)
+
+
+def test_launcher_staging(launcher):
+    t, f_x = launcher.t, launcher.specific_force[:, 0]
+    p = launcher.parameters
+    before = f_x[(t > 100.0) & (t < 107.0)]
+    assert np.all(before > 30.0)                        # stage 1 near burnout, light vehicle
+    coast = (t > 109.0) & (t < 111.0)
+    assert np.all(np.abs(f_x[coast]) < 2.0)             # drag only between the stages
+    k = int(np.argmin(np.abs(t - 112.0)))
+    upper = p["mass_liftoff_kg"] - p["stage1_propellant_kg"] - p["stage1_dry_kg"]
+    assert f_x[k] == pytest.approx(p["stage2_thrust_n"] / upper, rel=0.05)
+
+
+def test_launcher_climbs_towards_sun_synchronous_azimuth(launcher):
+    az = launcher.parameters["azimuth_deg"]
+    assert az == pytest.approx(np.degrees(np.arcsin(np.cos(97.4 * DEG) / np.cos(58.73 * DEG))))
+    assert -20.0 < az < -10.0                            # north-north-west
+    lat, lon, alt = launcher.geodetic
+    v_n = earth.ned_to_ecef_matrix(lat[-1], lon[-1]).T @ launcher.velocity[-1]
+    assert np.degrees(np.arctan2(v_n[1], v_n[0])) == pytest.approx(az, abs=2.0)
+    elevation = np.degrees(np.arctan2(-v_n[2], np.hypot(v_n[0], v_n[1])))
+    assert 10.0 < elevation < 60.0                      # gravity turn well under way
+    assert 40e3 < alt[-1] < 150e3                        # still endo-atmospheric-ish
+
+
+def test_launcher_consistency_and_override():
+    traj = launcher_ascent(duration_s=30.0, rate_hz=100.0)
+    assert traj.t[-1] == pytest.approx(30.0)
+    assert "stage1_burnout" not in traj.events
+    t, P, V = traj.t, traj.position, traj.velocity
+    fd = (P[2:] - P[:-2]) / (t[2:] - t[:-2])[:, None]
+    assert np.abs(fd - V[1:-1]).max() < 1e-4
+    dv = (V[2:] - V[:-2]) / (t[2:] - t[:-2])[:, None]
+    f_e = dv + 2 * np.cross(earth.EARTH_RATE_ECEF, V[1:-1]) - earth.normal_gravity_ecef(P[1:-1])
+    assert np.abs(f_e - traj.attitude[1:-1].apply(traj.specific_force[1:-1])).max() < 1e-3
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"stage1_burnout_s": 20.0}, "pitchover_s"),
+    ({"stage2_ignition_s": 105.0}, "stage2_ignition_s"),
+    ({"duration_s": 1000.0}, "duration_s"),
+    ({"inclination_deg": 20.0}, "inclination_deg"),
+    ({"lat_deg": float("nan")}, "lat_deg"),
+    ({"stage1_thrust_n": 1e5}, "stage1_thrust_n"),
+    ({"azimuth_deg": "north"}, "azimuth_deg"),
+    ({"spin_hz": 1.0}, "spin_hz"),
+])
+def test_launcher_bad_input(kwargs, name):
+    with pytest.raises(NavlibInputError, match=name):
+        launcher_ascent(**kwargs)
 
 
 # --- stationary --------------------------------------------------------------------------

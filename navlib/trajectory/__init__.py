@@ -5,7 +5,11 @@ Contract (spec/api.md): ``sounding_rocket``, ``launcher_ascent``, ``stationary``
 """
 
 from navlib.trajectory.base import Trajectory, build_trajectory, exact_imu
+from navlib.trajectory.launcher import launcher_ascent
 from navlib.trajectory.rocket import sounding_rocket
 from navlib.trajectory.stationary import stationary
 
-__all__ = ["Trajectory", "build_trajectory", "exact_imu", "sounding_rocket", "stationary"]
+__all__ = [
+    "Trajectory", "build_trajectory", "exact_imu", "launcher_ascent", "sounding_rocket",
+    "stationary",
+]

@@ -10,9 +10,13 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
+from scipy.integrate import solve_ivp
 from scipy.interpolate import make_interp_spline
 
+from navlib.errors import NavlibInputError
 from navlib.trajectory._attitude import pointing_angles, zyx_attitude
 from navlib.trajectory.base import build_trajectory
 
@@ -29,17 +33,21 @@ class RestStartSpline:
     """Quintic spline of ``y(t)`` with ``y = y' = y'' = 0`` for ``t <= t0``.
 
     Built by interpolating samples ``y`` on ``grid`` (``grid[0] = t0``, ``y[0] = 0``) with the
-    end conditions ``y'(t0) = y''(t0) = 0`` and the given derivatives at the right end, so
-    the function is C^2 everywhere (C^4 after ``t0``) and identically zero before ``t0``.
+    end conditions ``y'(t0) = 0``, ``y''(t0) = d2y_start`` (zero by default) and the given
+    derivatives at the right end, so the function is C^2 everywhere (C^4 after ``t0``) and
+    identically zero before ``t0``. A non-zero ``d2y_start`` (a hold-down release) is only
+    meant for splines whose domain starts at ``t0``.
     """
 
-    def __init__(self, grid, y, dy_end, d2y_end):
+    def __init__(self, grid, y, dy_end, d2y_end, d2y_start=None):
         y = np.asarray(y, dtype=float)
         zero = np.zeros(y.shape[1:])
+        start2 = zero if d2y_start is None else np.asarray(d2y_start, dtype=float)
         self.t0 = float(grid[0])
         self.spline = make_interp_spline(
             grid, y - y[0], k=5,
-            bc_type=([(1, zero), (2, zero)], [(1, np.asarray(dy_end)), (2, np.asarray(d2y_end))]),
+            bc_type=([(1, zero), (2, start2)],
+                     [(1, np.asarray(dy_end)), (2, np.asarray(d2y_end))]),
         )
 
     def __call__(self, t, nu=0):
@@ -106,7 +114,47 @@ def assemble(t, P0, displacement, pointing, C_L_e, roll, *, events, name, parame
                             parameters=parameters)
 
 
+def integrate(rhs, grid, y0, breakpoints, rtol=1e-10, atol=1e-6):
+    """Integrate ``dy/dt = rhs(t, y)`` with DOP853 and return ``y`` on ``grid`` (N, n).
+
+    The span is split at ``breakpoints`` (starts and ends of thrust ramps and other short
+    events) so that adaptive steps never stride over them; inside each piece the
+    right-hand side is smooth and the steps can be long.
+    """
+    cuts = np.unique(np.clip(np.r_[grid[0], np.asarray(breakpoints, float), grid[-1]],
+                             grid[0], grid[-1]))
+    out = np.empty((grid.size, np.size(y0)))
+    y = np.asarray(y0, dtype=float)
+    for lo, hi in itertools.pairwise(cuts):
+        inside = (grid >= lo) & (grid < hi)
+        t_eval = np.r_[grid[inside], hi]
+        sol = solve_ivp(rhs, (lo, hi), y, method="DOP853", t_eval=t_eval, rtol=rtol,
+                        atol=atol)
+        if not sol.success:  # pragma: no cover - smooth right-hand sides do not fail
+            raise NavlibInputError(f"flight integration failed: {sol.message}")
+        out[inside] = sol.y[:, :-1].T
+        y = sol.y[:, -1]
+    out[-1] = y
+    return out
+
+
 def output_times(end_s, rate_hz, start_s=0.0):
     """Regular sample times ``start_s, start_s + 1/rate, ...`` up to ``end_s`` inclusive."""
     n = int(np.floor((end_s - start_s) * rate_hz + 1e-9)) + 1
     return start_s + np.arange(n) / rate_hz
+
+
+def step(t, start, duration):
+    """Scalar ``smoothstep((t - start) / duration)`` (fast path for ODE right-hand sides)."""
+    x = (t - start) / duration
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    return x**4 * (35.0 - 84.0 * x + 70.0 * x**2 - 20.0 * x**3)
+
+
+def ramp_integral(x):
+    """``integral_0^x smoothstep`` for x in [0, 1] (propellant used during the ramp)."""
+    x = np.clip(x, 0.0, 1.0)
+    return x**5 * (7.0 - 14.0 * x + 10.0 * x**2 - 2.5 * x**3)

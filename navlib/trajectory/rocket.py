@@ -34,7 +34,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from navlib import earth
@@ -45,8 +44,11 @@ from navlib.trajectory._flight import (
     RHO_SEA_LEVEL,
     RestStartSpline,
     assemble,
+    integrate,
     output_times,
+    ramp_integral,
     roll_spline,
+    step,
 )
 from navlib.trajectory.base import Trajectory
 from navlib.units import DEG
@@ -186,7 +188,7 @@ def sounding_rocket(**overrides) -> Trajectory:
     v_exhaust = thrust_n * burn_eff / (m0 - m_bo)
 
     def thrust(t):
-        return thrust_n * _step(t, t_ign, tau_ign) * (1.0 - _step(t, t_bo - tau_tail, tau_tail))
+        return thrust_n * step(t, t_ign, tau_ign) * (1.0 - step(t, t_bo - tau_tail, tau_tail))
 
     # lift-off: thrust beats the weight component along the rail (mass still ~ m0)
     def net_along_rail(t):
@@ -197,7 +199,7 @@ def sounding_rocket(**overrides) -> Trajectory:
             f"thrust_n: {thrust_n} N cannot lift {m0} kg along a rail at "
             f"{p['rail_elevation_deg']} deg (needs > {-m0 * (gamma0 @ r_hat):.0f} N)")
     t_lift = brentq(net_along_rail, t_ign, t_ign + tau_ign, xtol=1e-12)
-    m_lift = m0 - (thrust_n / v_exhaust) * tau_ign * _ramp_integral((t_lift - t_ign) / tau_ign)
+    m_lift = m0 - (thrust_n / v_exhaust) * tau_ign * ramp_integral((t_lift - t_ign) / tau_ign)
 
     fade_start = p["rail_length_m"] - p["rail_fade_m"]
     fade_len = p["rail_fade_m"]
@@ -209,7 +211,7 @@ def sounding_rocket(**overrides) -> Trajectory:
         # scalar arithmetic where possible: this runs a few thousand times per flight
         P, V, m = y[:3], y[3:6], y[6]
         speed = math.sqrt(V[0] ** 2 + V[1] ** 2 + V[2] ** 2)
-        rail = 1.0 - _step((P - P0) @ r_hat, fade_start, fade_len)
+        rail = 1.0 - step((P - P0) @ r_hat, fade_start, fade_len)
         v_hat = V / speed if speed > 0.0 else r_hat
         u = rail * r_hat + (1.0 - rail) * v_hat
         u = u / math.sqrt(u @ u)
@@ -226,12 +228,9 @@ def sounding_rocket(**overrides) -> Trajectory:
     n_grid = int(np.ceil((t_end - t_lift) / p["grid_step_s"])) + 1
     grid = np.linspace(t_lift, t_end, n_grid)
     y0 = np.concatenate([P0, np.zeros(3), [m_lift]])
-    sol = solve_ivp(rhs, (t_lift, t_end), y0, method="DOP853", t_eval=grid, rtol=1e-10,
-                    atol=np.r_[1e-6 * np.ones(6), 1e-6], max_step=0.25)
-    if not sol.success:  # pragma: no cover - a smooth RHS does not fail
-        raise NavlibInputError(f"sounding_rocket: flight integration failed ({sol.message})")
-    P_grid, V_grid = sol.y[:3].T, sol.y[3:6].T
-    acc_end = rhs(grid[-1], sol.y[:, -1])[3:6]
+    y_grid = integrate(rhs, grid, y0, [t_ign + tau_ign, t_bo - tau_tail, t_bo])
+    P_grid, V_grid = y_grid[:, :3], y_grid[:, 3:6]
+    acc_end = rhs(grid[-1], y_grid[-1])[3:6]
     displacement = RestStartSpline(grid, P_grid - P0, V_grid[-1], acc_end)
 
     # spin: aerodynamic spin-up with speed, then a smooth de-spin step
@@ -273,19 +272,3 @@ def sounding_rocket(**overrides) -> Trajectory:
                   "liftoff_mass_kg": float(m_lift)}
     return assemble(t_out, P0, displacement, pointing, C_L_e, roll, events=events,
                     name="sounding rocket (VS30-like)", parameters=parameters)
-
-
-def _step(t, start, duration):
-    """Scalar :func:`smoothstep` of ``(t - start) / duration`` (fast path for the ODE)."""
-    x = (t - start) / duration
-    if x <= 0.0:
-        return 0.0
-    if x >= 1.0:
-        return 1.0
-    return x**4 * (35.0 - 84.0 * x + 70.0 * x**2 - 20.0 * x**3)
-
-
-def _ramp_integral(x):
-    """``integral_0^x smoothstep`` for x in [0, 1] (propellant used during the ramp)."""
-    x = np.clip(x, 0.0, 1.0)
-    return x**5 * (7.0 - 14.0 * x + 10.0 * x**2 - 2.5 * x**3)
