@@ -257,3 +257,16 @@ def test_bad_sensors_and_epochs(traj):
         ecef.discretize_at_epochs(model, [0, 100], method="rk4")
     with pytest.raises(NavlibInputError, match="hold"):
         ecef.discretize_at_epochs(model, [0, 100], hold="right")
+
+
+def test_batched_taylor_expm_matches_scipy():
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(5, 21, 21)) * np.array([0.01, 0.3, 1.0, 3.0, 8.0])[:, None, None]
+    X[2, 9:] = 0.0  # augmented-state structure: constant parameters
+    E = ecef.expm_taylor(X)
+    for k in range(5):
+        ref = expm(X[k])
+        np.testing.assert_allclose(E[k], ref, rtol=1e-11, atol=1e-12 * np.abs(ref).max())
+    np.testing.assert_array_equal(ecef.expm_taylor(np.zeros((2, 3, 3))), [np.eye(3)] * 2)
