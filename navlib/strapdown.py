@@ -1,0 +1,508 @@
+"""ECEF strapdown mechanisation for point-sampled IMU signals (spec excitability.md Eq. 1, A2).
+
+The navigation equations integrated here are those of España et al. (2019, Eq. 1) in ECEF::
+
+    dP/dt = V
+    dV/dt = C_b_e f_b + gamma(P) - 2 Omega x V          (gamma = normal gravity, spec A5)
+    dC_b_e/dt = C_b_e S(omega_ib_b) - S(Omega) C_b_e
+
+The IMU delivers **point samples** of ``f_b`` and ``omega_ib_b`` (not increments). Between
+samples both are reconstructed by cubic Lagrange interpolation through the four nearest
+samples (one-sided at the ends), which is fourth-order accurate like the integrator:
+
+* **Attitude.** Over a step ``[t_k, t_k + h]`` the attitude factorises exactly as
+  ``C(t_k + tau) = exp(-S(Omega) tau) C_k exp(S(phi(tau)))``: the Earth-rate part is a known
+  rotation about ECEF z and ``phi`` is the body rotation vector relative to inertial space,
+  driven by the Bortz equation in its body-rate form (spec A2,
+  :func:`navlib.rotations.bortz_rate`). ``phi(h)`` is integrated by classical RK4 using the
+  rates at ``0, h/2, h``; RK4 on the Bortz equation is exact for rotation about a fixed
+  axis, and the full equation (including the ``1/12`` coning term and its higher-order
+  coefficient) handles coning. ``phi(h/2)`` is integrated the same way and only serves to
+  rotate the mid-step specific force.
+* **Velocity and position.** Classical RK4 on ``(P, V)`` with the ECEF specific force
+  ``C(tau) f_b(tau)`` at ``0, h/2, h`` — sculling is accounted for because the body force
+  is rotated through the attitude *at* each abscissa, not through a step-start attitude.
+  Normal gravity (:func:`navlib.earth.normal_gravity_ecef`) is evaluated once per step at
+  the predicted points ``P_k + tau V_k`` (``tau = 0, h/2, h``); the neglected ``h^2/2 a``
+  offset changes gravity by ``|Gamma| h^2 a / 2`` (2e-8 m/s^2 at 110 m/s^2, 100 Hz).
+
+Because the attitude recursion does not depend on position or velocity, :func:`integrate`
+computes every step's rotation vector in one vectorised pass and chains them with a
+log-depth parallel prefix product of quaternions; only the translational recursion is a
+Python loop (one gravity call and a few 3-vector operations per step). :func:`step` is the
+same mechanisation for one interval, for filters that propagate sample by sample.
+
+Quaternions are stored scalar-last ``(x, y, z, w)`` like :mod:`scipy.spatial.transform`,
+and ``q_b_e`` rotates body vectors into ECEF.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.spatial.transform import Rotation
+
+from navlib import earth
+from navlib._validation import finite_array, finite_scalar, increasing_times
+from navlib.errors import NavlibInputError
+from navlib.rotations import bortz_rate
+
+_OMEGA = earth.OMEGA_E
+
+
+# --- quaternion arithmetic on (..., 4) scalar-last arrays ------------------------------------
+
+
+def _quat_mul(p, q):
+    """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``)."""
+    px, py, pz, pw = np.moveaxis(p, -1, 0)
+    qx, qy, qz, qw = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+            pw * qw - px * qx - py * qy - pz * qz,
+        ],
+        axis=-1,
+    )
+
+
+def _quat_from_rotvec(phi):
+    """Unit quaternion of ``exp(S(phi))`` with a series for small angles."""
+    angle = np.linalg.norm(phi, axis=-1)
+    half = 0.5 * angle
+    small = angle < 1e-4
+    safe = np.where(small, 1.0, angle)
+    # sin(a/2)/a, with its Taylor series 1/2 - a^2/48 below 1e-4 rad.
+    k = np.where(small, 0.5 - angle**2 / 48.0, np.sin(half) / safe)
+    return np.concatenate([k[..., None] * phi, np.cos(half)[..., None]], axis=-1)
+
+
+def _quat_rotate(q, v):
+    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4): ``C(q) v``."""
+    u = q[..., :3]
+    w = q[..., 3:]
+    uv = np.cross(u, v)
+    return v + 2.0 * (w * uv + np.cross(u, uv))
+
+
+def _earth_quat(tau):
+    """Quaternion of ``exp(-S(Omega) tau)``: rotation by ``-Omega tau`` about ECEF z."""
+    half = -0.5 * _OMEGA * np.asarray(tau, dtype=float)
+    zero = np.zeros_like(half)
+    return np.stack([zero, zero, np.sin(half), np.cos(half)], axis=-1)
+
+
+def _prefix_products(q):
+    """Running products ``q_0 ⊗ q_1 ⊗ ... ⊗ q_k`` of (N, 4) quaternions (Hillis–Steele scan).
+
+    Log-depth and vectorised: ``ceil(log2 N)`` batched products instead of N scalar ones.
+    """
+    out = np.array(q, dtype=float, copy=True)
+    shift = 1
+    while shift < len(out):
+        out[shift:] = _quat_mul(out[:-shift], out[shift:])
+        shift *= 2
+    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+
+
+# --- inter-sample reconstruction --------------------------------------------------------------
+
+
+def _interpolate(t, x, frac):
+    """Cubic Lagrange value of ``x`` at ``t_k + frac (t_{k+1} - t_k)`` for every interval k.
+
+    Uses the four samples ``k-1 .. k+2`` (shifted inwards at the ends; fewer when N < 4).
+    Returns (N-1, 3).
+    """
+    n = len(t)
+    p = min(4, n)
+    start = np.clip(np.arange(n - 1) - 1, 0, n - p)
+    idx = start[:, None] + np.arange(p)  # (N-1, p)
+    nodes = t[idx]
+    target = t[:-1] + frac * np.diff(t)
+    weights = np.ones((n - 1, p))
+    for j in range(p):
+        for m in range(p):
+            if m != j:
+                weights[:, j] *= (target - nodes[:, m]) / (nodes[:, j] - nodes[:, m])
+    return np.einsum("kj,kjd->kd", weights, x[idx])
+
+
+def _quadratic_quarter(x0, xm, x1):
+    """Value at ``h/4`` of the parabola through ``x0, xm, x1`` at ``0, h/2, h``."""
+    return 0.375 * x0 + 0.75 * xm - 0.125 * x1
+
+
+def _rotation_vector_rk4(w0, wm, w1, h):
+    """Body rotation vector over ``[0, h]`` from rates at ``0, h/2, h`` (RK4 on Bortz, A2).
+
+    ``w*`` are (..., 3), ``h`` is (...,) or scalar. Exact for a fixed rotation axis.
+    """
+    h = np.asarray(h, dtype=float)[..., None]
+    k2 = bortz_rate(0.5 * h * w0, wm)
+    k3 = bortz_rate(0.5 * h * k2, wm)
+    k4 = bortz_rate(h * k3, w1)
+    return h / 6.0 * (w0 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def _attitude_increments(w0, wm, w1, h):
+    """Body rotation vectors over the full step and over its first half."""
+    phi = _rotation_vector_rk4(w0, wm, w1, h)
+    phi_half = _rotation_vector_rk4(w0, _quadratic_quarter(w0, wm, w1), wm, 0.5 * h)
+    return phi, phi_half
+
+
+def _rotate_z(x, angle):
+    """Rotate vectors (..., 3) about ECEF z by ``angle`` (...,), rad."""
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.empty_like(x)
+    out[..., 0] = c * x[..., 0] - s * x[..., 1]
+    out[..., 1] = s * x[..., 0] + c * x[..., 1]
+    out[..., 2] = x[..., 2]
+    return out
+
+
+def _translation(h, r0, v0, a, a_mid):
+    """Position and velocity over consecutive steps for a known acceleration history.
+
+    Solves ``dV/dt = a(t) - 2 Omega x V``, ``dP/dt = V`` with ``a`` (M+1, 3) at the sample
+    times and ``a_mid`` (M, 3) at the mid-steps, ``h`` (M,) the steps. The Coriolis term is
+    exact through ``V = R(t) U``, ``R(t) = exp(-2 S(Omega) t)``, ``dU/dt = R(t)^T a``; ``U``
+    is integrated by Simpson's rule (exact for quadratic ``a``) and ``P`` by Simpson's rule
+    on ``V`` (exact for cubic ``V``). Returns ``P``, ``V`` (M+1, 3) and the mid-step
+    positions (M, 3), which only serve to evaluate gravity there.
+    """
+    s = np.concatenate([[0.0], np.cumsum(h)])
+    s_mid = s[:-1] + 0.5 * h
+    two_omega = 2.0 * _OMEGA
+    at = _rotate_z(a, two_omega * s)
+    at_mid = _rotate_z(a_mid, two_omega * s_mid)
+    hh = h[:, None]
+    du = hh / 6.0 * (at[:-1] + 4.0 * at_mid + at[1:])
+    u = np.empty_like(a)
+    u[0] = 0.0
+    np.cumsum(du, axis=0, out=u[1:])
+    u_mid = u[:-1] + hh / 24.0 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
+    v = _rotate_z(u + v0, -two_omega * s)
+    v_mid = _rotate_z(u_mid + v0, -two_omega * s_mid)
+    dr = hh / 6.0 * (v[:-1] + 4.0 * v_mid + v[1:])
+    r = np.empty_like(a)
+    r[0] = 0.0
+    np.cumsum(dr, axis=0, out=r[1:])
+    r_mid = r[:-1] + hh / 24.0 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
+    return r + r0, v, r_mid + r0
+
+
+_WINDOW_S = 10.0
+"""Length of the windows in which the translational recursion is solved by fixed-point
+iteration on gravity; the contraction factor is about ``|Gamma| T^2 / 2`` (1.5e-4 at the
+surface for 10 s)."""
+_PICARD_TOL_M = 1e-8
+_PICARD_MAX_ITER = 30
+
+
+def _translation_window(h, r0, v0, f_e, f_e_mid):
+    """Translation over one window with gravity at the solution's own positions.
+
+    Fixed-point (Picard) iteration: start from gravity frozen at ``r0``, integrate with
+    :func:`_translation`, re-evaluate gravity at the resulting sample and mid-step
+    positions, and repeat until the positions change by less than 1e-8 m.
+    """
+    g = np.broadcast_to(earth.normal_gravity_ecef(r0), f_e.shape)
+    g_mid = g[:-1]
+    previous = None
+    for _ in range(_PICARD_MAX_ITER):
+        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid)
+        if previous is not None and np.max(np.abs(r - previous)) < _PICARD_TOL_M:
+            return r, v
+        previous = r
+        g = earth.normal_gravity_ecef(r)
+        g_mid = earth.normal_gravity_ecef(r_mid)
+    raise NavlibInputError(
+        f"t: the gravity iteration did not converge within {_PICARD_MAX_ITER} passes over "
+        f"{h.sum():.3g} s; sample steps this long ({h.max():.3g} s) are not supported"
+    )
+
+
+# --- public API ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class StrapdownState:
+    """Navigation state at one instant: ECEF position (m), velocity (m/s), attitude.
+
+    ``q_b_e`` is the body -> ECEF unit quaternion, scalar-last (scipy order).
+    """
+
+    t: float
+    position: np.ndarray
+    velocity: np.ndarray
+    q_b_e: np.ndarray
+
+    @property
+    def attitude(self) -> Rotation:
+        """Body -> ECEF rotation."""
+        return Rotation.from_quat(self.q_b_e)
+
+    @classmethod
+    def from_trajectory(cls, trajectory, index: int = 0) -> StrapdownState:
+        """The true state of a :class:`navlib.trajectory.Trajectory` at sample ``index``."""
+        return cls(
+            t=float(trajectory.t[index]),
+            position=np.array(trajectory.position[index], dtype=float),
+            velocity=np.array(trajectory.velocity[index], dtype=float),
+            q_b_e=trajectory.attitude[index].as_quat(),
+        )
+
+
+def step(state: StrapdownState, f_b, w_ib_b, dt: float, *, f_mid=None, w_mid=None
+         ) -> StrapdownState:
+    """Propagate one IMU interval (the per-sample form of :func:`integrate`).
+
+    Parameters
+    ----------
+    state : StrapdownState
+        State at the start of the interval.
+    f_b, w_ib_b : array_like (2, 3)
+        Point samples of specific force (m/s^2) and inertial body rate (rad/s) at the start
+        and at the end of the interval.
+    dt : float
+        Interval length, s (> 0).
+    f_mid, w_mid : array_like (3,), optional
+        Samples at mid-interval. By default the mean of the two samples is used (linear
+        reconstruction, second order in ``dt``); pass a cubic interpolation through the
+        neighbouring samples, as :func:`integrate` does, for fourth order.
+
+    Returns
+    -------
+    StrapdownState
+        The state at ``state.t + dt``.
+
+    Notes
+    -----
+    Input checking is limited to shapes and ``dt`` so that filters can call this in a
+    tight loop; see the module docstring for the mechanisation (spec excitability.md A2).
+    """
+    f_b = np.asarray(f_b, dtype=float)
+    w_ib_b = np.asarray(w_ib_b, dtype=float)
+    if f_b.shape != (2, 3):
+        raise NavlibInputError(f"f_b: expected shape (2, 3), got {f_b.shape}")
+    if w_ib_b.shape != (2, 3):
+        raise NavlibInputError(f"w_ib_b: expected shape (2, 3), got {w_ib_b.shape}")
+    if not dt > 0.0:
+        raise NavlibInputError(f"dt: must be > 0, got {dt}")
+    f_mid = 0.5 * (f_b[0] + f_b[1]) if f_mid is None else np.asarray(f_mid, dtype=float)
+    w_mid = 0.5 * (w_ib_b[0] + w_ib_b[1]) if w_mid is None else np.asarray(w_mid, dtype=float)
+
+    phi, phi_half = _attitude_increments(w_ib_b[0], w_mid, w_ib_b[1], dt)
+    q0 = state.q_b_e
+    q_mid = _quat_mul(_earth_quat(0.5 * dt), _quat_mul(q0, _quat_from_rotvec(phi_half)))
+    q1 = _quat_mul(_earth_quat(dt), _quat_mul(q0, _quat_from_rotvec(phi)))
+    q1 = q1 / np.linalg.norm(q1)
+    f_e = np.stack([_quat_rotate(q0, f_b[0]), _quat_rotate(q1, f_b[1])])
+    f_e_mid = _quat_rotate(q_mid, f_mid)
+    # Gravity at the points predicted from the start state (no Picard iteration here).
+    tau = np.array([0.0, 0.5 * dt, dt])[:, None]
+    g = earth.normal_gravity_ecef(state.position + tau * state.velocity + 0.5 * tau**2 * f_e[0])
+    r, v, _ = _translation(np.array([dt]), state.position, state.velocity,
+                           f_e + g[[0, 2]], (f_e_mid + g[1])[None])
+    r1, v1 = r[1], v[1]
+    return StrapdownState(t=state.t + dt, position=r1, velocity=v1, q_b_e=q1)
+
+
+@dataclass(frozen=True, eq=False)
+class StrapdownResult:
+    """Integrated navigation solution at the IMU sample times.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+    position, velocity : ndarray (N, 3)
+        ECEF, m and m/s.
+    attitude : scipy.spatial.transform.Rotation, length N
+        Body -> ECEF.
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    attitude: Rotation
+
+    def state(self, index: int) -> StrapdownState:
+        """The solution at sample ``index`` as a :class:`StrapdownState`."""
+        return StrapdownState(t=float(self.t[index]), position=self.position[index].copy(),
+                              velocity=self.velocity[index].copy(),
+                              q_b_e=self.attitude[index].as_quat())
+
+    def to_frame(self) -> pd.DataFrame:
+        """Tidy DataFrame: t, ECEF x/y/z, vx/vy/vz, scalar-last quaternion qx..qw."""
+        q = self.attitude.as_quat()
+        return pd.DataFrame({
+            "t": self.t,
+            "x": self.position[:, 0], "y": self.position[:, 1], "z": self.position[:, 2],
+            "vx": self.velocity[:, 0], "vy": self.velocity[:, 1], "vz": self.velocity[:, 2],
+            "qx": q[:, 0], "qy": q[:, 1], "qz": q[:, 2], "qw": q[:, 3],
+        })
+
+
+def _attitude_quat(attitude0) -> np.ndarray:
+    """A single body -> ECEF attitude as a unit quaternion (Rotation, 3x3 matrix or quat)."""
+    if isinstance(attitude0, Rotation):
+        if not attitude0.single:
+            raise NavlibInputError("attitude0: expected a single Rotation, got a stack")
+        return attitude0.as_quat()
+    arr = finite_array(attitude0, "attitude0")
+    if arr.shape == (3, 3):
+        if not np.allclose(arr.T @ arr, np.eye(3), atol=1e-6) or np.linalg.det(arr) < 0:
+            raise NavlibInputError("attitude0: 3x3 matrix is not a proper rotation")
+        return Rotation.from_matrix(arr).as_quat()
+    if arr.shape == (4,):
+        norm = np.linalg.norm(arr)
+        if abs(norm - 1.0) > 1e-6:
+            raise NavlibInputError(f"attitude0: quaternion norm must be 1, got {norm}")
+        return arr / norm
+    raise NavlibInputError(
+        "attitude0: expected a scipy Rotation, a (3, 3) matrix or a scalar-last quaternion (4,),"
+        f" got shape {arr.shape}"
+    )
+
+
+def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResult:
+    """Integrate point-sampled IMU signals in ECEF from an initial state.
+
+    Parameters
+    ----------
+    t : array_like (N,)
+        Sample times, s, strictly increasing (non-uniform spacing is allowed).
+    f_b : array_like (N, 3)
+        Specific force in body axes, m/s^2 (point samples).
+    w_ib_b : array_like (N, 3)
+        Inertial angular rate in body axes, rad/s (point samples).
+    position0, velocity0 : array_like (3,)
+        ECEF position (m) and velocity (m/s) at ``t[0]``.
+    attitude0 : Rotation, (3, 3) matrix or (4,) scalar-last quaternion
+        Body -> ECEF attitude at ``t[0]``.
+
+    Returns
+    -------
+    StrapdownResult
+
+    Notes
+    -----
+    Fourth-order scheme described in the module docstring (spec excitability.md Eq. 1, A2,
+    A5). Closure on the exact IMU of ``navlib.trajectory.sounding_rocket()`` (100 Hz) is
+    checked by ``tests/test_strapdown.py``.
+    """
+    t = increasing_times(t, "t")
+    n = t.size
+    f_b = finite_array(f_b, "f_b", (n, 3))
+    w_ib_b = finite_array(w_ib_b, "w_ib_b", (n, 3))
+    r = finite_array(position0, "position0", (3,))
+    v = finite_array(velocity0, "velocity0", (3,))
+    if np.linalg.norm(r) < 1e5:
+        raise NavlibInputError("position0: expected an ECEF position in m (|r| >= 100 km)")
+    q0 = _attitude_quat(attitude0)
+
+    h = np.diff(t)
+    w_mid = _interpolate(t, w_ib_b, 0.5)
+    f_mid = _interpolate(t, f_b, 0.5)
+    phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
+
+    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments.
+    body = np.empty((n, 4))
+    body[0] = (0.0, 0.0, 0.0, 1.0)
+    body[1:] = _prefix_products(_quat_from_rotvec(phi))
+    q = _quat_mul(_earth_quat(t - t[0]), _quat_mul(q0, body))
+    q_mid = _quat_mul(
+        _earth_quat(t[:-1] + 0.5 * h - t[0]),
+        _quat_mul(q0, _quat_mul(body[:-1], _quat_from_rotvec(phi_half))),
+    )
+    f_e = _quat_rotate(q, f_b)
+    f_e_mid = _quat_rotate(q_mid, f_mid)
+
+    position = np.empty((n, 3))
+    velocity = np.empty((n, 3))
+    position[0], velocity[0] = r, v
+    i0 = 0
+    while i0 < n - 1:
+        i1 = max(int(np.searchsorted(t, t[i0] + _WINDOW_S, side="right")) - 1, i0 + 1)
+        position[i0:i1 + 1], velocity[i0:i1 + 1] = _translation_window(
+            h[i0:i1], position[i0], velocity[i0], f_e[i0:i1 + 1], f_e_mid[i0:i1])
+        i0 = i1
+    return StrapdownResult(t=t, position=position, velocity=velocity,
+                           attitude=Rotation.from_quat(q))
+
+
+@dataclass(frozen=True, eq=False)
+class ClosureError:
+    """Difference between a strapdown re-integration and the trajectory it came from.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+    position_error, velocity_error, attitude_error : ndarray (N,)
+        Norms of the position (m) and velocity (m/s) differences and the angle (rad) of
+        ``C_true^T C_integrated``.
+    position_m, velocity_m_s, attitude_rad : float
+        Their maxima over the run.
+    """
+
+    t: np.ndarray
+    position_error: np.ndarray
+    velocity_error: np.ndarray
+    attitude_error: np.ndarray
+
+    @property
+    def position_m(self) -> float:
+        return float(np.max(self.position_error))
+
+    @property
+    def velocity_m_s(self) -> float:
+        return float(np.max(self.velocity_error))
+
+    @property
+    def attitude_rad(self) -> float:
+        return float(np.max(self.attitude_error))
+
+    def to_frame(self) -> pd.DataFrame:
+        """Tidy DataFrame: t, position_error_m, velocity_error_m_s, attitude_error_rad."""
+        return pd.DataFrame({"t": self.t, "position_error_m": self.position_error,
+                             "velocity_error_m_s": self.velocity_error,
+                             "attitude_error_rad": self.attitude_error})
+
+
+def closure_error(trajectory, *, duration_s: float | None = None) -> ClosureError:
+    """Integrate a trajectory's own exact IMU from its initial state and compare.
+
+    Parameters
+    ----------
+    trajectory : navlib.trajectory.Trajectory
+    duration_s : float, optional
+        Only integrate the first ``duration_s`` seconds (default: all of it).
+
+    Returns
+    -------
+    ClosureError
+        Position, velocity and attitude error along the run and their maxima.
+    """
+    n = len(trajectory.t)
+    if duration_s is not None:
+        duration_s = finite_scalar(duration_s, "duration_s", 0.0, low_open=True)
+        n = int(np.searchsorted(trajectory.t, trajectory.t[0] + duration_s, side="right"))
+        if n < 2:
+            raise NavlibInputError(f"duration_s: {duration_s} s covers fewer than 2 samples")
+    sl = slice(0, n)
+    res = integrate(trajectory.t[sl], trajectory.specific_force[sl],
+                    trajectory.angular_rate[sl], trajectory.position[0],
+                    trajectory.velocity[0], trajectory.attitude[0])
+    d_att = (trajectory.attitude[sl].inv() * res.attitude).magnitude()
+    return ClosureError(
+        t=res.t,
+        position_error=np.linalg.norm(res.position - trajectory.position[sl], axis=1),
+        velocity_error=np.linalg.norm(res.velocity - trajectory.velocity[sl], axis=1),
+        attitude_error=d_att,
+    )
