@@ -479,10 +479,11 @@ class NormalizedEigenResult:
         Rayleigh quotients ``v' P_n v`` of the tracked vectors (equal to eigenvalues, up to
         the tracking of near-degenerate clusters).
     tracked_vectors : ndarray (N, n, n)
-        Eigenvectors followed by continuity: each mode keeps its index through crossings;
-        inside a cluster of near-equal eigenvalues (gap below ``degenerate_tol * o``) the
-        vectors are the orthonormal basis of the cluster's subspace closest to the previous
-        epoch's vectors (orthogonal Procrustes), so they vary smoothly instead of jumping.
+        Eigenvectors followed by continuity from the anchor epoch (default the last, where
+        mode i is the i-th largest): each mode keeps its index through crossings; inside a
+        cluster of near-equal eigenvalues (gap below ``degenerate_tol * o``) the vectors are
+        the orthonormal basis of the cluster's subspace closest to the neighbouring epoch's
+        vectors (orthogonal Procrustes), so they vary smoothly instead of jumping.
     order : float
         The normalising order ``o``.
     state_names : tuple of str
@@ -564,20 +565,9 @@ class NormalizedEigenResult:
         return share if time is None else share[self._epoch(time)]
 
 
-def _clusters(values: np.ndarray, gap: float) -> list[np.ndarray]:
-    """Split descending ``values`` into runs whose neighbouring gaps are <= ``gap``."""
-    breaks = np.flatnonzero(-np.diff(values) > gap) + 1
-    return np.split(np.arange(values.size), breaks)
-
-
-def _procrustes(U: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of span(U) closest (Frobenius) to V: ``U polar(U' V)``."""
-    W, _, Zt = np.linalg.svd(U.T @ V)
-    return U @ (W @ Zt)
-
-
 def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "diag",
-                     degenerate_tol: float = 1e-4, t=None,
+                     degenerate_tol: float = 1e-4, track: bool = True, anchor: str = "end",
+                     t=None,
                      state_names=None) -> NormalizedEigenResult:
     """Ham & Brown normalised covariance eigen-analysis (Silva et al. 2017 eqs. 45–46).
 
@@ -597,6 +587,14 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     scale : {"diag", "sqrtm"}
     degenerate_tol : float
         Eigenvalues closer than ``degenerate_tol * o`` are one cluster for tracking.
+    track : bool
+        Compute the tracked vectors (about 0.25 ms per epoch for 15 states); with False the
+        tracked fields repeat the sorted ones (fast path for interactive use).
+    anchor : {"end", "start"}
+        Epoch where tracked mode i is the i-th largest eigenvector; tracking runs from there
+        through the others. ``"end"`` (default) labels the modes by their steady-state order
+        and runs backwards, which suits covariance histories that start from a degenerate
+        ``P_n(0)`` (a diagonal ``P0`` normalises to ``I``: all eigenvalues equal).
     t, state_names : optional, taken from a CovarianceResult when given one.
 
     Returns
@@ -612,7 +610,8 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     (the projector onto the pair) is unaffected, see
     :meth:`NormalizedEigenResult.subspace_share`.
 
-    Tracked order: previous vectors are assigned to current clusters by maximum squared
+    Tracked order: starting from the sorted basis at the anchor epoch, the vectors of the
+    epoch already tracked are assigned to the next epoch's clusters by maximum squared
     projection (Hungarian assignment, each cluster receiving as many vectors as its
     dimension), then replaced by the Procrustes-closest basis of the cluster subspace,
     which makes the sign consistent as well.
@@ -628,6 +627,8 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     P0 = finite_array(P0, "P0", shape=(n, n))
     order = float(n) if order is None else finite_scalar(order, "order", 0.0, low_open=True)
     degenerate_tol = finite_scalar(degenerate_tol, "degenerate_tol", 0.0)
+    if anchor not in ("end", "start"):
+        raise NavlibInputError(f"anchor: expected 'end' or 'start', got {anchor!r}")
     if scale == "diag":
         d0 = np.sqrt(np.diag(P0))
         if np.any(d0 <= 0):
@@ -654,28 +655,45 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     for k in range(1, count):
         dots = np.einsum("ij,ij->j", V[k], V[k - 1])
         V[k] *= np.where(dots < 0, -1.0, 1.0)
-    tracked_V = np.empty_like(V)
-    tracked_V[0] = V[0]
+    tracked_V = V.copy()
     gap = degenerate_tol * order
-    for k in range(1, count):
-        prev = tracked_V[k - 1]
-        clusters = _clusters(w[k], gap)
-        if len(clusters) == n:
-            overlap = np.abs(V[k].T @ prev)
-            rows, cols = linear_sum_assignment(-overlap)
-            new = np.empty_like(prev)
-            new[:, cols] = V[k][:, rows]
-            dots = np.einsum("ij,ij->j", new, prev)
-            tracked_V[k] = new * np.where(dots < 0, -1.0, 1.0)
-            continue
-        # score[c_slot, j] = squared projection of previous vector j onto its cluster
-        slots = np.concatenate([np.full(c.size, i) for i, c in enumerate(clusters)])
-        proj = np.stack([np.sum((V[k][:, c].T @ prev) ** 2, axis=0) for c in clusters])
-        rows, cols = linear_sum_assignment(-proj[slots])
+    forward = anchor == "start"
+    for k in (range(1, count) if forward else range(count - 2, -1, -1)) if track else ():
+        prev, cur = tracked_V[k - 1 if forward else k + 1], V[k]
+        M = cur.T @ prev  # overlaps: rows current sorted vectors, columns previous tracked
+        label = np.concatenate([[0], np.cumsum(-np.diff(w[k]) > gap)])
         new = np.empty_like(prev)
-        for i, c in enumerate(clusters):
-            mine = cols[slots[rows] == i]
-            new[:, mine] = _procrustes(V[k][:, c], prev[:, mine])
+        if label[-1] == n - 1:  # all eigenvalues separated: assign by maximum overlap
+            rows, cols = linear_sum_assignment(-np.abs(M))
+            new[:, cols] = cur[:, rows] * np.where(M[rows, cols] < 0, -1.0, 1.0)
+            tracked_V[k] = new
+            continue
+        # squared projection of each previous vector onto each cluster's subspace; every
+        # sorted position is a slot of its cluster, so a cluster receives as many previous
+        # vectors as its dimension
+        starts = np.flatnonzero(np.diff(label, prepend=-1))
+        sizes = np.diff(np.append(starts, n))
+        proj = np.add.reduceat(M**2, starts, axis=0)
+        rows, cols = linear_sum_assignment(-proj[label])
+        single = sizes[label[rows]] == 1
+        r1, c1 = rows[single], cols[single]
+        new[:, c1] = cur[:, r1] * np.where(M[r1, c1] < 0, -1.0, 1.0)
+        multi = np.flatnonzero(sizes > 1)
+        # Procrustes per cluster: the basis of span(cur[:, c]) closest to prev[:, mine] is
+        # cur[:, c] W Z' with W S Z' = svd(cur[:, c]' prev[:, mine]); all clusters of the
+        # epoch in one batched SVD (padded with identity blocks)
+        size = sizes[multi].max()
+        blocks = np.broadcast_to(np.eye(size), (multi.size, size, size)).copy()
+        members = []
+        for b, i in enumerate(multi):
+            c = np.arange(starts[i], starts[i] + sizes[i])
+            mine = cols[label[rows] == i]
+            blocks[b, :c.size, :c.size] = M[c][:, mine]
+            members.append((c, mine))
+        W, _, Zt = np.linalg.svd(blocks)
+        polar = W @ Zt
+        for b, (c, mine) in enumerate(members):
+            new[:, mine] = cur[:, c] @ polar[b, :c.size, :c.size]
         tracked_V[k] = new
     tracked_w = np.einsum("kil,kij,kjl->kl", tracked_V, Pn, tracked_V)
     t = np.arange(count, dtype=float) if t is None else finite_array(t, "t", shape=(count,))

@@ -7,6 +7,8 @@
 
 from navlib.models.base import DiscreteModel, LinearModel
 from navlib.models.ecef import ecef21, ecef21_at_epochs
+from navlib.models.ssac import ssac
 
 __all__ = ["DiscreteModel", "LinearModel"]
 __all__ += ["ecef21", "ecef21_at_epochs"]
+__all__ += ["ssac"]
