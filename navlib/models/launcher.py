@@ -1,0 +1,338 @@
+"""Satellite-launcher error models of Beaudoin, Desbiens, Gagnon & Landry (2018).
+
+"Observability of satellite launcher navigation with INS, GPS, attitude sensors and reference
+trajectory", Acta Astronautica 142, 277-288; equations rebuilt in spec launcher.md §3.
+
+Four loosely coupled solutions (spec §1): ``ins_gps`` (eq. 1-2), ``ins_gps_att`` (eq. 3),
+``ins_gps_rt`` (eq. 4-5, 8) and ``ins_gps_att_rt`` (§2.4), each with any subset of the gyro
+(G), accelerometer (A) and GPS-position (P) biases as first-order Markov processes or random
+walks. State order (spec §3.1, §3.4; E = Earth-fixed frame, B = body, x = roll axis)::
+
+    psi_x psi_y psi_z | dv_x dv_y dv_z | dr_x dr_y dr_z        (E frame)  always
+    bg_x bg_y bg_z                                              (B frame)  if "G"
+    ba_x ba_y ba_z                                              (B frame)  if "A"
+    bp_x bp_y bp_z                                              (E frame)  if "P"
+    x19 .. x25 | psi_ref_x psi_ref_y psi_ref_z                  (B frame)  RT solutions
+
+giving 9/12/15/18 states, 19/22/25/28 with the reference trajectory (spec §3.6).
+
+The model is continuous, ``dx/dt = A(t) x + G(t) w``, with the paper's ``F(k)`` as ``A`` at
+each trajectory sample, so that ``model.discretize(method="euler")`` gives exactly the
+paper's ``A_lc = I + s_t F(k)`` and ``B = s_t G`` (spec §3, "all discrete time, Euler form");
+``method="expm"`` gives the exact zero-order-hold transition instead. The reference-trajectory
+block is written the same way: ``A1 = s_t [a1_sign T_E^B, 0]`` and ``A2 = I_10 + s_t M``
+(V3 reading with the ``-I_3`` feedback, spec §3.4 and §10b).
+
+Noise and measurement values. Table 1 (spec §7.1): gyro random walk 0.72 deg/h/sqrt(Hz),
+gyro bias stability 0.05 deg/h, accelerometer random walk 117 ug/sqrt(Hz), accelerometer bias
+stability 7500 ug, attitude sensor 1 deg (1 sigma per axis, white). Markov time constants
+100 s (spec §3.2, §5). The paper gives no GPS noise, GPS-bias size, wind level or initial
+covariance (spec §5 "Not given"); the values below are **assumed** and recorded in
+``model.parameters``: GPS velocity 0.1 m/s and position 3 m (1 sigma per axis, per 200 Hz
+sample), GPS position bias 2 m, wind angular-rate PSD (0.01 rad/s)^2 * s_t, and
+``P0`` = 0.1 deg attitude, 0.1 m/s, 3 m, biases at their stability, reference-trajectory
+states exactly zero (the attitude is "perfectly known" on the pad, spec §5).
+
+Bias models (spec §3.2): ``markov`` has ``db/dt = -b/c + w`` with PSD ``2 sigma^2 / c``
+(Euler: the paper's ``s_t sqrt(2/(c s_t))`` noise gain); ``random_walk`` sets the ``-1/c``
+terms ("the shaded terms") to zero and keeps the driving noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from navlib._validation import finite_scalar, reject_unknown
+from navlib.earth import EARTH_RATE_ECEF
+from navlib.errors import NavlibInputError
+from navlib.models.base import LinearModel
+from navlib.rotations import skew
+from navlib.units import DEG, DEG_PER_HOUR, DEG_PER_HOUR_PER_SQRT_HZ, UG, UG_PER_SQRT_HZ
+
+SOLUTIONS = ("ins_gps", "ins_gps_att", "ins_gps_rt", "ins_gps_att_rt")
+"""The four navigation solutions (spec launcher.md §1)."""
+BIAS_MODELS = ("none", "markov", "random_walk")
+"""Bias error models: neglected (no bias states), first-order Markov, random walk."""
+BIAS_LETTERS = ("G", "A", "P")
+"""Gyro, accelerometer and GPS-position biases, in state order."""
+BIAS_SETS = ("", "G", "A", "P", "GA", "GP", "AP", "GAP")
+"""The eight bias combinations of Table 2, in the paper's row order."""
+
+_AXES = ("x", "y", "z")
+_GROUPS = {
+    "psi": tuple(f"psi_{a}" for a in _AXES),
+    "dv": tuple(f"dv_{a}" for a in _AXES),
+    "dr": tuple(f"dr_{a}" for a in _AXES),
+    "G": tuple(f"bg_{a}" for a in _AXES),
+    "A": tuple(f"ba_{a}" for a in _AXES),
+    "P": tuple(f"bp_{a}" for a in _AXES),
+    "xa": tuple(f"x{i}" for i in range(19, 26)),
+    "ref": tuple(f"psi_ref_{a}" for a in _AXES),
+}
+STATE_NAMES = sum(_GROUPS.values(), ())
+"""All 28 states of the full ``ins_gps_att_rt`` + G, A, P model, in order."""
+
+TABLE1 = {
+    "gyro_arw": 0.72 * DEG_PER_HOUR_PER_SQRT_HZ,      # rad/s/sqrt(Hz)
+    "gyro_bias": 0.05 * DEG_PER_HOUR,                 # rad/s
+    "accel_vrw": 117.0 * UG_PER_SQRT_HZ,              # m/s^2/sqrt(Hz)
+    "accel_bias": 7500.0 * UG,                        # m/s^2
+    "sigma_att": 1.0 * DEG,                           # rad
+}
+"""Table 1 of the paper in SI units (spec launcher.md §5, §7.1)."""
+
+ASSUMED = {
+    "sigma_gps_vel": 0.1,        # m/s, per axis, per sample (not given in the paper)
+    "sigma_gps_pos": 3.0,        # m
+    "sigma_bp": 2.0,             # m, GPS position-bias steady-state sigma
+    "sigma_wind": 0.01,          # rad/s, wind angular rate per 200 Hz sample
+    "c_g": 100.0, "c_a": 100.0, "c_p": 100.0,           # s (spec §3.2: "100 s")
+    "sigma0_att": 0.1 * DEG, "sigma0_vel": 0.1, "sigma0_pos": 3.0,
+}
+"""Values the paper does not give (spec §5 "Not given"), chosen and documented here."""
+
+_OPTIONS = ("a1_sign", "sigma_gps_vel", "sigma_gps_pos", "sigma_bp", "sigma_wind", "c_g",
+            "c_a", "c_p", "sigma0_att", "sigma0_vel", "sigma0_pos", "gyro_arw", "gyro_bias",
+            "accel_vrw", "accel_bias", "sigma_att", "s_t")
+
+
+def rt_dynamics_matrix() -> np.ndarray:
+    """Continuous closed-loop attitude dynamics ``M`` of the RT augmentation, ``A2 = I + s_t M``.
+
+    Spec launcher.md §3.4 (V3 reading with the ``-I_3`` feedback): states
+    ``x19 x20 x21 | x22 x23 | x24 x25 | psi_ref_x psi_ref_y psi_ref_z``. Roll is a 2-state
+    loop (x19, psi_ref_x), pitch and yaw 4-state loops. Its eigenvalues are
+    ``-0.25 +- 0.733j`` (roll) and ``-2.818 +- 3.686j, -0.394, -0.096`` (pitch, yaw; §10b).
+
+    Returns
+    -------
+    M : ndarray (10, 10)
+    """
+    M = np.zeros((10, 10))
+    M[0:3, 0:3] = np.diag([-0.5, -6.1248, -6.1248])
+    M[1, 3] = M[2, 4] = 5.6922
+    M[0:3, 7:10] = -np.eye(3)
+    M[3, 1] = M[4, 2] = 1.0                      # x22' = x20, x23' = x21
+    M[5, 3] = M[6, 4] = 1.0                      # x24' = x22, x25' = x23
+    M[7:10, 0:3] = np.diag([0.6, 30.012, 30.012])
+    M[8, 3] = M[9, 4] = 10.7475
+    M[8, 5] = M[9, 6] = 0.8111
+    return M
+
+
+def simplified_gps_bias(c_p: float, s_t: float = 0.005):
+    """The simplified position / GPS-bias model of §4.1 (spec launcher.md §3.7, eq. 7).
+
+    ``[dr; b_p](k+1) = (I_6 + s_t [[0, 0], [0, -I_3 / c_p]]) [dr; b_p](k)``,
+    ``dr_m(k) = [I_3  I_3] [dr; b_p](k)``.
+
+    Parameters
+    ----------
+    c_p : float
+        GPS-bias Markov time constant, s (> 0); ``numpy.inf`` gives the random walk.
+    s_t : float
+        Sampling time, s.
+
+    Returns
+    -------
+    A : ndarray (6, 6)
+        Discrete transition (Euler form, as in the paper).
+    C : ndarray (3, 6)
+        Position measurement matrix.
+    """
+    try:
+        c_p = float(c_p)
+    except (TypeError, ValueError) as exc:
+        raise NavlibInputError(f"c_p: expected a number, got {c_p!r}") from exc
+    if np.isnan(c_p) or c_p <= 0:
+        raise NavlibInputError(f"c_p: must be > 0 (inf for a random walk), got {c_p}")
+    s_t = finite_scalar(s_t, "s_t", low=0.0, low_open=True)
+    A = np.eye(6)
+    A[3:, 3:] *= 1.0 - s_t / c_p
+    C = np.hstack([np.eye(3), np.eye(3)])
+    return A, C
+
+
+def _parse(solution, biases, bias_model):
+    if solution not in SOLUTIONS:
+        raise NavlibInputError(f"solution: expected one of {SOLUTIONS}, got {solution!r}")
+    if bias_model not in BIAS_MODELS:
+        raise NavlibInputError(f"bias_model: expected one of {BIAS_MODELS}, got {bias_model!r}")
+    if biases is None:
+        biases = ""
+    if not isinstance(biases, str):
+        biases = "".join(biases) if all(isinstance(b, str) for b in biases) else None
+    if biases is None or any(ch not in BIAS_LETTERS for ch in biases.upper()):
+        raise NavlibInputError(
+            f"biases: expected a subset of the letters G, A, P (e.g. 'GAP', 'GP', ''), got "
+            f"{biases!r}"
+        )
+    letters = biases.upper()
+    if len(set(letters)) != len(letters):
+        raise NavlibInputError(f"biases: repeated letter in {biases!r}")
+    letters = "".join(ch for ch in BIAS_LETTERS if ch in letters)
+    if bias_model == "none" and letters:
+        raise NavlibInputError(
+            f"bias_model: 'none' neglects the biases, but biases={biases!r} asks to estimate "
+            "some; use bias_model='markov' or 'random_walk', or biases=''"
+        )
+    if bias_model != "none" and not letters:
+        raise NavlibInputError(
+            f"bias_model: {bias_model!r} needs at least one bias in biases (G, A, P); with "
+            "biases='' use bias_model='none'"
+        )
+    return letters
+
+
+def state_names(solution: str = "ins_gps", biases: str = "GAP",
+                bias_model: str = "markov") -> tuple[str, ...]:
+    """State names of a configuration, in model order (spec launcher.md §3.1, §3.4)."""
+    letters = _parse(solution, biases, bias_model)
+    groups = ["psi", "dv", "dr", *letters]
+    if solution.endswith("_rt"):
+        groups += ["xa", "ref"]
+    return sum((_GROUPS[g] for g in groups), ())
+
+
+def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
+             trajectory=None, **kw) -> LinearModel:
+    """Launcher error model along a trajectory (Beaudoin et al. 2018 eq. 1-5, 8).
+
+    Parameters
+    ----------
+    solution : {"ins_gps", "ins_gps_att", "ins_gps_rt", "ins_gps_att_rt"}
+    biases : str
+        Any subset of ``"G"`` (gyro), ``"A"`` (accelerometer), ``"P"`` (GPS position), in any
+        order; ``""`` for none.
+    bias_model : {"none", "markov", "random_walk"}
+        ``"none"`` exactly when ``biases`` is empty.
+    trajectory : Trajectory, optional
+        Supplies ``T_B^E(k)`` (``attitude``) and ``a_m^B(k)`` (``specific_force``) at each
+        sample; default :func:`navlib.trajectory.launcher_ascent` (200 Hz).
+    a1_sign : {+1, -1}
+        Sign of ``A1`` (how the navigation attitude error drives the closed loop, spec §10b).
+    c_g, c_a, c_p : float
+        Markov time constants, s (default 100).
+    gyro_arw, gyro_bias, accel_vrw, accel_bias, sigma_att : float
+        Table 1 values in SI (default :data:`TABLE1`).
+    sigma_gps_vel, sigma_gps_pos, sigma_bp, sigma_wind, sigma0_att, sigma0_vel, sigma0_pos
+        Assumed values (default :data:`ASSUMED`); ``sigma_wind`` is rad/s per sample of
+        step ``s_t`` (default the trajectory's median step).
+
+    Returns
+    -------
+    LinearModel
+        Time-varying over the trajectory samples: ``A`` (N, n, n), ``G`` (N, n, q), ``Qc``
+        (q, q) PSDs, ``H`` (m, n) or (N, m, n) for the RT solutions, ``R`` (m, m) with a
+        zero block for the noise-free RT pseudo-measurement (eq. 8), ``P0`` (n, n).
+        Measurements in order: attitude (att solutions), GPS velocity, GPS position, RT
+        attitude difference (RT solutions): 6/9/9/12 rows.
+    """
+    reject_unknown(kw, _OPTIONS, "launcher")
+    letters = _parse(solution, biases, bias_model)
+    if trajectory is None:
+        from navlib.trajectory import launcher_ascent
+
+        trajectory = launcher_ascent()
+    try:
+        t = np.asarray(trajectory.t, dtype=float)
+        C_b_e = trajectory.attitude.as_matrix()
+        f_b = np.asarray(trajectory.specific_force, dtype=float)
+    except AttributeError as exc:
+        raise NavlibInputError(
+            "trajectory: expected a navlib Trajectory (t, attitude, specific_force)"
+        ) from exc
+    if t.size < 2:
+        raise NavlibInputError(f"trajectory: need at least 2 samples, got {t.size}")
+    p = {**TABLE1, **ASSUMED, "a1_sign": 1.0, "s_t": float(np.median(np.diff(t)))}
+    for key, value in kw.items():
+        p[key] = finite_scalar(value, key)
+    if p["a1_sign"] not in (1.0, -1.0):
+        raise NavlibInputError(f"a1_sign: expected +1 or -1, got {p['a1_sign']}")
+    for key in _OPTIONS:
+        if key != "a1_sign" and p[key] <= 0:
+            raise NavlibInputError(f"{key}: must be positive, got {p[key]}")
+
+    rt = solution.endswith("_rt")
+    att = solution.startswith("ins_gps_att")
+    names = state_names(solution, letters, bias_model)
+    n, N = len(names), t.size
+    start = {}
+    pos = 0
+    for g in ["psi", "dv", "dr", *letters] + (["xa", "ref"] if rt else []):
+        start[g] = pos
+        pos += len(_GROUPS[g])
+
+    def sl(group, size=3):
+        return slice(start[group], start[group] + size)
+
+    I3 = np.eye(3)
+    W_ie = skew(EARTH_RATE_ECEF)
+    f_e = np.einsum("nij,nj->ni", C_b_e, f_b)
+    A = np.zeros((N, n, n))
+    A[:, sl("psi"), sl("psi")] = -W_ie
+    A[:, sl("dv"), sl("psi")] = skew(f_e)
+    A[:, sl("dv"), sl("dv")] = -2.0 * W_ie
+    A[:, sl("dr"), sl("dv")] = I3
+    # noise channels: gyro, accel white noise; one driving noise per bias; wind
+    noise_groups = ["wg", "wa", *(f"w{b}" for b in letters)] + (["wind"] if rt else [])
+    q = 3 * len(noise_groups)
+    G = np.zeros((N, n, q))
+    G[:, sl("psi"), 0:3] = -C_b_e
+    G[:, sl("dv"), 3:6] = C_b_e
+    psd = [p["gyro_arw"] ** 2] * 3 + [p["accel_vrw"] ** 2] * 3
+    sigma_bias = {"G": p["gyro_bias"], "A": p["accel_bias"], "P": p["sigma_bp"]}
+    tau = {"G": p["c_g"], "A": p["c_a"], "P": p["c_p"]}
+    for i, b in enumerate(letters):
+        if b == "G":
+            A[:, sl("psi"), sl("G")] = -C_b_e
+        elif b == "A":
+            A[:, sl("dv"), sl("A")] = C_b_e
+        if bias_model == "markov":
+            A[:, sl(b), sl(b)] = -I3 / tau[b]
+        G[:, sl(b), 6 + 3 * i:9 + 3 * i] = I3
+        psd += [2.0 * sigma_bias[b] ** 2 / tau[b]] * 3
+    if rt:
+        C_e_b = np.swapaxes(C_b_e, 1, 2)
+        xa = slice(start["xa"], start["xa"] + 10)
+        A[:, xa, xa] = rt_dynamics_matrix()
+        A[:, sl("xa"), sl("psi")] = p["a1_sign"] * C_e_b
+        G[:, sl("ref"), q - 3:q] = I3
+        psd += [p["sigma_wind"] ** 2 * p["s_t"]] * 3
+    Qc = np.diag(psd)
+
+    # measurements: [attitude;] GPS velocity; GPS position (+ b_p) [; RT difference, eq. 8]
+    rows, sigmas, meas_names = [], [], []
+    if att:
+        rows.append(("psi", None))
+        sigmas += [p["sigma_att"]] * 3
+        meas_names += [f"psi_m_{a}" for a in _AXES]
+    rows += [("dv", None), ("dr", "P" if "P" in letters else None)]
+    sigmas += [p["sigma_gps_vel"]] * 3 + [p["sigma_gps_pos"]] * 3
+    meas_names += [f"dv_m_{a}" for a in _AXES] + [f"dr_m_{a}" for a in _AXES]
+    m = 3 * len(rows) + (3 if rt else 0)
+    H = np.zeros((N, m, n)) if rt else np.zeros((m, n))
+    for i, (group, extra) in enumerate(rows):
+        H[..., 3 * i:3 * i + 3, sl(group)] = I3
+        if extra:
+            H[..., 3 * i:3 * i + 3, sl(extra)] = I3
+    if rt:
+        H[:, m - 3:, sl("psi")] = C_e_b
+        H[:, m - 3:, sl("ref")] = I3
+        sigmas += [0.0] * 3
+        meas_names += [f"psi_ref_m_{a}" for a in _AXES]
+    R = np.diag(np.square(sigmas))
+
+    sigma0 = {"psi": p["sigma0_att"], "dv": p["sigma0_vel"], "dr": p["sigma0_pos"],
+              "G": p["gyro_bias"], "A": p["accel_bias"], "P": p["sigma_bp"], "ref": 0.0}
+    P0 = np.zeros((n, n))
+    for group, sigma in sigma0.items():
+        if group in start:
+            P0[sl(group), sl(group)] = sigma ** 2 * I3
+    noise_names = tuple(f"{g}_{a}" for g in noise_groups for a in _AXES)
+    params = {"solution": solution, "biases": letters, "bias_model": bias_model, **p}
+    return LinearModel(
+        state_names=names, A=A, G=G, Qc=Qc, H=H, R=R, t=t, P0=P0,
+        measurement_names=tuple(meas_names), noise_names=noise_names,
+        name=f"{solution}/{letters or '-'}/{bias_model}", parameters=params,
+    )
