@@ -7,8 +7,10 @@
 
 from navlib.models.base import DiscreteModel, LinearModel
 from navlib.models.ecef import ecef21, ecef21_at_epochs
+from navlib.models.launcher import launcher, simplified_gps_bias
 from navlib.models.ssac import ssac
 
 __all__ = ["DiscreteModel", "LinearModel"]
 __all__ += ["ecef21", "ecef21_at_epochs"]
 __all__ += ["ssac"]
+__all__ += ["launcher", "simplified_gps_bias"]
