@@ -1,0 +1,41 @@
+"""Flight-data import and validation: IMU/GNSS CSV files and PX4 ULog logs.
+
+Public contract (spec ``api.md``, "Flight data")::
+
+    imu = navlib.io.read_imu_csv(path, **units)    # t, f_x, f_y, f_z, w_x, w_y, w_z (SI)
+    gnss = navlib.io.read_gnss_csv(path, **units)  # t, x, y, z (ECEF m) [+ vx, vy, vz, sigma]
+    imu, gnss = navlib.io.read_ulog(path)          # PX4 ULog via pyulog, same columns
+
+plus :func:`check_overlap` (IMU and GNSS spans), :func:`split_at_gaps` (records read with
+``on_gap="split"``) and the inverse writers :func:`write_imu_csv`, :func:`write_gnss_csv`.
+Column names, aliases and unit keywords: :mod:`navlib.io.csv_files`; PX4 body frame and
+field mapping: :mod:`navlib.io.ulog`. Every problem raises :class:`navlib.NavlibInputError`
+naming file, column and line (or topic, field and message).
+"""
+
+from navlib.io.checks import FlightDataWarning, TimeOverlap, check_overlap, split_at_gaps
+from navlib.io.csv_files import (
+    GNSS_COLUMNS,
+    IMU_COLUMNS,
+    combine_sigma,
+    read_gnss_csv,
+    read_imu_csv,
+    write_gnss_csv,
+    write_imu_csv,
+)
+from navlib.io.ulog import read_ulog
+
+__all__ = [
+    "GNSS_COLUMNS",
+    "IMU_COLUMNS",
+    "FlightDataWarning",
+    "TimeOverlap",
+    "check_overlap",
+    "combine_sigma",
+    "read_gnss_csv",
+    "read_imu_csv",
+    "read_ulog",
+    "split_at_gaps",
+    "write_gnss_csv",
+    "write_imu_csv",
+]

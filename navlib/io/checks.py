@@ -1,0 +1,282 @@
+"""Validation of imported flight data: time stamps, gaps, plausible magnitudes, overlap.
+
+Every check raises :class:`navlib.NavlibInputError` naming the source (file or log topic),
+the column and the row. Gaps are the one finding that need not be fatal: ``on_gap`` chooses
+whether they are reported (``"warn"``), refused (``"raise"``) or split into segments
+(``"split"``: an integer ``segment`` column, see :func:`split_at_gaps`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from navlib import units
+from navlib.earth import A
+from navlib.errors import NavlibInputError
+from navlib.io._table import Source
+
+ON_GAP = ("warn", "raise", "split")
+"""Accepted values of the ``on_gap`` keyword."""
+AUTO_GAP_FACTOR = 10.0
+"""With ``max_gap_s=None`` a gap is an interval longer than this many median intervals."""
+R_MIN_M = 6.3e6
+"""Smallest plausible geocentric radius of a GNSS fix, m (below the poles' sea level)."""
+R_MAX_M = 7.5e6
+"""Largest plausible geocentric radius, m (about 1100 km altitude: high sounding rockets)."""
+V_MAX_M_S = 12e3
+"""Largest plausible ECEF speed, m/s (above Earth escape speed)."""
+ACCEL_MAX = 30.0 * units.G0
+"""Largest plausible median specific-force norm over a record, m/s^2."""
+RATE_MAX_RAD_S = 35.0
+"""Default largest plausible angular rate, rad/s (about 2000 deg/s, MEMS full scale)."""
+IMU_DT_RANGE_S = (1e-5, 1.0)
+"""Plausible median IMU sample interval, s (1 Hz .. 100 kHz)."""
+GNSS_DT_RANGE_S = (1e-3, 100.0)
+"""Plausible median GNSS epoch interval, s (0.01 Hz .. 1 kHz)."""
+
+
+class FlightDataWarning(UserWarning):
+    """Flight data were accepted but something was found (gaps, fallbacks, corruption)."""
+
+
+@dataclass(frozen=True)
+class TimeOverlap:
+    """Common time span of an IMU record and a GNSS record (s), see :func:`check_overlap`."""
+
+    t_start: float
+    t_end: float
+    imu_span: tuple[float, float]
+    gnss_span: tuple[float, float]
+    n_gnss: int
+    """GNSS epochs inside ``[t_start, t_end]``."""
+
+    @property
+    def duration(self) -> float:
+        return self.t_end - self.t_start
+
+
+def check_times(t: np.ndarray, source: Source, column: str) -> None:
+    """At least two samples; strictly increasing; duplicates and backward steps named."""
+    if t.size < 2:
+        raise source.error(column, None, f"need at least 2 samples, got {t.size}")
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0.0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        prev = source.where(k - 1)
+        if dt[k - 1] == 0.0:
+            problem = f"duplicate time stamp {t[k]:.10g} (same as {prev})"
+        else:
+            problem = (f"time stamp {t[k]:.10g} goes backwards from {t[k - 1]:.10g} at {prev}; "
+                       f"time stamps must be strictly increasing")
+        raise source.error(column, k, problem)
+
+
+def _unit_hint(value: float, low: float, high: float, keyword: str, table) -> str:
+    """Suggest the unit that would bring ``value`` (in SI under the declared unit) into range."""
+    for name, f in table:
+        if low <= value * f <= high:
+            return f"; it looks like {name}: set {keyword}={name!r}"
+    return ""
+
+
+def check_sample_interval(t: np.ndarray, source: Source, column: str, kind: str,
+                          time_factor: float) -> None:
+    """The median interval must be plausible for an IMU or a GNSS receiver (unit mix-ups)."""
+    low, high = IMU_DT_RANGE_S if kind == "imu" else GNSS_DT_RANGE_S
+    dt = float(np.median(np.diff(t)))
+    if low <= dt <= high:
+        return
+    raw = dt / time_factor
+    hint = _unit_hint(raw, low, high, "time_unit",
+                      [("s", 1.0), ("ms", units.MILLISECOND), ("us", units.MICROSECOND),
+                       ("ns", units.NANOSECOND)])
+    raise source.error(column, None,
+                       f"median sample interval {dt:.6g} s is implausible for {kind.upper()} "
+                       f"data (expected {low:g}..{high:g} s){hint}")
+
+
+def check_imu_magnitudes(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source,
+                         f_labels: str, w_labels: str, accel_declared_g: bool,
+                         max_rate_rad_s: float) -> None:
+    """Catch unit mix-ups in IMU data from their magnitudes.
+
+    * median |f| in [0.5, 2] m/s^2 although m/s^2 was declared: the data look like g;
+    * median |f| in [50, 200] m/s^2 although g was declared: the data look like m/s^2;
+    * median |f| above 30 g: implausible (mg, or a wrong scale);
+    * any |w| above ``max_rate_rad_s`` (default 35 rad/s): looks like deg/s.
+
+    The median over the record (not the maximum) keeps short shocks and burns from
+    triggering; a record that legitimately violates these passes with ``check_magnitudes=False``.
+    """
+    f_norm = np.linalg.norm(f_b, axis=1)
+    med = float(np.median(f_norm))
+    if not accel_declared_g and 0.5 <= med <= 2.0:
+        raise source.error(f_labels, None,
+                           f"median specific-force norm is {med:.3g} m/s^2: the data look "
+                           f"like g, not m/s^2 (at rest it should read about 9.8); set "
+                           f"accel_unit='g' (or check_magnitudes=False)")
+    if accel_declared_g and 50.0 <= med <= 200.0:
+        raise source.error(f_labels, None,
+                           f"median specific-force norm is {med / units.G0:.3g} g: the data "
+                           f"look like m/s^2, not g; set accel_unit='m/s^2'")
+    if med > ACCEL_MAX:
+        raise source.error(f_labels, None,
+                           f"median specific-force norm {med:.3g} m/s^2 "
+                           f"({med / units.G0:.3g} g) is implausible; mg or a wrong scale?")
+    w_norm = np.linalg.norm(w_ib_b, axis=1)
+    k = int(np.argmax(w_norm))
+    if w_norm[k] > max_rate_rad_s:
+        raise source.error(w_labels, k,
+                           f"angular rate {w_norm[k]:.4g} rad/s exceeds max_rate_rad_s="
+                           f"{max_rate_rad_s:g}: the data look like deg/s; set "
+                           f"gyro_unit='deg/s' (or raise max_rate_rad_s for a fast spinner)")
+
+
+def check_positions(r_e: np.ndarray, source: Source, labels: str,
+                    length_factor: float | None = None) -> None:
+    """Every ECEF position must lie between 6300 km and 7500 km from the Earth's centre.
+
+    ``length_factor`` (the declared length unit in m) enables a unit hint in the message.
+    """
+    r = np.linalg.norm(r_e, axis=1)
+    bad = np.flatnonzero((r < R_MIN_M) | (r > R_MAX_M))
+    if not bad.size:
+        return
+    k = int(bad[0])
+    med = float(np.median(r))
+    hint = "" if length_factor is None else _unit_hint(
+        med / length_factor, R_MIN_M, R_MAX_M, "length_unit",
+        [("m", 1.0), ("km", units.KILOMETRE), ("mm", units.MILLIMETRE)])
+    raise source.error(labels, k,
+                       f"position is {r[k]:.6g} m from the Earth's centre, {r[k] - A:.6g} m "
+                       f"from the equatorial surface; expected {R_MIN_M:g}..{R_MAX_M:g} m "
+                       f"(near the Earth's surface up to ~1100 km altitude){hint}")
+
+
+def check_velocities(v_e: np.ndarray, source: Source, labels: str) -> None:
+    """ECEF speeds must stay below 12 km/s."""
+    v = np.linalg.norm(v_e, axis=1)
+    bad = np.flatnonzero(v > V_MAX_M_S)
+    if bad.size:
+        k = int(bad[0])
+        raise source.error(labels, k, f"speed {v[k]:.6g} m/s exceeds {V_MAX_M_S:g} m/s; "
+                                      f"wrong velocity unit?")
+
+
+def check_positive(x: np.ndarray, source: Source, label: str) -> None:
+    """Standard deviations must be strictly positive."""
+    bad = np.flatnonzero(x <= 0.0)
+    if bad.size:
+        k = int(bad[0])
+        raise source.error(label, k, f"standard deviation must be > 0, got {x[k]:.10g}")
+
+
+def gap_threshold(t: np.ndarray, max_gap_s: float | None) -> float:
+    """``max_gap_s``, or ``AUTO_GAP_FACTOR`` times the median interval when None."""
+    if max_gap_s is None:
+        return AUTO_GAP_FACTOR * float(np.median(np.diff(t)))
+    if not np.isfinite(max_gap_s) or max_gap_s <= 0:
+        raise NavlibInputError(f"max_gap_s: must be a positive number or None, got {max_gap_s}")
+    return float(max_gap_s)
+
+
+def apply_gap_policy(frame: pd.DataFrame, source: Source, column: str,
+                     max_gap_s: float | None, on_gap: str) -> pd.DataFrame:
+    """Find intervals longer than the threshold in ``frame.t`` and act on them.
+
+    The gaps are always listed in ``frame.attrs["gaps"]`` (dicts with ``t_start``, ``t_end``,
+    ``duration_s``, ``row``: the first row after the gap, ``where``: its file line / sample).
+    ``on_gap="warn"`` (default) also emits a :class:`FlightDataWarning`; ``"raise"`` raises
+    :class:`NavlibInputError`; ``"split"`` adds an integer column ``segment`` (0, 1, ...)
+    that increments after each gap.
+    """
+    if on_gap not in ON_GAP:
+        raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
+    t = frame["t"].to_numpy()
+    thr = gap_threshold(t, max_gap_s)
+    dt = np.diff(t)
+    rows = np.flatnonzero(dt > thr) + 1
+    gaps = [{"t_start": float(t[k - 1]), "t_end": float(t[k]), "duration_s": float(dt[k - 1]),
+             "row": int(k), "where": source.where(int(k))} for k in rows]
+    frame.attrs["gaps"] = gaps
+    frame.attrs["max_gap_s"] = thr
+    if gaps:
+        longest = max(gaps, key=lambda g: g["duration_s"])
+        text = (f"{len(gaps)} gap(s) longer than {thr:.4g} s; the first ends at "
+                f"{gaps[0]['where']} (t = {gaps[0]['t_end']:.6g} s), the longest lasts "
+                f"{longest['duration_s']:.4g} s")
+        if on_gap == "raise":
+            raise source.error(column, int(rows[0]),
+                               text + "; pass on_gap='split' or 'warn', or a larger max_gap_s")
+        if on_gap == "warn":
+            warnings.warn(f"{source.label}: {text}", FlightDataWarning, stacklevel=3)
+    if on_gap == "split":
+        segment = np.zeros(t.size, dtype=np.int64)
+        segment[rows] = 1
+        frame["segment"] = np.cumsum(segment)
+    return frame
+
+
+def split_at_gaps(frame: pd.DataFrame) -> list[pd.DataFrame]:
+    """The contiguous pieces of a record read with ``on_gap="split"``, without ``segment``.
+
+    A frame without a ``segment`` column is returned whole, as a one-element list.
+    """
+    if not isinstance(frame, pd.DataFrame):
+        raise NavlibInputError(f"frame: expected a pandas DataFrame, got {type(frame).__name__}")
+    if "segment" not in frame.columns:
+        return [frame]
+    return [piece.drop(columns="segment").reset_index(drop=True)
+            for _, piece in frame.groupby("segment", sort=True)]
+
+
+def _span(frame, name: str) -> tuple[float, float, np.ndarray]:
+    if not isinstance(frame, pd.DataFrame):
+        raise NavlibInputError(f"{name}: expected a pandas DataFrame, got {type(frame).__name__}")
+    if "t" not in frame.columns:
+        raise NavlibInputError(f"{name}: missing column 't'; columns are {list(frame.columns)}")
+    t = frame["t"].to_numpy(dtype=float)
+    if t.size == 0 or not np.all(np.isfinite(t)):
+        raise NavlibInputError(f"{name}: column 't' must be non-empty and finite")
+    return float(t.min()), float(t.max()), t
+
+
+def check_overlap(imu: pd.DataFrame, gnss: pd.DataFrame, *,
+                  min_overlap_s: float = 0.0) -> TimeOverlap:
+    """Check that the IMU and GNSS records share a time span; return that span.
+
+    Parameters
+    ----------
+    imu, gnss : DataFrame
+        Records with a time column ``t`` in s on a common time base (as returned by
+        :func:`read_imu_csv`, :func:`read_gnss_csv`, :func:`read_ulog`).
+    min_overlap_s : float
+        Shortest acceptable common span, s. The default 0 only demands a positive overlap.
+
+    Raises
+    ------
+    NavlibInputError
+        When the spans do not overlap (or by less than ``min_overlap_s``); the message gives
+        both spans, which usually reveals a time-base or time-unit mismatch.
+    """
+    i0, i1, _ = _span(imu, "imu")
+    g0, g1, tg = _span(gnss, "gnss")
+    start, end = max(i0, g0), min(i1, g1)
+    spans = f"IMU spans {i0:.6g}..{i1:.6g} s, GNSS spans {g0:.6g}..{g1:.6g} s"
+    if end <= start:
+        raise NavlibInputError(
+            f"imu, gnss: time spans do not overlap ({spans}); do both use the same time "
+            f"origin and unit?"
+        )
+    if end - start < min_overlap_s:
+        raise NavlibInputError(
+            f"imu, gnss: time spans overlap by {end - start:.6g} s only, less than "
+            f"min_overlap_s={min_overlap_s:g} ({spans})"
+        )
+    n = int(np.count_nonzero((tg >= start) & (tg <= end)))
+    return TimeOverlap(start, end, (i0, i1), (g0, g1), n)
