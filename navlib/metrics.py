@@ -180,6 +180,13 @@ def _whiten(H: np.ndarray, R: np.ndarray, sqrt_d: np.ndarray) -> np.ndarray:
     return np.linalg.solve(L, H * sqrt_d)
 
 
+def _fix_signs(V: np.ndarray) -> np.ndarray:
+    """Columns (last axis) signed so their largest-magnitude entry is positive, for
+    reproducible plots of ``u^i`` / ``v^i`` (the metrics use squares and do not care)."""
+    pivot = np.take_along_axis(V, np.argmax(np.abs(V), axis=-2)[..., None, :], axis=-2)
+    return V * np.where(pivot < 0, -1.0, 1.0)
+
+
 # --------------------------------------------------------------------------- excitability
 
 
@@ -321,7 +328,7 @@ def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | N
         raise NavlibInputError("F, H: the observability matrix is zero (no state reaches any "
                                "measurement), so the energy spectrum S is undefined")
     S = n * sigma / total
-    U = Vh.T
+    U = _fix_signs(Vh.T)
     ne, e = _excited(S, U, eta)
     return ExcitabilityResult(e=e, S=S, U=U, ne=ne, sigma=sigma, eta=eta, O=O, d0=d,
                               state_names=names)
@@ -490,7 +497,7 @@ def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
     info = _information(P_n)
 
     lam, V = np.linalg.eigh(info)
-    lam, V = lam[:, ::-1], V[:, :, ::-1]
+    lam, V = lam[:, ::-1], _fix_signs(V[:, :, ::-1])
     cumulative = np.cumsum(np.clip(lam, 0.0, None), axis=1)
     r = np.sqrt(cumulative / cumulative[:, -1:])
     nr, s = _sensible(r, V, nu)

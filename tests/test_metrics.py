@@ -374,3 +374,16 @@ def test_singular_transition_without_noise_is_named():
     F = np.zeros((2, 2, 2))
     with pytest.raises(NavlibInputError, match="epoch 1"):
         sensability(F, np.array([[1.0, 0.0]]), np.zeros((2, 2, 2)), np.eye(1), np.eye(2))
+
+
+def test_single_epoch_and_signed_vectors():
+    rng = np.random.default_rng(11)
+    F, H, Q, R, P0 = random_system(rng, n=3, m=2, N=1)
+    se = sensability(F, H, Q, R, P0, prior_update=True)
+    ex = excitability(F, H, P0, R)
+    assert se.s.shape == (1, 3) and ex.ne <= 3
+    for V in (ex.U, se.V[0]):
+        pivot = V[np.argmax(np.abs(V), axis=0), np.arange(3)]
+        assert np.all(pivot > 0)
+    np.testing.assert_allclose(se.V[0] @ np.diag(se.eigenvalues[0]) @ se.V[0].T,
+                               se.information[0], rtol=1e-10)
