@@ -31,6 +31,18 @@ def unskew(m):
     )
 
 
+def cross(a, b):
+    """Cross product of (..., 3) arrays (broadcasting), several times faster than
+    ``np.cross`` on small inputs, which matters inside per-sample loops."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
 def bortz_coefficient(angle):
     """Scalar ``(1 - a sin a / (2 (1 - cos a))) / a^2`` of the Bortz equation (spec A2, A3).
 
@@ -61,5 +73,5 @@ def bortz_rate(theta, w_b):
     theta = np.asarray(theta, dtype=float)
     w_b = np.asarray(w_b, dtype=float)
     c = bortz_coefficient(np.linalg.norm(theta, axis=-1))[..., None]
-    txw = np.cross(theta, w_b)
-    return w_b + 0.5 * txw + c * np.cross(theta, txw)
+    txw = cross(theta, w_b)
+    return w_b + 0.5 * txw + c * cross(theta, txw)

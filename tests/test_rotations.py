@@ -8,7 +8,7 @@ from hypothesis.extra.numpy import arrays
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from navlib.rotations import bortz_coefficient, bortz_rate, skew, unskew
+from navlib.rotations import bortz_coefficient, bortz_rate, cross, skew, unskew
 
 vec3 = arrays(np.float64, 3, elements=st.floats(-1e3, 1e3))
 
@@ -18,6 +18,7 @@ vec3 = arrays(np.float64, 3, elements=st.floats(-1e3, 1e3))
 def test_skew_is_cross_product(v, u):
     S = skew(v)
     np.testing.assert_allclose(S @ u, np.cross(v, u), rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(cross(v, u), np.cross(v, u))
     np.testing.assert_array_equal(S, -S.T)
     np.testing.assert_allclose(S @ v, 0.0, atol=1e-9)
     np.testing.assert_array_equal(unskew(S), v)
@@ -41,6 +42,8 @@ def test_skew_rotation_covariance_and_batches():
     lhs = R @ skew(v) @ np.swapaxes(R, -1, -2)
     np.testing.assert_allclose(lhs, skew(np.einsum("nij,nj->ni", R, v)), atol=1e-14)
     assert skew(rng.normal(size=(2, 4, 3))).shape == (2, 4, 3, 3)
+    a, b = rng.normal(size=(2, 1, 3)), rng.normal(size=(4, 3))
+    np.testing.assert_allclose(cross(a, b), np.cross(a, b), rtol=1e-15)
     np.testing.assert_allclose(unskew(skew(v)), v)
     # unskew takes the skew part of a general matrix.
     M = rng.normal(size=(3, 3))
