@@ -582,3 +582,64 @@ def test_px4_bad_files_and_options(tmp_path):
     _raises("on_gap: expected", read_ulog, sim, on_gap="drop")
     _raises("imu_max_gap_s", read_ulog, sim, imu_max_gap_s=0.0)
     _raises(r"no usable GPS data.*0 with fix_type >= 9", read_ulog, sim, min_fix_type=9)
+
+
+def _edited_sim_log(tmp_path, edit, topics=("sensor_combined", "vehicle_gps_position",
+                                            "sensor_gps")):
+    """A copy of the simulation log, reduced to ``topics`` and changed by ``edit(data)``."""
+    pyulog = pytest.importorskip("pyulog")
+    ulog = pyulog.ULog(str(_sim_log()), message_name_filter_list=list(topics))
+    edit({(d.name, d.multi_id): d.data for d in ulog.data_list})
+    path = tmp_path / "edited.ulg"
+    ulog.write_ulog(str(path))
+    return path
+
+
+def test_px4_log_validation_names_topic_field_and_message(tmp_path):
+    imu_key, gps_key = ("sensor_combined", 0), ("vehicle_gps_position", 0)
+
+    def dup(data):
+        data[imu_key]["timestamp"][50] = data[imu_key]["timestamp"][49]
+
+    msg = _raises("duplicate time stamp", read_ulog, _edited_sim_log(tmp_path, dup))
+    assert "topic 'sensor_combined', column 'timestamp', message 50" in msg
+
+    def nan(data):
+        data[imu_key]["gyro_rad[1]"][7] = np.nan
+
+    _raises(r"column 'gyro_rad\[1\]', message 7: value nan is not a finite",
+            read_ulog, _edited_sim_log(tmp_path, nan))
+
+    def deg(data):
+        for i in range(3):
+            data[imu_key][f"gyro_rad[{i}]"][300] = 60.0
+
+    _raises(r"'gyro_rad', message 300: angular rate 103.9 rad/s .* look like deg/s",
+            read_ulog, _edited_sim_log(tmp_path, deg))
+
+    def clip(data):
+        data[imu_key]["accelerometer_clipping"][[100, 200]] = 1
+
+    with pytest.warns(FlightDataWarning, match="'accelerometer_clipping' flags 2 sample.*"
+                                               "message 100"):
+        imu, _ = read_ulog(_edited_sim_log(tmp_path, clip))
+    assert imu.attrs["clipping"]["accelerometer_clipping"] == 2
+
+    def gps_dup(data):  # (pyulog writes messages in time order: no backward steps here)
+        data[gps_key]["timestamp"][300] = data[gps_key]["timestamp"][299]
+
+    _raises("vehicle_gps_position', column 'timestamp', message 300: duplicate time stamp",
+            read_ulog, _edited_sim_log(tmp_path, gps_dup))
+
+    def late(data):
+        for key in (gps_key, ("sensor_gps", 0)):
+            data[key]["timestamp"] += 100_000_000  # GNSS 100 s after the IMU record
+
+    path = _edited_sim_log(tmp_path, late)
+    _raises("do not overlap", read_ulog, path)
+    assert len(read_ulog(path, require_overlap=False)[1]) == 423
+
+    path = _edited_sim_log(tmp_path, lambda data: None, topics=("sensor_combined",))
+    _raises(r"no usable GPS data \(no GPS topic\)", read_ulog, path)
+    path = _edited_sim_log(tmp_path, lambda data: None, topics=("sensor_gps",))
+    _raises("no 'sensor_combined' topic", read_ulog, path)

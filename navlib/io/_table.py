@@ -87,7 +87,6 @@ class TextTable:
     """A text table split into header fields and data lines, with their file line numbers."""
 
     header: list[str]
-    header_line: int
     source: Source
 
 
@@ -176,7 +175,7 @@ def read_text_table(path, sep: str | None = None) -> TextTable:
         else:
             problem = f"row has {counts[k]} fields but the header has {len(header)}"
         raise source.error(None, k, problem)
-    return TextTable(header, head_i + 1, source)
+    return TextTable(header, source)
 
 
 def resolve_columns(table: TextTable, specs: Sequence[ColumnSpec],

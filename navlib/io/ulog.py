@@ -210,9 +210,10 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         common origin, the earlier of the first IMU and first kept GNSS time stamps; that
         origin, in PX4 boot-time microseconds, is ``attrs["t0_us"]``. Other ``attrs``:
         ``source``, ``topic``, ``body_frame`` / ``altitude_reference``, ``dropped_no_fix``,
-        ``gaps``. The IMU sample time is ``sensor_combined.timestamp`` (PX4 integrates the
-        accelerometer over the gyro interval; ``accelerometer_timestamp_relative`` is not
-        applied).
+        ``gaps``, and ``clipping`` (samples flagged by PX4's ``accelerometer_clipping`` /
+        ``gyro_clipping``; any flag also warns). The IMU sample time is
+        ``sensor_combined.timestamp`` (PX4 integrates the accelerometer over the gyro
+        interval; ``accelerometer_timestamp_relative`` is not applied).
 
     Raises
     ------
@@ -288,8 +289,19 @@ def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, max_rate_rad_s) -> p
     if check_magnitudes:
         check_imu_magnitudes(f_b, w_ib_b, src, "'accelerometer_m_s2'", "'gyro_rad'", False,
                              max_rate_rad_s)
-    return pd.DataFrame({"t": t, **dict(zip(F_KEYS, f_b.T, strict=True)),
-                         **dict(zip(W_KEYS, w_ib_b.T, strict=True))})
+    clipped = {}
+    for field in ("accelerometer_clipping", "gyro_clipping"):
+        if field in d.data:
+            rows = np.flatnonzero(d.data[field])
+            clipped[field] = int(rows.size)
+            if rows.size:
+                warnings.warn(f"{src.label}: '{field}' flags {rows.size} sample(s), the first "
+                              f"at {src.where(int(rows[0]))}: the sensor saturated there",
+                              FlightDataWarning, stacklevel=3)
+    frame = pd.DataFrame({"t": t, **dict(zip(F_KEYS, f_b.T, strict=True)),
+                          **dict(zip(W_KEYS, w_ib_b.T, strict=True))})
+    frame.attrs["clipping"] = clipped
+    return frame
 
 
 def _gnss_frame(d, label, idx, ts, t0, altitude, check_magnitudes):
@@ -323,7 +335,7 @@ def _gnss_frame(d, label, idx, ts, t0, altitude, check_magnitudes):
             out["sigma"] = combine_sigma(eph, epv)
         else:
             warnings.warn(f"{src.label}: eph/epv not positive and finite at every fix; no "
-                          f"sigma column", FlightDataWarning, stacklevel=4)
+                          f"sigma column", FlightDataWarning, stacklevel=3)
     frame = pd.DataFrame(out)
     frame.attrs.update(topic=d.name, instance=int(d.multi_id), altitude_reference=ref,
                        velocity_input=velocity)
