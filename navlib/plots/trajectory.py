@@ -17,20 +17,31 @@ from navlib.units import DEG, DEG_PER_HOUR
 
 ROCKET_MARKERS = ("ignition", "burnout", "free_flight", "despin")
 """Events marked on the Fig. 1 analogue (paper: 18, 46, 60 and 73 s)."""
+LAUNCHER_MARKERS = ("pitchover", "gravity_turn", "stage1_burnout", "stage2_ignition")
+"""Events marked on the launcher figure (programme start/end, first engine off, second on)."""
 
 _TWO_PI = 2.0 * np.pi
 
 
 def _mark_events(ax, events: dict, which: Iterable[str] | None, label: bool) -> None:
-    """Dotted vertical lines at the chosen events, names written along the top axis."""
+    """Dotted vertical lines at the chosen events, names written down from the top axis.
+
+    Labels closer than 4 % of the time span to the previous one drop lower so they do not
+    overprint each other.
+    """
     names = list(events) if which is None else [w for w in which if w in events]
-    for name in names:
-        t = events[name]
+    chosen = sorted((events[name], name) for name in names)
+    span = (max(t for t, _ in chosen) - min(t for t, _ in chosen)) if chosen else 0.0
+    last, level = -np.inf, 0
+    for t, name in chosen:
         ax.axvline(t, color="0.4", linestyle=":", linewidth=1.0)
         if label:
-            ax.annotate(f"{name} {t:g} s", (t, 1.0), xycoords=("data", "axes fraction"),
-                        xytext=(2, -2), textcoords="offset points", rotation=90,
-                        va="top", ha="left", fontsize=7, color="0.3")
+            level = level + 1 if t - last < 0.04 * max(span, 1e-9) else 0
+            last = t
+            ax.annotate(f"{name} {t:g} s", (t, 1.0 - 0.3 * (level % 3)),
+                        xycoords=("data", "axes fraction"), xytext=(2, -2),
+                        textcoords="offset points", rotation=90, va="top", ha="left",
+                        fontsize=7, color="0.3")
 
 
 def _title(traj) -> str:
@@ -90,7 +101,7 @@ def body_x_elevation(traj) -> np.ndarray:
     return np.arcsin(np.clip(np.einsum("ni,ni->n", x_e, up), -1.0, 1.0))
 
 
-def launcher_figure(traj, markers: Iterable[str] | None = None):
+def launcher_figure(traj, markers: Iterable[str] | None = LAUNCHER_MARKERS):
     """Launcher ascent: body specific force, body-x elevation (pitch) and height vs time."""
     _, _, alt = traj.geodetic
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), layout="constrained")
@@ -99,7 +110,7 @@ def launcher_figure(traj, markers: Iterable[str] | None = None):
     axes[0].plot(traj.t, np.linalg.norm(traj.specific_force, axis=1), "k--", lw=0.8,
                  label="|f|")
     axes[0].set_ylabel("specific force [m/s²]")
-    axes[0].legend(ncol=4, fontsize=8)
+    axes[0].legend(ncol=4, fontsize=8, loc="lower left")
     axes[1].plot(traj.t, body_x_elevation(traj) / DEG, color="C4")
     axes[1].set_ylabel("body-x elevation [deg]")
     axes[2].plot(traj.t, alt / 1e3, color="C2")
@@ -144,22 +155,22 @@ def closure_error_figure(closure, position_tol_m: float | None = 1.0,
                          attitude_tol_rad: float | None = 1e-4, events: dict | None = None):
     """Strapdown closure: position (m), velocity (m/s) and attitude (mrad) error vs time.
 
-    Dashed lines show the tolerances (issue 2: 1 m and 0.1 mrad at the end of the flight).
+    Logarithmic axes (exact zeros, e.g. on the pad, are left out); dashed lines show the
+    tolerances (issue 2: 1 m and 0.1 mrad at the end of the flight).
     """
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6), layout="constrained")
-    axes[0].plot(closure.t, closure.position_error, color="C0")
-    axes[0].set_ylabel("position [m]")
-    axes[1].plot(closure.t, closure.velocity_error, color="C3")
-    axes[1].set_ylabel("velocity [m/s]")
-    axes[2].plot(closure.t, closure.attitude_error * 1e3, color="C1")
-    axes[2].set_ylabel("attitude [mrad]")
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
+    series = [(closure.position_error, "position [m]", "C0", position_tol_m),
+              (closure.velocity_error, "velocity [m/s]", "C3", None),
+              (closure.attitude_error * 1e3, "attitude [mrad]", "C1",
+               None if attitude_tol_rad is None else attitude_tol_rad * 1e3)]
+    for ax, (err, label, color, tol) in zip(axes, series, strict=True):
+        ax.plot(closure.t, np.where(err > 0.0, err, np.nan), color=color)
+        ax.set_yscale("log")
+        ax.set_ylabel(label)
+        if tol is not None:
+            ax.axhline(tol, color="k", ls="--", lw=0.8, label="tolerance")
+            ax.legend(fontsize=8, loc="lower right")
     axes[2].set_xlabel("time [s]")
-    if position_tol_m is not None:
-        axes[0].axhline(position_tol_m, color="k", ls="--", lw=0.8, label="tolerance")
-        axes[0].legend(fontsize=8)
-    if attitude_tol_rad is not None:
-        axes[2].axhline(attitude_tol_rad * 1e3, color="k", ls="--", lw=0.8, label="tolerance")
-        axes[2].legend(fontsize=8)
     if events:
         for k, ax in enumerate(axes):
             _mark_events(ax, events, ROCKET_MARKERS, label=k == 0)
