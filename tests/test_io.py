@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import navlib
 from navlib import earth
@@ -415,6 +417,30 @@ def test_imu_round_trip(tmp_path):
     nan.loc[3, "f_x"] = np.nan
     _raises(r"imu\['f_x'\]: contains NaN", write_imu_csv, nan, tmp_path / "x.csv")
     _raises("does not exist", write_imu_csv, imu, tmp_path / "no" / "x.csv")
+
+
+@settings(max_examples=15, deadline=None)
+@given(time_unit=st.sampled_from(["s", "ms", "us", "ns"]),
+       accel_unit=st.sampled_from(["m/s^2", "g", "mg"]),
+       gyro_unit=st.sampled_from(["rad/s", "deg/s"]),
+       rate=st.floats(20.0, 2000.0), t0=st.floats(0.0, 1e5))
+def test_imu_round_trip_any_units(tmp_path_factory, time_unit, accel_unit, gyro_unit, rate, t0):
+    t, f, w = _imu_values(n=50, rate=rate, t0=t0)
+    imu = pd.DataFrame({"t": t, **dict(zip(["f_x", "f_y", "f_z"], f.T, strict=True)),
+                        **dict(zip(["w_x", "w_y", "w_z"], w.T, strict=True))})
+    path = write_imu_csv(imu, tmp_path_factory.mktemp("rt") / "imu.csv", time_unit=time_unit,
+                         accel_unit=accel_unit, gyro_unit=gyro_unit)
+    back = read_imu_csv(path, time_unit=time_unit)  # agreeing keyword and header: accepted
+    pd.testing.assert_frame_equal(back, imu, check_exact=False, rtol=1e-13, atol=0)
+
+
+def test_windows_line_endings_and_byte_order_mark(tmp_path):
+    path, (t, f, _) = _imu_csv(tmp_path)
+    crlf = tmp_path / "win.csv"
+    crlf.write_bytes(b"\xef\xbb\xbf" + path.read_text().replace("\n", "\r\n").encode())
+    imu = read_imu_csv(crlf)
+    np.testing.assert_array_equal(imu["t"], t)
+    np.testing.assert_array_equal(imu["f_z"], f[:, 2])
 
 
 @pytest.mark.parametrize(("position", "velocity"), [("ecef", "ecef"), ("geodetic", "ned")])
