@@ -217,21 +217,15 @@ def test_model_contents_and_parameters(traj):
 
 
 def test_cached_epoch_model_is_reused(traj):
-    a = ecef.ecef21_at_epochs(traj, sensors=None, attitude_error="body") \
-        if _has_preset() else None
-    if a is None:
-        pytest.skip("sensor preset not available yet")
-    b = ecef.ecef21_at_epochs(traj, attitude_error="body")
+    a = ecef.ecef21_at_epochs(traj, sensors=NOISE, attitude_error="body")
+    b = ecef.ecef21_at_epochs(traj, sensors=dict(NOISE), attitude_error="body")
     assert a is b
     assert not a.F.flags.writeable
-
-
-def _has_preset():
-    try:
-        ecef.imu_noise_densities(None)
-    except (ImportError, NavlibInputError):
-        return False
-    return True
+    c = ecef.ecef21_at_epochs(traj, sensors=NOISE, attitude_error="ecef")
+    assert c is not a and c.F.shape == (2, 21, 21)
+    np.testing.assert_array_equal(c.P0, ecef.initial_covariance())
+    P0 = ecef.initial_covariance(sigma_theta0_deg=2.0)
+    assert P0[6, 6] == pytest.approx(np.radians(2.0) ** 2) and P0[0, 0] == 900.0
 
 
 @pytest.mark.parametrize("kwargs, word", [

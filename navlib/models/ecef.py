@@ -219,26 +219,19 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         ``A`` (N, 21, 21), ``G`` (N, 21, 18), ``Qc`` (18, 18), ``H`` (3, 21), ``R`` (3, 3),
         ``P0`` (21, 21), ``t`` the trajectory times, ``parameters`` every assumed value.
     """
-    reject_unknown(sigmas, P0_DEFAULTS, "ecef21")
     if attitude_error not in ATTITUDE_ERRORS:
         raise NavlibInputError(
             f"attitude_error: expected one of {ATTITUDE_ERRORS}, got {attitude_error!r}"
         )
+    P0, p0 = _initial_covariance(sigmas, "ecef21")
     for attr in ("t", "position", "specific_force", "angular_rate", "attitude"):
         if not hasattr(trajectory, attr):
             raise NavlibInputError(f"trajectory: expected a navlib Trajectory (no {attr!r})")
     gnss_sigma_m = finite_scalar(gnss_sigma_m, "gnss_sigma_m", 0.0, low_open=True)
-    p0 = {k: finite_scalar(sigmas.get(k, v), k, 0.0, low_open=True)
-          for k, v in P0_DEFAULTS.items()}
     noise = imu_noise_densities(sensors)
 
     A, G = ecef21_jacobians(trajectory.position, trajectory.C_b_e(),
                             trajectory.specific_force, trajectory.angular_rate, attitude_error)
-    sigma0 = np.repeat([
-        p0["sigma_p0_m"], p0["sigma_v0_m_s"], p0["sigma_theta0_deg"] * units.DEG,
-        p0["sigma_bg_deg_s"] * units.DEG, p0["sigma_ba_m_s2"],
-        p0["sigma_sg_ppm"] * units.PPM, p0["sigma_sa_ppm"] * units.PPM,
-    ], 3)
     psd = np.concatenate([noise[k] for k in ("vrw_m_s_sqrt_s", "arw_rad_sqrt_s",
                                              "bg_rw_rad_s_sqrt_s", "ba_rw_m_s2_sqrt_s",
                                              "sg_rw_per_sqrt_s", "sa_rw_per_sqrt_s")]) ** 2
@@ -259,10 +252,31 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
     return LinearModel(
         state_names=STATE_NAMES, A=A, G=G, Qc=np.diag(psd), H=H,
         R=gnss_sigma_m**2 * np.eye(3), t=np.asarray(trajectory.t, dtype=float),
-        P0=np.diag(sigma0**2), measurement_names=("gnss_x", "gnss_y", "gnss_z"),
+        P0=P0, measurement_names=("gnss_x", "gnss_y", "gnss_z"),
         noise_names=NOISE_NAMES, name=f"ecef21 ({attitude_error} attitude error)",
         parameters=parameters,
     )
+
+
+def _initial_covariance(sigmas: Mapping, where: str):
+    reject_unknown(sigmas, P0_DEFAULTS, where)
+    p0 = {k: finite_scalar(sigmas.get(k, v), k, 0.0, low_open=True)
+          for k, v in P0_DEFAULTS.items()}
+    sigma0 = np.repeat([
+        p0["sigma_p0_m"], p0["sigma_v0_m_s"], p0["sigma_theta0_deg"] * units.DEG,
+        p0["sigma_bg_deg_s"] * units.DEG, p0["sigma_ba_m_s2"],
+        p0["sigma_sg_ppm"] * units.PPM, p0["sigma_sa_ppm"] * units.PPM,
+    ], 3)
+    return np.diag(sigma0**2), p0
+
+
+def initial_covariance(**sigmas) -> np.ndarray:
+    """Diagonal ``P0`` (21, 21) in SI from the edge-unit sigmas of :data:`P0_DEFAULTS`.
+
+    The same ``P0`` :func:`ecef21` builds; use it to change ``P0`` of a discretised model
+    without rebuilding it (``dataclasses.replace(discrete, P0=initial_covariance(...))``).
+    """
+    return _initial_covariance(sigmas, "initial_covariance")[0]
 
 
 DISCRETIZATION_METHODS = ("series", "expm")
@@ -409,14 +423,19 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
         GNSS rate; epochs are the samples nearest a regular grid (``trajectory.at_rate``).
     method, hold
         See :func:`discretize_at_epochs`.
-    sensors : None or str
-        Sensor preset name (hashable, for the cache).
+    sensors : None, str or mapping
+        Sensor preset name or noise densities (see :func:`imu_noise_densities`).
     **model_options
         Passed to :func:`ecef21` (``attitude_error``, ``gnss_sigma_m``, P0 sigmas).
     """
     gnss_rate_hz = finite_scalar(gnss_rate_hz, "gnss_rate_hz", 0.0, low_open=True)
-    if sensors is not None and not isinstance(sensors, str):
-        raise NavlibInputError("sensors: ecef21_at_epochs caches on a preset name; pass a str")
+    if isinstance(sensors, Mapping):  # frozen to a hashable key for the cache
+        sensors = tuple(sorted((k, tuple(_per_axis(v, f"sensors[{k!r}]")))
+                               for k, v in sensors.items()))
+    elif sensors is not None and not isinstance(sensors, str):
+        raise NavlibInputError("sensors: ecef21_at_epochs caches on a preset name or a "
+                               "mapping of noise densities; got "
+                               f"{type(sensors).__name__}")
     key = tuple(sorted(model_options.items()))
     try:
         hash(key)
@@ -427,6 +446,8 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
 
 @lru_cache(maxsize=32)
 def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key):
+    if isinstance(sensors, tuple):
+        sensors = dict(sensors)
     model = ecef21(trajectory, sensors, **dict(key))
     discrete = discretize_at_epochs(model, trajectory.at_rate(gnss_rate_hz), method, hold)
     for arr in (discrete.F, discrete.Q, discrete.H, discrete.R, discrete.P0, discrete.t):
