@@ -20,7 +20,8 @@ Output layout (flat, inside the output folder)::
     README*               any README already there is kept
 
 A run restricted with ``only`` refreshes the selected pages and keeps the other pages of the
-previous report (the index lists all of them, each with the date and mode it was made in).
+previous report (the index lists all of them, each with the date and mode it was made in);
+a full run replaces the whole report (README files excepted).
 
 Parameters: ``quick=True`` and explicit ``parameters`` are injected only into notebooks whose
 tagged ``parameters`` cell assigns that name (so papermill never warns about unknown
@@ -474,15 +475,20 @@ smoke testing.</p>
 """
 
 
-def _publish(staging: Path, output: Path, runs: Sequence[NotebookRun]) -> None:
-    """Carry over the untouched part of the old report, write index + manifest, swap in."""
+def _publish(staging: Path, output: Path, runs: Sequence[NotebookRun], partial: bool) -> None:
+    """Carry over what stays of the old report, write index + manifest, swap in.
+
+    A ``partial`` run (``only`` given) keeps the other pages of the old report; a full run
+    keeps only README files, so pages of deleted or renamed notebooks disappear.
+    """
     finished = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     old_entries: dict = {}
     if output.is_dir():
-        old_entries = _load_manifest(output).get("notebooks", {})
+        old_entries = _load_manifest(output).get("notebooks", {}) if partial else {}
         for item in output.iterdir():
             target = staging / item.name
-            if item.name in (MANIFEST, INDEX) or target.exists():
+            keep = partial or item.name.upper().startswith("README")
+            if not keep or item.name in (MANIFEST, INDEX) or target.exists():
                 continue
             if item.is_dir():
                 shutil.copytree(item, target, symlinks=True)
@@ -521,7 +527,8 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     notebooks_dir : path
         Folder holding ``NN_*.ipynb``; it is also the notebooks' working directory.
     output_dir : path
-        Report folder; created, or replaced as a whole on success (see module docstring).
+        Report folder; created, or replaced on success (see module docstring: a run with
+        ``only`` keeps the other pages, a full run keeps only README files).
     quick : bool
         Inject ``quick=True`` (into notebooks that define ``quick``).
     only : iterable of str, optional
@@ -585,7 +592,7 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
                 break
         if not all(r.ok for r in runs):
             raise ReportError(runs)
-        _publish(staging, output, runs)
+        _publish(staging, output, runs, partial=only is not None)
         return runs
     finally:
         if staging.exists():

@@ -153,6 +153,18 @@ def test_only_refreshes_selected_pages_and_keeps_the_rest(good, tmp_path):
     assert 'href="01_good.html"' in after["index.html"].decode()
 
 
+def test_full_run_drops_pages_of_removed_notebooks(good, tmp_path):
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    shutil.copy(good[0] / "02_other.ipynb", nbdir / "02_other.ipynb")
+    out = tmp_path / "out"
+    shutil.copytree(good[1], out)
+    reports.run_reports(nbdir, out)
+    assert sorted(p.name for p in out.iterdir()) == [
+        "02_other.html", "02_other.ipynb", "README.md", "index.html", "manifest.json"]
+    assert "01_good" not in (out / "index.html").read_text()
+
+
 def test_fail_fast_stops_at_first_failure(good, tmp_path):
     nbdir = tmp_path / "notebooks"
     nbdir.mkdir()
