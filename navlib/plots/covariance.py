@@ -1,0 +1,144 @@
+"""Generic figures for covariance histories and the normalised eigen-analysis.
+
+Builders take :class:`navlib.covariance.CovarianceResult` /
+:class:`navlib.covariance.NormalizedEigenResult` objects and return new matplotlib Figures;
+they only convert units and lay out axes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from navlib.errors import NavlibInputError
+
+TIME_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0}
+
+
+def _time(t, unit: str):
+    if unit not in TIME_UNITS:
+        raise NavlibInputError(f"time_unit: expected one of {list(TIME_UNITS)}, got {unit!r}")
+    return np.asarray(t) / TIME_UNITS[unit]
+
+
+def sigma_axes(ax, result, states: Sequence[str], units: Mapping | None = None,
+               time_unit: str = "min", log: bool = False, prior: bool = False) -> None:
+    """Draw sigma(t) of ``states`` on ``ax``; ``units`` maps state -> (label, factor)."""
+    idx = result.index(list(states))
+    sigma = result.sigma_prior if prior else result.sigma
+    t = _time(result.t, time_unit)
+    labels = set()
+    for name, i in zip(states, idx, strict=True):
+        label, factor = (units or {}).get(name, ("", 1.0))
+        labels.add(label)
+        ax.plot(t, sigma[:, i] * factor, label=name)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(f"t [{time_unit}]")
+    ax.set_ylabel("sigma" + (f" [{', '.join(sorted(labels))}]" if any(labels) else ""))
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+
+
+def sigma_figure(result, groups: Mapping[str, Sequence[str]], units: Mapping | None = None,
+                 log_groups: Sequence[str] = (), time_unit: str = "min", ncols: int = 3,
+                 title: str | None = None):
+    """One panel per group of states: sigma(t) in display units.
+
+    Parameters
+    ----------
+    result : CovarianceResult
+    groups : mapping title -> state names
+    units : mapping state -> (unit label, factor), optional
+    log_groups : titles of groups drawn with a logarithmic y axis
+    """
+    n = len(groups)
+    nrows = int(np.ceil(n / ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.0 * nrows), squeeze=False,
+                             constrained_layout=True)
+    for ax, (name, states) in zip(axes.flat, groups.items(), strict=False):
+        sigma_axes(ax, result, states, units, time_unit, log=name in log_groups)
+        ax.set_title(name)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def eigenvalues_figure(eig, modes: Sequence[int] | None = None, time_unit: str = "min",
+                       log: bool = True, tracked: bool = False, title: str | None = None):
+    """Normalised eigenvalues over time (Silva et al. Fig. 7 analogue), modes 1-based."""
+    values = eig.tracked_values if tracked else eig.eigenvalues
+    modes = list(range(1, eig.n + 1)) if modes is None else list(modes)
+    t = _time(eig.t, time_unit)
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    for m in modes:
+        ax.plot(t, np.clip(values[:, m - 1], 1e-12, None), label=f"λ{m}",
+                linewidth=1.6 if m <= 6 else 0.9)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(f"t [{time_unit}]")
+    ax.set_ylabel(f"normalised eigenvalue (sum = {eig.order:g})")
+    ax.grid(True, alpha=0.3)
+    ax.legend(ncol=5, fontsize=7)
+    ax.set_title(title or ("tracked" if tracked else "sorted") + " eigenvalues of P_n(t)")
+    return fig
+
+
+def eigenvectors_figure(eig, modes: Sequence[int] = (1, 2, 3, 4, 5, 6), min_component: float
+                        = 0.1, time_unit: str = "min", tracked: bool = False, ncols: int = 3,
+                        t_from: float = 0.0, title: str | None = None):
+    """Eigenvector components over time, one panel per mode (Figs. 8–13 analogues).
+
+    Only states whose component exceeds ``min_component`` in magnitude at some epoch after
+    ``t_from`` (s) are drawn. With ``tracked=False`` (sorted order) crossings of nearly equal
+    eigenvalues show as the paper's X-shape; ``tracked=True`` follows the branches.
+    """
+    vectors = eig.tracked_vectors if tracked else eig.eigenvectors
+    modes = list(modes)
+    nrows = int(np.ceil(len(modes) / ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 2.8 * nrows), squeeze=False,
+                             sharex=True, constrained_layout=True)
+    t = _time(eig.t, time_unit)
+    start = int(np.searchsorted(eig.t, t_from))
+    colors = plt.get_cmap("tab20").colors  # one colour per state, stable across panels
+    for ax, m in zip(axes.flat, modes, strict=False):
+        comp = vectors[start:, :, m - 1]
+        shown = np.flatnonzero(np.abs(comp).max(axis=0) > min_component)
+        for line, j in enumerate(shown):  # dashes keep overlapping +-0.707 pairs visible
+            ax.plot(t[start:], comp[:, j], label=eig.state_names[j],
+                    color=colors[j % len(colors)], linestyle=("-", "--", ":", "-.")[line % 4])
+        ax.set_ylim(-1.05, 1.05)
+        ax.set_title(f"mode {m}" + (" (tracked)" if tracked else ""))
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    for ax in axes.flat[len(modes):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
+        ax.set_xlabel(f"t [{time_unit}]")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def ratio_figure(t, ratio, state_names: Sequence[str], states: Sequence[str] | None = None,
+                 time_unit: str = "min", title: str | None = None):
+    """Covariance ratio sigma_i(t0)/sigma_i(t) over time (log y), e.g. from
+    :func:`navlib.covariance.covariance_ratio`."""
+    names = list(state_names)
+    states = names if states is None else list(states)
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    tt = _time(t, time_unit)
+    for s in states:
+        ax.plot(tt, ratio[:, names.index(s)], label=s)
+    ax.set_yscale("log")
+    ax.set_xlabel(f"t [{time_unit}]")
+    ax.set_ylabel("sigma(t0) / sigma(t)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(ncol=5, fontsize=7)
+    if title:
+        ax.set_title(title)
+    return fig
