@@ -232,3 +232,20 @@ def test_local_observability_rejects_bad_input():
         local_observability(model, window=9)
     with pytest.raises(NavlibInputError, match="model"):
         local_observability(np.eye(3))
+
+
+def test_auto_coupling_threshold_absorbs_null_space_blur():
+    # exact null space {a - b}; a weak direction (sigma 1e-12) plus 1e-16 noise blurs the
+    # computed basis by ~1e-4, which a fixed 1e-6 threshold reads as coupling
+    rng = np.random.default_rng(0)
+    v_null = np.array([1.0, -1.0, 0.0, 0.0]) / np.sqrt(2)
+    basis = np.linalg.svd(v_null[None])[2][1:]          # 3 rows orthogonal to the null vector
+    O = np.diag([1.0, 1e-3, 1e-12]) @ basis + 1e-16 * rng.normal(size=(3, 4))
+    fixed = analyze(O, state_names=list("abcd"))
+    auto = analyze(O, coupling_threshold="auto", state_names=list("abcd"))
+    assert fixed.rank == auto.rank == 3
+    assert fixed.unobservable_groups != [["a", "b"]]
+    assert auto.unobservable_groups == [["a", "b"]]
+    assert 1e-6 < auto.coupling_threshold <= 0.1
+    with pytest.raises(NavlibInputError, match="coupling_threshold"):
+        analyze(O, coupling_threshold="exact")
