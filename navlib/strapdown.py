@@ -17,8 +17,8 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
   :func:`navlib.rotations.bortz_rate`). ``phi(h)`` is integrated by classical RK4 using the
   rates at ``0, h/2, h``; RK4 on the Bortz equation is exact for rotation about a fixed
   axis, and the full equation (including the ``1/12`` coning term and its higher-order
-  coefficient) handles coning. ``phi(h/2)`` is integrated the same way and only serves to
-  rotate the mid-step specific force.
+  coefficient) handles coning. ``phi(h/2)`` only serves to rotate the mid-step specific
+  force and is taken from the closed-form coning integral of the interpolating parabola.
 * **Velocity and position.** The ECEF specific force ``C(tau) f_b(tau)`` is formed at
   ``0, h/2, h`` — sculling is accounted for because the body force is rotated through the
   attitude *at* each abscissa, not through a step-start attitude. The Coriolis term is
@@ -63,7 +63,7 @@ def _quat_mul(p, q):
     """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``)."""
     px, py, pz, pw = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
     qx, qy, qz, qw = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    out = np.empty(np.broadcast_shapes(p.shape, q.shape))
+    out = np.empty(p.shape if p.shape == q.shape else np.broadcast_shapes(p.shape, q.shape))
     out[..., 0] = pw * qx + px * qw + py * qz - pz * qy
     out[..., 1] = pw * qy - px * qz + py * qw + pz * qx
     out[..., 2] = pw * qz + px * qy - py * qx + pz * qw
@@ -133,11 +133,6 @@ def _interpolate(t, x, frac):
     return np.einsum("kj,kjd->kd", weights, x[idx])
 
 
-def _quadratic_quarter(x0, xm, x1):
-    """Value at ``h/4`` of the parabola through ``x0, xm, x1`` at ``0, h/2, h``."""
-    return 0.375 * x0 + 0.75 * xm - 0.125 * x1
-
-
 def _rotation_vector_rk4(w0, wm, w1, h):
     """Body rotation vector over ``[0, h]`` from rates at ``0, h/2, h`` (RK4 on Bortz, A2).
 
@@ -150,11 +145,25 @@ def _rotation_vector_rk4(w0, wm, w1, h):
     return h / 6.0 * (w0 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
+def _half_step_rotation_vector(w0, wm, w1, h):
+    """Body rotation vector over ``[0, h/2]`` for the parabola through ``w0, wm, w1``.
+
+    ``phi = int w + 1/2 int alpha x w`` in closed form for ``w = a + b tau + c tau^2``:
+    ``a T + b T^2/2 + c T^3/3 + (a x b) T^3/12 + (a x c) T^4/12 + (b x c) T^5/60`` with
+    ``T = h/2``. The omitted third-order Bortz term is ``O(|phi|^2 |w_perp| T)``; this
+    vector only rotates the mid-step specific force, so the error does not accumulate.
+    """
+    h = np.asarray(h, dtype=float)[..., None]
+    b = (4.0 * wm - 3.0 * w0 - w1) / h
+    c = 2.0 * (w0 - 2.0 * wm + w1) / h**2
+    T = 0.5 * h
+    return (w0 * T + b * T**2 / 2.0 + c * T**3 / 3.0 + cross(w0, b) * T**3 / 12.0
+            + cross(w0, c) * T**4 / 12.0 + cross(b, c) * T**5 / 60.0)
+
+
 def _attitude_increments(w0, wm, w1, h):
-    """Body rotation vectors over the full step and over its first half."""
-    phi = _rotation_vector_rk4(w0, wm, w1, h)
-    phi_half = _rotation_vector_rk4(w0, _quadratic_quarter(w0, wm, w1), wm, 0.5 * h)
-    return phi, phi_half
+    """Body rotation vectors over the full step (RK4 on Bortz) and over its first half."""
+    return _rotation_vector_rk4(w0, wm, w1, h), _half_step_rotation_vector(w0, wm, w1, h)
 
 
 def _rotate_z(x, angle):
