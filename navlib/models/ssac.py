@@ -48,7 +48,8 @@ from navlib._validation import finite_array, finite_scalar, latitude_deg
 from navlib.earth import OMEGA_E, geodetic_to_ecef, gravity_magnitude, radii_of_curvature
 from navlib.errors import NavlibInputError
 from navlib.models.base import LinearModel
-from navlib.units import DEG, DEG_PER_HOUR, DEG_PER_SQRT_HOUR, MG, MG_PER_SQRT_HZ
+from navlib.sensors import SensorSpec, load_preset
+from navlib.units import DEG, DEG_PER_HOUR, MG
 
 STATES_15 = ("psiN", "psiE", "psiD", "dvN", "dvE", "dvD", "dL", "dlambda", "dh",
              "bgN", "bgE", "bgD", "baN", "baE", "baD")
@@ -65,15 +66,11 @@ SITE_LON_DEG = -(45 + 51 / 60 + 38 / 3600)
 """-45°51'38"."""
 SITE_ALT_M = 629.0
 
-IMU_DEFAULTS = {
-    "gyro_bias": 0.5 * DEG_PER_HOUR,
-    "accel_bias": 0.5 * MG,
-    "gyro_arw": 0.0002 * DEG_PER_SQRT_HOUR,
-    "accel_vrw": 0.01 * MG_PER_SQRT_HZ,
-}
-"""SSAC simulated-test IMU (ssac.md §4.1), SI: constant biases 0.5 deg/h and 0.5 mg, gyro
-random walk 0.0002 deg/sqrt(h) (the deg/sqrt(h) reading, ssac.md §4.1) and accelerometer
-random walk 0.01 mg/sqrt(Hz). Used unless a sensor preset is given."""
+IMU_PRESET = "ssac_tactical"
+"""Sensor preset of the SSAC simulated test (``data/sensors/ssac_tactical.toml``, ssac.md
+§4.1): constant biases 0.5 deg/h and 0.5 mg, gyro random walk 0.0002 deg/sqrt(h) (the
+deg/sqrt(h) reading) and accelerometer random walk 0.01 mg/sqrt(Hz)."""
+IMU_KEYS = ("gyro_bias", "accel_bias", "gyro_arw", "accel_vrw")
 
 SIGMA_NU = 0.01
 """Assumed zero-velocity measurement noise (quasi-stationary vibration), m/s (ssac.md §4.4)."""
@@ -169,21 +166,29 @@ def display_units(lat: float, alt: float, state_names=STATES_15) -> dict:
 
 
 def _imu_values(imu) -> dict:
-    values = dict(IMU_DEFAULTS)
-    if imu is None:
-        return values
-    if not isinstance(imu, dict):
-        raise NavlibInputError(f"imu: expected a dict of SI values, got {type(imu).__name__}")
-    unknown = sorted(set(imu) - set(values))
+    """SI bias and noise values from a preset name/path, a SensorSpec, or a dict of SI
+    overrides on top of :data:`IMU_PRESET`."""
+    overrides = {}
+    if imu is None or isinstance(imu, dict):
+        overrides, imu = dict(imu or {}), IMU_PRESET
+    spec = imu if isinstance(imu, SensorSpec) else load_preset(imu)
+    if spec.imu is None:
+        raise NavlibInputError(f"imu: preset {spec.name!r} has no IMU section")
+    values = {"gyro_bias": spec.imu.gyro.bias, "accel_bias": spec.imu.accel.bias,
+              "gyro_arw": spec.imu.gyro.noise_density,
+              "accel_vrw": spec.imu.accel.noise_density}
+    unknown = sorted(set(overrides) - set(IMU_KEYS))
     if unknown:
-        raise NavlibInputError(f"imu: unknown key(s) {unknown}; accepted {sorted(values)}")
-    for key, value in imu.items():
+        raise NavlibInputError(f"imu: unknown key(s) {unknown}; accepted {list(IMU_KEYS)}")
+    for key, value in overrides.items():
         values[key] = finite_scalar(value, f"imu[{key!r}]", 0.0)
+    if values["gyro_bias"] <= 0 or values["accel_bias"] <= 0:
+        raise NavlibInputError("imu: gyro_bias and accel_bias must be positive (they set P0)")
     return values
 
 
 def ssac(n_states: int = 15, lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M, *,
-         P0="matched", attitude_scale: float = 1.0, imu: dict | None = None,
+         P0="matched", attitude_scale: float = 1.0, imu=None,
          sigma_nu: float = SIGMA_NU, sigma_v0: float = 0.1, sigma_pos0_m: float = 10.0,
          C_b_n=None) -> LinearModel:
     """SSAC stationary local-level (NED) error model with zero-velocity measurements.
@@ -199,9 +204,11 @@ def ssac(n_states: int = 15, lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_
         Default initial covariance (:func:`initial_sigmas`); a matrix is used as given.
     attitude_scale : float
         Multiplies the attitude sigmas of a named P0 variant.
-    imu : dict, optional
-        SI overrides of ``gyro_bias`` (rad/s), ``accel_bias`` (m/s^2), ``gyro_arw``
-        (rad/sqrt(s)), ``accel_vrw`` (m/s/sqrt(s)); defaults :data:`IMU_DEFAULTS`.
+    imu : str, path, SensorSpec or dict, optional
+        Sensor preset (default :data:`IMU_PRESET`) giving the 1-sigma biases (P0) and the
+        white-noise densities (Qc), or a dict of SI overrides on top of it: ``gyro_bias``
+        (rad/s), ``accel_bias`` (m/s^2), ``gyro_arw`` (rad/sqrt(s)), ``accel_vrw``
+        (m/s/sqrt(s)).
     sigma_nu : float
         Zero-velocity measurement noise, m/s; ``R = sigma_nu^2 I`` (0 gives ideal updates).
     sigma_v0, sigma_pos0_m : float
