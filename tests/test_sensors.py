@@ -305,3 +305,23 @@ def test_simulate_gnss_bad_input(rocket):
         sensors.simulate_gnss(rocket, sensors.load_preset("ssac_tactical"))
     with pytest.raises(NavlibInputError, match="rate_hz"):
         sensors.simulate_gnss(rocket, sensors.load_preset("launcher_table1"), rate_hz=-1.0)
+
+
+def test_bias_signs_through_strapdown():
+    """Sign convention end to end: a +b accelerometer bias drifts the position by
+    +C_b_e b t^2 / 2, a +b gyro bias turns the body by +b t about the same body axis."""
+    from navlib import strapdown
+
+    traj = trajectories.stationary(duration_s=20.0, rate_hz=100.0)
+    b_a, b_g = np.array([0.01, -0.02, 0.0]), np.array([0.0, 0.0, 1e-3])
+    sim = sensors.simulate_imu(traj, ImuSpec(), seed=0, accel_bias=b_a, gyro_bias=b_g)
+    res = strapdown.integrate(traj.t, sim.f_b, sim.w_ib_b, traj.position[0],
+                              traj.velocity[0], traj.attitude[0])
+    T = traj.t[-1]
+    expected = traj.attitude[0].apply(b_a) * T**2 / 2
+    # Only approximately: the gyro bias turns the body (and so the force) by up to 0.02 rad.
+    np.testing.assert_allclose(res.position[-1] - traj.position[-1], expected, rtol=0,
+                               atol=0.02 * np.linalg.norm(expected))
+    d_att = (traj.attitude[-1].inv() * res.attitude[-1]).as_rotvec()
+    # Plus the second-order coupling with the Earth rate, |Omega| |b_g| T^2 / 2 = 1.5e-5 rad.
+    np.testing.assert_allclose(d_att, b_g * T, rtol=0, atol=2e-5)
