@@ -216,6 +216,33 @@ def test_model_contents_and_parameters(traj):
                                -traj.C_b_e()[k] * traj.angular_rate[k][None, :])
 
 
+def test_default_preset_gives_the_spec_values(traj):
+    """Preset motionpak_tactical = spec excitability.md §5 (noise densities and P0)."""
+    noise = ecef.imu_noise_densities()
+    for key, value in NOISE.items():
+        np.testing.assert_allclose(noise[key], value, rtol=0.01)
+    model = ecef.ecef21(traj)
+    assert model.parameters["sensors"] == "motionpak_tactical"
+    np.testing.assert_allclose(model.P0, ecef.initial_covariance(), rtol=1e-12)
+    np.testing.assert_allclose(ecef.initial_covariance(), ecef.initial_covariance(NOISE))
+    assert ecef.parameter_sigmas("motionpak_tactical") == pytest.approx(
+        {"sigma_bg_deg_s": 0.05, "sigma_ba_m_s2": 0.02, "sigma_sg_ppm": 5000.0,
+         "sigma_sa_ppm": 1000.0})
+
+
+def test_markov_bias_folds_into_the_random_walk():
+    from navlib.sensors import ImuSpec, TriadSpec
+
+    gyro = TriadSpec(bias=1e-4, noise_density=1e-5, bias_markov_sigma=2e-5,
+                     bias_markov_tau=100.0, bias_random_walk=1e-7)
+    noise = ecef.imu_noise_densities(ImuSpec(gyro=gyro, accel=TriadSpec(noise_density=1e-3)))
+    np.testing.assert_allclose(noise["bg_rw_rad_s_sqrt_s"],
+                               np.sqrt(1e-14 + 2 * 4e-10 / 100.0))
+    sig = ecef.parameter_sigmas(ImuSpec(gyro=gyro, accel=TriadSpec()))
+    assert sig["sigma_bg_deg_s"] == pytest.approx(np.degrees(1e-4))
+    assert sig["sigma_ba_m_s2"] == ecef.P0_DEFAULTS["sigma_ba_m_s2"]  # zero -> default
+
+
 def test_cached_epoch_model_is_reused(traj):
     a = ecef.ecef21_at_epochs(traj, sensors=NOISE, attitude_error="body")
     b = ecef.ecef21_at_epochs(traj, sensors=dict(NOISE), attitude_error="body")

@@ -90,12 +90,32 @@ def _per_axis(value, name: str) -> np.ndarray:
     return arr
 
 
+def _imu_spec(sensors):
+    """The ``navlib.sensors`` IMU spec behind ``sensors`` (None -> default preset), or the
+    mapping itself."""
+    if sensors is None:
+        sensors = DEFAULT_SENSORS
+    if isinstance(sensors, str):
+        from navlib import sensors as sensor_lib
+
+        sensors = sensor_lib.load_preset(sensors)
+    if isinstance(sensors, Mapping):
+        return sensors
+    imu = getattr(sensors, "imu", sensors)
+    if imu is None or not (hasattr(imu, "gyro") and hasattr(imu, "accel")):
+        raise NavlibInputError(
+            f"sensors: expected a preset name, a navlib.sensors SensorSpec/ImuSpec with an IMU, "
+            f"or a mapping with {list(NOISE_KEYS)}; got {type(sensors).__name__}"
+        )
+    return imu
+
+
 def imu_noise_densities(sensors=None) -> dict:
     """Noise densities (SI, per axis) for the 18 channels from a sensor spec.
 
     Parameters
     ----------
-    sensors : None, str, navlib.sensors IMU spec, or mapping
+    sensors : None, str, navlib.sensors.SensorSpec / ImuSpec, or mapping
         ``None`` takes the preset ``motionpak_tactical`` (spec §5 values); a string names a
         preset of :func:`navlib.sensors.load_preset`; a mapping gives the keys of
         :data:`NOISE_KEYS` directly (SI units).
@@ -104,39 +124,50 @@ def imu_noise_densities(sensors=None) -> dict:
     -------
     dict
         :data:`NOISE_KEYS` -> ndarray (3,).
-    """
-    if sensors is None:
-        sensors = DEFAULT_SENSORS
-    if isinstance(sensors, str):
-        from navlib import sensors as sensor_lib
 
-        sensors = sensor_lib.load_preset(sensors)
-    if isinstance(sensors, Mapping):
-        reject_unknown(sensors, NOISE_KEYS, "sensors")
-        missing = [k for k in NOISE_KEYS if k not in sensors]
+    Notes
+    -----
+    The model's parameters are Brownian (España Eq. 3). A preset's Gauss-Markov bias drift
+    (sigma, tau) is folded into the random-walk density as ``sqrt(rw^2 + 2 sigma^2 / tau)``,
+    the density of its driving noise (its decay over the 86 s flight is neglected).
+    """
+    spec = _imu_spec(sensors)
+    if isinstance(spec, Mapping):
+        reject_unknown(spec, NOISE_KEYS, "sensors")
+        missing = [k for k in NOISE_KEYS if k not in spec]
         if missing:
             raise NavlibInputError(f"sensors: missing noise density key(s) {missing}")
-        return {k: _per_axis(sensors[k], f"sensors[{k!r}]") for k in NOISE_KEYS}
-    return _noise_from_spec(sensors)
+        return {k: _per_axis(spec[k], f"sensors[{k!r}]") for k in NOISE_KEYS}
+    gyro, acc = spec.gyro, spec.accel
 
+    def bias_rw(triad):
+        markov = (2.0 * triad.bias_markov_sigma**2 / triad.bias_markov_tau
+                  if np.isfinite(triad.bias_markov_tau) else 0.0)
+        return np.sqrt(triad.bias_random_walk**2 + markov)
 
-def _noise_from_spec(spec) -> dict:
-    imu = getattr(spec, "imu", spec)
-    try:
-        gyro, acc = imu.gyro, imu.accel
-        values = {
-            "arw_rad_sqrt_s": gyro.white_noise, "vrw_m_s_sqrt_s": acc.white_noise,
-            "bg_rw_rad_s_sqrt_s": gyro.bias_random_walk,
-            "ba_rw_m_s2_sqrt_s": acc.bias_random_walk,
-            "sg_rw_per_sqrt_s": gyro.scale_factor_random_walk,
-            "sa_rw_per_sqrt_s": acc.scale_factor_random_walk,
-        }
-    except AttributeError as exc:
-        raise NavlibInputError(
-            f"sensors: expected a preset name, a navlib.sensors IMU spec or a mapping with "
-            f"{list(NOISE_KEYS)}; got {type(spec).__name__} ({exc})"
-        ) from exc
+    values = {
+        "arw_rad_sqrt_s": gyro.noise_density, "vrw_m_s_sqrt_s": acc.noise_density,
+        "bg_rw_rad_s_sqrt_s": bias_rw(gyro), "ba_rw_m_s2_sqrt_s": bias_rw(acc),
+        "sg_rw_per_sqrt_s": gyro.scale_factor_random_walk,
+        "sa_rw_per_sqrt_s": acc.scale_factor_random_walk,
+    }
     return {k: _per_axis(v, f"sensors.{k}") for k, v in values.items()}
+
+
+def parameter_sigmas(sensors=None) -> dict:
+    """Initial sigmas of the 12 IMU parameters (edge units) from a sensor spec's turn-on
+    values: ``sigma_bg_deg_s``, ``sigma_ba_m_s2``, ``sigma_sg_ppm``, ``sigma_sa_ppm``.
+
+    A mapping of noise densities carries none: the :data:`P0_DEFAULTS` values are returned.
+    A zero turn-on value in a preset falls back to the default too (P0 must be definite).
+    """
+    spec = _imu_spec(sensors)
+    keys = ("sigma_bg_deg_s", "sigma_ba_m_s2", "sigma_sg_ppm", "sigma_sa_ppm")
+    if isinstance(spec, Mapping):
+        return {k: P0_DEFAULTS[k] for k in keys}
+    values = (spec.gyro.bias / units.DEG, spec.accel.bias, spec.gyro.scale_factor / units.PPM,
+              spec.accel.scale_factor / units.PPM)
+    return {k: float(v) if v > 0 else P0_DEFAULTS[k] for k, v in zip(keys, values, strict=True)}
 
 
 def ecef21_jacobians(position, C_b_e, f_b, w_ib_b, attitude_error: str = "ecef"):
@@ -208,7 +239,9 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
     gnss_sigma_m : float
         GNSS position standard deviation per ECEF axis, ``R = sigma^2 I3`` (assumed 5 m).
     **sigmas
-        Initial standard deviations, defaults :data:`P0_DEFAULTS`: ``sigma_p0_m`` (30 m),
+        Initial standard deviations. IMU-parameter sigmas default to the sensor spec's
+        turn-on values (:func:`parameter_sigmas`; the default preset holds the §5 values),
+        the others to :data:`P0_DEFAULTS`: ``sigma_p0_m`` (30 m),
         ``sigma_v0_m_s`` (3 m/s), ``sigma_theta0_deg`` (1 deg), ``sigma_bg_deg_s``
         (0.05 deg/s), ``sigma_ba_m_s2`` (0.02 m/s^2), ``sigma_sg_ppm`` (5000 ppm),
         ``sigma_sa_ppm`` (1000 ppm). ``P0`` is diagonal (the paper: "normally diagonal").
@@ -223,7 +256,7 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         raise NavlibInputError(
             f"attitude_error: expected one of {ATTITUDE_ERRORS}, got {attitude_error!r}"
         )
-    P0, p0 = _initial_covariance(sigmas, "ecef21")
+    P0, p0 = _initial_covariance(sigmas, "ecef21", sensors)
     for attr in ("t", "position", "specific_force", "angular_rate", "attitude"):
         if not hasattr(trajectory, attr):
             raise NavlibInputError(f"trajectory: expected a navlib Trajectory (no {attr!r})")
@@ -243,7 +276,8 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         **p0,
         **{k: v.tolist() for k, v in noise.items()},
         "sensors": sensors if isinstance(sensors, str) else
-        (DEFAULT_SENSORS if sensors is None else type(sensors).__name__),
+        (DEFAULT_SENSORS if sensors is None else "noise densities" if isinstance(sensors, Mapping)
+         else getattr(sensors, "name", type(sensors).__name__)),
         "imu_inverse_model": "f = (I + diag s_a)^-1 (f_hat - b_a), likewise omega (spec A7)",
         "gravity": "normal gravity (J2 + centrifugal) and its Jacobian (spec A5)",
         "noise_channels": "18: acc/gyro white noise + random walks of b_g, b_a, s_g, s_a (A6)",
@@ -258,10 +292,11 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
     )
 
 
-def _initial_covariance(sigmas: Mapping, where: str):
+def _initial_covariance(sigmas: Mapping, where: str, sensors=None):
     reject_unknown(sigmas, P0_DEFAULTS, where)
+    defaults = {**P0_DEFAULTS, **parameter_sigmas(sensors)}
     p0 = {k: finite_scalar(sigmas.get(k, v), k, 0.0, low_open=True)
-          for k, v in P0_DEFAULTS.items()}
+          for k, v in defaults.items()}
     sigma0 = np.repeat([
         p0["sigma_p0_m"], p0["sigma_v0_m_s"], p0["sigma_theta0_deg"] * units.DEG,
         p0["sigma_bg_deg_s"] * units.DEG, p0["sigma_ba_m_s2"],
@@ -270,13 +305,15 @@ def _initial_covariance(sigmas: Mapping, where: str):
     return np.diag(sigma0**2), p0
 
 
-def initial_covariance(**sigmas) -> np.ndarray:
-    """Diagonal ``P0`` (21, 21) in SI from the edge-unit sigmas of :data:`P0_DEFAULTS`.
+def initial_covariance(sensors=None, **sigmas) -> np.ndarray:
+    """Diagonal ``P0`` (21, 21) in SI from edge-unit sigmas (keys of :data:`P0_DEFAULTS`).
 
-    The same ``P0`` :func:`ecef21` builds; use it to change ``P0`` of a discretised model
-    without rebuilding it (``dataclasses.replace(discrete, P0=initial_covariance(...))``).
+    The same ``P0`` :func:`ecef21` builds: IMU-parameter sigmas default to the sensor spec's
+    turn-on values (:func:`parameter_sigmas`), the others to :data:`P0_DEFAULTS`. Use it to
+    change ``P0`` of a discretised model without rebuilding it
+    (``dataclasses.replace(discrete, P0=initial_covariance(...))``).
     """
-    return _initial_covariance(sigmas, "initial_covariance")[0]
+    return _initial_covariance(sigmas, "initial_covariance", sensors)[0]
 
 
 DISCRETIZATION_METHODS = ("series", "expm")
