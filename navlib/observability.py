@@ -179,6 +179,9 @@ class ObservabilityResult:
     unobservable_share : ndarray (n,)
         ``sqrt(P_ii)`` of the scaled projector: cosine between each state axis and the
         unobservable subspace (0 = fully observable direction, 1 = entirely unobservable).
+    weakest_direction : ndarray (n,)
+        Unit right singular vector of the smallest singular value: the least observable
+        state combination (physical coordinates), whatever the rank.
     state_names : tuple of str
     rtol, coupling_threshold : float
     scale : ndarray (n,) or None
@@ -191,6 +194,7 @@ class ObservabilityResult:
     null_space: np.ndarray
     unobservable_groups: list
     unobservable_share: np.ndarray
+    weakest_direction: np.ndarray
     state_names: tuple
     rtol: float
     coupling_threshold: float
@@ -311,7 +315,8 @@ def analyze(O, rtol: float | None = None, state_names: Sequence[str] | None = No
     return ObservabilityResult(
         rank=rank, n=n, cond=float(_condition(s, n)), singular_values=s,
         null_space=null_space, unobservable_groups=[[names[i] for i in g] for g in groups],
-        unobservable_share=share, state_names=names, rtol=tol, coupling_threshold=threshold,
+        unobservable_share=share, weakest_direction=Vt[n - 1].copy(), state_names=names,
+        rtol=tol, coupling_threshold=threshold,
         scale=scale,
     )
 
