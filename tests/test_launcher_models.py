@@ -8,9 +8,9 @@ from navlib import NavlibInputError, earth
 from navlib.models.launcher import (
     BIAS_SETS,
     SOLUTIONS,
-    TABLE1,
     launcher,
     rt_dynamics_matrix,
+    sensor_values,
     simplified_gps_bias,
     state_names,
 )
@@ -118,8 +118,8 @@ def test_markov_and_random_walk_differ_only_in_the_time_constants(traj):
     np.testing.assert_allclose(diff, np.broadcast_to(np.diag(expected), diff.shape))
     # driving noise kept (spec §3.2): bias block of Q = s_t 2 sigma^2 / c
     Q = walk.discretize(method="euler").Q[0]
-    assert np.isclose(Q[9, 9], S_T * 2 * TABLE1["gyro_bias"] ** 2 / 100.0)
-    assert np.isclose(Q[12, 12], S_T * 2 * TABLE1["accel_bias"] ** 2 / 100.0)
+    assert np.isclose(Q[9, 9], S_T * 2 * np.radians(0.05 / 3600) ** 2 / 100.0)   # Table 1
+    assert np.isclose(Q[12, 12], S_T * 2 * (7500e-6 * 9.80665) ** 2 / 100.0)
     np.testing.assert_array_equal(markov.Qc, walk.Qc)
 
 
@@ -166,6 +166,19 @@ def test_roll_error_does_not_reach_velocity_without_lateral_force():
     np.testing.assert_allclose(model.A[0, 3:6, 0:3] @ roll_axis_e, 0.0, atol=1e-12)
 
 
+def test_noise_values_come_from_the_table1_preset(traj):
+    values = sensor_values()
+    assert values["gyro_arw"] == pytest.approx(np.radians(0.72 / 3600))    # 0.72 deg/h/rtHz
+    assert values["accel_vrw"] == pytest.approx(117e-6 * 9.80665)
+    assert values["sigma_att"] == pytest.approx(np.radians(1.0))
+    assert values["c_g"] == values["c_a"] == values["c_p"] == 100.0
+    model = launcher("ins_gps_att", "", "none", trajectory=traj, sigma_gps_pos=7.0)
+    assert model.R[0, 0] == pytest.approx(np.radians(1.0) ** 2)
+    assert model.R[6, 6] == pytest.approx(49.0)
+    assert model.parameters["sensors"] == "launcher_table1"
+    assert model.Qc[0, 0] == pytest.approx(values["gyro_arw"] ** 2)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"solution": "ins"}, "solution"),
     ({"biases": "GX"}, "biases"),
@@ -177,6 +190,7 @@ def test_roll_error_does_not_reach_velocity_without_lateral_force():
     ({"c_g": -1.0}, "c_g"),
     ({"sigma_gps": 1.0}, "unknown keyword"),
     ({"trajectory": "churchill"}, "trajectory"),
+    ({"sensors": "no_such_preset"}, "preset|sensors"),
 ])
 def test_launcher_rejects_bad_arguments(traj, kwargs, match):
     kwargs = {"trajectory": traj, **kwargs}

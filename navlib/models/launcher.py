@@ -23,15 +23,17 @@ paper's ``A_lc = I + s_t F(k)`` and ``B = s_t G`` (spec §3, "all discrete time,
 block is written the same way: ``A1 = s_t [a1_sign T_E^B, 0]`` and ``A2 = I_10 + s_t M``
 (V3 reading with the ``-I_3`` feedback, spec §3.4 and §10b).
 
-Noise and measurement values. Table 1 (spec §7.1): gyro random walk 0.72 deg/h/sqrt(Hz),
-gyro bias stability 0.05 deg/h, accelerometer random walk 117 ug/sqrt(Hz), accelerometer bias
-stability 7500 ug, attitude sensor 1 deg (1 sigma per axis, white). Markov time constants
-100 s (spec §3.2, §5). The paper gives no GPS noise, GPS-bias size, wind level or initial
-covariance (spec §5 "Not given"); the values below are **assumed** and recorded in
-``model.parameters``: GPS velocity 0.1 m/s and position 3 m (1 sigma per axis, per 200 Hz
-sample), GPS position bias 2 m, wind angular-rate PSD (0.01 rad/s)^2 * s_t, and
-``P0`` = 0.1 deg attitude, 0.1 m/s, 3 m, biases at their stability, reference-trajectory
-states exactly zero (the attitude is "perfectly known" on the pad, spec §5).
+Noise and measurement values come from the sensor preset ``data/sensors/launcher_table1.toml``
+(:func:`navlib.sensors.load_preset`; keyword ``sensors``): Table 1 (spec §7.1) gyro random
+walk 0.72 deg/h/sqrt(Hz), gyro bias stability 0.05 deg/h, accelerometer random walk
+117 ug/sqrt(Hz), accelerometer bias stability 7500 ug, attitude sensor 1 deg (1 sigma per
+axis, white), Markov time constants 100 s (spec §3.2, §5); and the GPS values the paper does
+not give, marked assumed in the preset: velocity 0.1 m/s and position 3 m (1 sigma per axis,
+per 200 Hz sample), position bias 2 m with c_p = 100 s. Not in any preset and **assumed**
+here (:data:`ASSUMED`, recorded in ``model.parameters``): wind angular rate 0.01 rad/s per
+sample (PSD (0.01 rad/s)^2 * s_t) and ``P0`` = 0.1 deg attitude, 0.1 m/s, 3 m, biases at
+their stability, reference-trajectory states exactly zero (the attitude is "perfectly known"
+on the pad, spec §5).
 
 Bias models (spec §3.2): ``markov`` has ``db/dt = -b/c + w`` with PSD ``2 sigma^2 / c``
 (Euler: the paper's ``s_t sqrt(2/(c s_t))`` noise gain); ``random_walk`` sets the ``-1/c``
@@ -47,7 +49,8 @@ from navlib.earth import EARTH_RATE_ECEF
 from navlib.errors import NavlibInputError
 from navlib.models.base import LinearModel
 from navlib.rotations import skew
-from navlib.units import DEG, DEG_PER_HOUR, DEG_PER_HOUR_PER_SQRT_HZ, UG, UG_PER_SQRT_HZ
+from navlib.sensors import SensorSpec, load_preset
+from navlib.units import DEG
 
 SOLUTIONS = ("ins_gps", "ins_gps_att", "ins_gps_rt", "ins_gps_att_rt")
 """The four navigation solutions (spec launcher.md §1)."""
@@ -72,24 +75,33 @@ _GROUPS = {
 STATE_NAMES = sum(_GROUPS.values(), ())
 """All 28 states of the full ``ins_gps_att_rt`` + G, A, P model, in order."""
 
-TABLE1 = {
-    "gyro_arw": 0.72 * DEG_PER_HOUR_PER_SQRT_HZ,      # rad/s/sqrt(Hz)
-    "gyro_bias": 0.05 * DEG_PER_HOUR,                 # rad/s
-    "accel_vrw": 117.0 * UG_PER_SQRT_HZ,              # m/s^2/sqrt(Hz)
-    "accel_bias": 7500.0 * UG,                        # m/s^2
-    "sigma_att": 1.0 * DEG,                           # rad
-}
-"""Table 1 of the paper in SI units (spec launcher.md §5, §7.1)."""
+DEFAULT_SENSORS = "launcher_table1"
+"""Sensor preset of the paper's Table 1 (``data/sensors/launcher_table1.toml``)."""
 
 ASSUMED = {
-    "sigma_gps_vel": 0.1,        # m/s, per axis, per sample (not given in the paper)
-    "sigma_gps_pos": 3.0,        # m
-    "sigma_bp": 2.0,             # m, GPS position-bias steady-state sigma
     "sigma_wind": 0.01,          # rad/s, wind angular rate per 200 Hz sample
-    "c_g": 100.0, "c_a": 100.0, "c_p": 100.0,           # s (spec §3.2: "100 s")
     "sigma0_att": 0.1 * DEG, "sigma0_vel": 0.1, "sigma0_pos": 3.0,
 }
-"""Values the paper does not give (spec §5 "Not given"), chosen and documented here."""
+"""Values neither the paper nor the sensor preset gives (spec §5 "Not given"), chosen here."""
+
+
+def sensor_values(sensors=DEFAULT_SENSORS) -> dict:
+    """The model's noise keywords (SI) from a sensor preset name, path or SensorSpec.
+
+    Returns ``gyro_arw, gyro_bias, c_g, accel_vrw, accel_bias, c_a, sigma_att,
+    sigma_gps_vel, sigma_gps_pos, sigma_bp, c_p``.
+    """
+    spec = sensors if isinstance(sensors, SensorSpec) else load_preset(sensors)
+    if spec.imu is None or spec.gnss is None or spec.attitude_sigma is None:
+        raise NavlibInputError(f"sensors: preset {spec.name!r} needs [imu], [gnss] and "
+                               "[attitude_sensor] sections")
+    gyro, accel, gnss = spec.imu.gyro, spec.imu.accel, spec.gnss
+    return {"gyro_arw": gyro.noise_density, "gyro_bias": gyro.bias_markov_sigma,
+            "c_g": gyro.bias_markov_tau, "accel_vrw": accel.noise_density,
+            "accel_bias": accel.bias_markov_sigma, "c_a": accel.bias_markov_tau,
+            "sigma_att": spec.attitude_sigma, "sigma_gps_vel": gnss.velocity_sigma,
+            "sigma_gps_pos": gnss.position_sigma, "sigma_bp": gnss.position_bias_markov,
+            "c_p": gnss.position_bias_tau}
 
 _OPTIONS = ("a1_sign", "sigma_gps_vel", "sigma_gps_pos", "sigma_bp", "sigma_wind", "c_g",
             "c_a", "c_p", "sigma0_att", "sigma0_vel", "sigma0_pos", "gyro_arw", "gyro_bias",
@@ -195,7 +207,7 @@ def state_names(solution: str = "ins_gps", biases: str = "GAP",
 
 
 def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
-             trajectory=None, **kw) -> LinearModel:
+             trajectory=None, *, sensors=DEFAULT_SENSORS, **kw) -> LinearModel:
     """Launcher error model along a trajectory (Beaudoin et al. 2018 eq. 1-5, 8).
 
     Parameters
@@ -209,13 +221,18 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
     trajectory : Trajectory, optional
         Supplies ``T_B^E(k)`` (``attitude``) and ``a_m^B(k)`` (``specific_force``) at each
         sample; default :func:`navlib.trajectory.launcher_ascent` (200 Hz).
+    sensors : str, path or SensorSpec
+        Sensor preset for the noise values (default ``"launcher_table1"``); the keywords
+        below override single values.
     a1_sign : {+1, -1}
         Sign of ``A1`` (how the navigation attitude error drives the closed loop, spec §10b).
     c_g, c_a, c_p : float
-        Markov time constants, s (default 100).
+        Markov time constants, s (preset: 100).
     gyro_arw, gyro_bias, accel_vrw, accel_bias, sigma_att : float
-        Table 1 values in SI (default :data:`TABLE1`).
-    sigma_gps_vel, sigma_gps_pos, sigma_bp, sigma_wind, sigma0_att, sigma0_vel, sigma0_pos
+        Table 1 values in SI (from the preset).
+    sigma_gps_vel, sigma_gps_pos, sigma_bp : float
+        GPS white noise and position-bias sigma (from the preset, assumed there).
+    sigma_wind, sigma0_att, sigma0_vel, sigma0_pos : float
         Assumed values (default :data:`ASSUMED`); ``sigma_wind`` is rad/s per sample of
         step ``s_t`` (default the trajectory's median step).
 
@@ -244,14 +261,15 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
         ) from exc
     if t.size < 2:
         raise NavlibInputError(f"trajectory: need at least 2 samples, got {t.size}")
-    p = {**TABLE1, **ASSUMED, "a1_sign": 1.0, "s_t": float(np.median(np.diff(t)))}
+    p = {**sensor_values(sensors), **ASSUMED, "a1_sign": 1.0,
+         "s_t": float(np.median(np.diff(t)))}
     for key, value in kw.items():
         p[key] = finite_scalar(value, key)
     if p["a1_sign"] not in (1.0, -1.0):
         raise NavlibInputError(f"a1_sign: expected +1 or -1, got {p['a1_sign']}")
     for key in _OPTIONS:
-        if key != "a1_sign" and p[key] <= 0:
-            raise NavlibInputError(f"{key}: must be positive, got {p[key]}")
+        if key != "a1_sign" and not 0 < p[key] < np.inf:
+            raise NavlibInputError(f"{key}: must be positive and finite, got {p[key]}")
 
     rt = solution.endswith("_rt")
     att = solution.startswith("ins_gps_att")
@@ -330,7 +348,8 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
         if group in start:
             P0[sl(group), sl(group)] = sigma ** 2 * I3
     noise_names = tuple(f"{g}_{a}" for g in noise_groups for a in _AXES)
-    params = {"solution": solution, "biases": letters, "bias_model": bias_model, **p}
+    params = {"solution": solution, "biases": letters, "bias_model": bias_model,
+              "sensors": sensors if isinstance(sensors, str) else sensors.name, **p}
     return LinearModel(
         state_names=names, A=A, G=G, Qc=Qc, H=H, R=R, t=t, P0=P0,
         measurement_names=tuple(meas_names), noise_names=noise_names,
