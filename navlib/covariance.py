@@ -567,8 +567,7 @@ class NormalizedEigenResult:
 
 def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "diag",
                      degenerate_tol: float = 1e-4, track: bool = True, anchor: str = "end",
-                     t=None,
-                     state_names=None) -> NormalizedEigenResult:
+                     t=None, state_names=None) -> NormalizedEigenResult:
     """Ham & Brown normalised covariance eigen-analysis (Silva et al. 2017 eqs. 45–46).
 
     ``P_sn(t) = D0^-1 P(t) D0^-1`` with ``D0 = sqrt(diag P0)`` (or the symmetric matrix
@@ -652,9 +651,8 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     first = V[0]
     pivot = np.argmax(np.abs(first), axis=0)
     V[0] *= np.where(first[pivot, np.arange(n)] < 0, -1.0, 1.0)
-    for k in range(1, count):
-        dots = np.einsum("ij,ij->j", V[k], V[k - 1])
-        V[k] *= np.where(dots < 0, -1.0, 1.0)
+    flips = np.where(np.einsum("kij,kij->kj", V[1:], V[:-1]) < 0, -1.0, 1.0)
+    V[1:] *= np.cumprod(flips, axis=0)[:, None, :]  # chained: each column vs the flipped one
     tracked_V = V.copy()
     gap = degenerate_tol * order
     forward = anchor == "start"

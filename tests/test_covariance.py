@@ -197,6 +197,8 @@ def test_tracking_follows_branches_through_a_crossing():
     steps = np.einsum("kij,kij->kj", res.tracked_vectors[1:], res.tracked_vectors[:-1])
     assert steps.min() > 0.99
     # the sorted order shows the X-shape: column 0 swaps branch after the crossing
+    sorted_steps = np.einsum("kij,kij->kj", res.eigenvectors[1:], res.eigenvectors[:-1])
+    assert sorted_steps.min() >= 0.0  # sign-consistent sorted columns
     first = np.abs(np.einsum("ki,ki->k", res.eigenvectors[:, :, 0], V[:, :, 0]))
     assert first[10] > 0.999 and first[-10] < 1e-3
     # while the projector onto the pair (subspace share) stays put
