@@ -1,0 +1,443 @@
+"""Automatic flight-phase segmentation from a trajectory's specific force and angular rate.
+
+A recorded flight is cut into phases whose excitation differs (spec excitability.md §6:
+excitability is computed per segment, the paper's segments being the pad, the boost and
+the coast of the sounding rocket). The phases are read from the kinematics of a (fitted)
+:class:`~navlib.trajectory.Trajectory`, in ECEF, with ``f^e = C_b_e f^b``,
+``omega_eb^e = C_b_e (omega_ib^b - C_e^b Omega)`` and the kinematic acceleration
+``a^e = dV/dt = f^e + gamma(P) - 2 Omega x V``:
+
+==========  ===============================================================================
+phase       condition (checked in this order; the first that holds wins)
+==========  ===============================================================================
+rest        ``|V| < rest_speed_m_s``, ``|omega_eb| < rest_rate_deg_s`` and
+            ``| |f| - |gamma| | < rest_force_m_s2``: the vehicle stands (or hovers) still
+powered     tangential specific force ``f_t = f^e . u > powered_accel_m_s2``: a thrust (or
+            traction) pushes the vehicle forward along its path ``u``
+turn        ``max(omega_perp, omega_path) > turn_rate_deg_s``: the body rotates about an axis
+            across the path (a spin about the path axis, as a rocket's roll, is excluded),
+            or the velocity direction turns (``omega_path = |V x a| / |V|^2``, counted only
+            above ``turn_speed_m_s``: at lower speed it is dominated by fit noise)
+coast       lateral specific force ``|f^e - f_t u| < coast_lateral_m_s2`` (and not powered):
+            nothing but drag along the path acts, ballistic flight or free fall
+cruise      anything else: motion with the weight supported (level flight, driving)
+==========  ===============================================================================
+
+The path direction ``u`` is ``V/|V|`` above ``direction_speed_m_s``; below it ``u`` is the
+direction of ``a^e`` when ``|a^e| > powered_accel_m_s2`` (a lift-off accelerates along its
+rail from zero speed) and undefined otherwise (then ``f_t = 0``, the lateral force is
+``|f|`` and ``omega_perp = |omega_eb|``).
+
+A vehicle descending at constant speed under a force opposite to its velocity (a drone
+landing, a parachute) satisfies the coast condition: from ``f`` alone it cannot be told
+from a body slowed by drag. Braking (``f_t < 0`` with the weight supported) shows as
+cruise.
+
+Against chatter the features are averaged over windows of ``resolution_s``, a phase is
+kept while its condition holds with every threshold relaxed by the factor ``hysteresis``
+(``rest``: limits times ``1 + h``; ``powered``, ``turn``: thresholds times ``1 - h``;
+``coast``: lateral limit times ``1 + h``), and runs shorter than ``min_duration_s`` are
+merged into their longer neighbour.
+
+The result is an editable table (:meth:`Segmentation.to_frame`: ``phase, t_start, t_end``);
+:func:`segments_table` turns a user's edit (a DataFrame, a list of boundaries or of
+``(t_start, t_end)`` / ``(phase, t_start, t_end)`` entries) back into that table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from itertools import pairwise
+
+import numpy as np
+import pandas as pd
+
+from navlib import earth
+from navlib._validation import finite_scalar, reject_unknown
+from navlib.errors import NavlibInputError
+from navlib.units import DEG
+
+__all__ = [
+    "PHASES",
+    "SEGMENT_DEFAULTS",
+    "Segmentation",
+    "flight_features",
+    "segment_flight",
+    "segments_table",
+]
+
+PHASES = ("rest", "powered", "turn", "coast", "cruise")
+"""Phase labels in priority order (module docstring)."""
+
+SEGMENT_DEFAULTS = {
+    "rest_speed_m_s": 1.0,
+    "rest_rate_deg_s": 3.0,
+    "rest_force_m_s2": 1.0,
+    "powered_accel_m_s2": 2.0,
+    "turn_rate_deg_s": 5.0,
+    "coast_lateral_m_s2": 2.0,
+    "direction_speed_m_s": 1.0,
+    "turn_speed_m_s": 3.0,
+    "resolution_s": 0.1,
+    "hysteresis": 0.25,
+    "min_duration_s": 2.0,
+}
+"""Default thresholds of :func:`segment_flight` (engineering choices, not from a paper)."""
+
+SEGMENT_COLUMNS = ("phase", "t_start", "t_end")
+_FEATURES = ("speed", "f_norm", "gravity", "f_along", "f_lateral", "rate", "rate_across",
+             "path_rate")
+_TIME_TOL = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class Segmentation:
+    """Phases of a flight found by :func:`segment_flight`.
+
+    Attributes
+    ----------
+    segments : DataFrame
+        ``phase, t_start, t_end, duration`` (s), contiguous, covering the flight.
+    features : DataFrame
+        One row per window of ``resolution_s``: ``t`` (window centre), ``t_start``,
+        ``t_end``, the features ``speed`` (m/s), ``f_norm``, ``gravity``, ``f_along``,
+        ``f_lateral`` (m/s^2), ``rate``, ``rate_across``, ``path_rate`` (rad/s), the label of
+        the strict thresholds ``raw`` and the final ``phase``.
+    thresholds : dict
+        The thresholds used (:data:`SEGMENT_DEFAULTS` with the caller's changes).
+    """
+
+    segments: pd.DataFrame
+    features: pd.DataFrame
+    thresholds: dict = field(default_factory=dict)
+
+    def to_frame(self) -> pd.DataFrame:
+        """The editable segment table (a copy): ``phase, t_start, t_end, duration``."""
+        return self.segments.copy()
+
+    def phase_at(self, t) -> np.ndarray:
+        """Automatic phase label at times ``t`` (s), from the windows of ``features``."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        edges = self.features["t_start"].to_numpy()
+        k = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, edges.size - 1)
+        return self.features["phase"].to_numpy()[k]
+
+
+def _options(options: Mapping) -> dict:
+    reject_unknown(options, SEGMENT_DEFAULTS, "segment_flight")
+    p = {k: finite_scalar(options.get(k, v), k, 0.0, low_open=True)
+         for k, v in SEGMENT_DEFAULTS.items() if k != "hysteresis"}
+    p["hysteresis"] = finite_scalar(options.get("hysteresis", SEGMENT_DEFAULTS["hysteresis"]),
+                                    "hysteresis", 0.0, 0.9)
+    return p
+
+
+def _trajectory_arrays(trajectory):
+    for attr in ("t", "position", "velocity", "specific_force", "angular_rate", "attitude"):
+        if not hasattr(trajectory, attr):
+            raise NavlibInputError(f"trajectory: expected a navlib Trajectory (no {attr!r})")
+    t = np.asarray(trajectory.t, dtype=float)
+    if t.size < 2:
+        raise NavlibInputError(f"trajectory: need at least 2 samples, got {t.size}")
+    return (t, np.asarray(trajectory.position, dtype=float),
+            np.asarray(trajectory.velocity, dtype=float),
+            np.asarray(trajectory.specific_force, dtype=float),
+            np.asarray(trajectory.angular_rate, dtype=float), trajectory.attitude.as_matrix())
+
+
+def flight_features(trajectory, direction_speed_m_s: float = 1.0,
+                    powered_accel_m_s2: float = 2.0,
+                    turn_speed_m_s: float = 3.0) -> pd.DataFrame:
+    """Per-sample kinematic features the segmentation reads (module docstring).
+
+    Returns
+    -------
+    DataFrame
+        ``t``; ``speed`` ``|V|`` (m/s); ``f_norm`` ``|f|`` and ``gravity`` ``|gamma(P)|``
+        (m/s^2); ``f_along`` ``f^e . u`` and ``f_lateral`` ``|f^e - f_along u|`` (m/s^2);
+        ``rate`` ``|omega_eb|``, ``rate_across`` its part across ``u`` and ``path_rate``
+        ``|V x a| / |V|^2`` (rad/s; 0 below ``turn_speed_m_s``).
+    """
+    t, P, V, f_b, w_ib_b, C_b_e = _trajectory_arrays(trajectory)
+    omega = earth.EARTH_RATE_ECEF
+    gamma = earth.normal_gravity_ecef(P)
+    f_e = np.einsum("nij,nj->ni", C_b_e, f_b)
+    w_eb_b = w_ib_b - np.einsum("nji,j->ni", C_b_e, omega)
+    w_eb_e = np.einsum("nij,nj->ni", C_b_e, w_eb_b)
+    a_e = f_e + gamma - 2.0 * np.cross(omega, V)
+    speed = np.linalg.norm(V, axis=1)
+    a_norm = np.linalg.norm(a_e, axis=1)
+    moving = speed >= direction_speed_m_s
+    pushed = ~moving & (a_norm > powered_accel_m_s2)
+    u = np.zeros_like(V)
+    u[moving] = V[moving] / speed[moving, None]
+    u[pushed] = a_e[pushed] / a_norm[pushed, None]
+    f_along = np.einsum("ni,ni->n", f_e, u)
+    w_along = np.einsum("ni,ni->n", w_eb_e, u)
+    path_rate = np.zeros_like(speed)
+    fast = speed >= max(turn_speed_m_s, direction_speed_m_s)
+    path_rate[fast] = np.linalg.norm(np.cross(V[fast], a_e[fast]), axis=1) / speed[fast] ** 2
+    return pd.DataFrame({
+        "t": t,
+        "speed": speed,
+        "f_norm": np.linalg.norm(f_e, axis=1),
+        "gravity": np.linalg.norm(gamma, axis=1),
+        "f_along": f_along,
+        "f_lateral": np.linalg.norm(f_e - f_along[:, None] * u, axis=1),
+        "rate": np.linalg.norm(w_eb_e, axis=1),
+        "rate_across": np.linalg.norm(w_eb_e - w_along[:, None] * u, axis=1),
+        "path_rate": path_rate,
+    })
+
+
+def _windows(features: pd.DataFrame, resolution_s: float) -> pd.DataFrame:
+    """Average the per-sample features over consecutive windows of ``resolution_s``."""
+    t = features["t"].to_numpy()
+    t0, t1 = float(t[0]), float(t[-1])
+    n_bins = max(int(np.ceil((t1 - t0) / resolution_s - 1e-9)), 1)
+    k = np.minimum(((t - t0) / resolution_s).astype(int), n_bins - 1)
+    counts = np.bincount(k, minlength=n_bins)
+    used = counts > 0
+    out = {"t_start": t0 + resolution_s * np.arange(n_bins)[used]}
+    out["t_end"] = np.minimum(out["t_start"] + resolution_s, t1)
+    out["t"] = 0.5 * (out["t_start"] + out["t_end"])
+    for name in _FEATURES:
+        sums = np.bincount(k, weights=features[name].to_numpy(), minlength=n_bins)
+        out[name] = sums[used] / counts[used]
+    frame = pd.DataFrame(out)
+    return frame[["t", "t_start", "t_end", *_FEATURES]]
+
+
+def _conditions(w: pd.DataFrame, p: dict, relax: float) -> dict[str, np.ndarray]:
+    """Boolean condition of each phase per window, thresholds relaxed by ``relax``."""
+    wider, narrower = 1.0 + relax, 1.0 - relax
+    rest = ((w["speed"] < p["rest_speed_m_s"] * wider)
+            & (w["rate"] < p["rest_rate_deg_s"] * DEG * wider)
+            & ((w["f_norm"] - w["gravity"]).abs() < p["rest_force_m_s2"] * wider))
+    powered = w["f_along"] > p["powered_accel_m_s2"] * narrower
+    turn = np.maximum(w["rate_across"], w["path_rate"]) > p["turn_rate_deg_s"] * DEG * narrower
+    coast = ((w["f_lateral"] < p["coast_lateral_m_s2"] * wider)
+             & (w["f_along"] <= p["powered_accel_m_s2"] * wider))
+    return {"rest": rest.to_numpy(), "powered": powered.to_numpy(), "turn": turn.to_numpy(),
+            "coast": coast.to_numpy()}
+
+
+def _classify(conditions: dict[str, np.ndarray], n: int) -> np.ndarray:
+    label = np.full(n, "cruise", dtype=object)
+    for phase in reversed(PHASES[:-1]):  # the first phase in priority order wins
+        label[conditions[phase]] = phase
+    return label
+
+
+def _with_hysteresis(strict: np.ndarray, relaxed: dict[str, np.ndarray]) -> np.ndarray:
+    """Keep the current phase while its relaxed condition holds, else take the strict one."""
+    out = strict.copy()
+    current = strict[0]
+    for k in range(strict.size):
+        if not relaxed[current][k]:
+            current = strict[k]
+        out[k] = current
+    return out
+
+
+def _runs(labels: np.ndarray) -> list[list]:
+    """Runs of equal labels as ``[label, first, last]`` index triples."""
+    change = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+    starts = np.concatenate([[0], change])
+    ends = np.concatenate([change - 1, [labels.size - 1]])
+    return [[labels[s], int(s), int(e)] for s, e in zip(starts, ends, strict=True)]
+
+
+def _merge_short(runs: list[list], t_start: np.ndarray, t_end: np.ndarray,
+                 min_duration: float) -> list[list]:
+    """Merge the shortest run below ``min_duration`` into its longer neighbour, repeatedly."""
+    def duration(run):
+        return t_end[run[2]] - t_start[run[1]]
+
+    while len(runs) > 1:
+        k = min(range(len(runs)), key=lambda i: duration(runs[i]))
+        if duration(runs[k]) >= min_duration - _TIME_TOL:
+            break
+        neighbours = [i for i in (k - 1, k + 1) if 0 <= i < len(runs)]
+        j = max(neighbours, key=lambda i: duration(runs[i]))
+        lo, hi = min(j, k), max(j, k)
+        merged = [runs[j][0], runs[lo][1], runs[hi][2]]
+        runs[lo:hi + 1] = [merged]
+        # neighbours that now carry the same label become one run
+        i = 0
+        while i < len(runs) - 1:
+            if runs[i][0] == runs[i + 1][0]:
+                runs[i:i + 2] = [[runs[i][0], runs[i][1], runs[i + 1][2]]]
+            else:
+                i += 1
+    return runs
+
+
+def segment_flight(trajectory, **thresholds) -> Segmentation:
+    """Cut a flight into phases (rest, powered, turn, coast, cruise) from its kinematics.
+
+    Parameters
+    ----------
+    trajectory : navlib.trajectory.Trajectory
+        A reference trajectory, typically :func:`navlib.trajectory.fit_flight_data` of a
+        recorded flight (its IMU is smooth and exact).
+    **thresholds
+        Any of :data:`SEGMENT_DEFAULTS`: ``rest_speed_m_s`` (1), ``rest_rate_deg_s`` (3),
+        ``rest_force_m_s2`` (1), ``powered_accel_m_s2`` (2), ``turn_rate_deg_s`` (5),
+        ``coast_lateral_m_s2`` (2), ``direction_speed_m_s`` (1), ``turn_speed_m_s`` (3),
+        ``resolution_s`` (0.1),
+        ``hysteresis`` (0.25, in [0, 0.9]), ``min_duration_s`` (2). Conditions in the
+        module docstring.
+
+    Returns
+    -------
+    Segmentation
+        ``segments`` (``phase, t_start, t_end, duration``, contiguous from the first to
+        the last sample) and the per-window ``features``.
+    """
+    p = _options(thresholds)
+    features = flight_features(trajectory, p["direction_speed_m_s"], p["powered_accel_m_s2"],
+                               p["turn_speed_m_s"])
+    w = _windows(features, p["resolution_s"])
+    n = len(w)
+    strict = _classify(_conditions(w, p, 0.0), n)
+    relaxed = _conditions(w, p, p["hysteresis"])
+    relaxed["cruise"] = strict == "cruise"
+    labels = _with_hysteresis(strict, relaxed)
+    t_start, t_end = w["t_start"].to_numpy(), w["t_end"].to_numpy()
+    runs = _merge_short(_runs(labels), t_start, t_end, p["min_duration_s"])
+    final = labels.copy()
+    for label, first, last in runs:
+        final[first:last + 1] = label
+    w["raw"] = strict
+    w["phase"] = final
+    segments = pd.DataFrame({
+        "phase": [r[0] for r in runs],
+        "t_start": [float(t_start[r[1]]) for r in runs],
+        "t_end": [float(t_end[r[2]]) for r in runs],
+    })
+    segments["duration"] = segments["t_end"] - segments["t_start"]
+    return Segmentation(segments=segments, features=w, thresholds=p)
+
+
+# --------------------------------------------------------------------------- user edits
+
+
+def _entry(item, k: int) -> tuple[str | None, float, float]:
+    """One segment entry: a mapping, ``(t_start, t_end)`` or ``(phase, t_start, t_end)``."""
+    where = f"segments[{k}]"
+    if isinstance(item, Mapping):
+        missing = [c for c in ("t_start", "t_end") if c not in item]
+        if missing:
+            raise NavlibInputError(f"{where}: missing key(s) {missing}")
+        phase = item.get("phase")
+        start, end = item["t_start"], item["t_end"]
+    elif isinstance(item, Sequence) and not isinstance(item, str) and len(item) in (2, 3):
+        phase = item[0] if len(item) == 3 else None
+        start, end = item[-2], item[-1]
+    else:
+        raise NavlibInputError(f"{where}: expected (t_start, t_end), (phase, t_start, t_end) "
+                               f"or a mapping, got {item!r}")
+    if phase is not None and (not isinstance(phase, str) or not phase.strip()):
+        raise NavlibInputError(f"{where}: phase must be a non-empty string, got {phase!r}")
+    return (None if phase is None else phase.strip(), finite_scalar(start, f"{where} t_start"),
+            finite_scalar(end, f"{where} t_end"))
+
+
+def _from_boundaries(values: np.ndarray, t0: float, t1: float) -> list:
+    if np.any(np.diff(values) <= 0):
+        raise NavlibInputError(f"segments: boundaries must be strictly increasing, got "
+                               f"{values.tolist()}")
+    cuts = values[(values > t0 + _TIME_TOL) & (values < t1 - _TIME_TOL)]
+    outside = values[(values < t0 - _TIME_TOL) | (values > t1 + _TIME_TOL)]
+    if outside.size:
+        raise NavlibInputError(f"segments: boundaries {outside.tolist()} lie outside the flight "
+                               f"span {t0:.6g}..{t1:.6g} s")
+    edges = np.concatenate([[t0], cuts, [t1]])
+    return [(None, float(a), float(b)) for a, b in pairwise(edges)]
+
+
+def segments_table(segments, t_start: float, t_end: float,
+                   automatic: Segmentation | None = None) -> pd.DataFrame:
+    """Normalise a user's segment choice to the table ``phase, t_start, t_end, duration``.
+
+    Parameters
+    ----------
+    segments : DataFrame, sequence of numbers, or sequence of entries
+        * a DataFrame with ``t_start``, ``t_end`` and optionally ``phase`` columns (e.g.
+          an edited :meth:`Segmentation.to_frame`);
+        * a list of boundary times, e.g. ``[18, 46]`` or ``[0, 18, 46, 86]``: contiguous
+          segments between them, the flight's ends added when missing;
+        * a list of ``(t_start, t_end)`` or ``(phase, t_start, t_end)`` tuples or mappings:
+          these windows only (gaps allowed, overlaps not).
+    t_start, t_end : float
+        The flight span, s; every segment must lie inside it.
+    automatic : Segmentation, optional
+        Labels segments given without a phase by the automatic phase covering most of the
+        segment; without it they are labelled ``segment 1``, ``segment 2``, ...
+
+    Raises
+    ------
+    NavlibInputError
+        Unreadable entries, boundaries not increasing or outside the span, empty or
+        overlapping segments (naming the entry).
+    """
+    t0 = finite_scalar(t_start, "t_start")
+    t1 = finite_scalar(t_end, "t_end")
+    if t1 <= t0:
+        raise NavlibInputError(f"t_end: must be after t_start = {t0}, got {t1}")
+    if isinstance(segments, Segmentation):
+        segments = segments.segments
+    if isinstance(segments, pd.DataFrame):
+        missing = [c for c in ("t_start", "t_end") if c not in segments.columns]
+        if missing:
+            raise NavlibInputError(f"segments: missing column(s) {missing}; columns are "
+                                   f"{list(segments.columns)}")
+        cols = [c for c in SEGMENT_COLUMNS if c in segments.columns]
+        entries = [_entry(dict(zip(cols, row, strict=True)), k)
+                   for k, row in enumerate(segments[cols].itertuples(index=False))]
+    elif isinstance(segments, np.ndarray) or (
+            isinstance(segments, Sequence) and not isinstance(segments, str)):
+        items = list(segments)
+        if not items:
+            raise NavlibInputError("segments: empty; give boundaries or segment entries")
+        if all(isinstance(x, int | float | np.integer | np.floating)
+               and not isinstance(x, bool) for x in items):
+            values = np.array([finite_scalar(x, f"segments[{k}]")
+                               for k, x in enumerate(items)])
+            entries = _from_boundaries(values, t0, t1)
+        else:
+            entries = [_entry(item, k) for k, item in enumerate(items)]
+    else:
+        raise NavlibInputError(f"segments: expected a DataFrame, a list of boundaries or of "
+                               f"(t_start, t_end) entries, got {type(segments).__name__}")
+    if not entries:
+        raise NavlibInputError("segments: no segment given")
+    rows = sorted(entries, key=lambda e: e[1])
+    for k, (_, a, b) in enumerate(rows):
+        if b <= a:
+            raise NavlibInputError(f"segments: segment {k + 1} ({a:.6g}..{b:.6g} s) is empty; "
+                                   f"t_end must be after t_start")
+        if a < t0 - _TIME_TOL or b > t1 + _TIME_TOL:
+            raise NavlibInputError(f"segments: segment {k + 1} ({a:.6g}..{b:.6g} s) leaves the "
+                                   f"flight span {t0:.6g}..{t1:.6g} s")
+        if k and a < rows[k - 1][2] - _TIME_TOL:
+            raise NavlibInputError(f"segments: segment {k + 1} ({a:.6g}..{b:.6g} s) overlaps "
+                                   f"segment {k} (ends {rows[k - 1][2]:.6g} s)")
+    phases = [phase if phase is not None else _majority(automatic, a, b, k)
+              for k, (phase, a, b) in enumerate(rows)]
+    table = pd.DataFrame({"phase": phases, "t_start": [max(r[1], t0) for r in rows],
+                          "t_end": [min(r[2], t1) for r in rows]})
+    table["duration"] = table["t_end"] - table["t_start"]
+    return table
+
+
+def _majority(automatic: Segmentation | None, a: float, b: float, k: int) -> str:
+    """The automatic phase covering most of ``[a, b]`` (``segment k+1`` without one)."""
+    if automatic is None:
+        return f"segment {k + 1}"
+    seg = automatic.segments
+    overlap = (np.minimum(seg["t_end"], b) - np.maximum(seg["t_start"], a)).clip(lower=0.0)
+    totals = overlap.groupby(seg["phase"]).sum()
+    return str(totals.idxmax()) if totals.max() > 0 else f"segment {k + 1}"
