@@ -1,0 +1,1160 @@
+"""España, Carrizo & Giribet (2019): excitability and sensability on the sounding-rocket flight.
+
+The experiment of the paper's §5 rebuilt from library pieces: the VS30-like trajectory
+(:func:`navlib.trajectory.sounding_rocket`), the 21-state ECEF model discretised to the 1 Hz
+GNSS epochs (:func:`navlib.models.ecef.ecef21_at_epochs`), and the metrics of
+:mod:`navlib.metrics`. Each paper statement X1-X7 (Fig. 2) and S1-S8 (Figs. 3-5) is a function
+returning a :class:`~navlib.studies.verdict.ClaimResult`, evaluated by code.
+
+The paper's statements are qualitative ("mostly in S_O", "very low", "briefly sensible");
+the operational thresholds used here are module constants (spec excitability.md §3 and
+its [I] notes):
+
+* :data:`IN_SO` = 1/sqrt(2): a state "lies in S_O" when more than half of its unit vector's
+  squared norm projects on the excited subspace (X1-X4); the same value for "sensible"
+  (:data:`SENSIBLE`, S-claims).
+* :data:`LOW` = 0.25: "very low" / "barely" = less than 1/16 of the squared norm.
+* :data:`BRIEF_S` = 10 s: "briefly sensible"; :data:`TRANSIENT_S` = 5 s: epochs before it
+  are left out of the "weakly sensible" counts (every state is sensible at t0 under the
+  literal reading of spec A9, and the sensible subspace is still large for a few epochs).
+
+A claim made of several checks is "reproduced" when every check passes, "partly" when more
+than half pass, "not reproduced" otherwise; each result lists the checks that failed.
+The metrics are *relative* (normalised by D0 and R0) and depend strongly on the assumed
+P0, GNSS sigma, eta and nu (spec §3 "What the prototype showed"): :func:`sensitivity_sweep`
+shows how much.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import numpy as np
+import pandas as pd
+
+from navlib import covariance, metrics
+from navlib._validation import finite_scalar, reject_unknown
+from navlib.errors import NavlibInputError
+from navlib.models.ecef import (
+    ATTITUDE_ERRORS,
+    P0_DEFAULTS,
+    PAPER_IDS,
+    STATE_GROUPS,
+    STATE_NAMES,
+    ecef21_at_epochs,
+    imu_noise_densities,
+    initial_covariance,
+    parameter_sigmas,
+)
+from navlib.studies.verdict import ClaimResult, claims_frame
+from navlib.trajectory import sounding_rocket
+
+SEGMENTS = ((0.0, 19.0), (19.0, 60.0), (60.0, 86.0))
+"""The paper's segments tau1 (pad), tau2 (powered flight and spin), tau3 (free fall), s."""
+SEGMENT_LABELS = ("tau1", "tau2", "tau3")
+
+IN_SO = float(1.0 / np.sqrt(2.0))
+"""Excitability above which a state "lies (mostly) in S_O" (spec §3, X4 note)."""
+SENSIBLE = IN_SO
+"""Sensability above which a state counts as sensible at an epoch."""
+LOW = 0.25
+"""Excitability (or sensability) below which a state is "very low" / "barely" excited."""
+BRIEF_S = 10.0
+"""Longest total time (s) that still counts as "briefly" sensible (S7)."""
+TRANSIENT_S = 5.0
+"""Start-up epochs (s after t0) left out of the "weakly sensible" counts (S7, S8)."""
+NOT_IMPROVED = 0.9
+"""sigma_end / sigma_0 above which an a-priori bound is "not improved" (S7)."""
+FUTILE = 0.5
+"""sigma_end / sigma_0 above which in-flight calibration of a parameter is futile (S8)."""
+
+BASELINE = {"spin_hz": 2.0, "attitude_error": "ecef", "eta": 1e-3, "nu": 0.985,
+            "d0": "global", "gnss_sigma_m": 5.0, **P0_DEFAULTS}
+"""Baseline settings (spec excitability.md §5, all assumed [A])."""
+
+PARAMETERS = STATE_NAMES[9:]
+"""The 12 IMU parameter states (e10-e21)."""
+ATTITUDE = STATE_GROUPS["attitude"]
+
+
+# --------------------------------------------------------------------------- the flight
+
+
+def _frozen(options: dict | None) -> tuple:
+    options = dict(options or {})
+    try:
+        key = tuple(sorted(options.items()))
+        hash(key)
+    except TypeError as exc:
+        raise NavlibInputError("trajectory_options: expected plain numbers") from exc
+    return key
+
+
+def add_coning(traj, coning_deg: float = 3.0, coning_hz: float = 0.5,
+               start_s: float | None = None, ramp_s: float = 2.0):
+    """The same flight path with the body coning about its nominal attitude.
+
+    ``C_b_e = C_nom Rx(phi) Ry(alpha) Rx(-phi)``: the body x axis tilts by ``alpha`` (ramped
+    in with a smoothstep from ``start_s``, default lift-off) about a lateral axis turning at
+    ``coning_hz``. Position, velocity and ``f^e`` are unchanged, so the accelerometers see a
+    lateral specific force ``|f| sin(alpha)``; the IMU stays exact (analytic body rate,
+    :func:`navlib.trajectory.build_trajectory`). Used to test whether lateral *body* motion
+    resolves the X3/S6 tension (it does not: the ECEF attitude error couples through ``f^e``).
+    """
+    from scipy.spatial.transform import Rotation
+
+    from navlib import earth
+    from navlib.trajectory import build_trajectory
+    from navlib.trajectory._attitude import smoothstep
+
+    coning_deg = finite_scalar(coning_deg, "coning_deg", 0.0, 30.0)
+    coning_hz = finite_scalar(coning_hz, "coning_hz", 0.0)
+    ramp_s = finite_scalar(ramp_s, "ramp_s", 0.0, low_open=True)
+    if start_s is None:
+        start_s = traj.events.get("liftoff", traj.t[0])
+    start_s = finite_scalar(start_s, "start_s")
+    t = traj.t
+    step, dstep, _ = smoothstep((t - start_s) / ramp_s)
+    alpha = np.radians(coning_deg) * step
+    dalpha = np.radians(coning_deg) * dstep / ramp_s
+    dphi = 2.0 * np.pi * coning_hz
+    e_x, e_y = np.eye(3)[0], np.eye(3)[1]
+    R1 = Rotation.from_rotvec(np.outer(dphi * t, e_x))
+    R2 = Rotation.from_rotvec(np.outer(alpha, e_y))
+    R3 = R1.inv()
+    R = R1 * R2 * R3
+    w_R = ((R3.inv() * R2.inv()).apply(np.outer(np.full_like(t, dphi), e_x))
+           + R3.inv().apply(np.outer(dalpha, e_y)) - dphi * e_x)
+    omega = earth.EARTH_RATE_ECEF
+    C_nom = traj.C_b_e()
+    w_nom = traj.angular_rate - np.einsum("nji,j->ni", C_nom, omega)
+    f_e = np.einsum("nij,nj->ni", C_nom, traj.specific_force)
+    acc = f_e - 2.0 * np.cross(omega, traj.velocity) + earth.normal_gravity_ecef(traj.position)
+    return build_trajectory(t, traj.position, traj.velocity, acc, C_nom @ R.as_matrix(),
+                            R.inv().apply(w_nom) + w_R, events=traj.events,
+                            name=f"{traj.name} + coning",
+                            parameters={**traj.parameters, "coning_deg": coning_deg,
+                                        "coning_hz": coning_hz})
+
+
+CONING_KEYS = ("coning_deg", "coning_hz")
+
+
+@lru_cache(maxsize=16)
+def _trajectory(spin_hz: float, key: tuple):
+    options = dict(key)
+    coning = {k: options.pop(k) for k in CONING_KEYS if k in options}
+    traj = sounding_rocket(spin_hz=spin_hz, **options)
+    return add_coning(traj, **coning) if coning else traj
+
+
+def rocket_trajectory(spin_hz: float = 2.0, **overrides):
+    """The VS30-like flight (:func:`navlib.trajectory.sounding_rocket`), cached per settings.
+
+    ``overrides`` are ``sounding_rocket`` keywords plus ``coning_deg``/``coning_hz``
+    (:func:`add_coning`). The same object comes back for the same settings, so the
+    discretised model cached on it (:func:`navlib.models.ecef.ecef21_at_epochs`) is reused
+    by widgets and sweeps.
+    """
+    spin_hz = finite_scalar(spin_hz, "spin_hz", 0.0)
+    if "spin_hz" in overrides:
+        raise NavlibInputError("spin_hz: pass it once, as the first argument")
+    return _trajectory(spin_hz, _frozen(overrides))
+
+
+def rocket_chain(spin_hz: float = 2.0, attitude_error: str = "ecef", sensors=None,
+                 gnss_sigma_m: float = 5.0, gnss_rate_hz: float = 1.0,
+                 trajectory_options: dict | None = None, **sigmas):
+    """The 21-state model of the rocket flight at the GNSS epochs (cached).
+
+    The discretised ``F``, ``Q`` depend only on the trajectory (spin), the attitude-error
+    frame and the sensor noise; they are cached. ``P0`` (from ``sigmas``, see
+    :data:`navlib.models.ecef.P0_DEFAULTS`) and ``R = gnss_sigma_m^2 I`` are attached
+    afterwards at no cost.
+
+    Returns
+    -------
+    DiscreteModel
+        ``t`` (87,) at 1 Hz for the 0-86 s flight, ``F``, ``Q`` (86, 21, 21), ``H``, ``R``,
+        ``P0``.
+    """
+    traj = rocket_trajectory(spin_hz, **dict(_frozen(trajectory_options)))
+    base = ecef21_at_epochs(traj, gnss_rate_hz, sensors=sensors, attitude_error=attitude_error)
+    gnss_sigma_m = finite_scalar(gnss_sigma_m, "gnss_sigma_m", 0.0, low_open=True)
+    R = np.broadcast_to(gnss_sigma_m**2 * np.eye(3), base.R.shape)
+    return replace(base, P0=initial_covariance(sensors, **sigmas), R=R)
+
+
+# --------------------------------------------------------------------------- the analysis
+
+
+@dataclass(frozen=True, eq=False)
+class RocketAnalysis:
+    """Excitability per segment and sensability per epoch on the rocket flight.
+
+    Attributes
+    ----------
+    model : DiscreteModel
+        The 21-state model at the GNSS epochs (with ``P0`` and ``R``).
+    trajectory : Trajectory
+    sensability : navlib.metrics.SensabilityResult
+    excitability : tuple of navlib.metrics.ExcitabilityResult
+        One per segment.
+    segments : tuple of (float, float)
+    settings : dict
+        The settings used (spin, frame, eta, nu, D0 choice, GNSS sigma, P0 sigmas).
+    """
+
+    model: object
+    trajectory: object
+    sensability: metrics.SensabilityResult
+    excitability: tuple
+    segments: tuple
+    settings: dict
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self.model.state_names
+
+    def e(self) -> pd.DataFrame:
+        """Excitability table: rows states, columns segment labels."""
+        return pd.DataFrame({label: ex.e for label, ex in zip(self.labels, self.excitability,
+                                                              strict=True)},
+                            index=pd.Index(self.state_names, name="state"))
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return tuple(f"tau{i + 1}" for i in range(len(self.segments)))
+
+    def excitability_frame(self) -> pd.DataFrame:
+        """Tidy: ``state, paper_id, segment, t_start, t_end, e, ne, eta``."""
+        rows = []
+        for label, (t_a, t_b), ex in zip(self.labels, self.segments, self.excitability,
+                                         strict=True):
+            rows.append(pd.DataFrame({
+                "state": self.state_names, "paper_id": [PAPER_IDS[s] for s in self.state_names],
+                "segment": label, "t_start": t_a, "t_end": t_b, "e": ex.e, "ne": ex.ne,
+                "eta": ex.eta,
+            }))
+        return pd.concat(rows, ignore_index=True)
+
+    def spectrum_frame(self) -> pd.DataFrame:
+        """Tidy energy spectra: ``segment, direction (1-based), S, excited``."""
+        rows = []
+        for label, ex in zip(self.labels, self.excitability, strict=True):
+            frame = ex.to_frame()[["direction", "S", "excited", "ne"]]
+            rows.append(frame.assign(segment=label))
+        return pd.concat(rows, ignore_index=True)
+
+    def sensability_frame(self, k: float = 2.0) -> pd.DataFrame:
+        """Tidy ``t, state, s, sigma, lower, upper`` with the physical ``k``-sigma band."""
+        return metrics.physical_bands(self.sensability, k)
+
+    to_frame = excitability_frame
+
+    def with_eta(self, eta: float) -> RocketAnalysis:
+        """Same analysis with another eta (no new SVD)."""
+        ex = tuple(e.with_eta(eta) for e in self.excitability)
+        return replace(self, excitability=ex, settings={**self.settings, "eta": ex[0].eta})
+
+    def with_nu(self, nu: float) -> RocketAnalysis:
+        """Same analysis with another nu (no new eigen-decomposition)."""
+        se = self.sensability.with_nu(nu)
+        return replace(self, sensability=se, settings={**self.settings, "nu": se.nu})
+
+    def epochs(self, t_a: float, t_b: float, open_start: bool = False) -> np.ndarray:
+        """Indices of the epochs in ``[t_a, t_b]`` (``(t_a, t_b]`` with ``open_start``)."""
+        t = self.model.t
+        low = t > t_a + 1e-9 if open_start else t >= t_a - 1e-9
+        return np.flatnonzero(low & (t <= t_b + 1e-9))
+
+    def at(self, time: float) -> int:
+        """Index of the epoch nearest ``time``."""
+        return int(np.argmin(np.abs(self.model.t - time)))
+
+
+def _segments(segments, t) -> tuple:
+    try:
+        segs = tuple((float(a), float(b)) for a, b in segments)
+    except (TypeError, ValueError) as exc:
+        raise NavlibInputError("segments: expected a sequence of (t_start, t_end) pairs") \
+            from exc
+    if not segs:
+        raise NavlibInputError("segments: need at least one segment")
+    for i, (a, b) in enumerate(segs):
+        if not (np.isfinite(a) and np.isfinite(b)) or b <= a:
+            raise NavlibInputError(f"segments[{i}]: need t_start < t_end, got ({a}, {b})")
+        if a < t[0] - 1e-9 or b > t[-1] + 1e-9:
+            raise NavlibInputError(f"segments[{i}]: ({a}, {b}) s lies outside the flight "
+                                   f"[{t[0]:g}, {t[-1]:g}] s")
+    return segs
+
+
+def excitability_segments(model, segments=SEGMENTS, eta: float = 1e-3, d0: str = "global",
+                          sensability=None) -> tuple:
+    """:func:`navlib.metrics.excitability_segment` for each segment (spec A12, A19).
+
+    ``d0="filter"`` takes D0 from the filter covariance at each segment start; pass the
+    ``sensability`` result of the same model to reuse its covariance recursion.
+    """
+    segs = _segments(segments, model.t)
+    return tuple(metrics.excitability_segment(model, a, b, eta=eta, d0=d0, P_filter=sensability)
+                 for a, b in segs)
+
+
+def analyze(spin_hz: float = 2.0, attitude_error: str = "ecef", eta: float = 1e-3,
+            nu: float = 0.985, segments=SEGMENTS, d0: str = "global",
+            gnss_sigma_m: float = 5.0, sensors=None, prior_update: bool = False,
+            trajectory_options: dict | None = None, **sigmas) -> RocketAnalysis:
+    """Excitability (per segment) and sensability (per epoch) on the rocket flight.
+
+    Parameters
+    ----------
+    spin_hz : float
+        Aerodynamic spin reached in powered flight (assumed 2 Hz; halved at 73 s).
+    attitude_error : {"ecef", "body"}
+        Attitude-error frame (spec A4); ECEF default (reading of Fig. 4).
+    eta : float
+        Excitability energy threshold (assumed 1e-3, spec A14).
+    nu : float
+        Sensability threshold (paper: 0.985).
+    segments : sequence of (t_start, t_end)
+        Default tau1 = [0, 19], tau2 = [19, 60], tau3 = [60, 86] s.
+    d0 : {"global", "filter"}
+        D0 of the excitability per segment (spec A19).
+    gnss_sigma_m : float
+        GNSS position sigma per axis, R = R0 (assumed 5 m).
+    sensors : None, str or mapping
+        IMU noise (default preset ``motionpak_tactical``).
+    prior_update : bool
+        Sensability with P0 as a prior updated at t0 (spec A9; default: literal reading).
+    trajectory_options : dict, optional
+        Further :func:`navlib.trajectory.sounding_rocket` keywords (site, rail, timings).
+    **sigmas
+        Initial sigmas, see :data:`navlib.models.ecef.P0_DEFAULTS`.
+    """
+    if attitude_error not in ATTITUDE_ERRORS:
+        raise NavlibInputError(
+            f"attitude_error: expected one of {ATTITUDE_ERRORS}, got {attitude_error!r}")
+    reject_unknown(sigmas, P0_DEFAULTS, "analyze")
+    model = rocket_chain(spin_hz, attitude_error, sensors, gnss_sigma_m,
+                         trajectory_options=trajectory_options, **sigmas)
+    traj = rocket_trajectory(spin_hz, **dict(_frozen(trajectory_options)))
+    se = metrics.sensability_model(model, nu=nu, prior_update=prior_update)
+    ex = excitability_segments(model, segments, eta, d0, se)
+    settings = {"spin_hz": float(spin_hz), "attitude_error": attitude_error, "eta": ex[0].eta,
+                "nu": se.nu, "d0": d0, "gnss_sigma_m": float(gnss_sigma_m),
+                "prior_update": bool(prior_update),
+                "sensors": sensors if sensors is None or isinstance(sensors, str) else "custom",
+                **{k: float(sigmas.get(k, v)) for k, v in
+                   {**P0_DEFAULTS, **parameter_sigmas(sensors)}.items()}}
+    return RocketAnalysis(model, traj, se, ex, _segments(segments, model.t), settings)
+
+
+# --------------------------------------------------------------------------- claim helpers
+
+
+def _require_three(analysis: RocketAnalysis) -> None:
+    if len(analysis.segments) != 3:
+        raise NavlibInputError(
+            f"segments: the paper's claims need three segments (pad, powered, free fall); "
+            f"the analysis has {len(analysis.segments)}")
+
+
+def _verdict(statements: dict) -> tuple[str, str]:
+    """Verdict from the claim's statements, each a bool or a dict of named boolean checks.
+
+    A statement's score is the fraction of its checks that pass; the claim is "reproduced"
+    when every check passes, "partly" when the mean statement score exceeds 1/2, else "not
+    reproduced". The note lists the statements that failed and which checks.
+    """
+    scores, failures = [], []
+    for name, checks in statements.items():
+        checks = checks if isinstance(checks, dict) else {name: checks}
+        passed = sum(bool(v) for v in checks.values())
+        scores.append(passed / len(checks))
+        if passed < len(checks):
+            bad = [k for k, v in checks.items() if not v]
+            detail = "" if bad == [name] else f" ({passed}/{len(checks)}; {', '.join(bad)})"
+            failures.append(f"{name}{detail}")
+    score = float(np.mean(scores))
+    if score == 1.0:
+        verdict = "reproduced"
+    elif score > 0.5:
+        verdict = "partly"
+    else:
+        verdict = "not reproduced"
+    note = f"score {score:.2f}" + (f"; failed: {'; '.join(failures)}" if failures else "")
+    return verdict, note
+
+
+def _e(analysis: RocketAnalysis, state: str, segment: int) -> float:
+    return float(analysis.excitability[segment].e[STATE_NAMES.index(state)])
+
+
+def _s(analysis: RocketAnalysis, state: str) -> np.ndarray:
+    return analysis.sensability.s[:, STATE_NAMES.index(state)]
+
+
+def _sigma(analysis: RocketAnalysis, state: str) -> np.ndarray:
+    return analysis.sensability.sigma[:, STATE_NAMES.index(state)]
+
+
+def _fmt(values: dict, digits: int = 2) -> str:
+    return ", ".join(f"{k} {v:.{digits}f}" for k, v in values.items())
+
+
+def _assumption(analysis: RocketAnalysis, extra: str = "") -> str:
+    s = analysis.settings
+    text = (f"eta={s['eta']:g}, D0={s['d0']}, R0=({s['gnss_sigma_m']:g} m)^2 I, "
+            f"{s['attitude_error']} attitude error, spin {s['spin_hz']:g} Hz")
+    return f"{text}; {extra}" if extra else text
+
+
+def _sens_assumption(analysis: RocketAnalysis, extra: str = "") -> str:
+    s = analysis.settings
+    text = (f"nu={s['nu']:g}, P0 posterior at t0 (A9)" if not s["prior_update"]
+            else f"nu={s['nu']:g}, P0 prior updated at t0 (A9)")
+    text += f", {s['attitude_error']} attitude error, spin {s['spin_hz']:g} Hz"
+    return f"{text}; {extra}" if extra else text
+
+
+# --------------------------------------------------------------------------- X1-X7 (Fig. 2)
+
+
+def claim_x1(analysis: RocketAnalysis) -> ClaimResult:
+    """X1: e1-e6 (P, V) lie mostly in S_O in all three segments (GNSS)."""
+    _require_three(analysis)
+    states = STATE_GROUPS["position"] + STATE_GROUPS["velocity"]
+    checks = {"P, V in S_O in every segment": {
+        f"{s}@{lab}": _e(analysis, s, i) >= IN_SO
+        for i, lab in enumerate(SEGMENT_LABELS) for s in states}}
+    verdict, note = _verdict(checks)
+    mins = {lab: min(_e(analysis, s, i) for s in states) for i, lab in enumerate(SEGMENT_LABELS)}
+    return ClaimResult("X1", "P and V (e1-e6) lie mostly in S_O in all three segments",
+                       "e1-e6 high in tau1, tau2, tau3", f"min e: {_fmt(mins)}; {note}",
+                       verdict, _assumption(analysis, "sigma_P0/sigma_V0 vs R0 (small P0 "
+                                                      "breaks it)"))
+
+
+def claim_x2(analysis: RocketAnalysis) -> ClaimResult:
+    """X2: attitude (e7-e9) in S_O in tau1 and tau2, barely excited in tau3."""
+    _require_three(analysis)
+    checks = {f"attitude in S_O in {lab}": {s: _e(analysis, s, i) >= IN_SO for s in ATTITUDE}
+              for i, lab in enumerate(SEGMENT_LABELS[:2])}
+    checks["attitude barely excited in tau3"] = {s: _e(analysis, s, 2) < LOW for s in ATTITUDE}
+    verdict, note = _verdict(checks)
+    ours = "; ".join(f"{lab}: " + "/".join(f"{_e(analysis, s, i):.2f}" for s in ATTITUDE)
+                     for i, lab in enumerate(SEGMENT_LABELS))
+    return ClaimResult("X2", "Attitude in S_O in tau1 and tau2, barely excites the innovations "
+                       "in tau3", "e7-e9 high in tau1, tau2; low in tau3",
+                       f"e7/e8/e9 {ours}; {note}", verdict,
+                       _assumption(analysis, "heading is not excited at rest (only the tilt "
+                                             "plane), so ECEF components ~ their tangent-plane "
+                                             "projections"))
+
+
+def claim_x3(analysis: RocketAnalysis) -> ClaimResult:
+    """X3: e16 (x-gyro scale factor) becomes excitable in tau2."""
+    _require_three(analysis)
+    e = [_e(analysis, "sg_x", i) for i in range(3)]
+    checks = {"e16@tau2 in S_O": e[1] >= IN_SO, "e16 tau2 > tau1": e[1] > e[0],
+              "e16 tau2 > tau3": e[1] > e[2]}
+    verdict, note = _verdict(checks)
+    return ClaimResult("X3", "x-gyro scale factor (e16) becomes excitable in tau2 "
+                       "(acceleration with spin)", "e16 high in tau2 only",
+                       f"e16 {_fmt(dict(zip(SEGMENT_LABELS, e, strict=True)))}; {note}",
+                       verdict, _assumption(analysis, "needs a large spin x sigma_sg"))
+
+
+def claim_x4(analysis: RocketAnalysis) -> ClaimResult:
+    """X4: e19 (x-accelerometer scale factor) more excitable in tau2 than tau1, still < 1/√2."""
+    _require_three(analysis)
+    e = [_e(analysis, "sa_x", i) for i in range(3)]
+    checks = {"e19 tau2 > tau1": e[1] > e[0], "e19@tau2 < 1/sqrt2": e[1] < IN_SO}
+    verdict, note = _verdict(checks)
+    return ClaimResult("X4", "x-accelerometer scale factor (e19) more excitable in tau2 than "
+                       "tau1 but predominantly in S_NO", "e19 tau2 > tau1, < 1/sqrt(2)",
+                       f"e19 {_fmt(dict(zip(SEGMENT_LABELS, e, strict=True)))}; {note}",
+                       verdict, _assumption(analysis, "thrust ~110 m/s^2 x sigma_sa"))
+
+
+OTHER_PARAMETERS = tuple(p for p in PARAMETERS if p not in ("sg_x", "sa_x"))
+"""IMU parameters other than e16 and e19 (X5, X6)."""
+
+
+def claim_x5(analysis: RocketAnalysis) -> ClaimResult:
+    """X5: all other IMU parameters very low in every segment."""
+    _require_three(analysis)
+    checks = {"other parameters very low": {
+        f"{p}@{lab}": _e(analysis, p, i) < LOW
+        for i, lab in enumerate(SEGMENT_LABELS) for p in OTHER_PARAMETERS}}
+    verdict, note = _verdict(checks)
+    top = {lab: max(OTHER_PARAMETERS, key=lambda p, i=i: _e(analysis, p, i))
+           for i, lab in enumerate(SEGMENT_LABELS)}
+    ours = ", ".join(f"{lab} max {_e(analysis, p, i):.2f} ({p})"
+                     for i, (lab, p) in enumerate(top.items()))
+    return ClaimResult("X5", "All other IMU parameters very low in every segment",
+                       "e10-e15, e17, e18, e20, e21 ~ 0", f"{ours}; {note}", verdict,
+                       _assumption(analysis, f"'very low' = e < {LOW}; sigma_bg0 vs "
+                                             "sigma_theta0 sets the pad gyro-bias share"))
+
+
+def _rms(analysis: RocketAnalysis, states: Sequence[str], segment: int) -> float:
+    return float(np.sqrt(np.mean([_e(analysis, s, segment) ** 2 for s in states])))
+
+
+def claim_x6(analysis: RocketAnalysis) -> ClaimResult:
+    """X6: among the low values, biases higher in tau1, scale factors higher in tau2."""
+    _require_three(analysis)
+    biases = [p for p in OTHER_PARAMETERS if p.startswith("b")]
+    scales = [p for p in OTHER_PARAMETERS if p.startswith("s")]
+    rb = [_rms(analysis, biases, i) for i in range(3)]
+    rs = [_rms(analysis, scales, i) for i in range(3)]
+    checks = {"biases highest in tau1": int(np.argmax(rb)) == 0,
+              "scale factors highest in tau2": int(np.argmax(rs)) == 1}
+    verdict, note = _verdict(checks)
+    ours = (f"rms e biases {'/'.join(f'{v:.3f}' for v in rb)}, scale factors "
+            f"{'/'.join(f'{v:.3f}' for v in rs)} (tau1/tau2/tau3); {note}")
+    return ClaimResult("X6", "Among the low values, biases relatively higher in tau1 and scale "
+                       "factors in tau2", "biases: tau1; scale factors: tau2", ours, verdict,
+                       _assumption(analysis, "rms over the non-e16/e19 parameters"))
+
+
+def claim_x7(analysis: RocketAnalysis) -> ClaimResult:
+    """X7: tau3 (free fall) unfavourable for in-flight IMU recalibration."""
+    _require_three(analysis)
+    r = [_rms(analysis, PARAMETERS, i) for i in range(3)]
+    top = max(_e(analysis, p, 2) for p in PARAMETERS)
+    checks = {"rms e(params) tau3 < tau1": r[2] < r[0], "rms e(params) tau3 < tau2": r[2] < r[1],
+              "max e(params)@tau3 low": top < LOW}
+    verdict, note = _verdict(checks)
+    ours = f"rms e of the 12 parameters {'/'.join(f'{v:.3f}' for v in r)}, max tau3 {top:.2f}"
+    return ClaimResult("X7", "Free fall (tau3) is unfavourable for in-flight recalibration",
+                       "IMU parameters not excitable in tau3", f"{ours}; {note}", verdict,
+                       _assumption(analysis))
+
+
+# --------------------------------------------------------------------------- S1-S8 (Figs 3-5)
+
+
+def _pad(analysis: RocketAnalysis) -> np.ndarray:
+    """Pad epochs after t0: (tau1 start, ignition] (or tau1 end when earlier)."""
+    t_a, t_b = analysis.segments[0]
+    ignition = analysis.trajectory.events.get("ignition", t_b)
+    return analysis.epochs(t_a, min(t_b, ignition), open_start=True)
+
+
+def _sensible_time(analysis: RocketAnalysis, state: str, epochs: np.ndarray) -> float:
+    """Seconds (epoch count x GNSS period) with s >= SENSIBLE among ``epochs``."""
+    if epochs.size == 0:
+        return 0.0
+    period = float(np.median(np.diff(analysis.model.t)))
+    return float(np.count_nonzero(_s(analysis, state)[epochs] >= SENSIBLE) * period)
+
+
+def claim_s1(analysis: RocketAnalysis) -> ClaimResult:
+    """S1: x-position sensability high from the very beginning."""
+    _require_three(analysis)
+    k = analysis.epochs(*analysis.segments[0], open_start=True)
+    s = _s(analysis, "P_x")
+    checks = {"s(P_x) >= 1/sqrt2 on tau1": bool(np.all(s[k] >= SENSIBLE))}
+    verdict, note = _verdict(checks)
+    ours = f"min s(P_x) tau1 {s[k].min():.2f}; whole flight {s[1:].min():.2f}"
+    return ClaimResult("S1", "x-position sensability high from the very beginning",
+                       "s(P_x) high from t0", f"{ours}; {note}", verdict,
+                       _sens_assumption(analysis, "epoch t0 left out (s = 1 there by A9)"))
+
+
+def claim_s2(analysis: RocketAnalysis) -> ClaimResult:
+    """S2: V_x sensability: valley before 5 s, rise near 12 s, ~1 after 55 s."""
+    _require_three(analysis)
+    t = analysis.model.t
+    s = _s(analysis, "V_x")
+    k1 = analysis.epochs(*analysis.segments[0], open_start=True)
+    kv = k1[np.argmin(s[k1])]
+    t_v = float(t[kv])
+    late = analysis.epochs(55.0, analysis.segments[2][1])
+    before = analysis.epochs(analysis.segments[1][0], 55.0 - 1e-6)
+    rise = analysis.epochs(10.0, 16.0)
+    checks = {
+        "valley before 5 s": t_v <= 5.0 + 1e-9 and s[kv] < SENSIBLE,
+        "rise near 12 s": rise.size > 0 and t_v < 12.0 and s[rise].max() - s[kv] >= 0.2,
+        "~1 after 55 s": late.size > 0 and s[late].mean() >= 0.9
+        and s[late].max() >= s[before].max(),
+    }
+    verdict, note = _verdict(checks)
+    ours = (f"valley {s[kv]:.2f} at {t_v:.0f} s, max 10-16 s {s[rise].max():.2f}, "
+            f"mean after 55 s {s[late].mean():.2f}")
+    return ClaimResult("S2", "x-velocity sensability: deep valley before 5 s, rise near 12 s, "
+                       "~1 after 55 s", "valley < 5 s; rise ~12 s; ~1 after 55 s",
+                       f"{ours}; {note}", verdict,
+                       _sens_assumption(analysis, "valley timing set by sigma_V0 vs GNSS "
+                                                  "sigma"))
+
+
+def claim_s3(analysis: RocketAnalysis) -> ClaimResult:
+    """S3: the V_x 2-sigma band grows after the valley, shrinks after ~12 s, min after 55 s."""
+    _require_three(analysis)
+    t = analysis.model.t
+    s, sig = _s(analysis, "V_x"), _sigma(analysis, "V_x")
+    k1 = analysis.epochs(*analysis.segments[0], open_start=True)
+    kv = int(k1[np.argmin(s[k1])])
+    after = analysis.epochs(t[kv], t[kv] + 7.0, open_start=True)
+    k12, k55 = analysis.at(12.0), analysis.at(55.0)
+    checks = {
+        "band grows after the valley": after.size > 0 and sig[after].max() > 1.02 * sig[kv],
+        "band shrinks after ~12 s": sig[k55] < sig[k12],
+        "band minimum after 55 s": t[int(np.argmin(sig))] >= 55.0 - 1e-9,
+    }
+    verdict, note = _verdict(checks)
+    ours = (f"2sigma(V_x) {2 * sig[kv]:.2f} m/s at the valley ({t[kv]:.0f} s), "
+            f"max {2 * sig[after].max() if after.size else np.nan:.2f} in the next 7 s, "
+            f"{2 * sig[k12]:.2f} at 12 s, {2 * sig[k55]:.2f} at 55 s, "
+            f"min at {t[int(np.argmin(sig))]:.0f} s")
+    return ClaimResult("S3", "The V_x 2-sigma band lags the sensability: grows after the "
+                       "valley, shrinks after ~12 s, minimum after 55 s",
+                       "grow / shrink after 12 s / min after 55 s", f"{ours}; {note}",
+                       verdict, _sens_assumption(analysis))
+
+
+def _up(analysis: RocketAnalysis) -> np.ndarray:
+    """Local vertical (ECEF) at the pad."""
+    from navlib import earth
+
+    lat, lon, _ = earth.ecef_to_geodetic(analysis.trajectory.position[0])
+    return -earth.ned_to_ecef_matrix(lat, lon)[:, 2]
+
+
+def tangent_projections(analysis: RocketAnalysis) -> np.ndarray:
+    """Norms of the projections of the three attitude-error axes on the pad's tangent plane.
+
+    ECEF axes for the ``ecef`` attitude error, body axes at t0 for ``body`` (spec §3
+    prototype: 0.58 / 0.82 / 0.99 for the ECEF axes at the assumed site).
+    """
+    up = _up(analysis)
+    if analysis.settings["attitude_error"] == "body":
+        up = analysis.trajectory.C_b_e()[0].T @ up
+    return np.sqrt(np.clip(1.0 - up**2, 0.0, None))
+
+
+def direction_sensability(result: metrics.SensabilityResult, v) -> np.ndarray:
+    """Sensability of a physical direction ``v`` (n,) at every epoch (Def. 2 generalised).
+
+    ``v`` is mapped to the normalised coordinates (``D0^-1/2 v``), made unit, and projected
+    on the practically sensible subspace ``span{v^1..v^nr}``: ``||V[:, :nr]' w||``.
+    """
+    v = np.asarray(v, dtype=float)
+    if v.shape != (result.n,) or not np.any(v):
+        raise NavlibInputError(f"v: expected a non-zero vector of length {result.n}")
+    w = v / np.sqrt(result.d0)
+    w = w / np.linalg.norm(w)
+    proj = np.einsum("kji,j->ki", result.V, w) ** 2
+    keep = np.arange(result.n) < result.nr[:, None]
+    return np.sqrt(np.sum(proj * keep, axis=1))
+
+
+def heading_direction(analysis: RocketAnalysis) -> np.ndarray:
+    """The 21-vector of a rotation about the local vertical at the pad (heading error)."""
+    up = _up(analysis)
+    if analysis.settings["attitude_error"] == "body":
+        up = analysis.trajectory.C_b_e()[0].T @ up
+    v = np.zeros(len(STATE_NAMES))
+    v[6:9] = up
+    return v
+
+
+def claim_s4(analysis: RocketAnalysis) -> ClaimResult:
+    """S4: on the pad each attitude component is more sensible the larger its tangent-plane
+    projection; q_x and q_y grow only after lift-off."""
+    _require_three(analysis)
+    pad = _pad(analysis)
+    proj = tangent_projections(analysis)
+    mean_pad = np.array([_s(analysis, s)[pad].mean() for s in ATTITUDE])
+    t_lift = analysis.segments[1][0]
+    after = analysis.epochs(t_lift, t_lift + 10.0, open_start=True)
+    mean_after = np.array([_s(analysis, s)[after].mean() for s in ATTITUDE])
+    checks = {"pad order follows tangent projection":
+              bool(np.array_equal(np.argsort(mean_pad), np.argsort(proj))),
+              "theta_x grows after lift-off": mean_after[0] > mean_pad[0],
+              "theta_y grows after lift-off": mean_after[1] > mean_pad[1]}
+    verdict, note = _verdict(checks)
+    ours = (f"pad mean s {'/'.join(f'{v:.2f}' for v in mean_pad)} vs projections "
+            f"{'/'.join(f'{v:.2f}' for v in proj)}; 10 s after lift-off "
+            f"{'/'.join(f'{v:.2f}' for v in mean_after)}")
+    return ClaimResult("S4", "On the pad the IMU is an inclinometer: attitude components more "
+                       "sensible the larger their tangent-plane projection; q_x, q_y grow after "
+                       "lift-off", "order by projection; q_x, q_y rise after 19 s",
+                       f"{ours}; {note}", verdict,
+                       _sens_assumption(analysis, "components in ECEF axes (A4 b)"))
+
+
+def claim_s5(analysis: RocketAnalysis) -> ClaimResult:
+    """S5: gyro noise and bias hide the Earth rate: excitability at rest does not become
+    sensability (heading not sensible on the pad)."""
+    _require_three(analysis)
+    pad = _pad(analysis)
+    heading = direction_sensability(analysis.sensability, heading_direction(analysis))
+    k_end = int(pad[-1])
+    P = analysis.sensability.P[k_end, 6:9, 6:9]
+    v = heading_direction(analysis)[6:9]
+    sigma_heading = float(np.degrees(np.sqrt(v @ P @ v)))
+    excited = [s for s in STATE_NAMES if _e(analysis, s, 0) >= IN_SO]
+    not_sensible = [s for s in excited if _s(analysis, s)[pad].mean() < SENSIBLE]
+    late_pad = pad[analysis.model.t[pad] > analysis.model.t[0] + TRANSIENT_S]
+    gyro = STATE_GROUPS["gyro_bias"]
+    checks = {"heading not sensible at ignition": heading[k_end] < SENSIBLE,
+              "gyro biases not sensible on the pad":
+              all(np.all(_s(analysis, s)[late_pad] < SENSIBLE) for s in gyro),
+              "an excitable-at-rest state stays non-sensible": bool(not_sensible)}
+    verdict, note = _verdict(checks)
+    ours = (f"heading s {heading[k_end]:.2f}, 1sigma {sigma_heading:.1f} deg at "
+            f"{analysis.model.t[k_end]:.0f} s; excitable at rest but not sensible: "
+            f"{', '.join(not_sensible) or 'none'}")
+    return ClaimResult("S5", "Gyro noise and bias hide the Earth rate: high excitability at "
+                       "rest does not become sensability", "heading not sensible on the pad",
+                       f"{ours}; {note}", verdict,
+                       _sens_assumption(analysis, "ARW, sigma_bg0 >> Earth rate (15 deg/h)"))
+
+
+def claim_s6(analysis: RocketAnalysis) -> ClaimResult:
+    """S6: attitude sensability high through tau2 as the band shrinks; declines in tau3 as
+    the band grows."""
+    _require_three(analysis)
+    (a2, b2), (a3, b3) = analysis.segments[1], analysis.segments[2]
+    k2 = analysis.epochs(a2, b2)
+    i2a, i2b, i3a, i3b = (analysis.at(x) for x in (a2, b2, a3, b3))
+    sens = {s: _s(analysis, s) for s in ATTITUDE}
+    sig = {s: _sigma(analysis, s) for s in ATTITUDE}
+    checks = {
+        "high through tau2": {s: sens[s][k2].mean() >= SENSIBLE for s in ATTITUDE},
+        "band shrinks in tau2": {s: sig[s][i2b] < sig[s][i2a] for s in ATTITUDE},
+        "declines in tau3": {s: sens[s][i3b] < sens[s][i3a] for s in ATTITUDE},
+        "band grows in tau3": {s: sig[s][i3b] > sig[s][i3a] for s in ATTITUDE},
+    }
+    verdict, note = _verdict(checks)
+    ratio = {s: float(_sigma(analysis, s)[k2].max() / _sigma(analysis, s)[0]) for s in ATTITUDE}
+    ours = ("mean s tau2 " + "/".join(f"{_s(analysis, s)[k2].mean():.2f}" for s in ATTITUDE)
+            + "; max sigma/sigma0 in tau2 " + "/".join(f"{v:.1f}" for v in ratio.values())
+            + "; s at tau3 start->end " + "/".join(
+                f"{_s(analysis, s)[i3a]:.2f}->{_s(analysis, s)[i3b]:.2f}" for s in ATTITUDE))
+    return ClaimResult("S6", "Attitude sensability high through tau2 as its band shrinks; "
+                       "declines in free fall as the band grows",
+                       "high in tau2, band shrinks; declines in tau3", f"{ours}; {note}",
+                       verdict, _sens_assumption(analysis, "spin x sigma_sg drives the roll "
+                                                           "band (the X3 tension)"))
+
+
+def claim_s7(analysis: RocketAnalysis) -> ClaimResult:
+    """S7: IMU parameters weakly sensible; one gyro bias briefly sensible in tau2 without
+    improving its a-priori bound."""
+    _require_three(analysis)
+    t = analysis.model.t
+    later = np.flatnonzero(t > t[0] + TRANSIENT_S)
+    times = {p: _sensible_time(analysis, p, later) for p in PARAMETERS}
+    k2 = analysis.epochs(*analysis.segments[1])
+    gyro = STATE_GROUPS["gyro_bias"]
+    brief = {g: _sensible_time(analysis, g, k2) for g in gyro}
+    candidates = [g for g in gyro if 0 < brief[g] <= BRIEF_S]
+    ratio = {g: float(_sigma(analysis, g)[-1] / _sigma(analysis, g)[0]) for g in gyro}
+    checks = {
+        "parameters weakly sensible": {p: times[p] <= BRIEF_S for p in PARAMETERS},
+        "a gyro bias briefly sensible in tau2": bool(candidates),
+        "its bound not improved": bool(candidates) and all(ratio[g] >= NOT_IMPROVED
+                                                            for g in candidates),
+    }
+    verdict, note = _verdict(checks)
+    longest = max(times, key=times.get)
+    ours = (f"longest sensible parameter {longest} {times[longest]:.0f} s; gyro-bias sensible "
+            f"time in tau2 {_fmt(brief, 0)} s; sigma_end/sigma0 {_fmt(ratio)}")
+    return ClaimResult("S7", "IMU parameters weakly sensible; a gyro bias briefly sensible in "
+                       "tau2 without improving its 2-sigma bound",
+                       "one b_g component briefly sensible (x or y, A18)", f"{ours}; {note}",
+                       verdict, _sens_assumption(analysis, f"'briefly' <= {BRIEF_S:g} s"))
+
+
+def claim_s8(analysis: RocketAnalysis) -> ClaimResult:
+    """S8: in-flight recalibration futile; an exciting trajectory is necessary but not
+    sufficient for sensability."""
+    _require_three(analysis)
+    t = analysis.model.t
+    ratio = {p: float(_sigma(analysis, p)[-1] / _sigma(analysis, p)[0]) for p in PARAMETERS}
+    calibrated = [p for p, r in ratio.items() if r < FUTILE]
+    excited_not_sensible = []
+    for i, (a, b) in enumerate(analysis.segments):
+        k = analysis.epochs(a, b)
+        excited_not_sensible += [f"{s}@tau{i + 1}" for s in STATE_NAMES
+                                 if _e(analysis, s, i) >= IN_SO
+                                 and _s(analysis, s)[k].mean() < SENSIBLE]
+    later = np.flatnonzero(t > t[0] + TRANSIENT_S)
+    never_excited = [s for s in STATE_NAMES
+                     if all(_e(analysis, s, i) < IN_SO for i in range(3))]
+    sensible_unexcited = [s for s in never_excited
+                          if _sensible_time(analysis, s, later) > BRIEF_S]
+    checks = {"recalibration futile": {p: ratio[p] >= FUTILE for p in PARAMETERS},
+              "excitation not sufficient": bool(excited_not_sensible),
+              "excitation necessary": not sensible_unexcited}
+    verdict, note = _verdict(checks)
+    listed = ", ".join(f"{p} {ratio[p]:.2f}" for p in calibrated) or "none"
+    ours = (f"calibrated in flight: {listed}"
+            f"; excited but not sensible: {', '.join(excited_not_sensible[:4]) or 'none'}"
+            f"{' ...' if len(excited_not_sensible) > 4 else ''}; sensible without excitation: "
+            f"{', '.join(sensible_unexcited) or 'none'}")
+    return ClaimResult("S8", "In-flight recalibration is futile; an exciting trajectory is "
+                       "necessary but not sufficient", "no parameter improves; excitation "
+                       "necessary, not sufficient", f"{ours}; {note}", verdict,
+                       _sens_assumption(analysis, f"'calibrated' = sigma_end/sigma0 < {FUTILE}"))
+
+
+EXCITABILITY_CLAIMS = (claim_x1, claim_x2, claim_x3, claim_x4, claim_x5, claim_x6, claim_x7)
+SENSABILITY_CLAIMS = (claim_s1, claim_s2, claim_s3, claim_s4, claim_s5, claim_s6, claim_s7,
+                      claim_s8)
+CLAIM_IDS = tuple(f"X{i}" for i in range(1, 8)) + tuple(f"S{i}" for i in range(1, 9))
+
+
+def excitability_claims(analysis: RocketAnalysis) -> list[ClaimResult]:
+    """X1-X7 (Fig. 2) evaluated on ``analysis``."""
+    return [claim(analysis) for claim in EXCITABILITY_CLAIMS]
+
+
+def sensability_claims(analysis: RocketAnalysis) -> list[ClaimResult]:
+    """S1-S8 (Figs. 3-5) evaluated on ``analysis``."""
+    return [claim(analysis) for claim in SENSABILITY_CLAIMS]
+
+
+def claims_table(analysis: RocketAnalysis, which: str = "all") -> pd.DataFrame:
+    """Table of claim results: ``which`` = ``"excitability"``, ``"sensability"`` or ``"all"``."""
+    if which not in ("excitability", "sensability", "all"):
+        raise NavlibInputError(f"which: expected 'excitability', 'sensability' or 'all', "
+                               f"got {which!r}")
+    results = []
+    if which in ("excitability", "all"):
+        results += excitability_claims(analysis)
+    if which in ("sensability", "all"):
+        results += sensability_claims(analysis)
+    return claims_frame(results)
+
+
+# --------------------------------------------------------------------------- X3 vs S6/S7
+
+
+TENSION_VARIANTS = {
+    "baseline (2 Hz spin, 5000 ppm)": {},
+    "spin 1 Hz": {"spin_hz": 1.0},
+    "spin 0.5 Hz": {"spin_hz": 0.5},
+    "sigma_sg 1000 ppm": {"sigma_sg_ppm": 1000.0},
+    "sigma_sg 300 ppm, sigma_bg 0.01 deg/s": {"sigma_sg_ppm": 300.0, "sigma_bg_deg_s": 0.01},
+    "sigma_sg 50 ppm": {"sigma_sg_ppm": 50.0},
+    "spin 1 Hz, sigma_sg 1000 ppm": {"spin_hz": 1.0, "sigma_sg_ppm": 1000.0},
+    "body coning 3 deg at 0.5 Hz": {"trajectory_options": {"coning_deg": 3.0,
+                                                           "coning_hz": 0.5}},
+    "rail 45 deg (stronger gravity turn)": {"trajectory_options": {"rail_elevation_deg": 45.0}},
+    "body-frame attitude error": {"attitude_error": "body"},
+}
+"""Variants tried against the X3-versus-S6/S7 tension (spec §3 "What the prototype showed"):
+lower spin, tighter sigma_sg, lateral motion (body coning; a stronger gravity turn that
+rotates f^e), and the other attitude-error frame."""
+
+
+def tension_table(variants: dict | None = None, sensors=None, progress: bool = False,
+                  **common) -> pd.DataFrame:
+    """X3 versus S6/S7 across ``variants`` (default :data:`TENSION_VARIANTS`).
+
+    Each variant is a dict of :func:`analyze` keywords on top of ``common``. Columns:
+    ``variant``, ``spin_hz``, ``sigma_sg_ppm``, ``roll_drift_deg`` (1-sigma roll drift that
+    the gyro-x scale-factor uncertainty builds over tau2: ``sigma_sg * int |omega_x| dt``),
+    ``e16_tau2``, ``max_theta_growth`` (largest ``sigma_theta(t)/sigma_theta(0)`` in tau2),
+    ``sg_x_sensible_s`` (time with ``s(sg_x) >= 1/sqrt2`` after the start-up transient),
+    ``X3``, ``S6``, ``S7`` verdicts, ``all_three`` (X3 reproduced and S6, S7 at least
+    partly) and ``n_reproduced`` (of the 15 claims).
+
+    The mechanism the table exposes: X3 needs ``sigma_sg x spin`` large against
+    ``sigma_theta0``; the resulting roll drift is a rotation about the thrust axis, which a
+    GNSS position fix sees only through the slow turn of ``f^e``, so the ECEF attitude bands
+    that project on the rocket axis grow (S6) and sg_x ends up sensible (S7).
+    """
+    from tqdm.auto import tqdm
+
+    variants = TENSION_VARIANTS if variants is None else dict(variants)
+    rows = []
+    for name, options in tqdm(list(variants.items()), desc="tension variants",
+                              disable=not progress):
+        kwargs = {**common, **options}
+        a = analyze(sensors=sensors, **kwargs)
+        claims = {c.claim_id: c for c in excitability_claims(a) + sensability_claims(a)}
+        t = a.model.t
+        k2 = a.epochs(*a.segments[1])
+        traj_t, w_x = a.trajectory.t, np.abs(a.trajectory.angular_rate[:, 0])
+        in_tau2 = (traj_t >= a.segments[1][0]) & (traj_t <= a.segments[1][1])
+        sigma_sg = a.settings["sigma_sg_ppm"] * 1e-6
+        roll = np.degrees(sigma_sg * np.trapezoid(w_x[in_tau2], traj_t[in_tau2]))
+        growth = a.sensability.sigma[k2][:, 6:9].max(axis=0) / a.sensability.sigma[0, 6:9]
+        later = np.flatnonzero(t > t[0] + TRANSIENT_S)
+        verdicts = {k: claims[k].verdict for k in ("X3", "S6", "S7")}
+        rows.append({
+            "variant": name, "spin_hz": a.settings["spin_hz"],
+            "sigma_sg_ppm": a.settings["sigma_sg_ppm"], "roll_drift_deg": roll,
+            "e16_tau2": _e(a, "sg_x", 1), "max_theta_growth": float(growth.max()),
+            "sg_x_sensible_s": _sensible_time(a, "sg_x", later), **verdicts,
+            "all_three": verdicts["X3"] == "reproduced"
+            and all(verdicts[k] in ("reproduced", "partly") for k in ("S6", "S7")),
+            "n_reproduced": sum(c.verdict == "reproduced" for c in claims.values()),
+        })
+    return pd.DataFrame(rows)
+
+
+def tension_findings(table: pd.DataFrame) -> list[str]:
+    """Short statements computed from a :func:`tension_table` (for the notebook text)."""
+    out = []
+    x3 = table[table["X3"] == "reproduced"]
+    out.append(f"X3 reproduced in {len(x3)} of {len(table)} variants; their 1-sigma roll drift "
+               f"over tau2 is {x3['roll_drift_deg'].min():.0f}-{x3['roll_drift_deg'].max():.0f}"
+               " deg" if len(x3) else "X3 reproduced in no variant")
+    ok = table[table["all_three"]]
+    out.append("X3 holds together with S6 and S7 (at least partly) in: "
+               + (", ".join(ok["variant"]) if len(ok) else "no variant"))
+    s7 = table[table["S7"] != "not reproduced"]
+    out.append("S7 at least partly reproduced in: "
+               + (", ".join(s7["variant"]) if len(s7) else "no variant"))
+    quiet = table[table["sg_x_sensible_s"] == 0]
+    if len(quiet):
+        out.append("sg_x never sensible in: " + ", ".join(
+            f"{r.variant} (e16 {r.e16_tau2:.2f})" for r in quiet.itertuples()))
+    return out
+
+
+# --------------------------------------------------------------------------- sweep
+
+
+P0_SETS = {
+    "small (5 m, 0.1 m/s)": {"sigma_p0_m": 5.0, "sigma_v0_m_s": 0.1},
+    "baseline (30 m, 3 m/s)": {},
+    "large (100 m, 10 m/s)": {"sigma_p0_m": 100.0, "sigma_v0_m_s": 10.0},
+}
+"""Named initial position/velocity uncertainties of the sweep (spec §3 failure modes)."""
+
+SWEEP_GRID = {
+    "eta": (1e-1, 1e-2, 1e-3, 1e-4),
+    "nu": (0.98, 0.985, 0.99, 0.995),
+    "p0": tuple(P0_SETS),
+    "gnss_sigma_m": (1.0, 5.0, 15.0),
+    "spin_hz": (0.5, 1.0, 2.0, 3.0),
+    "imu_grade": (0.1, 1.0, 10.0),
+    "d0": ("global", "filter"),
+}
+"""Default sweep values. ``imu_grade`` multiplies every noise density and IMU-parameter
+sigma of the preset (0.1 ~ navigation grade, 10 ~ consumer grade)."""
+QUICK_GRID = {"eta": (1e-2, 1e-4), "nu": (0.99,), "p0": ("small (5 m, 0.1 m/s)",),
+              "gnss_sigma_m": (15.0,), "spin_hz": (1.0,), "imu_grade": (10.0,),
+              "d0": ("filter",)}
+"""A short one-at-a-time sweep for quick mode (two chains)."""
+SWEEP_BASELINE = {"eta": 1e-3, "nu": 0.985, "p0": "baseline (30 m, 3 m/s)",
+                  "gnss_sigma_m": 5.0, "spin_hz": 2.0, "imu_grade": 1.0, "d0": "global"}
+
+
+def _graded(sensors, grade: float):
+    noise = imu_noise_densities(sensors)
+    if grade == 1.0:
+        return sensors, {}
+    scaled = {k: v * grade for k, v in noise.items()}
+    sigmas = {k: v * grade for k, v in parameter_sigmas(sensors).items()}
+    return scaled, sigmas
+
+
+def _sweep_rows(grid: dict, mode: str) -> list[dict]:
+    if mode == "grid":
+        names = list(SWEEP_BASELINE)
+        values = [grid.get(n, (SWEEP_BASELINE[n],)) for n in names]
+        return [dict(zip(names, combo, strict=True), factor="grid")
+                for combo in itertools.product(*values)]
+    rows = [dict(SWEEP_BASELINE, factor="baseline")]
+    for name, values in grid.items():
+        rows += [dict(SWEEP_BASELINE, **{name: v}, factor=name) for v in values
+                 if v != SWEEP_BASELINE[name]]
+    return rows
+
+
+def sensitivity_sweep(grid: dict | None = None, mode: str = "one_at_a_time",
+                      quick: bool = False, sensors=None, progress: bool = True,
+                      attitude_error: str = "ecef") -> pd.DataFrame:
+    """Pass/fail matrix of X1-X7 and S1-S8 over eta, nu, P0, GNSS sigma, spin and IMU grade.
+
+    Parameters
+    ----------
+    grid : dict, optional
+        Values per factor (keys of :data:`SWEEP_GRID`); default :data:`SWEEP_GRID`
+        (:data:`QUICK_GRID` with ``quick``).
+    mode : {"one_at_a_time", "grid"}
+        Vary one factor at a time from :data:`SWEEP_BASELINE` (default), or the full
+        factorial grid of the given values.
+    quick : bool
+        Use :data:`QUICK_GRID` when ``grid`` is None.
+    sensors : None, str or mapping
+        Base IMU (default preset ``motionpak_tactical``).
+    progress : bool
+        Show a tqdm progress bar.
+
+    Returns
+    -------
+    DataFrame
+        One row per setting: ``factor`` (which factor was varied, "baseline" or "grid"), the
+        seven factor columns, one boolean column per claim (True = "reproduced"), and
+        ``n_reproduced``.
+
+    Notes
+    -----
+    Cheap by construction: the trajectory is cached per spin and the discretised model per
+    (spin, IMU grade); P0 and R are attached without re-discretising; one sensability
+    recursion serves every nu (``with_nu``) and one SVD per segment every eta (``with_eta``).
+    """
+    from tqdm.auto import tqdm
+
+    if mode not in ("one_at_a_time", "grid"):
+        raise NavlibInputError(f"mode: expected 'one_at_a_time' or 'grid', got {mode!r}")
+    grid = (QUICK_GRID if quick else SWEEP_GRID) if grid is None else dict(grid)
+    reject_unknown(grid, SWEEP_BASELINE, "grid")
+    for name, values in grid.items():
+        if name == "p0":
+            bad = [v for v in values if v not in P0_SETS]
+            if bad:
+                raise NavlibInputError(f"grid['p0']: unknown set(s) {bad}; use {list(P0_SETS)}")
+    rows = _sweep_rows(grid, mode)
+    rows.sort(key=lambda r: (r["spin_hz"], r["imu_grade"], r["p0"], r["gnss_sigma_m"],
+                             r["d0"], r["nu"], r["eta"]))
+    out = []
+    cache: dict = {}
+    for row in tqdm(rows, desc="sensitivity sweep", disable=not progress):
+        key = (row["spin_hz"], row["imu_grade"], row["p0"], row["gnss_sigma_m"])
+        if key not in cache:
+            cache.clear()
+            imu, grade_sigmas = _graded(sensors, row["imu_grade"])
+            model = rocket_chain(row["spin_hz"], attitude_error, imu, row["gnss_sigma_m"],
+                                 **grade_sigmas, **P0_SETS[row["p0"]])
+            se = metrics.sensability_model(model, nu=SWEEP_BASELINE["nu"])
+            cache[key] = (model, se, {})
+        model, se, excitations = cache[key]
+        if row["d0"] not in excitations:
+            excitations[row["d0"]] = excitability_segments(model, SEGMENTS, 1e-3, row["d0"], se)
+        ex = tuple(e.with_eta(row["eta"]) for e in excitations[row["d0"]])
+        settings = {**BASELINE, "spin_hz": row["spin_hz"], "eta": row["eta"], "nu": row["nu"],
+                    "d0": row["d0"], "gnss_sigma_m": row["gnss_sigma_m"],
+                    "attitude_error": attitude_error, "prior_update": False}
+        analysis = RocketAnalysis(model, rocket_trajectory(row["spin_hz"]),
+                                  se.with_nu(row["nu"]), ex, SEGMENTS, settings)
+        claims = excitability_claims(analysis) + sensability_claims(analysis)
+        passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
+        out.append({"factor": row["factor"], **{k: row[k] for k in SWEEP_BASELINE}, **passed,
+                    "n_reproduced": sum(passed.values())})
+    frame = pd.DataFrame(out)
+    order = {f: i for i, f in enumerate(["baseline", *grid])}
+    frame["_order"] = frame["factor"].map(order).fillna(len(order))
+    return frame.sort_values(["_order", *SWEEP_BASELINE]).drop(columns="_order") \
+        .reset_index(drop=True)
+
+
+def sweep_pass_rates(sweep: pd.DataFrame) -> pd.Series:
+    """Fraction of the swept settings in which each claim is reproduced."""
+    return sweep[list(CLAIM_IDS)].mean().rename("pass_rate")
+
+
+# --------------------------------------------------------------------------- simpler measures
+
+
+RATIO_ESTIMATED = 2.0
+"""Covariance ratio sigma_0/sigma_end above which the PSINS measure calls a state estimated."""
+
+
+def measure_comparison(analysis: RocketAnalysis) -> pd.DataFrame:
+    """Per-state comparison of excitability/sensability with the simpler measures.
+
+    Columns: ``state``, ``paper_id``, ``e_tau1..3`` (excitability), ``s_end`` and
+    ``s_sensible_s`` (time sensible after the transient), ``ratio_end`` (PSINS covariance
+    ratio ``sigma_0/sigma_end``, :func:`navlib.covariance.covariance_ratio`), ``hb_share``
+    (norm of the state's row in the Ham-Brown modes of ``D0^-1/2 P_end D0^-1/2`` whose
+    eigenvalue is below ``1/RATIO_ESTIMATED^2``: the *directions* whose normalised variance
+    shrank as much as the ratio threshold asks of single states; from
+    :func:`navlib.covariance.normalized_eigen` with its trace normalisation undone), and the
+    four yes/no readings ``excited``
+    (e >= 1/sqrt2 in some segment), ``sensible_end``, ``ratio_estimated``
+    (ratio >= :data:`RATIO_ESTIMATED`), ``hb_estimated`` (hb_share >= 1/sqrt2).
+    """
+    se = analysis.sensability
+    ratio = covariance.covariance_ratio(se.sigma)
+    hb = covariance.normalized_eigen(se.P, analysis.model.P0, t=se.t,
+                                     state_names=analysis.state_names)
+    # undo the trace normalisation: eigenvalues of D0^-1/2 P D0^-1/2 (1 = prior variance)
+    trace = np.sum(se.sigma[-1] ** 2 / np.diag(analysis.model.P0))
+    hb_values = hb.eigenvalues[-1] * trace / hb.order
+    modes = np.flatnonzero(hb_values < RATIO_ESTIMATED**-2) + 1
+    share = hb.subspace_share(modes, time=float(se.t[-1])) if modes.size else \
+        np.zeros(se.n)
+    t = analysis.model.t
+    later = np.flatnonzero(t > t[0] + TRANSIENT_S)
+    frame = pd.DataFrame({"state": analysis.state_names,
+                          "paper_id": [PAPER_IDS[s] for s in analysis.state_names]})
+    for i, label in enumerate(analysis.labels):
+        frame[f"e_{label}"] = analysis.excitability[i].e
+    frame["s_end"] = se.s[-1]
+    frame["s_sensible_s"] = [_sensible_time(analysis, s, later) for s in analysis.state_names]
+    frame["ratio_end"] = ratio[-1]
+    frame["hb_share"] = share
+    e_cols = [f"e_{label}" for label in analysis.labels]
+    frame["excited"] = frame[e_cols].max(axis=1) >= IN_SO
+    frame["sensible_end"] = frame["s_end"] >= SENSIBLE
+    frame["ratio_estimated"] = frame["ratio_end"] >= RATIO_ESTIMATED
+    frame["hb_estimated"] = frame["hb_share"] >= IN_SO
+    return frame
+
+
+DISAGREEMENT_REASONS = {
+    "ratio estimated, not sensible":
+        "the ratio counts one state's absolute variance reduction; sensability asks whether "
+        "the state lies in the few best-informed normalised directions, which other states "
+        "(usually P, V) dominate",
+    "sensible, ratio < 2":
+        "sensability is relative: the state's information is large against the other "
+        "directions although its own variance fell little (or grew)",
+    "ratio estimated, not in Ham-Brown modes":
+        "the state's variance fell, but only in combination with others: the well-estimated "
+        "directions mix it with correlated states",
+    "in Ham-Brown modes, ratio < 2":
+        "a direction containing the state is well estimated while its own variance is not: "
+        "the state is strongly correlated with better-known states",
+    "excited, never sensible":
+        "excitability ignores process noise and uses only F, H, D0, R0; sensability includes "
+        "the noise that drowns the signal",
+}
+"""Reasons attached by :func:`measure_disagreements`, one per kind of disagreement."""
+
+
+def measure_disagreements(comparison: pd.DataFrame) -> pd.DataFrame:
+    """Where the simpler measures disagree with sensability/excitability, and why.
+
+    Rows ``state, disagreement, numbers, why`` for each state where the PSINS covariance
+    ratio (>= :data:`RATIO_ESTIMATED`) disagrees with sensability at the end, where the ratio
+    disagrees with the Ham-Brown modes, and where a state is excited in some segment but
+    never sensible; ``why`` from :data:`DISAGREEMENT_REASONS`.
+    """
+    rows = []
+    e_cols = [c for c in comparison.columns if c.startswith("e_tau")]
+    for r in comparison.itertuples():
+        kinds = []
+        if r.ratio_estimated and not r.sensible_end:
+            kinds.append(("ratio estimated, not sensible",
+                          f"ratio {r.ratio_end:.1f}, s_end {r.s_end:.2f}"))
+        if r.sensible_end and not r.ratio_estimated:
+            kinds.append(("sensible, ratio < 2", f"s_end {r.s_end:.2f}, ratio {r.ratio_end:.2f}"))
+        if r.ratio_estimated and not r.hb_estimated:
+            kinds.append(("ratio estimated, not in Ham-Brown modes",
+                          f"ratio {r.ratio_end:.1f}, HB share {r.hb_share:.2f}"))
+        if r.hb_estimated and not r.ratio_estimated:
+            kinds.append(("in Ham-Brown modes, ratio < 2",
+                          f"HB share {r.hb_share:.2f}, ratio {r.ratio_end:.2f}"))
+        if r.excited and r.s_sensible_s == 0:
+            e_max = max(getattr(r, c) for c in e_cols)
+            kinds.append(("excited, never sensible", f"max e {e_max:.2f}"))
+        rows += [(r.state, kind, numbers, DISAGREEMENT_REASONS[kind]) for kind, numbers in kinds]
+    return pd.DataFrame(rows, columns=["state", "disagreement", "numbers", "why"])
