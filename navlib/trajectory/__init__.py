@@ -5,11 +5,12 @@ Contract (spec/api.md): ``sounding_rocket``, ``launcher_ascent``, ``stationary``
 """
 
 from navlib.trajectory.base import Trajectory, build_trajectory, exact_imu
+from navlib.trajectory.fit import fit_flight_data
 from navlib.trajectory.launcher import launcher_ascent
 from navlib.trajectory.rocket import sounding_rocket
 from navlib.trajectory.stationary import stationary
 
 __all__ = [
-    "Trajectory", "build_trajectory", "exact_imu", "launcher_ascent", "sounding_rocket",
-    "stationary",
+    "Trajectory", "build_trajectory", "exact_imu", "fit_flight_data", "launcher_ascent",
+    "sounding_rocket", "stationary",
 ]

@@ -1,0 +1,588 @@
+"""A kinematically exact reference trajectory fitted to recorded flight data.
+
+The idea of Giribet et al. (2007), as used by España et al. (2019, spec excitability.md
+§4): find the smooth B-spline trajectory that best fits the recorded IMU and GNSS data in
+a least-squares sense and whose IMU signals satisfy the kinematics (spec Eq. 1) exactly.
+Its IMU is then re-derived from the splines with
+:func:`navlib.trajectory.base.exact_imu`, so a correct strapdown integrating it reproduces
+the fitted position and attitude to the last digit of the integrator.
+
+Method (:func:`fit_flight_data`)
+--------------------------------
+1. **Initial attitude.** ``initial_attitude`` if given; otherwise accelerometer levelling
+   over the first ``level_s`` seconds (the vehicle must be at rest there) plus a heading:
+   ``heading_deg`` (azimuth of the body x axis) if given, else a coarse closed-form
+   estimate that turns the IMU specific force about the vertical onto the GNSS-derived one
+   (second differences of the GNSS positions against triangle-weighted IMU averages over
+   the same windows).
+2. **Attitude history.** The gyros are integrated with :func:`navlib.strapdown.integrate`
+   (fourth-order attitude chain with Earth rate), giving ``C_b_e`` at every IMU sample.
+3. **Position spline and attitude correction.** ``P(t)`` is a quintic B-spline with knots
+   every ``knot_spacing_s`` (default 0.1 s: ten 100 Hz samples per knot interval, short
+   enough for thrust ramps of a few tenths of a second and the 0.5 s de-spin of the
+   sounding rocket; longer spacing smooths noise more but rounds off such transients).
+   Its coefficients solve one weighted linear least-squares problem with rows
+   ``P(t_j) = P_j`` (weight ``1/sigma``, from the ``sigma`` column or
+   ``sigma_position_m``), ``P'(t_j) = V_j`` when GNSS velocity is present
+   (``sigma_velocity_mps``) and, at every IMU sample,
+   ``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'``
+   (``sigma_specific_force_mps2``). ``eps(t)`` is a slowly varying attitude correction
+   (cubic B-spline, knots every ``correction_knot_spacing_s``; prior
+   ``attitude_prior_deg`` on its value and ``attitude_drift_deg_s`` on its change) that
+   absorbs levelling/heading errors and gyro drift, solved jointly through its Schur
+   complement. Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times;
+   specific-force rows whose residual exceeds 4 sigma are down-weighted (Huber), so a
+   transient the spline cannot follow does not bend the attitude. The normal equations of
+   the spline are banded (one Cholesky factorisation serves the three axes).
+4. **Attitude spline.** The corrected attitude samples are written as yaw/pitch/roll in a
+   fixed frame adapted to the flight (its x axis along the mean direction of the body axis
+   that moves least, its z axis along the direction that axis never visits), so pitch
+   stays far from +-90 deg; yaw and roll are unwrapped, which handles any amount of spin.
+   Each angle gets a quintic least-squares spline with knots every
+   ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``). The body rate follows from
+   the analytic Euler kinematics.
+5. The position is refitted with the smooth attitude, and the exact IMU is derived.
+
+Observability caveat: accelerometers and GNSS see the attitude only through the direction
+of the specific force, so a rotation about that direction (on the pad: the heading; for a
+near-vertical rocket also in flight) is determined only by how that direction changes over
+the record. Give ``heading_deg`` or ``initial_attitude`` when they are known.
+
+Residuals (``trajectory.parameters["fit_residuals"]``)
+-----------------------------------------------------
+* ``gnss_position_rms_m`` (x, y, z) and ``gnss_position_rms_3d_m``: GNSS minus fit;
+* ``gnss_velocity_rms_mps`` (x, y, z) when GNSS velocity was given;
+* ``specific_force_rms_mps2`` and ``angular_rate_rms_rad_s`` (x, y, z body axes): recorded
+  IMU minus the fitted trajectory's exact IMU, with their maxima
+  ``specific_force_max_mps2`` and ``angular_rate_max_rad_s`` (norms);
+* ``heading_deg`` (body-x azimuth at the start) and ``heading_source``
+  (``keyword``, ``initial_attitude`` or ``estimated``); ``n_imu``, ``n_gnss``,
+  ``n_knots``.
+
+With noiseless data of a trajectory the splines can represent, all residuals are near
+zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
+small fraction, about ``n_coefficients / n_rows``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import scipy.sparse as sp
+from scipy.interpolate import BSpline, make_lsq_spline
+from scipy.linalg import solveh_banded
+from scipy.spatial.transform import Rotation
+
+from navlib import earth, strapdown
+from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
+from navlib.errors import NavlibInputError
+from navlib.io import check_overlap
+from navlib.trajectory._attitude import zyx_attitude
+from navlib.trajectory.base import Trajectory, build_trajectory
+from navlib.units import DEG
+
+FIT_DEFAULTS = {
+    "knot_spacing_s": 0.1,
+    "attitude_knot_spacing_s": None,
+    "sigma_position_m": 5.0,
+    "sigma_velocity_mps": 0.5,
+    "sigma_specific_force_mps2": 0.05,
+    "heading_deg": None,
+    "initial_attitude": None,
+    "level_s": 1.0,
+    "attitude_prior_deg": 5.0,
+    "attitude_drift_deg_s": 0.01,
+    "correction_knot_spacing_s": 10.0,
+    "iterations": 3,
+    "name": "fitted flight",
+}
+
+IMU_COLUMNS = ("t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z")
+GNSS_COLUMNS = ("t", "x", "y", "z")
+GNSS_VELOCITY_COLUMNS = ("vx", "vy", "vz")
+_K = 5                      # quintic splines: C^4 position, C^2 specific force
+_MIN_GNSS = 4
+_MIN_IMU = 20
+_MAX_PITCH = 80.0 * DEG     # adapted-frame pitch limit (Euler singularity at 90 deg)
+_MIN_HORIZONTAL_F = 0.3     # m/s^2, RMS needed to estimate the heading
+_HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
+
+
+# --- input checking ----------------------------------------------------------------------
+
+def _columns(frame, name, required, optional=()):
+    if not isinstance(frame, pd.DataFrame):
+        raise NavlibInputError(f"{name}: expected a pandas DataFrame, got {type(frame).__name__}")
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise NavlibInputError(
+            f"{name}: missing column(s) {missing}; columns are {list(frame.columns)}")
+    present = [c for c in optional if c in frame.columns]
+    if present and len(present) != len(optional):
+        absent = [c for c in optional if c not in frame.columns]
+        raise NavlibInputError(
+            f"{name}: velocity columns must come together; have {present}, missing {absent}")
+    out = {}
+    for col in (*required, *present):
+        out[col] = finite_array(frame[col].to_numpy(dtype=float, na_value=np.nan),
+                                f"{name} column {col!r}", ndim=1)
+    increasing_times(out["t"], f"{name} column 't'")
+    return out
+
+
+def _options(options):
+    reject_unknown(options, FIT_DEFAULTS, "fit_flight_data")
+    p = {**FIT_DEFAULTS, **options}
+    for key in ("knot_spacing_s", "sigma_position_m", "sigma_velocity_mps",
+                "sigma_specific_force_mps2", "level_s", "attitude_prior_deg",
+                "attitude_drift_deg_s", "correction_knot_spacing_s"):
+        p[key] = finite_scalar(p[key], key, 0.0, low_open=True)
+    if p["attitude_knot_spacing_s"] is None:
+        p["attitude_knot_spacing_s"] = p["knot_spacing_s"]
+    p["attitude_knot_spacing_s"] = finite_scalar(p["attitude_knot_spacing_s"],
+                                                 "attitude_knot_spacing_s", 0.0, low_open=True)
+    if p["heading_deg"] is not None:
+        p["heading_deg"] = finite_scalar(p["heading_deg"], "heading_deg", -360.0, 360.0)
+    iterations = finite_scalar(p["iterations"], "iterations", 1.0, 20.0)
+    if iterations != int(iterations):
+        raise NavlibInputError(f"iterations: expected an integer, got {p['iterations']!r}")
+    p["iterations"] = int(iterations)
+    q0 = p["initial_attitude"]
+    if q0 is not None:
+        if isinstance(q0, Rotation):
+            if not q0.single:
+                raise NavlibInputError("initial_attitude: expected one Rotation, got a stack")
+        else:
+            mat = finite_array(q0, "initial_attitude", (3, 3))
+            if not np.allclose(mat.T @ mat, np.eye(3), atol=1e-6) or np.linalg.det(mat) < 0:
+                raise NavlibInputError("initial_attitude: the 3x3 matrix is not a rotation")
+            p["initial_attitude"] = Rotation.from_matrix(mat)
+    return p
+
+
+# --- B-spline machinery ------------------------------------------------------------------
+
+def _knots(t0, t1, spacing):
+    """Clamped quintic knot vector on [t0, t1] with interior knots about ``spacing`` apart."""
+    n_int = max(int(np.ceil((t1 - t0) / spacing - 1e-9)), 1)
+    inner = np.linspace(t0, t1, n_int + 1)
+    return np.r_[np.full(_K, t0), inner, np.full(_K, t1)]
+
+
+def _basis(x, knots, nu):
+    """Sparse (N, m) matrix of the ``nu``-th derivatives of the quintic B-spline basis.
+
+    Derivatives come from the lower-degree basis through the standard recursion
+    ``B'_{i,k} = k B_{i,k-1}/(t_{i+k}-t_i) - k B_{i+1,k-1}/(t_{i+k+1}-t_{i+1})``.
+    """
+    x = np.minimum(x, np.nextafter(knots[-1], -np.inf))  # the last interval is half-open
+    out = BSpline.design_matrix(x, knots, _K - nu)
+    for d in range(_K - nu + 1, _K + 1):
+        m = knots.size - d - 1
+        i = np.arange(m)
+        den0, den1 = knots[i + d] - knots[i], knots[i + d + 1] - knots[i + 1]
+        a = np.where(den0 > 0, d / np.where(den0 > 0, den0, 1.0), 0.0)
+        b = np.where(den1 > 0, -d / np.where(den1 > 0, den1, 1.0), 0.0)
+        M = sp.csr_array((np.r_[a, b], (np.r_[i, i + 1], np.r_[i, i])), shape=(m + 1, m))
+        out = out @ M
+    return sp.csr_array(out)
+
+
+def _banded(N):
+    """Upper banded storage of a symmetric sparse matrix with bandwidth ``_K``."""
+    m = N.shape[0]
+    ab = np.zeros((_K + 1, m))
+    for d in range(_K + 1):
+        ab[_K - d, d:] = N.diagonal(d)
+    return ab
+
+
+# --- attitude ----------------------------------------------------------------------------
+
+def _level(f_b, gamma_e, C_n_e, heading):
+    """Body -> ECEF attitude from the mean specific force at rest and a body-x azimuth.
+
+    TRIAD with the down direction exact: ``-f/|f|`` maps onto ``gamma/|gamma|``; the body x
+    axis is then placed at azimuth ``heading`` in the geodetic NED frame ``C_n_e`` (normal
+    gravity and the ellipsoid normal differ by a few microradians).
+    """
+    d_b = -f_b / np.linalg.norm(f_b)
+    z_e = gamma_e / np.linalg.norm(gamma_e)
+    if 1.0 - d_b[0] ** 2 < np.sin(1.0 * DEG) ** 2:
+        raise NavlibInputError(
+            "heading_deg: the body x axis is within 1 deg of the vertical at the start, so "
+            "its azimuth is undefined; pass initial_attitude instead")
+    # x_e = cos(e) h + sin(e) D with h the horizontal unit at ``heading``, x_e . z_e = d_b[0]
+    h = C_n_e[:, 0] * np.cos(heading) + C_n_e[:, 1] * np.sin(heading)
+    a, b = h @ z_e, C_n_e[:, 2] @ z_e
+    phase = np.arctan2(b, a)
+    elev = phase + np.arccos(np.clip(d_b[0] / np.hypot(a, b), -1.0, 1.0))
+    if np.cos(elev) < 0.0:
+        elev = phase - np.arccos(np.clip(d_b[0] / np.hypot(a, b), -1.0, 1.0))
+    x_e = np.cos(elev) * h + np.sin(elev) * C_n_e[:, 2]
+    t2_b = np.cross(d_b, [1.0, 0.0, 0.0])
+    t2_b /= np.linalg.norm(t2_b)
+    t2_e = np.cross(z_e, x_e)
+    t2_e /= np.linalg.norm(t2_e)
+    T_b = np.column_stack([d_b, t2_b, np.cross(d_b, t2_b)])
+    T_e = np.column_stack([z_e, t2_e, np.cross(z_e, t2_e)])
+    return Rotation.from_matrix(T_e @ T_b.T)
+
+
+def _heading_of(C_b_e0, C_n_e):
+    """Azimuth (rad) of the body x axis at the start."""
+    x_n = C_n_e.T @ C_b_e0.apply([1.0, 0.0, 0.0])
+    return float(np.arctan2(x_n[1], x_n[0]))
+
+
+def _coarse_heading(t, f_e, axis_e, t_g, P_g):
+    """Heading correction (rad) rotating IMU specific force onto GNSS second differences.
+
+    ``f_e`` is the IMU specific force in ECEF with the provisional attitude and ``axis_e``
+    the (Earth-fixed, rotating) vertical about which the heading turns.
+    """
+    h_prev, h_next = np.diff(t_g)[:-1], np.diff(t_g)[1:]
+    P0, P1, P2 = P_g[:-2], P_g[1:-1], P_g[2:]
+    acc = 2.0 * ((P2 - P1) / h_next[:, None] - (P1 - P0) / h_prev[:, None]) / (
+        h_prev + h_next)[:, None]
+    vel = (P2 - P0) / (h_prev + h_next)[:, None]
+    gnss_f = acc + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel) - earth.normal_gravity_ecef(P1)
+    # the second difference is the acceleration averaged with a triangle (B-spline) weight
+    imu_f = np.empty_like(gnss_f)
+    for j in range(len(P1)):
+        lo, mid, hi = t_g[j], t_g[j + 1], t_g[j + 2]
+        sel = (t >= lo) & (t <= hi)
+        if not np.any(sel):
+            imu_f[j] = np.nan
+            continue
+        w = np.where(t[sel] <= mid, (t[sel] - lo) / (mid - lo), (hi - t[sel]) / (hi - mid))
+        imu_f[j] = (w[:, None] * f_e[sel]).sum(0) / max(w.sum(), 1e-300)
+    ok = np.all(np.isfinite(imu_f), axis=1)
+    z = axis_e[0]
+    u = imu_f[ok] - np.outer(imu_f[ok] @ z, z)
+    w = gnss_f[ok] - np.outer(gnss_f[ok] @ z, z)
+    if not ok.any() or np.sqrt(np.mean(np.sum(u**2, 1))) < _MIN_HORIZONTAL_F:
+        raise NavlibInputError(
+            "heading_deg: the horizontal specific force is too small to derive the heading "
+            f"(needs an RMS above {_MIN_HORIZONTAL_F} m/s^2); pass heading_deg or "
+            "initial_attitude")
+    return float(np.arctan2(np.sum(np.cross(u, w) @ z), np.sum(u * w)))
+
+
+def _adapted_euler(attitude):
+    """Fixed frame, body-axis permutation and unwrapped yaw/pitch/roll of an attitude history.
+
+    Tries the three cyclic relabellings of the body axes and keeps the one whose pointing
+    axis stays farthest from the adapted frame's pole.
+    """
+    C_b_e = attitude.as_matrix()
+    best = None
+    for shift in range(3):
+        P = np.roll(np.eye(3), shift, axis=0)   # body -> relabelled body, P e_shift = e_x
+        C = C_b_e @ P.T
+        x_e = C[:, :, 0]
+        _, v = np.linalg.eigh(x_e.T @ x_e)
+        x_L, z_L = v[:, 2], v[:, 0]
+        if np.sum(x_e @ x_L) < 0:
+            x_L = -x_L
+        C_L_e = np.column_stack([x_L, np.cross(z_L, x_L), z_L])
+        pitch = np.abs(np.arcsin(np.clip(x_e @ z_L, -1.0, 1.0))).max()
+        if best is None or pitch < best[0]:
+            best = (pitch, P, C_L_e, C)
+    pitch, P, C_L_e, C = best
+    if pitch > _MAX_PITCH:
+        raise NavlibInputError(
+            f"imu: every body axis sweeps within {90 - np.degrees(pitch):.1f} deg of a pole of "
+            "the best fixed frame; this attitude history has no regular yaw/pitch/roll form")
+    angles = Rotation.from_matrix(np.einsum("ji,njk->nik", C_L_e, C)).as_euler("ZYX")
+    angles[:, 0] = np.unwrap(angles[:, 0])
+    angles[:, 2] = np.unwrap(angles[:, 2])
+    return C_L_e, P, angles
+
+
+# --- the fit -----------------------------------------------------------------------------
+
+def fit_flight_data(imu, gnss, **options) -> Trajectory:
+    """Least-squares B-spline reference trajectory with an exact IMU (Giribet et al. 2007).
+
+    Parameters
+    ----------
+    imu : DataFrame
+        Columns ``t, f_x, f_y, f_z, w_x, w_y, w_z`` (s, m/s^2, rad/s; body axes; point
+        samples), as from :func:`navlib.io.read_imu_csv`.
+    gnss : DataFrame
+        Columns ``t, x, y, z`` (ECEF, m) and optionally ``vx, vy, vz`` (m/s) and ``sigma``
+        (per-epoch position standard deviation, m), on the IMU's time base.
+    **options
+        ``knot_spacing_s=0.1`` (position spline), ``attitude_knot_spacing_s=None`` (same),
+        ``sigma_position_m=5`` (when no ``sigma`` column), ``sigma_velocity_mps=0.5``,
+        ``sigma_specific_force_mps2=0.05`` (weights of the three kinds of rows),
+        ``heading_deg=None`` (azimuth of the body x axis at the start; None: estimated),
+        ``attitude_prior_deg=5``, ``attitude_drift_deg_s=0.01``,
+        ``correction_knot_spacing_s=10`` (the attitude correction, method step 3),
+        ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
+        IMU sample of the overlap; replaces levelling and heading), ``level_s=1`` (rest
+        period used for levelling), ``iterations=3`` (gravity/Coriolis/heading
+        relinearisations), ``name``.
+
+    Returns
+    -------
+    Trajectory
+        Sampled at the IMU times inside the common span; its IMU is exact for the fitted
+        splines. ``parameters["fit_residuals"]`` reports the residuals (module docstring);
+        ``parameters`` also holds the options used. ``events``: ``start``, ``end``.
+
+    Raises
+    ------
+    NavlibInputError
+        Missing or non-finite columns, non-increasing times, too few samples,
+        non-overlapping spans, a start not at rest (without ``initial_attitude``), a
+        heading that cannot be estimated, unknown options.
+    """
+    p = _options(options)
+    imu_cols = _columns(imu, "imu", IMU_COLUMNS)
+    gnss_cols = _columns(gnss, "gnss", GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS)
+    if "sigma" in gnss.columns:
+        sigma = finite_array(gnss["sigma"].to_numpy(dtype=float, na_value=np.nan),
+                             "gnss column 'sigma'", ndim=1)
+        if np.any(sigma <= 0):
+            raise NavlibInputError("gnss column 'sigma': values must be positive")
+    else:
+        sigma = np.full(gnss_cols["t"].size, p["sigma_position_m"])
+    span = check_overlap(imu, gnss, min_overlap_s=2.0 * p["knot_spacing_s"])
+
+    t_all = imu_cols["t"]
+    keep = (t_all >= span.t_start) & (t_all <= span.t_end)
+    if keep.sum() < _MIN_IMU:
+        raise NavlibInputError(
+            f"imu: need at least {_MIN_IMU} samples inside the common span, got {keep.sum()}")
+    t = t_all[keep]
+    f_b = np.column_stack([imu_cols[c][keep] for c in ("f_x", "f_y", "f_z")])
+    w_b = np.column_stack([imu_cols[c][keep] for c in ("w_x", "w_y", "w_z")])
+    g_keep = (gnss_cols["t"] >= t[0]) & (gnss_cols["t"] <= t[-1])
+    if g_keep.sum() < _MIN_GNSS:
+        raise NavlibInputError(
+            f"gnss: need at least {_MIN_GNSS} epochs inside the IMU span, got {g_keep.sum()}")
+    t_g = gnss_cols["t"][g_keep]
+    P_g = np.column_stack([gnss_cols[c][g_keep] for c in GNSS_COLUMNS[1:]])
+    V_g = (np.column_stack([gnss_cols[c][g_keep] for c in GNSS_VELOCITY_COLUMNS])
+           if "vx" in gnss_cols else None)
+    sigma = sigma[g_keep]
+    if np.any(np.linalg.norm(P_g, axis=1) < 1e6):
+        raise NavlibInputError("gnss: positions must be ECEF in metres (|r| < 1000 km found)")
+
+    # 1-2: initial attitude and gyro-integrated attitude history -------------------------
+    lat0, lon0, _ = earth.ecef_to_geodetic(P_g[0])
+    C_n_e = earth.ned_to_ecef_matrix(lat0, lon0)
+    gamma0 = earth.normal_gravity_ecef(P_g[0])
+    if p["initial_attitude"] is not None:
+        att0, source = p["initial_attitude"], "initial_attitude"
+    else:
+        rest = t <= t[0] + p["level_s"]
+        f_mean = f_b[rest].mean(axis=0)
+        g = np.linalg.norm(gamma0)
+        spread = np.linalg.norm(f_b[rest] - f_mean, axis=1).max()
+        if abs(np.linalg.norm(f_mean) - g) > 0.02 * g or spread > 0.5:
+            raise NavlibInputError(
+                f"imu: levelling needs the vehicle at rest during the first level_s="
+                f"{p['level_s']} s (mean |f| = {np.linalg.norm(f_mean):.3f} m/s^2 against "
+                f"gravity {g:.3f}, spread {spread:.3f} m/s^2); pass initial_attitude")
+        heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
+        att0 = _level(f_mean, gamma0, C_n_e, heading)
+        source = "keyword"
+    P_start = P_g[0]
+    sd = strapdown.integrate(t, f_b, w_b, P_start, np.zeros(3), att0)
+    attitude = sd.attitude
+    # the vertical about which a heading change turns, carried along with the Earth
+    axis_e = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF)).apply(
+        gamma0 / np.linalg.norm(gamma0))
+    if p["initial_attitude"] is None and p["heading_deg"] is None:
+        delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g)
+        attitude = Rotation.from_rotvec(axis_e * delta) * attitude
+        source = "estimated"
+
+    # 3: position spline and attitude correction --------------------------------------
+    knots = _knots(t[0], t[-1], p["knot_spacing_s"])
+    rows = _Rows(knots, t, t_g, P_g, V_g, sigma, p, P_start)
+    correction = _Correction(t, p)
+    coef = None
+    for _ in range(p["iterations"]):
+        f_e = attitude.apply(f_b)
+        coef, eps = rows.solve(f_e, coef, correction)
+        rows.robust_weights(coef, f_e, eps)
+        attitude = Rotation.from_rotvec(eps) * attitude
+
+    # 4: smooth attitude -----------------------------------------------------------------
+    C_L_e, perm, angles = _adapted_euler(attitude)
+    att_knots = _knots(t[0], t[-1], p["attitude_knot_spacing_s"])
+    angle_spline = make_lsq_spline(t, angles, att_knots, k=_K)
+    ang, dang = angle_spline(t), angle_spline(t, 1)
+    C_r_e, w_er_r = zyx_attitude(C_L_e, ang[:, 0], ang[:, 1], ang[:, 2],
+                                 dang[:, 0], dang[:, 1], dang[:, 2])
+    C_b_e = C_r_e @ perm                      # relabelled body -> body: C_b_e = C_r_e P
+    w_eb_b = w_er_r @ perm                    # omega_b = P^T omega_r
+
+    # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
+    f_e = np.einsum("nij,nj->ni", C_b_e, f_b)
+    for _ in range(p["iterations"]):
+        coef, _ = rows.solve(f_e, coef)
+    P, V, a = rows.evaluate(coef)
+    attitude_fit = Rotation.from_matrix(C_b_e)
+    traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events={"start": float(t[0]),
+                            "end": float(t[-1])}, name=str(p["name"]))
+    residuals = _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g)
+    residuals.update({
+        "heading_deg": float(np.degrees(_heading_of(attitude_fit[0], C_n_e))),
+        "heading_source": source, "n_imu": int(t.size), "n_gnss": int(t_g.size),
+        "n_knots": int(knots.size - 2 * _K),
+    })
+    params = {k: v for k, v in p.items() if k != "initial_attitude"}
+    params["fit_residuals"] = residuals
+    return Trajectory(t=traj.t, position=traj.position, velocity=traj.velocity,
+                      attitude=traj.attitude, specific_force=traj.specific_force,
+                      angular_rate=traj.angular_rate, events=traj.events, name=traj.name,
+                      parameters=params)
+
+
+class _Rows:
+    """The weighted least-squares rows of the position spline (method step 3).
+
+    Unknowns are the spline coefficients of ``P - P_ref`` for x, y, z (same basis) and,
+    optionally, the attitude correction. The three axes share the banded normal matrix.
+    """
+
+    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref):
+        self.P_ref = P_ref
+        self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
+        self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
+        self.sigma_f = p["sigma_specific_force_mps2"]
+        w_g2 = 1.0 / sigma**2
+        self.N_gnss = self.G0.T @ (self.G0 * w_g2[:, None])
+        rhs_gnss = self.G0.T @ (w_g2[:, None] * (P_g - P_ref))
+        if V_g is not None:
+            w_v2 = 1.0 / p["sigma_velocity_mps"] ** 2
+            self.N_gnss = self.N_gnss + w_v2 * (self.G1.T @ self.G1)
+            rhs_gnss = rhs_gnss + w_v2 * (self.G1.T @ V_g)
+        self.rhs_gnss = rhs_gnss
+        self.set_weights(np.ones(t.size))
+        # first linearisation point: GNSS positions interpolated to the IMU times
+        self.P0 = np.column_stack([np.interp(t, t_g, P_g[:, i]) for i in range(3)])
+        self.V0 = np.column_stack([np.interp(t, t_g, np.gradient(P_g[:, i], t_g))
+                                   for i in range(3)])
+
+    def set_weights(self, factor):
+        """IMU row weights ``factor / sigma_f^2`` and the banded normal matrix."""
+        self.w_f2 = factor / self.sigma_f**2
+        self.N = sp.csr_array(self.B2.T @ (self.B2 * self.w_f2[:, None]) + self.N_gnss)
+        self.ab = _banded(self.N)
+
+    def robust_weights(self, coef, f_e, eps):
+        """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma)."""
+        P, V, a = self.evaluate(coef)
+        r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
+             - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
+        size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
+        self.set_weights(1.0 / np.maximum(size, 1.0))
+
+    def _solve(self, rhs):
+        x = solveh_banded(self.ab, rhs)
+        return x + solveh_banded(self.ab, rhs - self.N @ x)   # one refinement step
+
+    def evaluate(self, coef):
+        return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
+
+    def solve(self, f_e, coef, correction=None):
+        """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
+
+        With a :class:`_Correction`, the specific force rows read
+        ``P'' = (I + S(eps(t))) C f + gamma - 2 Omega x V``; ``eps`` is eliminated through
+        its Schur complement (a small dense system) so the banded solve stays banded.
+        """
+        if coef is None:
+            P, V = self.P0, self.V0
+        else:
+            P, V, _ = self.evaluate(coef)
+        r = f_e + earth.normal_gravity_ecef(P) - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V)
+        w = self.w_f2[:, None]
+        rhs = self.B2.T @ (w * r) + self.rhs_gnss
+        if correction is None:
+            return self._solve(rhs), np.zeros_like(f_e)
+        G = correction.columns(f_e)                       # (3, N, n_u): axis, sample, unknown
+        Q = [self.B2.T @ (w * G[a]) for a in range(3)]
+        n_u = G.shape[2]
+        sol = self._solve(np.hstack([rhs, *Q]))
+        c0 = sol[:, :3]
+        S = [sol[:, 3 + a * n_u: 3 + (a + 1) * n_u] for a in range(3)]
+        lhs = correction.prior.copy()
+        b = -correction.prior @ correction.total      # the prior holds the accumulated sum
+        for a in range(3):
+            lhs += G[a].T @ (w * G[a]) - Q[a].T @ S[a]
+            b += Q[a].T @ c0[:, a] - G[a].T @ (w[:, 0] * r[:, a])
+        e = np.linalg.solve(lhs, b)
+        correction.total = correction.total + e
+        coef = c0 + np.column_stack([S[a] @ e for a in range(3)])
+        return coef, correction.evaluate(e)
+
+
+class _Correction:
+    """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector), cubic B-spline.
+
+    ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
+    the recorded specific force and GNSS reveal. Prior: each coefficient ~ N(0,
+    ``attitude_prior_deg``^2) and neighbouring coefficients differ by ~ N(0,
+    (``attitude_drift_deg_s`` x knot spacing)^2), so stretches without attitude information
+    (free fall) keep the gyro attitude.
+    """
+
+    def __init__(self, t, p):
+        k = 3
+        n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
+        inner = np.linspace(t[0], t[-1], n_int + 1)
+        knots = np.r_[np.full(k, t[0]), inner, np.full(k, t[-1])]
+        x = np.minimum(t, np.nextafter(t[-1], -np.inf))
+        self.beta = BSpline.design_matrix(x, knots, k).toarray()   # (N, n_c)
+        n_c = self.beta.shape[1]
+        step = (t[-1] - t[0]) / n_int
+        D = np.diff(np.eye(n_c), axis=0)
+        per_axis = (np.eye(n_c) / (p["attitude_prior_deg"] * DEG) ** 2
+                    + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
+        self.prior = np.kron(np.eye(3), per_axis)       # unknowns ordered (axis j, coef i)
+        self.n_c = n_c
+        self.total = np.zeros(3 * n_c)                   # sum of the increments applied
+
+    def columns(self, f_e):
+        """``G[a, k, (j, i)] = beta_i(t_k) (e_j x f_e(t_k))_a``."""
+        out = np.empty((3, f_e.shape[0], 3 * self.n_c))
+        for j in range(3):
+            e_j = np.zeros(3)
+            e_j[j] = 1.0
+            cross = np.cross(e_j, f_e)                   # (N, 3)
+            for a in range(3):
+                out[a, :, j * self.n_c:(j + 1) * self.n_c] = self.beta * cross[:, a:a + 1]
+        return out
+
+    def evaluate(self, e):
+        return np.column_stack([self.beta @ e[j * self.n_c:(j + 1) * self.n_c]
+                                for j in range(3)])
+
+
+def _rms(x):
+    return [float(v) for v in np.sqrt(np.mean(np.asarray(x) ** 2, axis=0))]
+
+
+def _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g):
+    P_fit_g = rows.P_ref + rows.G0 @ coef
+    d_p = P_g - P_fit_g
+    d_f = f_b - traj.specific_force
+    d_w = w_b - traj.angular_rate
+    out = {
+        "gnss_position_rms_m": _rms(d_p),
+        "gnss_position_rms_3d_m": float(np.sqrt(np.mean(np.sum(d_p**2, axis=1)))),
+        "specific_force_rms_mps2": _rms(d_f),
+        "specific_force_max_mps2": float(np.linalg.norm(d_f, axis=1).max()),
+        "angular_rate_rms_rad_s": _rms(d_w),
+        "angular_rate_max_rad_s": float(np.linalg.norm(d_w, axis=1).max()),
+    }
+    if V_g is not None:
+        out["gnss_velocity_rms_mps"] = _rms(V_g - rows.G1 @ coef)
+    return out

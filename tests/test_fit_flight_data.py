@@ -1,0 +1,180 @@
+"""fit_flight_data: B-spline reference fitted to IMU + GNSS records (Giribet et al. 2007 idea).
+
+Noiseless samples of a known trajectory must be reproduced, noisy ones must leave
+residuals at the noise level, the fitted IMU must be exact for the fitted kinematics, and
+bad input must raise NavlibInputError naming the problem.
+"""
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.spatial.transform import Rotation
+
+from navlib import NavlibInputError, strapdown
+from navlib.trajectory import fit_flight_data, sounding_rocket, stationary
+
+
+def _records(traj, *, sigma_f=0.0, sigma_w=0.0, sigma_p=0.0, gnss_hz=1.0, velocity=False,
+             seed=0):
+    rng = np.random.default_rng(seed)
+    n = len(traj)
+    f = traj.specific_force + sigma_f * rng.standard_normal((n, 3))
+    w = traj.angular_rate + sigma_w * rng.standard_normal((n, 3))
+    imu = pd.DataFrame({"t": traj.t, "f_x": f[:, 0], "f_y": f[:, 1], "f_z": f[:, 2],
+                        "w_x": w[:, 0], "w_y": w[:, 1], "w_z": w[:, 2]})
+    g = traj.at_rate(gnss_hz)
+    P = traj.position[g] + sigma_p * rng.standard_normal((g.size, 3))
+    gnss = pd.DataFrame({"t": traj.t[g], "x": P[:, 0], "y": P[:, 1], "z": P[:, 2]})
+    if velocity:
+        gnss["vx"], gnss["vy"], gnss["vz"] = traj.velocity[g].T
+    return imu, gnss
+
+
+@pytest.fixture(scope="module")
+def rocket():
+    return sounding_rocket()
+
+
+@pytest.fixture(scope="module")
+def noiseless_fit(rocket):
+    imu, gnss = _records(rocket)
+    return fit_flight_data(imu, gnss, knot_spacing_s=0.05, sigma_position_m=0.01)
+
+
+def test_noiseless_rocket_is_reproduced(rocket, noiseless_fit):
+    fit = noiseless_fit
+    assert np.array_equal(fit.t, rocket.t)
+    assert np.abs(fit.position - rocket.position).max() < 0.01
+    assert np.abs(fit.velocity - rocket.velocity).max() < 0.02
+    # attitude: the misfit at lift-off (below) leaves a ~0.3 mrad compromise in the joint
+    # attitude correction; a record starting after the transients is exact to ~5 urad
+    att = (fit.attitude.inv() * rocket.attitude).magnitude()
+    assert att.max() < 1e-3 and np.median(att) < 5e-4
+    # IMU: exact away from the lift-off jerk jump and the 0.08 s rail tip-off, which a
+    # uniform-knot quintic cannot follow (the generator's acceleration is only C^0 there)
+    lift = rocket.events["liftoff"]
+    smooth = (rocket.t < lift - 0.3) | (rocket.t > lift + 1.5)
+    d_f = np.linalg.norm(fit.specific_force - rocket.specific_force, axis=1)
+    d_w = np.linalg.norm(fit.angular_rate - rocket.angular_rate, axis=1)
+    assert d_f[smooth].max() < 0.1 and np.median(d_f) < 1e-3
+    assert d_w[smooth].max() < 1e-3 and np.median(d_w) < 1e-5
+    # the 2 Hz spin and its halving are followed
+    k72, k74 = np.searchsorted(fit.t, [72.0, 74.0])
+    assert fit.angular_rate[k74, 0] / fit.angular_rate[k72, 0] == pytest.approx(0.5, rel=1e-4)
+
+
+def test_noiseless_residual_report(noiseless_fit):
+    res = noiseless_fit.parameters["fit_residuals"]
+    assert res["gnss_position_rms_3d_m"] < 1e-3
+    assert max(res["specific_force_rms_mps2"]) < 0.03
+    assert max(res["angular_rate_rms_rad_s"]) < 3e-4
+    assert res["heading_source"] == "estimated"
+    assert res["heading_deg"] == pytest.approx(100.0, abs=0.05)   # rail azimuth recovered
+    assert res["n_imu"] == 8601 and res["n_gnss"] == 87
+    assert "gnss_velocity_rms_mps" not in res
+
+
+def test_fitted_imu_is_exact_for_fitted_kinematics(rocket):
+    """Strapdown re-integration of the fitted IMU closes on the fitted trajectory."""
+    imu, gnss = _records(rocket, velocity=True)
+    fit = fit_flight_data(imu, gnss, heading_deg=100.0)
+    closure = strapdown.closure_error(fit)
+    assert closure.position_m < 1.0 and closure.attitude_rad < 1e-4
+    res = fit.parameters["fit_residuals"]
+    assert res["heading_source"] == "keyword"
+    assert max(res["gnss_velocity_rms_mps"]) < 0.05
+
+
+def test_noisy_residuals_at_noise_level(rocket):
+    sigma_f, sigma_w, sigma_p = 0.05, 2e-4, 3.0
+    imu, gnss = _records(rocket, sigma_f=sigma_f, sigma_w=sigma_w, sigma_p=sigma_p, seed=7)
+    gnss["sigma"] = sigma_p
+    fit = fit_flight_data(imu, gnss, knot_spacing_s=0.05)
+    res = fit.parameters["fit_residuals"]
+    # lateral axes: free of the lift-off transient, so pure noise (slightly less: the fit
+    # absorbs its degrees of freedom)
+    for value in res["specific_force_rms_mps2"][1:]:
+        assert 0.8 * sigma_f < value < 1.1 * sigma_f
+    assert 0.8 * sigma_f < res["specific_force_rms_mps2"][0] < 1.5 * sigma_f
+    for value in res["angular_rate_rms_rad_s"]:
+        assert 0.8 * sigma_w < value < 1.3 * sigma_w
+    for value in res["gnss_position_rms_m"]:
+        assert 0.6 * sigma_p < value < 1.2 * sigma_p
+    # and the fit is much closer to the truth than the GNSS noise
+    err = np.linalg.norm(fit.position - rocket.position, axis=1)
+    assert np.sqrt(np.mean(err**2)) < 0.5 * sigma_p
+    # the thrust axis is pinned by the specific force; the roll about it (for this
+    # near-vertical rocket: the heading) is only weakly observable, so it is not checked
+    x_fit, x_true = fit.attitude.apply([1.0, 0, 0]), rocket.attitude.apply([1.0, 0, 0])
+    pointing = np.arccos(np.clip(np.sum(x_fit * x_true, axis=1), -1.0, 1.0))
+    assert pointing.max() < 3e-3 and np.median(pointing) < 1e-3
+
+
+def test_stationary_record_with_given_heading():
+    traj = stationary(duration_s=20.0, rate_hz=50.0)
+    imu, gnss = _records(traj)
+    fit = fit_flight_data(imu, gnss, heading_deg=0.0)
+    assert np.abs(fit.position - traj.position).max() < 1e-3
+    assert (fit.attitude.inv() * traj.attitude).magnitude().max() < 1e-6
+    assert np.abs(fit.specific_force - traj.specific_force).max() < 1e-5
+    assert np.abs(fit.angular_rate - traj.angular_rate).max() < 1e-9
+
+
+def test_initial_attitude_replaces_levelling(rocket):
+    """A record starting in flight needs the initial attitude; with it the fit works."""
+    imu, gnss = _records(rocket)
+    k = int(np.searchsorted(rocket.t, 25.0))
+    imu, gnss = imu[imu.t >= 25.0], gnss[gnss.t >= 25.0]
+    with pytest.raises(NavlibInputError, match="initial_attitude"):
+        fit_flight_data(imu, gnss)
+    fit = fit_flight_data(imu, gnss, initial_attitude=rocket.attitude[k].as_matrix(),
+                          sigma_position_m=0.01, knot_spacing_s=0.05)
+    assert fit.parameters["fit_residuals"]["heading_source"] == "initial_attitude"
+    assert np.abs(fit.position - rocket.position[k:]).max() < 1e-3
+    assert (fit.attitude.inv() * rocket.attitude[k:]).magnitude().max() < 2e-5
+    assert np.abs(fit.specific_force - rocket.specific_force[k:]).max() < 5e-3
+    assert np.abs(fit.angular_rate - rocket.angular_rate[k:]).max() < 1e-3
+
+
+# --- bad input -------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def short_records():
+    return _records(stationary(duration_s=10.0, rate_hz=50.0))
+
+
+@pytest.mark.parametrize("mutate, match", [
+    (lambda imu, gnss: (imu.drop(columns="w_z"), gnss), "w_z"),
+    (lambda imu, gnss: (imu, gnss.drop(columns="z")), "'z'"),
+    (lambda imu, gnss: (imu.to_numpy(), gnss), "DataFrame"),
+    (lambda imu, gnss: (imu.assign(f_x=np.nan), gnss), "f_x"),
+    (lambda imu, gnss: (imu, gnss.assign(t=gnss.t + 100.0)), "overlap"),
+    (lambda imu, gnss: (imu, gnss.iloc[:3]), "gnss"),
+    (lambda imu, gnss: (imu.iloc[:10], gnss), "imu"),
+    (lambda imu, gnss: (imu, gnss.assign(vx=0.0)), "velocity"),
+    (lambda imu, gnss: (imu, gnss.assign(sigma=-1.0)), "sigma"),
+    (lambda imu, gnss: (imu.iloc[::-1], gnss), "increasing"),
+    (lambda imu, gnss: (imu, gnss.assign(x=1.0, y=2.0, z=3.0)), "ECEF"),
+])
+def test_bad_records(short_records, mutate, match):
+    imu, gnss = mutate(*short_records)
+    with pytest.raises(NavlibInputError, match=match):
+        fit_flight_data(imu, gnss, heading_deg=0.0)
+
+
+@pytest.mark.parametrize("options, match", [
+    ({"knot_spcing_s": 0.1}, "knot_spcing_s"),
+    ({"knot_spacing_s": 0.0}, "knot_spacing_s"),
+    ({"heading_deg": float("inf")}, "heading_deg"),
+    ({"iterations": 1.5}, "iterations"),
+    ({"initial_attitude": np.ones((3, 3))}, "initial_attitude"),
+    ({"initial_attitude": Rotation.identity(2)}, "initial_attitude"),
+])
+def test_bad_options(short_records, options, match):
+    with pytest.raises(NavlibInputError, match=match):
+        fit_flight_data(*short_records, **options)
+
+
+def test_heading_needs_horizontal_excitation(short_records):
+    with pytest.raises(NavlibInputError, match="heading_deg"):
+        fit_flight_data(*short_records)
