@@ -19,6 +19,40 @@ def _at(traj, t):
     return int(np.argmin(np.abs(traj.t - t)))
 
 
+# --- attitude building blocks ----------------------------------------------------------
+
+def test_zyx_body_rate_matches_matrix_derivative():
+    """S(omega) = C^T dC/dt for C = Rz(psi) Ry(theta) Rx(phi), by central differences."""
+    from navlib.rotations import unskew
+    from navlib.trajectory._attitude import zyx_body_rate, zyx_matrix
+
+    rng = np.random.default_rng(3)
+    angles = rng.uniform(-1.4, 1.4, (50, 3))
+    rates = rng.normal(size=(50, 3))
+    h = 1e-6
+    C_plus = zyx_matrix(*(angles + h * rates).T)
+    C_minus = zyx_matrix(*(angles - h * rates).T)
+    dC = (C_plus - C_minus) / (2 * h)
+    C = zyx_matrix(*angles.T)
+    w_fd = unskew(np.swapaxes(C, 1, 2) @ dC)
+    w = zyx_body_rate(angles[:, 1], angles[:, 2], rates[:, 0], rates[:, 1], rates[:, 2])
+    assert np.allclose(w, w_fd, atol=1e-8)
+    ref = Rotation.from_euler("ZYX", angles).as_matrix()
+    assert np.allclose(C, ref, atol=1e-14)
+
+
+def test_smoothstep_is_c3_ramp():
+    from navlib.trajectory._attitude import smoothstep
+
+    x = np.linspace(-0.5, 1.5, 2001)
+    s, ds, d2s = smoothstep(x)
+    assert s[0] == 0.0 and s[-1] == 1.0 and np.all(np.diff(s) >= 0)
+    assert np.allclose(np.gradient(s, x), ds, atol=2e-3)
+    assert np.allclose(np.gradient(ds, x), d2s, atol=5e-2)
+    assert smoothstep(0.5)[0] == pytest.approx(0.5)
+    assert smoothstep(0.0)[2] == 0.0 and smoothstep(1.0)[2] == 0.0
+
+
 # --- sounding rocket: paper magnitudes (spec excitability.md §3) -------------------------
 
 def test_rocket_sampling_and_events(rocket):
