@@ -11,7 +11,7 @@ the coast of the sounding rocket). The phases are read from the kinematics of a 
 phase       condition (checked in this order; the first that holds wins)
 ==========  ===============================================================================
 rest        ``|V| < rest_speed_m_s``, ``|omega_eb| < rest_rate_deg_s`` and
-            ``| |f| - |gamma| | < rest_force_m_s2``: the vehicle stands (or hovers) still
+            ``|a^e| < rest_accel_m_s2``: the vehicle stands (or hovers) still
 powered     tangential specific force ``f_t = f^e . u > powered_accel_m_s2``: a thrust (or
             traction) pushes the vehicle forward along its path ``u``
 turn        ``max(omega_perp, omega_path) > turn_rate_deg_s``: the body rotates about an axis
@@ -24,7 +24,7 @@ cruise      anything else: motion with the weight supported (level flight, drivi
 ==========  ===============================================================================
 
 The path direction ``u`` is ``V/|V|`` above ``direction_speed_m_s``; below it ``u`` is the
-direction of ``a^e`` when ``|a^e| > powered_accel_m_s2`` (a lift-off accelerates along its
+direction of ``a^e`` when ``|a^e| > rest_accel_m_s2`` (a lift-off accelerates along its
 rail from zero speed) and undefined otherwise (then ``f_t = 0``, the lateral force is
 ``|f|`` and ``omega_perp = |omega_eb|``).
 
@@ -73,7 +73,7 @@ PHASES = ("rest", "powered", "turn", "coast", "cruise")
 SEGMENT_DEFAULTS = {
     "rest_speed_m_s": 1.0,
     "rest_rate_deg_s": 3.0,
-    "rest_force_m_s2": 1.0,
+    "rest_accel_m_s2": 0.5,
     "powered_accel_m_s2": 2.0,
     "turn_rate_deg_s": 5.0,
     "coast_lateral_m_s2": 2.0,
@@ -86,8 +86,8 @@ SEGMENT_DEFAULTS = {
 """Default thresholds of :func:`segment_flight` (engineering choices, not from a paper)."""
 
 SEGMENT_COLUMNS = ("phase", "t_start", "t_end")
-_FEATURES = ("speed", "f_norm", "gravity", "f_along", "f_lateral", "rate", "rate_across",
-             "path_rate")
+_FEATURES = ("speed", "accel", "f_norm", "gravity", "f_along", "f_lateral", "rate",
+             "rate_across", "path_rate")
 _TIME_TOL = 1e-6
 
 
@@ -101,9 +101,9 @@ class Segmentation:
         ``phase, t_start, t_end, duration`` (s), contiguous, covering the flight.
     features : DataFrame
         One row per window of ``resolution_s``: ``t`` (window centre), ``t_start``,
-        ``t_end``, the features ``speed`` (m/s), ``f_norm``, ``gravity``, ``f_along``,
-        ``f_lateral`` (m/s^2), ``rate``, ``rate_across``, ``path_rate`` (rad/s), the label of
-        the strict thresholds ``raw`` and the final ``phase``.
+        ``t_end``, the features ``speed`` (m/s), ``accel``, ``f_norm``, ``gravity``,
+        ``f_along``, ``f_lateral`` (m/s^2), ``rate``, ``rate_across``, ``path_rate``
+        (rad/s), the label of the strict thresholds ``raw`` and the final ``phase``.
     thresholds : dict
         The thresholds used (:data:`SEGMENT_DEFAULTS` with the caller's changes).
     """
@@ -147,15 +147,16 @@ def _trajectory_arrays(trajectory):
 
 
 def flight_features(trajectory, direction_speed_m_s: float = 1.0,
-                    powered_accel_m_s2: float = 2.0,
+                    rest_accel_m_s2: float = 0.5,
                     turn_speed_m_s: float = 3.0) -> pd.DataFrame:
     """Per-sample kinematic features the segmentation reads (module docstring).
 
     Returns
     -------
     DataFrame
-        ``t``; ``speed`` ``|V|`` (m/s); ``f_norm`` ``|f|`` and ``gravity`` ``|gamma(P)|``
-        (m/s^2); ``f_along`` ``f^e . u`` and ``f_lateral`` ``|f^e - f_along u|`` (m/s^2);
+        ``t``; ``speed`` ``|V|`` (m/s); ``accel`` ``|a^e|``, ``f_norm`` ``|f|`` and
+        ``gravity`` ``|gamma(P)|`` (m/s^2); ``f_along`` ``f^e . u`` and ``f_lateral``
+        ``|f^e - f_along u|`` (m/s^2);
         ``rate`` ``|omega_eb|``, ``rate_across`` its part across ``u`` and ``path_rate``
         ``|V x a| / |V|^2`` (rad/s; 0 below ``turn_speed_m_s``).
     """
@@ -169,7 +170,7 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
     speed = np.linalg.norm(V, axis=1)
     a_norm = np.linalg.norm(a_e, axis=1)
     moving = speed >= direction_speed_m_s
-    pushed = ~moving & (a_norm > powered_accel_m_s2)
+    pushed = ~moving & (a_norm > rest_accel_m_s2)
     u = np.zeros_like(V)
     u[moving] = V[moving] / speed[moving, None]
     u[pushed] = a_e[pushed] / a_norm[pushed, None]
@@ -181,6 +182,7 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
     return pd.DataFrame({
         "t": t,
         "speed": speed,
+        "accel": a_norm,
         "f_norm": np.linalg.norm(f_e, axis=1),
         "gravity": np.linalg.norm(gamma, axis=1),
         "f_along": f_along,
@@ -214,7 +216,7 @@ def _conditions(w: pd.DataFrame, p: dict, relax: float) -> dict[str, np.ndarray]
     wider, narrower = 1.0 + relax, 1.0 - relax
     rest = ((w["speed"] < p["rest_speed_m_s"] * wider)
             & (w["rate"] < p["rest_rate_deg_s"] * DEG * wider)
-            & ((w["f_norm"] - w["gravity"]).abs() < p["rest_force_m_s2"] * wider))
+            & (w["accel"] < p["rest_accel_m_s2"] * wider))
     powered = w["f_along"] > p["powered_accel_m_s2"] * narrower
     turn = np.maximum(w["rate_across"], w["path_rate"]) > p["turn_rate_deg_s"] * DEG * narrower
     coast = ((w["f_lateral"] < p["coast_lateral_m_s2"] * wider)
@@ -284,7 +286,7 @@ def segment_flight(trajectory, **thresholds) -> Segmentation:
         recorded flight (its IMU is smooth and exact).
     **thresholds
         Any of :data:`SEGMENT_DEFAULTS`: ``rest_speed_m_s`` (1), ``rest_rate_deg_s`` (3),
-        ``rest_force_m_s2`` (1), ``powered_accel_m_s2`` (2), ``turn_rate_deg_s`` (5),
+        ``rest_accel_m_s2`` (0.5), ``powered_accel_m_s2`` (2), ``turn_rate_deg_s`` (5),
         ``coast_lateral_m_s2`` (2), ``direction_speed_m_s`` (1), ``turn_speed_m_s`` (3),
         ``resolution_s`` (0.1),
         ``hysteresis`` (0.25, in [0, 0.9]), ``min_duration_s`` (2). Conditions in the
@@ -297,7 +299,7 @@ def segment_flight(trajectory, **thresholds) -> Segmentation:
         the last sample) and the per-window ``features``.
     """
     p = _options(thresholds)
-    features = flight_features(trajectory, p["direction_speed_m_s"], p["powered_accel_m_s2"],
+    features = flight_features(trajectory, p["direction_speed_m_s"], p["rest_accel_m_s2"],
                                p["turn_speed_m_s"])
     w = _windows(features, p["resolution_s"])
     n = len(w)
