@@ -157,3 +157,36 @@ def test_fig1_data_and_claims():
                          "cond": [5.0, 5.0, 5.0, 1e16], "log10_cond": [0.7] * 3 + [16],
                          "cond_per_cp_st": [0.02, 0.002, 0.0002, np.nan]})
     assert claim(fig1_claims(flat), "F1-proportional").verdict == "not reproduced"
+
+
+# ---------------------------------------------------------------- figures and panel
+def test_figure_builders_and_panel(result, short_ascent):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from navlib.plots.observability import (
+        fig1_figure,
+        mission_figure,
+        singular_values_figure,
+        table2_figure,
+    )
+    from navlib.widgets.observability import observability_panel
+
+    res = mission_observability("ins_gps", "", "none", short_ascent, stride=400)
+    a = inspect_step("ins_gps", "P", "random_walk", short_ascent, step=100)
+    figs = [fig1_figure(fig1_data()), mission_figure(res, short_ascent.events),
+            table2_figure(result), singular_values_figure(a)]
+    for fig in figs:
+        assert isinstance(fig, matplotlib.figure.Figure) and fig.axes
+        plt.close(fig)
+    panel = observability_panel(short_ascent, stride=400)
+    assert panel.result is not None and panel.result.n == 28
+    panel.controls["log10_rtol"].value = -3.0          # re-rank only: rank can only drop
+    assert panel.result.rtol == pytest.approx(1e-3) and panel.result.rank.max() <= 25
+    panel.controls["biases"].value = ""                 # random_walk without biases: error
+    assert "Not a valid configuration" in panel.status.value and panel.model is None
+    panel.controls["bias_model"].value = "none"
+    assert panel.model is not None and panel.result.n == 19
+    plt.close("all")
