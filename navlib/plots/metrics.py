@@ -1,0 +1,259 @@
+"""Figures for excitability and sensability on the rocket flight (notebooks 03 and 04).
+
+Builders take a :class:`navlib.studies.rocket.RocketAnalysis` (or tables made from one)
+and return a new matplotlib Figure; nothing is computed here beyond unit conversion:
+
+* :func:`excitability_bars` / :func:`energy_spectrum` / :func:`excitability_figure`:
+  the Fig. 2 analogue (bars of ``e_tau^i``, 21 components x segments) and the log plot of
+  ``S_tau(u^i)`` with the eta line and ``ne``;
+* :func:`sensability_figure`: the Figs. 3-5 analogues (sensability beside the physical
+  2-sigma band of each chosen state);
+* :func:`measures_figure`: sensability beside the PSINS covariance ratio;
+* :func:`tension_figure`, :func:`sweep_figure`: the X3 / S6-S7 trade and the pass/fail
+  matrix of the sensitivity sweep.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from navlib.covariance import covariance_ratio
+from navlib.models.ecef import PAPER_IDS
+from navlib.studies.rocket import IN_SO, LOW, SENSIBLE
+from navlib.units import DEG, PPM
+
+SEGMENT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
+SPECTRUM_FLOOR = 1e-45
+"""Smallest S drawn on the log axis (exact zeros of rank-deficient segments)."""
+_DISPLAY = {"P": (1.0, "m"), "V": (1.0, "m/s"), "theta": (DEG, "deg"), "bg": (DEG, "deg/s"),
+            "ba": (1.0, "m/s²"), "sg": (PPM, "ppm"), "sa": (PPM, "ppm")}
+
+
+def display_unit(state: str) -> tuple[float, str]:
+    """(SI value of one display unit, unit label) for a 21-state name, e.g. theta -> deg."""
+    return _DISPLAY.get(state.rsplit("_", 1)[0], (1.0, ""))
+
+
+def short_name(state: str) -> str:
+    """Compact axis label of a state name: ``theta_x`` -> ``θx``, ``bg_y`` -> ``bgy``."""
+    return state.replace("theta", "θ").replace("_", "")
+
+
+def _segment_label(i: int, segment) -> str:
+    return f"τ{i + 1} [{segment[0]:g}, {segment[1]:g}] s"
+
+
+def excitability_bars(analysis, ax=None):
+    """Fig. 2 analogue: bars of ``e_tau^i`` for the 21 components, one colour per segment.
+
+    Dashed lines at 1/sqrt(2) ("lies in S_O") and at the "very low" threshold.
+    """
+    fig, ax = (plt.subplots(figsize=(11, 3.6)) if ax is None else (ax.figure, ax))
+    names = analysis.state_names
+    k = len(analysis.segments)
+    width = 0.8 / k
+    x = np.arange(len(names))
+    for i, (segment, ex) in enumerate(zip(analysis.segments, analysis.excitability,
+                                          strict=True)):
+        ax.bar(x - 0.4 + width * (i + 0.5), ex.e, width,
+               color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)],
+               label=f"{_segment_label(i, segment)}, ne={ex.ne}")
+    ax.axhline(IN_SO, color="0.3", linestyle="--", linewidth=0.8)
+    ax.axhline(LOW, color="0.6", linestyle=":", linewidth=0.8)
+    ax.set_xticks(x, [f"{PAPER_IDS[n]}\n{short_name(n)}" for n in names], fontsize=7)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("excitability e")
+    ax.set_title(_bars_title(analysis), fontsize=10)
+    ax.legend(fontsize=7, ncol=k, loc="upper right")
+    return fig
+
+
+def _bars_title(analysis) -> str:
+    s = analysis.settings
+    return (f"Excitability per segment (η = {s['eta']:.0e}, D0 {s['d0']}, "
+            f"{s['attitude_error']} attitude error)")
+
+
+def energy_spectrum(analysis, ax=None):
+    """``S_tau(u^i)`` (Eq. 19) on a log axis per segment, the eta line and each ``ne``."""
+    fig, ax = (plt.subplots(figsize=(6, 3.6)) if ax is None else (ax.figure, ax))
+    n = len(analysis.state_names)
+    i_dir = np.arange(1, n + 1)
+    for i, ex in enumerate(analysis.excitability):
+        colour = SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)]
+        ax.semilogy(i_dir, np.maximum(ex.S, SPECTRUM_FLOOR), "o-", color=colour,
+                    markersize=3, label=f"τ{i + 1}: ne = {ex.ne}", gid=f"spectrum{i}")
+        ax.axvline(min(ex.ne, n), color=colour, linestyle=":", linewidth=1.0,
+                   visible=ex.ne <= n, gid=f"ne{i}")
+    eta = analysis.settings["eta"]
+    ax.axhline(eta, color="k", linestyle="--", linewidth=1.0, label=f"η = {eta:.0e}",
+               gid="eta")
+    ax.set_xlabel("direction i (u^i)")
+    ax.set_ylabel("S_τ(u^i)")
+    ax.set_xticks(i_dir[::2])
+    ax.set_title("Energy spectrum of the normalised O_τ", fontsize=10)
+    ax.legend(fontsize=7)
+    return fig
+
+
+def excitability_figure(analysis, fig=None):
+    """Bars (Fig. 2 analogue) and energy spectrum side by side in one Figure.
+
+    ``fig``: a Figure made by this function to redraw in place (its two axes are cleared and
+    redrawn, their positions kept), which widgets use to avoid a new layout per update.
+    """
+    if fig is not None and _update_in_place(fig, analysis):
+        return fig
+    if fig is None:
+        fig = plt.figure(figsize=(14, 3.8), layout="constrained")
+        grid = fig.add_gridspec(1, 3)
+        bars, spectrum = fig.add_subplot(grid[0, :2]), fig.add_subplot(grid[0, 2])
+    else:
+        bars, spectrum = fig.axes[:2]
+        bars.cla()
+        spectrum.cla()
+    excitability_bars(analysis, bars)
+    energy_spectrum(analysis, spectrum)
+    return fig
+
+
+def _update_in_place(fig, analysis) -> bool:
+    """Set new heights, spectra, ne and eta on the artists of an excitability figure with
+    the same number of segments and states (no new artists, ticks or layout)."""
+    bars, spectrum = fig.axes[:2]
+    containers = bars.containers
+    lines = {ln.get_gid(): ln for ln in spectrum.get_lines()}
+    k, n = len(analysis.excitability), len(analysis.state_names)
+    if len(containers) != k or any(f"spectrum{i}" not in lines for i in range(k)) \
+            or len(containers[0].patches) != n:
+        return False
+    bar_legend, spectrum_legend = bars.get_legend(), spectrum.get_legend()
+    for i, (segment, ex) in enumerate(zip(analysis.segments, analysis.excitability,
+                                          strict=True)):
+        for patch, height in zip(containers[i].patches, ex.e, strict=True):
+            patch.set_height(height)
+        lines[f"spectrum{i}"].set_ydata(np.maximum(ex.S, SPECTRUM_FLOOR))
+        lines[f"ne{i}"].set_xdata([min(ex.ne, n)] * 2)
+        lines[f"ne{i}"].set_visible(ex.ne <= n)
+        bar_legend.get_texts()[i].set_text(f"{_segment_label(i, segment)}, ne={ex.ne}")
+        spectrum_legend.get_texts()[i].set_text(f"τ{i + 1}: ne = {ex.ne}")
+    eta = analysis.settings["eta"]
+    lines["eta"].set_ydata([eta] * 2)
+    spectrum_legend.get_texts()[k].set_text(f"η = {eta:.0e}")
+    bars.set_title(_bars_title(analysis), fontsize=10)
+    spectrum.relim()
+    spectrum.autoscale_view()
+    return True
+
+
+def _shade_segments(ax, segments) -> None:
+    for i, (a, b) in enumerate(segments):
+        ax.axvspan(a, b, color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)], alpha=0.06,
+                   linewidth=0)
+        ax.annotate(f"τ{i + 1}", ((a + b) / 2, 1.0), xycoords=("data", "axes fraction"),
+                    ha="center", va="bottom", fontsize=7, color="0.35")
+
+
+def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: str = ""):
+    """Figs. 3-5 analogues: sensability of each state (left axis) and its physical
+    ``±k sigma`` band (right axis, display units), segments shaded.
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+    states : sequence of str
+        e.g. ``["P_x", "V_x"]`` (Fig. 3), ``["theta_x", "theta_y", "theta_z"]`` (Fig. 4),
+        ``["bg_x", "bg_y", "bg_z"]`` (Fig. 5).
+    k : float
+        Band half-width in sigmas (paper: 2).
+    """
+    states = list(states)
+    se = analysis.sensability
+    idx = [analysis.state_names.index(s) for s in states]
+    fig, axes = plt.subplots(len(states), 1, figsize=(9, 2.1 * len(states) + 0.4),
+                             sharex=True, squeeze=False, layout="constrained")
+    for ax, state, j in zip(axes[:, 0], states, idx, strict=True):
+        ax.plot(se.t, se.s[:, j], color="tab:blue", linewidth=1.5, label="sensability")
+        ax.axhline(SENSIBLE, color="tab:blue", linestyle=":", linewidth=0.8)
+        ax.set_ylim(-0.03, 1.05)
+        ax.set_ylabel(f"s({state})", color="tab:blue")
+        _shade_segments(ax, analysis.segments)
+        scale, unit = display_unit(state)
+        twin = ax.twinx()
+        band = k * se.sigma[:, j] / scale
+        twin.fill_between(se.t, -band, band, color="tab:red", alpha=0.15, linewidth=0)
+        twin.plot(se.t, band, color="tab:red", linewidth=0.8)
+        twin.plot(se.t, -band, color="tab:red", linewidth=0.8)
+        twin.set_ylabel(f"±{k:g}σ [{unit}]", color="tab:red")
+    axes[-1, 0].set_xlabel("t [s]")
+    s = analysis.settings
+    fig.suptitle(title or f"Sensability (ν = {s['nu']:.3f}) and {k:g}σ bands", fontsize=10)
+    return fig
+
+
+def measures_figure(analysis, states: Sequence[str]):
+    """Sensability beside the PSINS covariance ratio ``sigma_i(t0)/sigma_i(t)`` (log)."""
+    states = list(states)
+    se = analysis.sensability
+    ratio = covariance_ratio(se.sigma)
+    fig, (ax_s, ax_r) = plt.subplots(1, 2, figsize=(12, 3.4), layout="constrained")
+    for state in states:
+        j = analysis.state_names.index(state)
+        line, = ax_s.plot(se.t, se.s[:, j], label=state)
+        ax_r.semilogy(se.t, ratio[:, j], color=line.get_color(), label=state)
+    for ax in (ax_s, ax_r):
+        _shade_segments(ax, analysis.segments)
+        ax.set_xlabel("t [s]")
+    ax_s.axhline(SENSIBLE, color="0.4", linestyle=":")
+    ax_s.set_ylabel("sensability s")
+    ax_r.axhline(1.0, color="0.4", linestyle=":")
+    ax_r.set_ylabel("σ(t0)/σ(t)  (PSINS ratio)")
+    ax_s.legend(fontsize=7, ncol=2)
+    fig.suptitle("Sensability versus the covariance-ratio 'observability degree'", fontsize=10)
+    return fig
+
+
+_VERDICT_MARKERS = {"reproduced": "o", "partly": "s", "not reproduced": "x"}
+
+
+def tension_figure(table):
+    """X3 versus S6/S7: ``e16`` in tau2 against the attitude band growth, per variant."""
+    fig, ax = plt.subplots(figsize=(8, 4), layout="constrained")
+    for r in table.itertuples():
+        ax.scatter(r.max_theta_growth, r.e16_tau2, marker=_VERDICT_MARKERS.get(r.X3, "o"),
+                   s=50, color="tab:green" if r.all_three else "tab:red")
+        ax.annotate(r.variant, (r.max_theta_growth, r.e16_tau2), fontsize=7,
+                    xytext=(4, 2), textcoords="offset points")
+    ax.axhline(IN_SO, color="0.4", linestyle="--", linewidth=0.8)
+    ax.axvline(1.0, color="0.4", linestyle=":", linewidth=0.8)
+    ax.set_xscale("log")
+    ax.set_xlabel("max σθ(t)/σθ(0) in τ2 (S6 wants < 1)")
+    ax.set_ylabel("e16 (sg_x) in τ2 (X3 wants ≥ 1/√2)")
+    ax.set_title("The X3 / S6-S7 tension (marker: X3 verdict; green: X3 with S6, S7)",
+                 fontsize=10)
+    return fig
+
+
+def sweep_figure(sweep, claim_ids: Sequence[str] | None = None):
+    """Pass/fail matrix of a sensitivity sweep (rows: settings; columns: claims)."""
+    from navlib.studies.rocket import CLAIM_IDS, SWEEP_BASELINE
+
+    claim_ids = list(CLAIM_IDS if claim_ids is None else claim_ids)
+    matrix = sweep[claim_ids].to_numpy(dtype=float)
+    labels = []
+    for r in sweep.itertuples():
+        if r.factor in ("baseline", "grid"):
+            labels.append(r.factor if r.factor == "baseline" else
+                          ", ".join(f"{k}={getattr(r, k)}" for k in SWEEP_BASELINE))
+        else:
+            labels.append(f"{r.factor} = {getattr(r, r.factor)}")
+    height = 0.28 * len(labels) + 1.2
+    fig, ax = plt.subplots(figsize=(9, height), layout="constrained")
+    ax.imshow(matrix, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto")
+    ax.set_xticks(np.arange(len(claim_ids)), claim_ids, fontsize=8)
+    ax.set_yticks(np.arange(len(labels)), labels, fontsize=7)
+    ax.set_title("Claims reproduced (green) per setting", fontsize=10)
+    return fig
