@@ -201,7 +201,8 @@ def _windows(features: pd.DataFrame, resolution_s: float) -> pd.DataFrame:
     k = np.minimum(((t - t0) / resolution_s).astype(int), n_bins - 1)
     counts = np.bincount(k, minlength=n_bins)
     used = counts > 0
-    out = {"t_start": t0 + resolution_s * np.arange(n_bins)[used]}
+    # window edges rounded to the nanosecond so that 18.000000000000004 reads 18
+    out = {"t_start": np.round(t0 + resolution_s * np.arange(n_bins)[used], 9)}
     out["t_end"] = np.minimum(out["t_start"] + resolution_s, t1)
     out["t"] = 0.5 * (out["t_start"] + out["t_end"])
     for name in _FEATURES:

@@ -1,0 +1,145 @@
+"""Figures for assessing a recorded flight (notebook 07) that :mod:`navlib.plots.metrics`
+does not draw: the phases over the fitted specific force and angular rate, the fit
+residuals over time, and the per-segment "which states" map.
+
+The excitability bars, energy spectrum and sensability curves come from
+:mod:`navlib.plots.metrics` unchanged: a :class:`navlib.studies.assess.FlightAssessment`
+offers the same ``segments``, ``excitability``, ``sensability``, ``settings`` and
+``state_names`` as the rocket analysis those builders were written for. Every builder here
+takes a ``FlightAssessment`` and returns a new Figure; nothing is computed beyond unit
+conversion and thinning long records for display.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Patch
+
+from navlib.units import DEG
+
+PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
+                 "coast": "tab:blue", "cruise": "tab:green"}
+"""Colour of each automatic phase; user-named segments cycle through :data:`OTHER_COLOURS`."""
+OTHER_COLOURS = ("tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan")
+_MAX_POINTS = 20_000
+
+
+def _thin(n: int) -> slice:
+    return slice(None, None, max(1, int(np.ceil(n / _MAX_POINTS))))
+
+
+def _phase_colour(phase: str, others: dict) -> str:
+    if phase in PHASE_COLOURS:
+        return PHASE_COLOURS[phase]
+    return others.setdefault(phase, OTHER_COLOURS[len(others) % len(OTHER_COLOURS)])
+
+
+def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12) -> None:
+    """Shade each segment of ``segment_table`` (``phase, t_start, t_end``) in its phase
+    colour; with ``label`` write ``"<segment> <phase>"`` along the top of the axes."""
+    others: dict = {}
+    for k, row in enumerate(segment_table.itertuples(index=False)):
+        colour = _phase_colour(row.phase, others)
+        ax.axvspan(row.t_start, row.t_end, color=colour, alpha=alpha, linewidth=0)
+        if label:
+            number = getattr(row, "segment", k + 1)
+            ax.annotate(f"{number} {row.phase}", ((row.t_start + row.t_end) / 2, 1.0),
+                        xycoords=("data", "axes fraction"), ha="center", va="bottom",
+                        fontsize=7, color="0.25")
+
+
+def phases_figure(assessment):
+    """The fitted specific force and angular rate (body axes) with the assessed segments
+    shaded by phase, and a strip of the automatic segmentation underneath."""
+    traj = assessment.trajectory
+    sl = _thin(len(traj.t))
+    t = traj.t[sl]
+    f_b = traj.specific_force[sl]
+    w_b = traj.angular_rate[sl] / DEG
+    fig, axes = plt.subplots(3, 1, figsize=(11, 6.2), sharex=True, layout="constrained",
+                             gridspec_kw={"height_ratios": [3, 3, 0.6]})
+    for ax, data, name, unit in ((axes[0], f_b, "f", "m/s²"), (axes[1], w_b, "ω_ib", "deg/s")):
+        for i, axis in enumerate("xyz"):
+            ax.plot(t, data[:, i], linewidth=0.9, label=f"{name}_{axis}")
+        ax.plot(t, np.linalg.norm(data, axis=1), color="k", linewidth=0.8, label=f"|{name}|")
+        ax.set_ylabel(f"{name} [{unit}]")
+        ax.legend(fontsize=7, ncol=4, loc="upper right")
+        shade_phases(ax, assessment.segment_table, label=ax is axes[0])
+    auto = assessment.automatic.segments
+    shade_phases(axes[2], auto, label=False, alpha=1.0)
+    axes[2].set_yticks([])
+    axes[2].set_ylabel("auto", fontsize=8)
+    present = [p for p in PHASE_COLOURS if p in set(auto["phase"])]
+    axes[2].legend(handles=[Patch(color=PHASE_COLOURS[p], label=p) for p in present],
+                   fontsize=7, ncol=len(present), loc="upper center",
+                   bbox_to_anchor=(0.5, -0.35), frameon=False)
+    axes[2].set_xlabel("t [s]")
+    fig.suptitle(f"Fitted specific force and angular rate, body axes "
+                 f"({traj.name or 'flight'}); shading: assessed segments", fontsize=10)
+    return fig
+
+
+def fit_residuals_figure(assessment):
+    """Recorded minus fitted: GNSS position per ECEF axis (with the model's ±sigma) and the
+    IMU specific force and angular rate per body axis, over time."""
+    gnss = assessment.gnss_residuals
+    imu = assessment.imu_residuals
+    sl = _thin(len(imu))
+    sigma = assessment.options.get("gnss_sigma_m")
+    fig, axes = plt.subplots(3, 1, figsize=(11, 6.4), sharex=True, layout="constrained")
+    for axis in "xyz":
+        axes[0].plot(gnss["t"], gnss[f"d{axis}"], "o-", markersize=2.5, linewidth=0.7,
+                     label=f"Δ{axis}")
+    if sigma:
+        axes[0].axhspan(-sigma, sigma, color="0.85", zorder=0, label=f"±σ = {sigma:.3g} m")
+    axes[0].set_ylabel("GNSS − fit [m]")
+    for axis in "xyz":
+        axes[1].plot(imu["t"].iloc[sl], imu[f"df_{axis}"].iloc[sl], linewidth=0.5,
+                     label=f"Δf_{axis}")
+        axes[2].plot(imu["t"].iloc[sl], imu[f"dw_{axis}"].iloc[sl] / DEG, linewidth=0.5,
+                     label=f"Δω_{axis}")
+    axes[1].set_ylabel("IMU − fit, f [m/s²]")
+    axes[2].set_ylabel("IMU − fit, ω [deg/s]")
+    axes[2].set_xlabel("t [s]")
+    for ax in axes:
+        ax.legend(fontsize=7, ncol=4, loc="upper right")
+        shade_phases(ax, assessment.segment_table, label=ax is axes[0], alpha=0.08)
+    fig.suptitle("Fit residuals (white noise, biases and scale-factor errors of the records "
+                 "stay in them)", fontsize=10)
+    return fig
+
+
+def estimable_figure(assessment):
+    """Per segment (columns) and state (rows): excitability ``e`` and the share of epochs
+    with ``s >= s_threshold``; cells at or above their threshold are outlined."""
+    table = assessment.state_table()
+    names = list(assessment.state_names)
+    segs = assessment.segment_table
+    e = table.pivot(index="state", columns="segment", values="e").loc[names]
+    frac = table.pivot(index="state", columns="segment", values="s_fraction").loc[names]
+    th = assessment.thresholds
+    labels = [f"{r.segment} {r.phase}\n{r.t_start:.4g}–{r.t_end:.4g} s"
+              for r in segs.itertuples(index=False)]
+    width = 3.2 + 1.3 * len(segs)
+    fig, axes = plt.subplots(1, 2, figsize=(2 * width, 7.2), layout="constrained")
+    panels = ((axes[0], e.to_numpy(), th["e_threshold"], "excitability e"),
+              (axes[1], frac.to_numpy(), th["min_fraction"],
+               f"share of epochs with s ≥ {th['s_threshold']:.3g}"))
+    for ax, values, threshold, title in panels:
+        image = ax.imshow(values, cmap="Blues", vmin=0.0, vmax=1.0, aspect="auto")
+        for (j, k), v in np.ndenumerate(values):
+            good = v >= threshold
+            ax.text(k, j, f"{v:.2f}", ha="center", va="center", fontsize=7,
+                    color="white" if v > 0.6 else "0.2", fontweight="bold" if good else None)
+            if good:
+                ax.add_patch(plt.Rectangle((k - 0.5, j - 0.5), 1, 1, fill=False,
+                                           edgecolor="tab:red", linewidth=1.2))
+        ax.set_xticks(np.arange(len(labels)), labels, fontsize=7)
+        ax.set_yticks(np.arange(len(names)), names, fontsize=7)
+        ax.set_title(f"{title} (outlined: ≥ {threshold:.3g})", fontsize=9)
+        fig.colorbar(image, ax=ax, shrink=0.6)
+    fig.suptitle(f"Which states this flight could estimate, segment by segment "
+                 f"(η = {th['eta']:.0e}, ν = {th['nu']:.3f}, preset "
+                 f"{assessment.options.get('preset')})", fontsize=10)
+    return fig
