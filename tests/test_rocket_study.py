@@ -232,3 +232,42 @@ def test_metrics_on_custom_segments():
     a = rocket.analyze(segments=[(0, 10), (10, 30)], eta=1e-2)
     assert a.labels == ("tau1", "tau2") and len(a.excitability) == 2
     assert isinstance(a.excitability[0], metrics.ExcitabilityResult)
+
+
+def test_excitability_figure_updates_in_place(baseline):
+    import matplotlib.pyplot as plt
+
+    from navlib.plots import metrics as mplots
+
+    fig = mplots.excitability_figure(baseline)
+    heights = [p.get_height() for p in fig.axes[0].patches]
+    np.testing.assert_allclose(heights, np.concatenate([e.e for e in baseline.excitability]))
+    other = baseline.with_eta(1e-1)
+    assert mplots.excitability_figure(other, fig) is fig
+    np.testing.assert_allclose([p.get_height() for p in fig.axes[0].patches],
+                               np.concatenate([e.e for e in other.excitability]))
+    assert "1e-01" in fig.axes[1].get_title()
+    plt.close(fig)
+
+
+def test_panels_recompute_only_what_changes(baseline):
+    from navlib.widgets.metrics import ExcitabilityPanel, SensabilityPanel
+
+    panel = ExcitabilityPanel(dpi=30)
+    chain = panel.analysis.model
+    panel.controls["eta"].value = 1e-2
+    assert panel.analysis.model is chain and panel.analysis.settings["eta"] == 1e-2
+    np.testing.assert_allclose(panel.analysis.e(), baseline.with_eta(1e-2).e())
+    panel.controls["tau1"].value = (0.0, 10.0)
+    assert panel.analysis.segments[0] == (0.0, 10.0)
+    assert panel.image.value[:4] == b"\x89PNG" and "X1" in panel.table.value
+    assert set(panel.last_timing) == {"compute_ms", "render_ms", "table_ms", "total_ms"}
+    panel.controls["tau2"].value = (5.0, 5.0)  # empty segment: message, no crash
+    assert "Invalid input" in panel.status.value
+    sens = SensabilityPanel(dpi=30)
+    low = metrics.nu_range(21)[0]
+    assert sens.controls["nu"].min > low and f"{low:.4f}" in sens.range_note.value
+    sens.controls["nu"].value = 0.99
+    np.testing.assert_allclose(sens.analysis.sensability.s, baseline.with_nu(0.99).sensability.s)
+    sens.controls["states"].value = ("bg_x",)
+    assert "S7" in sens.table.value

@@ -56,11 +56,10 @@ def excitability_bars(analysis, ax=None):
     k = len(analysis.segments)
     width = 0.8 / k
     x = np.arange(len(names))
-    for i, (segment, ex) in enumerate(zip(analysis.segments, analysis.excitability,
-                                          strict=True)):
+    for i, ex in enumerate(analysis.excitability):
         ax.bar(x - 0.4 + width * (i + 0.5), ex.e, width,
                color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)],
-               label=f"{_segment_label(i, segment)}, ne={ex.ne}")
+               label=f"τ{i + 1}")
     ax.axhline(IN_SO, color="0.3", linestyle="--", linewidth=0.8)
     ax.axhline(LOW, color="0.6", linestyle=":", linewidth=0.8)
     ax.set_xticks(x, [f"{PAPER_IDS[n]}\n{short_name(n)}" for n in names], fontsize=7)
@@ -73,8 +72,9 @@ def excitability_bars(analysis, ax=None):
 
 def _bars_title(analysis) -> str:
     s = analysis.settings
-    return (f"Excitability per segment (η = {s['eta']:.0e}, D0 {s['d0']}, "
-            f"{s['attitude_error']} attitude error)")
+    segments = ", ".join(_segment_label(i, seg) for i, seg in enumerate(analysis.segments))
+    return (f"Excitability per segment: {segments}\n"
+            f"η = {s['eta']:.0e}, D0 {s['d0']}, {s['attitude_error']} attitude error")
 
 
 def energy_spectrum(analysis, ax=None):
@@ -85,18 +85,25 @@ def energy_spectrum(analysis, ax=None):
     for i, ex in enumerate(analysis.excitability):
         colour = SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)]
         ax.semilogy(i_dir, np.maximum(ex.S, SPECTRUM_FLOOR), "o-", color=colour,
-                    markersize=3, label=f"τ{i + 1}: ne = {ex.ne}", gid=f"spectrum{i}")
+                    markersize=3, label=f"τ{i + 1}", gid=f"spectrum{i}")
         ax.axvline(min(ex.ne, n), color=colour, linestyle=":", linewidth=1.0,
                    visible=ex.ne <= n, gid=f"ne{i}")
     eta = analysis.settings["eta"]
-    ax.axhline(eta, color="k", linestyle="--", linewidth=1.0, label=f"η = {eta:.0e}",
+    ax.axhline(eta, color="k", linestyle="--", linewidth=1.0, label="η",
                gid="eta")
+    ax.set_ylim(SPECTRUM_FLOOR / 10.0, 10.0 * n)  # fixed, so redraws keep their axes
     ax.set_xlabel("direction i (u^i)")
     ax.set_ylabel("S_τ(u^i)")
     ax.set_xticks(i_dir[::2])
-    ax.set_title("Energy spectrum of the normalised O_τ", fontsize=10)
+    ax.set_title(_spectrum_title(analysis), fontsize=10)
     ax.legend(fontsize=7)
     return fig
+
+
+def _spectrum_title(analysis) -> str:
+    ne = " / ".join(str(ex.ne) for ex in analysis.excitability)
+    return (f"Energy spectrum of the normalised O_τ\n"
+            f"η = {analysis.settings['eta']:.0e}: ne = {ne}")
 
 
 def excitability_figure(analysis, fig=None):
@@ -130,23 +137,23 @@ def _update_in_place(fig, analysis) -> bool:
     if len(containers) != k or any(f"spectrum{i}" not in lines for i in range(k)) \
             or len(containers[0].patches) != n:
         return False
-    bar_legend, spectrum_legend = bars.get_legend(), spectrum.get_legend()
-    for i, (segment, ex) in enumerate(zip(analysis.segments, analysis.excitability,
-                                          strict=True)):
+    for i, ex in enumerate(analysis.excitability):
         for patch, height in zip(containers[i].patches, ex.e, strict=True):
             patch.set_height(height)
         lines[f"spectrum{i}"].set_ydata(np.maximum(ex.S, SPECTRUM_FLOOR))
         lines[f"ne{i}"].set_xdata([min(ex.ne, n)] * 2)
         lines[f"ne{i}"].set_visible(ex.ne <= n)
-        bar_legend.get_texts()[i].set_text(f"{_segment_label(i, segment)}, ne={ex.ne}")
-        spectrum_legend.get_texts()[i].set_text(f"τ{i + 1}: ne = {ex.ne}")
-    eta = analysis.settings["eta"]
-    lines["eta"].set_ydata([eta] * 2)
-    spectrum_legend.get_texts()[k].set_text(f"η = {eta:.0e}")
-    bars.set_title(_bars_title(analysis), fontsize=10)
-    spectrum.relim()
-    spectrum.autoscale_view()
+    lines["eta"].set_ydata([analysis.settings["eta"]] * 2)
+    bars.title.set_text(_bars_title(analysis))
+    spectrum.title.set_text(_spectrum_title(analysis))
     return True
+
+
+def excitability_dynamic_artists(fig) -> list:
+    """The artists :func:`excitability_figure` changes on an in-place update (bars, spectra,
+    ne and eta lines, titles), for blitting renderers."""
+    bars, spectrum = fig.axes[:2]
+    return [*bars.patches, bars.title, *spectrum.get_lines(), spectrum.title]
 
 
 def _shade_segments(ax, segments) -> None:

@@ -9,7 +9,8 @@ Both panels call :mod:`navlib.studies.rocket` and the figure builders of
   three small SVDs, a new nu reuses the eigen-decompositions (``with_nu``);
 * the figure is kept and redrawn in place, rendered once to PNG per update.
 
-``last_timing`` holds the milliseconds spent computing and rendering in the last update.
+``last_timing`` holds the milliseconds of the last update: ``compute_ms``, ``render_ms``,
+``table_ms`` (claims table) and ``total_ms``.
 """
 
 from __future__ import annotations
@@ -26,31 +27,59 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from navlib import metrics
 from navlib.errors import NavlibInputError
 from navlib.models.ecef import ATTITUDE_ERRORS, STATE_NAMES
-from navlib.plots.metrics import excitability_figure, sensability_figure
+from navlib.plots.metrics import (
+    excitability_dynamic_artists,
+    excitability_figure,
+    sensability_figure,
+)
 from navlib.studies import rocket
 
 _LOOK = dict(style={"description_width": "9em"}, layout=widgets.Layout(width="34em"))
 
 
-def _png(fig, dpi: float) -> bytes:
-    """One Agg draw of ``fig`` at ``dpi``, encoded to PNG (savefig would draw twice)."""
-    from PIL import Image
+class _Blitter:
+    """Render a figure to PNG, redrawing only its changing artists after the first time.
 
-    if fig.dpi != dpi:
+    The first render draws everything except ``dynamic`` (marked animated) and keeps that
+    background; later renders restore it and draw the dynamic artists on top (Agg
+    blitting), so an update costs a few milliseconds of drawing plus the PNG encoding
+    instead of re-rasterising every tick label.
+    """
+
+    def __init__(self, fig, dynamic, dpi: float):
+        self.fig = fig
+        self.dynamic = list(dynamic)
         fig.set_dpi(dpi)
-    canvas = FigureCanvasAgg(fig) if not isinstance(fig.canvas, FigureCanvasAgg) \
-        else fig.canvas
-    canvas.draw()
-    buffer = io.BytesIO()
-    Image.fromarray(np.asarray(canvas.buffer_rgba())).save(buffer, format="png",
-                                                           compress_level=1)
-    return buffer.getvalue()
+        self.canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) \
+            else FigureCanvasAgg(fig)
+        for artist in self.dynamic:
+            artist.set_animated(True)
+        self.canvas.draw()  # runs the layout once, then it is frozen
+        if fig.get_layout_engine() is not None:
+            fig.set_layout_engine("none")
+        self.background = self.canvas.copy_from_bbox(fig.bbox)
+
+    def png(self) -> bytes:
+        from PIL import Image
+
+        self.canvas.restore_region(self.background)
+        for artist in self.dynamic:
+            self.fig.draw_artist(artist)
+        buffer = io.BytesIO()
+        Image.fromarray(np.asarray(self.canvas.buffer_rgba())).save(buffer, format="png",
+                                                                    compress_level=1)
+        return buffer.getvalue()
 
 
-def _freeze_layout(fig) -> None:
-    """After the first render keep the axes where the constrained layout put them."""
-    if fig.get_layout_engine() is not None:
-        fig.set_layout_engine("none")
+def _timing(start: float, computed: float, rendered: float) -> dict:
+    done = time.perf_counter()
+    return {"compute_ms": 1e3 * (computed - start), "render_ms": 1e3 * (rendered - computed),
+            "table_ms": 1e3 * (done - rendered), "total_ms": 1e3 * (done - start)}
+
+
+def _timing_text(timing: dict) -> str:
+    return (f"update {timing['total_ms']:.0f} ms (compute {timing['compute_ms']:.0f}, "
+            f"render {timing['render_ms']:.0f}, table {timing['table_ms']:.0f})")
 
 
 def _claims_html(table) -> str:
@@ -104,6 +133,7 @@ class ExcitabilityPanel(widgets.VBox):
         self._bases: dict = {}
         self._excitations: dict = {}
         self._figure = None
+        self._blitter = None
         self.analysis = None
         for control in self.controls.values():
             control.observe(lambda _change: self.update(), names="value")
@@ -146,22 +176,21 @@ class ExcitabilityPanel(widgets.VBox):
             return
         self.analysis = analysis
         computed = time.perf_counter()
-        first = self._figure is None
-        self._figure = excitability_figure(analysis, self._figure)
-        self.image.value = _png(self._figure, self.dpi)
-        if first:
-            _freeze_layout(self._figure)
-            plt.close(self._figure)
+        dynamic = None if self._figure is None else excitability_dynamic_artists(self._figure)
+        figure = excitability_figure(analysis, self._figure)
+        if figure is not self._figure or excitability_dynamic_artists(figure) != dynamic:
+            plt.close(figure)  # new figure or rebuilt axes: new background
+            self._figure = figure
+            self._blitter = _Blitter(figure, excitability_dynamic_artists(figure), self.dpi)
+        self.image.value = self._blitter.png()
         rendered = time.perf_counter()
         try:
             self.table.value = _claims_html(rocket.claims_table(analysis, "excitability"))
         except NavlibInputError as exc:  # not three segments
             self.table.value = f"<i>{exc}</i>"
-        self.last_timing = {"compute_ms": 1e3 * (computed - start),
-                            "render_ms": 1e3 * (rendered - computed)}
+        self.last_timing = _timing(start, computed, rendered)
         ne = ", ".join(f"τ{i + 1}: {e.ne}" for i, e in enumerate(analysis.excitability))
-        self.status.value = (f"ne {ne}; compute {self.last_timing['compute_ms']:.0f} ms, "
-                             f"render {self.last_timing['render_ms']:.0f} ms")
+        self.status.value = f"ne {ne}; {_timing_text(self.last_timing)}"
 
 
 class SensabilityPanel(widgets.VBox):
@@ -198,6 +227,8 @@ class SensabilityPanel(widgets.VBox):
         self.last_timing: dict = {}
         self._figure = None
         self._figure_states: tuple = ()
+        self._lines: list = []
+        self._blitter = None
         self.analysis = None
         for control in self.controls.values():
             control.observe(lambda _change: self.update(), names="value")
@@ -220,27 +251,21 @@ class SensabilityPanel(widgets.VBox):
         self.analysis = analysis
         computed = time.perf_counter()
         if states != self._figure_states:
-            if self._figure is not None:
-                plt.close(self._figure)
-            self._figure = sensability_figure(analysis, states)
-            self._figure_states = states
-            self.image.value = _png(self._figure, self.dpi)
-            _freeze_layout(self._figure)
+            self._figure = sensability_figure(analysis, states,
+                                              title="Sensability (ν on the slider) and ±2σ bands")
             plt.close(self._figure)
-        else:
-            se = analysis.sensability
-            lines = [ln for ax in self._figure.axes for ln in ax.get_lines()
-                     if ln.get_label() == "sensability"]
-            for line, state in zip(lines, states, strict=True):
-                line.set_ydata(se.s[:, STATE_NAMES.index(state)])
-            self._figure.suptitle(f"Sensability (ν = {se.nu:.4f}) and 2σ bands", fontsize=10)
-            self.image.value = _png(self._figure, self.dpi)
+            self._figure_states = states
+            self._lines = [ln for ax in self._figure.axes for ln in ax.get_lines()
+                           if ln.get_label() == "sensability"]
+            self._blitter = _Blitter(self._figure, self._lines, self.dpi)
+        se = analysis.sensability
+        for line, state in zip(self._lines, states, strict=True):
+            line.set_ydata(se.s[:, STATE_NAMES.index(state)])
+        self.image.value = self._blitter.png()
         rendered = time.perf_counter()
         self.table.value = _claims_html(rocket.claims_table(analysis, "sensability"))
-        self.last_timing = {"compute_ms": 1e3 * (computed - start),
-                            "render_ms": 1e3 * (rendered - computed)}
+        self.last_timing = _timing(start, computed, rendered)
         nr = analysis.sensability.nr
-        self.status.value = (f"sensible subspace dimension nr: {nr.min()}-{nr.max()} "
-                             f"(median {int(sorted(nr)[len(nr) // 2])}); compute "
-                             f"{self.last_timing['compute_ms']:.0f} ms, render "
-                             f"{self.last_timing['render_ms']:.0f} ms")
+        self.status.value = (f"ν = {analysis.sensability.nu:.4f}; sensible subspace dimension "
+                             f"nr {nr.min()}-{nr.max()} (median {int(np.median(nr))}); "
+                             f"{_timing_text(self.last_timing)}")
