@@ -222,7 +222,10 @@ def ecef21_jacobians(position, C_b_e, f_b, w_ib_b, attitude_error: str = "ecef")
 
 
 def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma_m: float = 5.0,
-           **sigmas) -> LinearModel:
+           sigma_p0_m: float = 30.0, sigma_v0_m_s: float = 3.0, sigma_theta0_deg: float = 1.0,
+           sigma_bg_deg_s: float | None = None, sigma_ba_m_s2: float | None = None,
+           sigma_sg_ppm: float | None = None, sigma_sa_ppm: float | None = None
+           ) -> LinearModel:
     """The 21-state ECEF error model along ``trajectory`` at its IMU rate.
 
     Parameters
@@ -238,13 +241,14 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         names ``theta_x..z`` are then ECEF-axis or body-axis components.
     gnss_sigma_m : float
         GNSS position standard deviation per ECEF axis, ``R = sigma^2 I3`` (assumed 5 m).
-    **sigmas
-        Initial standard deviations. IMU-parameter sigmas default to the sensor spec's
-        turn-on values (:func:`parameter_sigmas`; the default preset holds the §5 values),
-        the others to :data:`P0_DEFAULTS`: ``sigma_p0_m`` (30 m),
-        ``sigma_v0_m_s`` (3 m/s), ``sigma_theta0_deg`` (1 deg), ``sigma_bg_deg_s``
-        (0.05 deg/s), ``sigma_ba_m_s2`` (0.02 m/s^2), ``sigma_sg_ppm`` (5000 ppm),
-        ``sigma_sa_ppm`` (1000 ppm). ``P0`` is diagonal (the paper: "normally diagonal").
+    sigma_p0_m, sigma_v0_m_s, sigma_theta0_deg : float
+        Initial standard deviations of position (30 m), velocity (3 m/s) and attitude
+        (1 deg per axis), spec §5 [A].
+    sigma_bg_deg_s, sigma_ba_m_s2, sigma_sg_ppm, sigma_sa_ppm : float, optional
+        Initial standard deviations of the IMU parameters; None takes the sensor spec's
+        turn-on values (:func:`parameter_sigmas`; the default preset holds the §5 values
+        0.05 deg/s, 0.02 m/s^2, 5000 ppm, 1000 ppm). ``P0`` is diagonal (the paper:
+        "normally diagonal").
 
     Returns
     -------
@@ -256,7 +260,12 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         raise NavlibInputError(
             f"attitude_error: expected one of {ATTITUDE_ERRORS}, got {attitude_error!r}"
         )
-    P0, p0 = _initial_covariance(sigmas, "ecef21", sensors)
+    given = {"sigma_p0_m": sigma_p0_m, "sigma_v0_m_s": sigma_v0_m_s,
+             "sigma_theta0_deg": sigma_theta0_deg, "sigma_bg_deg_s": sigma_bg_deg_s,
+             "sigma_ba_m_s2": sigma_ba_m_s2, "sigma_sg_ppm": sigma_sg_ppm,
+             "sigma_sa_ppm": sigma_sa_ppm}
+    P0, p0 = _initial_covariance({k: v for k, v in given.items() if v is not None}, "ecef21",
+                                 sensors)
     for attr in ("t", "position", "specific_force", "angular_rate", "attitude"):
         if not hasattr(trajectory, attr):
             raise NavlibInputError(f"trajectory: expected a navlib Trajectory (no {attr!r})")
