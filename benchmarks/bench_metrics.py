@@ -57,10 +57,11 @@ def rocket_trajectory():
 
 def discretised_rocket():
     """The uncached model chain (the ``ecef21_at_epochs`` cache would hide its cost)."""
-    from navlib.models.ecef import discretize_at_epochs, ecef21
+    from navlib.models.ecef import ecef21
 
     trajectory = rocket_trajectory()
-    return discretize_at_epochs(ecef21(trajectory, NOISE), trajectory.at_rate(1.0))
+    return ecef21(trajectory, NOISE).discretize(epochs=trajectory.at_rate(1.0), method="series",
+                                                hold="mean")
 
 
 def rocket_chain():

@@ -6,7 +6,7 @@ from scipy.integrate import quad_vec
 from scipy.linalg import expm
 
 from navlib import NavlibInputError
-from navlib.discretize import chain, discretize_steps
+from navlib.discretize import chain, discretize_steps, expm_taylor
 from navlib.models import LinearModel
 
 
@@ -36,6 +36,17 @@ def test_van_loan_matches_quadrature_on_random_system():
     Q_quad, _ = quad_vec(integrand, 0.0, dt, epsabs=1e-13)
     np.testing.assert_allclose(F[0], expm(A * dt), rtol=1e-12)
     np.testing.assert_allclose(Q[0], Q_quad, rtol=1e-9, atol=1e-14)
+
+
+def test_series_van_loan_matches_block_exponential_over_short_steps():
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(6, 5, 5))
+    G = rng.normal(size=(6, 5, 2))
+    Qc = np.diag([0.5, 2.0])
+    F_ref, Q_ref = discretize_steps(A, G, Qc, 0.01, method="expm")
+    F, Q = discretize_steps(A, G, Qc, 0.01, method="series")
+    np.testing.assert_allclose(F, F_ref, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(Q, Q_ref, rtol=0, atol=1e-9 * np.abs(Q_ref).max())
 
 
 def test_euler_form_is_first_order():
@@ -88,3 +99,16 @@ def test_bad_input_is_named():
         model.subset(["p", "w"])
     with pytest.raises(NavlibInputError, match="dt"):
         model.discretize()
+
+
+def test_batched_taylor_expm_matches_scipy():
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(5, 21, 21)) * np.array([0.01, 0.3, 1.0, 3.0, 8.0])[:, None, None]
+    X[2, 9:] = 0.0  # augmented-state structure: constant parameters
+    E = expm_taylor(X)
+    for k in range(5):
+        ref = expm(X[k])
+        np.testing.assert_allclose(E[k], ref, rtol=1e-11, atol=1e-12 * np.abs(ref).max())
+    np.testing.assert_array_equal(expm_taylor(np.zeros((2, 3, 3))), [np.eye(3)] * 2)

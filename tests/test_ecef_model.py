@@ -8,6 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, earth
 from navlib.models import ecef
+from navlib.models.base import HOLDS
 from navlib.rotations import skew, unskew
 from navlib.trajectory import build_trajectory
 
@@ -152,8 +153,8 @@ def _rk4_noise(A_steps, W_steps, dt, substeps):
 def test_discretised_epochs_match_fine_step_integration(traj, frame):
     model = ecef.ecef21(traj, NOISE, attitude_error=frame)
     epochs = traj.at_rate(1.0)
-    fast = ecef.discretize_at_epochs(model, epochs, "series", hold="left")
-    ref = ecef.discretize_at_epochs(model, epochs, "expm", hold="left")
+    fast = model.discretize(epochs=epochs, method="series", hold="left")
+    ref = model.discretize(epochs=epochs, method="expm", hold="left")
     np.testing.assert_allclose(fast.t, [0.0, 1.0, 2.0])
     span = slice(epochs[0], epochs[1])
     Phi = _rk4_transition(model.A[span], 0.01, 10)
@@ -188,8 +189,8 @@ def test_hold_converges_to_continuous_model():
     for rate in (100.0, 200.0):
         traj = spinning_trajectory(rate_hz=rate, duration=1.0)
         model = ecef.ecef21(traj, NOISE)
-        for hold in ecef.HOLDS:
-            dm = ecef.discretize_at_epochs(model, [0, len(traj) - 1], hold=hold)
+        for hold in HOLDS:
+            dm = model.discretize(epochs=[0, len(traj) - 1], method="series", hold=hold)
             errors[hold, rate] = np.max(np.abs(dm.F[0] - Phi) / scale)
     assert 1.7 < errors["left", 100.0] / errors["left", 200.0] < 2.3
     assert 3.4 < errors["mean", 100.0] / errors["mean", 200.0] < 4.6
@@ -273,21 +274,8 @@ def test_bad_sensors_and_epochs(traj):
         ecef.ecef21(traj, object())
     model = ecef.ecef21(traj, NOISE)
     with pytest.raises(NavlibInputError, match="epochs"):
-        ecef.discretize_at_epochs(model, [0, 10_000])
+        model.discretize(epochs=[0, 10_000])
     with pytest.raises(NavlibInputError, match="method"):
-        ecef.discretize_at_epochs(model, [0, 100], method="rk4")
+        model.discretize(epochs=[0, 100], method="rk4")
     with pytest.raises(NavlibInputError, match="hold"):
-        ecef.discretize_at_epochs(model, [0, 100], hold="right")
-
-
-def test_batched_taylor_expm_matches_scipy():
-    from scipy.linalg import expm
-
-    rng = np.random.default_rng(3)
-    X = rng.normal(size=(5, 21, 21)) * np.array([0.01, 0.3, 1.0, 3.0, 8.0])[:, None, None]
-    X[2, 9:] = 0.0  # augmented-state structure: constant parameters
-    E = ecef.expm_taylor(X)
-    for k in range(5):
-        ref = expm(X[k])
-        np.testing.assert_allclose(E[k], ref, rtol=1e-11, atol=1e-12 * np.abs(ref).max())
-    np.testing.assert_array_equal(ecef.expm_taylor(np.zeros((2, 3, 3))), [np.eye(3)] * 2)
+        model.discretize(epochs=[0, 100], hold="right")

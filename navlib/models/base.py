@@ -17,6 +17,9 @@ import pandas as pd
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
 
+HOLDS = ("left", "mean")
+"""How a trajectory model's matrices are held over one step (see LinearModel.discretize)."""
+
 
 def _stack(matrix, n_samples: int) -> np.ndarray:
     matrix = np.asarray(matrix, dtype=float)
@@ -139,7 +142,7 @@ class LinearModel:
         )
 
     def discretize(self, dt: float | None = None, n_epochs: int | None = None,
-                   method: str = "expm", epochs=None) -> DiscreteModel:
+                   method: str = "expm", epochs=None, hold: str = "left") -> DiscreteModel:
         """Discrete ``F_k, Q_k`` (and ``H_k, R_k``) at steps or measurement epochs.
 
         Parameters
@@ -149,12 +152,19 @@ class LinearModel:
             whose steps come from ``t``.
         n_epochs : int, optional
             Number of epochs for a constant model (default ``n + 1``).
-        method : {"expm", "euler"}
-            Matrix exponential + Van Loan (default) or the papers' Euler form.
+        method : {"expm", "series", "euler"}
+            Matrix exponential + Van Loan (default), the same with Van Loan's integral by
+            its Taylor series (fast for short IMU steps), or the papers' Euler form
+            (see :mod:`navlib.discretize`).
         epochs : array of int, optional
             Sample indices of the measurement epochs of a trajectory model; per-step
             transitions are chained between them (spec excitability.md A8). Default: every
             sample.
+        hold : {"left", "mean"}
+            Matrices used over the step ``[t_j, t_j+1]`` of a trajectory model: the left
+            sample (the papers' ``A(k)``, first order in the step) or the mean of the two
+            samples (trapezoidal first Magnus term, second order: on a 1.5 Hz spinning
+            flight at 100 Hz the 1 s transition error drops from 8e-2 to 8e-4).
         """
         if self.t is None:
             if dt is None:
@@ -168,17 +178,29 @@ class LinearModel:
             Q = np.broadcast_to(Q1, (n_epochs - 1, self.n, self.n))
             return DiscreteModel(t, F, Q, _stack(self.H, n_epochs), _stack(self.R, n_epochs),
                                  self.state_names, self.measurement_names, self.P0)
+        if hold not in HOLDS:
+            raise NavlibInputError(f"hold: expected one of {HOLDS}, got {hold!r}")
         n_samples = self.t.size
-        A = _stack(self.A, n_samples)[:-1]
-        G = _stack(self.G, n_samples)[:-1]
-        F_steps, Q_steps = discretize_steps(A, G, self.Qc, np.diff(self.t), method)
         epochs = np.arange(n_samples) if epochs is None else np.asarray(epochs, dtype=int)
-        if epochs.size == n_samples and np.array_equal(epochs, np.arange(n_samples)):
+        if (epochs.ndim != 1 or epochs.size < 2 or epochs[0] < 0
+                or epochs[-1] >= n_samples or np.any(np.diff(epochs) <= 0)):
+            raise NavlibInputError(
+                f"epochs: expected >= 2 increasing sample indices in [0, {n_samples - 1}]"
+            )
+        span = slice(int(epochs[0]), int(epochs[-1]) + 1)
+        A = _stack(self.A, n_samples)[span]
+        G = _stack(self.G, n_samples)[span]
+        if hold == "mean":
+            A, G = 0.5 * (A[:-1] + A[1:]), 0.5 * (G[:-1] + G[1:])
+        else:
+            A, G = A[:-1], G[:-1]
+        F_steps, Q_steps = discretize_steps(A, G, self.Qc, np.diff(self.t[span]), method)
+        if epochs.size == F_steps.shape[0] + 1:
             F, Q = F_steps, Q_steps
         else:
-            F, Q = chain(F_steps, Q_steps, epochs)
-        return DiscreteModel(self.t[epochs], F, Q, _stack(self.H, n_samples)[epochs],
-                             _stack(self.R, n_samples)[epochs], self.state_names,
+            F, Q = chain(F_steps, Q_steps, epochs - epochs[0])
+        return DiscreteModel(self.t[epochs], F, Q, np.array(_stack(self.H, n_samples)[epochs]),
+                             np.array(_stack(self.R, n_samples)[epochs]), self.state_names,
                              self.measurement_names, self.P0)
 
     def describe(self) -> pd.DataFrame:

@@ -34,7 +34,6 @@ import numpy as np
 
 from navlib import earth, units
 from navlib._validation import finite_scalar, reject_unknown
-from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.models.base import DiscreteModel, LinearModel
 from navlib.rotations import skew
@@ -325,134 +324,6 @@ def initial_covariance(sensors=None, **sigmas) -> np.ndarray:
     return _initial_covariance(sigmas, "initial_covariance", sensors)[0]
 
 
-DISCRETIZATION_METHODS = ("series", "expm")
-
-_TAYLOR_DEGREE = 12
-_TAYLOR_THETA = 0.5
-
-
-def expm_taylor(X) -> np.ndarray:
-    """Batched matrix exponential of ``X`` (K, n, n) by Taylor series with scaling and squaring.
-
-    All matrices share one scaling ``2^-s`` that brings the largest 1-norm below 0.5; the
-    degree-12 Taylor polynomial then has a truncation error below ``0.5^13/13! ~ 2e-14``
-    relative, and ``s`` squarings follow. For the 21-state model at 100 Hz
-    (``|A dt|_1 <= 1.6``) this is 14 batched products, about 20x faster than
-    :func:`scipy.linalg.expm`, which treats each matrix of a stack separately.
-    """
-    X = np.asarray(X, dtype=float)
-    norm = float(np.max(np.sum(np.abs(X), axis=-2))) if X.size else 0.0
-    squarings = max(0, int(np.ceil(np.log2(norm / _TAYLOR_THETA)))) if norm > 0 else 0
-    X = X / 2.0**squarings
-    diag = np.arange(X.shape[-1])
-    E = X / _TAYLOR_DEGREE
-    E[..., diag, diag] += 1.0
-    for k in range(_TAYLOR_DEGREE - 1, 0, -1):  # Horner: E <- I + X E / k
-        E = X @ E
-        E *= 1.0 / k
-        E[..., diag, diag] += 1.0
-    for _ in range(squarings):
-        E = E @ E
-    return E
-
-
-def step_transitions(A, G, Qc, dt, order: int = 4):
-    """Per-step ``F = expm(A dt)`` and Van Loan ``Q`` by its Taylor series.
-
-    ``F`` comes from :func:`expm_taylor`. ``Q = int_0^dt e^{As} W e^{A's} ds =
-    sum_k L_k dt^{k+1}/(k+1)!`` with ``W = G Qc G'``, ``L_0 = W``, ``L_k = A L_{k-1} +
-    L_{k-1} A'``. Over one 10 ms IMU step the series is accurate to
-    ``~|A dt|^(order+1)/(order+2)!`` relative on the coupled blocks (the spin term
-    ``|omega| dt ~ 0.13`` at 2 Hz), and it avoids the (2n x 2n) exponential of Van Loan's
-    block form (spec A8 allows even the trapezoid rule here).
-
-    Parameters
-    ----------
-    A : ndarray (K, n, n)
-    G : ndarray (K, n, q)
-    Qc : ndarray (q, q)
-    dt : ndarray (K,)
-    order : int
-        Highest ``k`` kept in the series.
-
-    Returns
-    -------
-    F, Q : ndarray (K, n, n)
-    """
-    step = np.asarray(dt, dtype=float)[:, None, None]
-    F = expm_taylor(A * step)
-    GQ = G @ Qc
-    W = GQ @ np.swapaxes(G, 1, 2)
-    L = W
-    Q = W * step
-    factor = step.copy()
-    for k in range(1, order + 1):
-        AL = A @ L
-        L = AL + np.swapaxes(AL, 1, 2)
-        factor = factor * step / (k + 1)
-        Q = Q + L * factor
-    return F, 0.5 * (Q + np.swapaxes(Q, 1, 2))
-
-
-HOLDS = ("mean", "left")
-
-
-def discretize_at_epochs(model: LinearModel, epochs, method: str = "series",
-                         hold: str = "mean") -> DiscreteModel:
-    """Chain a trajectory model's IMU steps to measurement ``epochs`` (spec A8).
-
-    Parameters
-    ----------
-    model : LinearModel
-        A trajectory model (``A``, ``G`` stacked over its samples ``t``).
-    epochs : array of int
-        Increasing sample indices of the measurement epochs.
-    method : {"series", "expm"}
-        ``"series"``: :func:`step_transitions` (batched Taylor ``expm`` for F, Taylor-series
-        Van Loan for Q; fast). ``"expm"``: Van Loan's block exponential
-        (:func:`navlib.discretize.discretize_steps`; the reference, ~10x slower for n = 21).
-    hold : {"mean", "left"}
-        Matrices over the step ``[t_j, t_j+1]``: the mean of the two samples (trapezoidal
-        first Magnus term, second order: 8e-4 relative error of a 1 s transition on a 1.5 Hz
-        spinning test flight at 100 Hz) or the left sample as :meth:`LinearModel.discretize`
-        does (first order: 8e-2 on the same flight). Default ``"mean"``.
-    """
-    if method not in DISCRETIZATION_METHODS:
-        raise NavlibInputError(
-            f"method: expected one of {DISCRETIZATION_METHODS}, got {method!r}"
-        )
-    if hold not in HOLDS:
-        raise NavlibInputError(f"hold: expected one of {HOLDS}, got {hold!r}")
-    if model.t is None:
-        raise NavlibInputError("model: expected a trajectory model (with sample times t)")
-    epochs = np.asarray(epochs, dtype=int)
-    n_samples = model.t.size
-    if (epochs.ndim != 1 or epochs.size < 2 or epochs[0] < 0 or epochs[-1] >= n_samples
-            or np.any(np.diff(epochs) <= 0)):
-        raise NavlibInputError(
-            f"epochs: expected >= 2 increasing sample indices in [0, {n_samples - 1}]"
-        )
-    first, last = int(epochs[0]), int(epochs[-1])
-    A = model.A[first:last + 1]
-    G = model.G[first:last + 1]
-    if hold == "mean":
-        A, G = 0.5 * (A[:-1] + A[1:]), 0.5 * (G[:-1] + G[1:])
-    else:
-        A, G = A[:-1], G[:-1]
-    dt = np.diff(model.t[first:last + 1])
-    if method == "series":
-        F_steps, Q_steps = step_transitions(A, G, model.Qc, dt)
-    else:
-        F_steps, Q_steps = discretize_steps(A, G, model.Qc, dt, "expm")
-    F, Q = chain(F_steps, Q_steps, epochs - first)
-    H = np.broadcast_to(model.H, (n_samples, *model.H.shape[-2:])) if model.H.ndim == 2 \
-        else model.H
-    R = np.broadcast_to(model.R, (n_samples, *model.R.shape[-2:])) if model.R.ndim == 2 \
-        else model.R
-    return DiscreteModel(model.t[epochs], F, Q, np.array(H[epochs]), np.array(R[epochs]),
-                         model.state_names, model.measurement_names, model.P0)
-
-
 def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "series",
                      hold: str = "mean", sensors=None, **model_options) -> DiscreteModel:
     """The 21-state model discretised to the GNSS epochs of ``trajectory`` (cached).
@@ -468,7 +339,8 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
     gnss_rate_hz : float
         GNSS rate; epochs are the samples nearest a regular grid (``trajectory.at_rate``).
     method, hold
-        See :func:`discretize_at_epochs`.
+        See :meth:`navlib.models.LinearModel.discretize`; the defaults (series Van Loan,
+        two-sample mean hold) are fast and second order in the IMU step.
     sensors : None, str or mapping
         Sensor preset name or noise densities (see :func:`imu_noise_densities`).
     **model_options
@@ -495,7 +367,8 @@ def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key):
     if isinstance(sensors, tuple):
         sensors = dict(sensors)
     model = ecef21(trajectory, sensors, **dict(key))
-    discrete = discretize_at_epochs(model, trajectory.at_rate(gnss_rate_hz), method, hold)
+    discrete = model.discretize(epochs=trajectory.at_rate(gnss_rate_hz), method=method,
+                                hold=hold)
     for arr in (discrete.F, discrete.Q, discrete.H, discrete.R, discrete.P0, discrete.t):
         arr.flags.writeable = False  # shared by every caller of the cache
     return discrete
