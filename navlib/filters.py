@@ -1,7 +1,7 @@
 """Navigation filters: a closed-loop INS/GNSS error-state EKF and a linear error-state
 Monte-Carlo simulator (spec launcher.md §6.2-6.4; issue 5).
 
-Linear mode — :func:`simulate_linear`
+Linear mode — :func:`simulate_linear` (:func:`prepare_linear` caches the covariance)
     Truth error ``x_{k+1} = F_k x_k + w_k`` with ``w_k ~ N(0, Q_k)`` sampled, measured as
     ``z_k = H_k x_k + v_k`` with ``v_k ~ N(0, R_k)``, filtered by the Kalman filter of the
     same model. The covariance recursion is data independent, so it is computed once
@@ -37,17 +37,26 @@ from scipy import stats
 
 from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import kalman_covariance
+from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.models.base import DiscreteModel, LinearModel
-from navlib.models.ecef import step_transitions
 from navlib.outliers import as_outliers, channel_profile, linear_mapping
 from navlib.rotations import skew, unskew
 
 __all__ = [
+    "EKFResult",
+    "EKFRun",
+    "LinearFilter",
     "LinearSimulation",
+    "ReferenceTrajectory",
     "chi2_bounds",
+    "ekf",
     "kalman_gains",
     "linear_steps",
+    "nees_values",
+    "prepare_linear",
+    "simulate_attitude_sensor",
+    "simulate_ekf",
     "simulate_linear",
 ]
 
@@ -131,7 +140,7 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
     method : {"euler", "expm"}
         For a LinearModel: the papers' ``F = I + A dt``, ``Q = G Qc G' dt`` (Beaudoin eq. 1,
         ``A_lc = I + s_t F``; default), or the zero-order-hold exponential with the Van
-        Loan ``Q`` (batched series, :func:`navlib.models.ecef.step_transitions`). The
+        Loan ``Q`` (batched series, :func:`navlib.discretize.discretize_steps`). The
         matrices over step k are those of sample k.
     P0 : ndarray (n, n), optional
         Initial covariance (default the model's).
@@ -159,7 +168,7 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
             L = (G @ _psd_sqrt(Qc)) * np.sqrt(dt)[:, None, None]
             Q = L @ np.swapaxes(L, 1, 2)
         else:
-            F, Q = step_transitions(A, G, Qc, dt)
+            F, Q = discretize_steps(A, G, Qc, dt, method="series")
             Gamma = _phi1_series(A, dt) @ G
             L = _psd_sqrt(Q)
         H = np.broadcast_to(model.H, (N, *model.H.shape[-2:]))
@@ -250,8 +259,9 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
     return lo, hi
 
 
-def _nees(err, P, rtol: float = 1e-10):
-    """NEES ``e' P^+ e`` of errors (K, R, n) against covariances (K, n, n).
+def nees_values(err, P, rtol: float = 1e-10):
+    """NEES ``e' P^+ e`` of errors (K, R, n) against covariances (K, n, n); returns the
+    NEES (K, R) and its degrees of freedom (K,).
 
     Scaled to a correlation matrix first (states of very different units); directions with
     (relative) zero variance are left out, and the degrees of freedom are the kept rank.
@@ -408,7 +418,7 @@ class LinearSimulation:
                              "dof": self.nis_dof, "lower": lo, "upper": hi})
 
 
-def _measured_mask(N: int, t, update_every, measured) -> np.ndarray:
+def _measured_mask(N: int, update_every, measured) -> np.ndarray:
     if measured is not None:
         mask = np.asarray(measured, dtype=bool)
         if mask.shape != (N,):
@@ -422,18 +432,70 @@ def _measured_mask(N: int, t, update_every, measured) -> np.ndarray:
     return mask
 
 
+@dataclass(frozen=True, eq=False)
+class LinearFilter:
+    """A linear model with its (data-independent) Kalman covariance and gains.
+
+    Built by :func:`prepare_linear`; :func:`simulate_linear` reuses it across calls (the
+    covariance recursion dominates the cost of a short Monte-Carlo batch).
+
+    Attributes
+    ----------
+    steps : LinearSteps
+    measured : ndarray (N,) of bool
+        Update epochs.
+    gains : Gains
+    covariance : navlib.covariance.CovarianceResult
+        Prior and posterior covariances at every epoch.
+    """
+
+    steps: LinearSteps
+    measured: np.ndarray
+    gains: Gains
+    covariance: object
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.steps.t
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(self.steps.state_names)
+
+
+def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measured=None,
+                   P0=None, noise_input=None, noise_names: Sequence[str] = ()
+                   ) -> LinearFilter:
+    """Discretise a model and run its Kalman covariance recursion once.
+
+    Parameters as in :func:`simulate_linear`. The covariance is
+    :func:`navlib.covariance.kalman_covariance` (Joseph form), the gains
+    :func:`kalman_gains` from its priors.
+    """
+    if isinstance(model, LinearFilter):
+        return model
+    steps = linear_steps(model, method=method, P0=P0, noise_input=noise_input,
+                         noise_names=noise_names)
+    mask = _measured_mask(steps.t.size, update_every, measured)
+    cov = kalman_covariance(steps.F, steps.Q, steps.H, steps.R, steps.P0, measured=mask,
+                            t=steps.t, state_names=steps.state_names)
+    return LinearFilter(steps, mask, kalman_gains(cov.P_prior, steps.H, steps.R, mask), cov)
+
+
 def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
                     noise: bool = True, initial_error: bool = True, method: str = "euler",
                     update_every: int = 1, measured=None, record_every: int | None = None,
                     P0=None, noise_input=None, noise_names: Sequence[str] = (),
-                    progress: Callable[[int, int], None] | None = None,
-                    steps: LinearSteps | None = None, covariance=None) -> LinearSimulation:
+                    progress: Callable[[int, int], None] | None = None) -> LinearSimulation:
     """Monte-Carlo simulation of the linear error-state Kalman filter, runs vectorised.
 
     Parameters
     ----------
-    model : LinearModel (trajectory model) or DiscreteModel
-        E.g. ``navlib.models.launcher(...)`` or ``navlib.models.ecef21(traj)``.
+    model : LinearModel (trajectory model), DiscreteModel or LinearFilter
+        E.g. ``navlib.models.launcher(...)`` or ``navlib.models.ecef21(traj)``; a
+        :class:`LinearFilter` from :func:`prepare_linear` reuses its covariance and gains
+        (``method``, ``update_every``, ``measured``, ``P0``, ``noise_input`` are then
+        ignored).
     runs : int
         Number of Monte-Carlo runs (batch axis).
     seed, rng
@@ -460,9 +522,6 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         Noise input matrices for a DiscreteModel (IMU outliers only).
     progress : callable(done, total), optional
         Called every few hundred steps (e.g. to advance a progress bar).
-    steps, covariance : optional
-        Pre-computed :func:`linear_steps` and :func:`navlib.covariance.kalman_covariance`
-        results to reuse across calls with the same model and update epochs.
 
     Returns
     -------
@@ -475,9 +534,10 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     ``Gamma_k u(t_k)``. The covariance and gains are the same for every run.
     """
     outliers = as_outliers(outliers)
-    if steps is None:
-        steps = linear_steps(model, method=method, P0=P0, noise_input=noise_input,
-                             noise_names=noise_names)
+    prepared = prepare_linear(model, method=method, update_every=update_every,
+                              measured=measured, P0=P0, noise_input=noise_input,
+                              noise_names=noise_names)
+    steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
     runs = int(runs)
     if runs < 1:
         raise NavlibInputError(f"runs: expected >= 1, got {runs}")
@@ -487,13 +547,6 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     t, F, L, H, R = steps.t, steps.F, steps.L, steps.H, steps.R
     N, n = t.size, steps.n
     m = H.shape[-2]
-    mask = _measured_mask(N, t, update_every, measured)
-    if covariance is None:
-        covariance = kalman_covariance(F, steps.Q, H, R, steps.P0, measured=mask, t=t,
-                                       state_names=steps.state_names)
-    elif covariance.P_post.shape != (N, n, n):
-        raise NavlibInputError("covariance: does not match the model's epochs and states")
-    gains = kalman_gains(covariance.P_prior, H, R, mask)
 
     # outliers -> measurement additions (N, m) and noise-channel inputs (N-1, q_in)
     z_add = np.zeros((N, m))
@@ -586,8 +639,8 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
                 x_hat = x_hat @ Fk
         if progress is not None:
             progress(c1, N)
-    P_rec = covariance.P_post[rec]
-    nees, nees_dof = _nees(est_rec - truth_rec, P_rec)
+    P_rec = prepared.covariance.P_post[rec]
+    nees, nees_dof = nees_values(est_rec - truth_rec, P_rec)
     return LinearSimulation(
         t=t[rec], truth=truth_rec, estimate=est_rec, P=P_rec, nees=nees, nees_dof=nees_dof,
         nis_t=t[upd], nis=nis, nis_dof=gains.dof[upd], innovation=innov_rec,
@@ -936,7 +989,7 @@ def _step_matrices(A, G, Qc, dt, method):
         GL = G @ _psd_sqrt(Qc)
         Q = (GL @ np.swapaxes(GL, 1, 2)) * dt[:, None, None]
         return F, Q
-    return step_transitions(A, G, Qc, dt)
+    return discretize_steps(A, G, Qc, dt, method="series")
 
 
 def _joseph_update(P, H, R, innov):

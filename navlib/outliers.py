@@ -52,11 +52,16 @@ outlier time ``t_o``, the recovery window ``W`` and the averaging length ``Delta
   over ``[t_o - Delta, t_o)`` (Monte-Carlo RMS, or the filter sigma when no runs are given);
 * ``residual_vs_3sigma = residual / (3 sigma(t_o + W))``.
 
-Classification: **"recovers"** when ``retained <= recovered_fraction`` (default 0.1: the
-filter removed at least 90 % of the injected error within the window), otherwise
-**"static error"**. The two ratios say how the left-over error compares with the error the
-filter had anyway and with its own 3-sigma: a static error below ``e_pre`` is invisible in
-a single noisy run, one above 3 sigma is a filter that is confidently wrong. A channel the
+Classification: **"recovers"** when ``retained <= exp(-1)``, i.e. the injected error
+decayed by at least one e-folding within the window — equivalently the effective time
+constant ``tau = W / ln(1 / retained)`` is at most the window; otherwise **"static
+error"**. The threshold is a property of the decay, not of the paper's outcomes: an
+observable state corrected by a filter of bandwidth ``1/tau_f`` loses ``1 - exp(-W/tau_f)``
+of the injected error, a weakly observable one keeps almost all of it (``tau`` of several
+windows). ``recovered_fraction`` changes the threshold. The two ratios say how the left-over
+error compares with the error the filter had anyway and with its own 3-sigma: a static error
+below ``e_pre`` is invisible in a single noisy run, one above 3 sigma is a filter that is
+confidently wrong. A channel the
 solution does not have (e.g. ``rt_x`` for INS/GPS) gives ``peak = 0`` and the verdict
 ``"unaffected"``.
 """
@@ -301,6 +306,8 @@ class RecoveryScore:
         Largest and final (window-averaged) outlier-induced error, in the quantity's unit.
     retained : float
         ``residual / peak`` (NaN when unaffected).
+    time_constant : float
+        Effective decay time ``window / ln(1 / retained)``, s (inf when nothing decayed).
     pre_error : float
         RMS nominal error just before the outlier.
     sigma_end : float
@@ -315,6 +322,7 @@ class RecoveryScore:
     peak: float
     residual: float
     retained: float
+    time_constant: float
     pre_error: float
     sigma_end: float
     residual_vs_pre: float
@@ -335,7 +343,8 @@ def _norm(x) -> np.ndarray:
 
 def score_recovery(t, induced, *, t_outlier: float, window: float, sigma=None,
                    nominal_error=None, averaging: float = 1.0,
-                   recovered_fraction: float = 0.1, unaffected_tol: float = 0.0
+                   recovered_fraction: float = float(np.exp(-1.0)),
+                   unaffected_tol: float = 0.0
                    ) -> RecoveryScore:
     """Score how an outlier-induced error decays (definition in the module docstring).
 
@@ -350,13 +359,15 @@ def score_recovery(t, induced, *, t_outlier: float, window: float, sigma=None,
         Outlier time and recovery window, s; the window is clipped to the data.
     sigma : ndarray (K,) or (K, p), optional
         Filter standard deviation of the watched quantity (root-sum-square for a vector).
-    nominal_error : ndarray (K,), (K, p), (K, R) or (K, R, p), optional
-        Nominal (outlier-free) estimation errors of one or R runs; their RMS over
+    nominal_error : ndarray, optional
+        Nominal (outlier-free) estimation errors laid out like ``induced`` with an optional
+        run axis after time: (K,) or (K, R) for a scalar, (K, p) or (K, R, p) for a
+        vector. Their RMS over
         ``[t_o - averaging, t_o)`` is ``e_pre``. Without it ``e_pre`` is the sigma there.
     averaging : float
         ``Delta``, s: length of the final averaging window and of the pre-outlier window.
     recovered_fraction : float
-        Threshold on ``retained`` for "recovers" (default 0.1).
+        Threshold on ``retained`` for "recovers" (default ``exp(-1)``: one e-folding).
     unaffected_tol : float
         Peaks at or below this value count as "unaffected".
     """
@@ -367,7 +378,8 @@ def score_recovery(t, induced, *, t_outlier: float, window: float, sigma=None,
     t_outlier = finite_scalar(t_outlier, "t_outlier")
     window = finite_scalar(window, "window", 0.0, low_open=True)
     averaging = finite_scalar(averaging, "averaging", 0.0, low_open=True)
-    recovered_fraction = finite_scalar(recovered_fraction, "recovered_fraction", 0.0, 1.0)
+    recovered_fraction = finite_scalar(recovered_fraction, "recovered_fraction", 0.0, 1.0,
+                                       low_open=True)
     if not t[0] <= t_outlier < t[-1]:
         raise NavlibInputError(f"t_outlier: {t_outlier} s is outside the data "
                                f"[{t[0]:g}, {t[-1]:g}) s")
@@ -388,12 +400,13 @@ def score_recovery(t, induced, *, t_outlier: float, window: float, sigma=None,
     sigma_end = float(sig[k_end]) if sig is not None else np.nan
     if nominal_error is not None:
         e = np.asarray(nominal_error, dtype=float)
-        if e.shape[0] != t.size:
-            raise NavlibInputError(f"nominal_error: expected {t.size} samples on axis 0")
-        if e.ndim == 3 or (e.ndim == 2 and np.ndim(induced) == 1):
-            e = _norm(e) if e.ndim == 3 else np.abs(e)      # (K, R)
-        else:
-            e = _norm(e)[:, None]                             # (K, 1)
+        vector = np.ndim(induced) == 2
+        if e.shape[0] != t.size or e.ndim not in ((2, 3) if vector else (1, 2)):
+            raise NavlibInputError(
+                f"nominal_error: expected ({t.size}[, R]{', p' if vector else ''}), got "
+                f"{e.shape}"
+            )
+        e = _norm(e) if vector else np.abs(e)               # (K,) or (K, R)
         pre = float(np.sqrt(np.mean(e[before] ** 2))) if before.any() else np.nan
     elif sig is not None and before.any():
         pre = float(np.sqrt(np.mean(sig[before] ** 2)))
@@ -401,6 +414,8 @@ def score_recovery(t, induced, *, t_outlier: float, window: float, sigma=None,
         pre = np.nan
     with np.errstate(divide="ignore", invalid="ignore"):
         retained = residual / peak if peak > 0 else np.nan
+        tau = (window / np.log(1.0 / retained) if 0 < retained < 1
+               else (0.0 if retained == 0 else np.inf)) if peak > 0 else np.nan
         vs_pre = residual / pre if pre > 0 else np.nan
         vs_3s = residual / (3.0 * sigma_end) if sigma_end > 0 else np.nan
     if peak <= unaffected_tol:
@@ -409,7 +424,8 @@ def score_recovery(t, induced, *, t_outlier: float, window: float, sigma=None,
         verdict = "recovers"
     else:
         verdict = "static error"
-    return RecoveryScore(peak, residual, float(retained), pre, sigma_end, float(vs_pre),
+    return RecoveryScore(peak, residual, float(retained), float(tau), pre, sigma_end,
+                         float(vs_pre),
                          float(vs_3s), verdict, t_outlier, window, recovered_fraction)
 
 
