@@ -190,6 +190,18 @@ def test_stationary_flight(still):
     assert e["bg_z"] < 0.1
 
 
+def test_flight_ending_between_gnss_epochs(still_records):
+    """Segments cover the fitted flight even when its end falls between model epochs."""
+    imu, gnss = still_records
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FlightDataWarning)
+        result = assess_flight(imu[imu["t"] <= 20.5], gnss)
+    table = result.segment_table
+    assert table["t_end"].iloc[-1] == pytest.approx(20.5)
+    assert result.model.t[-1] == pytest.approx(20.0)
+    assert table["n_epochs"].tolist() == [21]
+
+
 def test_stationary_without_fallback_names_the_heading(still_records):
     with pytest.raises(NavlibInputError, match="heading_deg"):
         assess_flight(*still_records, heading_fallback_deg=None)

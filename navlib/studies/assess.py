@@ -428,7 +428,7 @@ class FlightAssessment:
             table = self.automatic.segments
         else:
             table = segments
-        table = _segment_table(table, self.model, self.automatic)
+        table = _segment_table(table, self.model, self.automatic, self.trajectory.t)
         excit = _excitability(self.model, table, th["eta"])
         sens = self.sensability if th["nu"] == self.sensability.nu else \
             self.sensability.with_nu(th["nu"])
@@ -455,9 +455,10 @@ def _thresholds(values: Mapping) -> dict:
     }
 
 
-def _segment_table(segments, model, automatic: Segmentation) -> pd.DataFrame:
-    """Normalise ``segments`` and count the model epochs each holds (at least 2 needed)."""
-    table = segments_table(segments, float(model.t[0]), float(model.t[-1]), automatic)
+def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.DataFrame:
+    """Normalise ``segments`` (inside the fitted flight ``t_flight``) and count the model
+    epochs each holds (at least 2 needed; the last epoch may precede the flight's end)."""
+    table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
     t = model.t
     counts = [int(np.count_nonzero((t >= a - 1e-9) & (t <= b + 1e-9)))
               for a, b in zip(table["t_start"], table["t_end"], strict=True)]
@@ -582,7 +583,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpa
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              **model_options)
     table = _segment_table(automatic.segments if segments is None else segments, model,
-                           automatic)
+                           automatic, trajectory.t)
     excit = _excitability(model, table, thresholds["eta"])
     sens = sensability_model(model, nu=thresholds["nu"])
     options = {"preset": preset, "gnss_rate_hz": gnss_rate_hz, "gnss_sigma_m": sigma,
