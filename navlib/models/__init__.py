@@ -1,8 +1,11 @@
 """Linear error models (spec api.md "Models").
 
 ``LinearModel`` (continuous, with ``subset`` and ``discretize``) and ``DiscreteModel``
-(``t, F, Q, H, R`` at epochs). Builders: ``ssac``, ``launcher``, ``simplified_gps_bias``,
-``ecef21`` live in their own modules and are exported here.
+(``t, F, Q, H, R`` at epochs), and their builders:
+
+* ``ecef21`` / ``ecef21_at_epochs``: the 21-state ECEF model of España et al. (2019);
+* ``launcher`` / ``simplified_gps_bias``: the launcher models of Beaudoin et al. (2018);
+* ``ssac``: the stationary local-level models of Silva et al. (2017).
 """
 
 from navlib.models.base import DiscreteModel, LinearModel
@@ -10,7 +13,7 @@ from navlib.models.ecef import ecef21, ecef21_at_epochs
 from navlib.models.launcher import launcher, simplified_gps_bias
 from navlib.models.ssac import ssac
 
-__all__ = ["DiscreteModel", "LinearModel"]
-__all__ += ["ecef21", "ecef21_at_epochs"]
-__all__ += ["ssac"]
-__all__ += ["launcher", "simplified_gps_bias"]
+__all__ = [
+    "DiscreteModel", "LinearModel", "ecef21", "ecef21_at_epochs", "launcher",
+    "simplified_gps_bias", "ssac",
+]
