@@ -556,6 +556,11 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         ok = False
         for ch in o.channels:
             mp = linear_mapping(ch, steps.measurement_names, steps.noise_names)
+            if mp.target == "noise" and steps.Gamma is None:
+                raise NavlibInputError(
+                    f"outliers: IMU channel {ch!r} needs the model's noise input; pass a "
+                    "LinearModel or noise_input= with noise_names="
+                )
             if mp.index is None:
                 continue
             values = mp.sign * channel_profile((o,), ch, t)
@@ -563,11 +568,6 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
                 ok = True
                 z_add[:, mp.index] += values
             else:
-                if steps.Gamma is None:
-                    raise NavlibInputError(
-                        f"outliers: IMU channel {ch!r} needs the model's noise input; pass a "
-                        "LinearModel or noise_input= with noise_names="
-                    )
                 ok = True
                 u_cols.append(mp.index)
                 u_vals.append(values[:-1])
@@ -1066,8 +1066,9 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
         Attitude-sensor body -> ECEF attitudes (``*_att`` solutions).
     reference : (t, Rotation) or callable, optional
         Reference-trajectory attitudes for ``*_rt`` solutions, or a callable
-        ``reference(k, t_k, C_nav) -> (3, 3)`` called at every IMU sample with the current
-        navigation attitude (see :class:`ReferenceTrajectory`).
+        ``reference(k, t_k, C_nav_prev) -> (3, 3)`` called at every IMU sample with the
+        posterior navigation attitude of the previous call (None at the first; see
+        :class:`ReferenceTrajectory`).
     gnss_velocity_sigma : float, optional
         ecef21 only: use GNSS velocity with this sigma (m/s).
     initial_parameters : dict, optional
@@ -1145,7 +1146,7 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
             raise NavlibInputError(f"attitude: solution {solution!r} needs attitude-sensor data")
         ta, Ca = _rotations(attitude, "attitude")
         add("att", _epoch_index(t, ta, "attitude"), Ca)
-    ref_callable = None
+    ref_callable = ref_nav = None
     if "rt" in rows:
         if reference is None:
             raise NavlibInputError(f"reference: solution {solution!r} needs reference-"
@@ -1214,7 +1215,6 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
             k = w0 + j
             if k in events and (j > 0 or k == 0):
                 zs, sel = [], []
-                dx_att = x[att_i]
                 for kind, value in events[k]:
                     if kind not in rows:
                         continue
@@ -1234,8 +1234,7 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
                         z = _rotvec(value @ C_hat.T)
                     else:   # rt
                         if ref_callable is not None:
-                            C_nav = (_exp(dx_att) @ C_hat)
-                            C_ref = np.asarray(ref_callable(k, t[k], C_nav), dtype=float)
+                            C_ref = np.asarray(ref_callable(k, t[k], ref_nav), dtype=float)
                         else:
                             C_ref = value
                         z = _rotvec(C_hat.T @ C_ref)
@@ -1251,6 +1250,8 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
                     x = x + K @ innov
                     full = np.full(m_all, np.nan)
                     full[sel] = innov
+                    if ref_callable is not None:
+                        ref_nav = _exp(x[att_i]) @ Cw[j]      # posterior navigation attitude
                     rec.append((j, x.copy(), P.copy() if keep_covariance else None,
                                 np.sqrt(np.clip(np.diag(P), 0, None)), full,
                                 float(innov @ S_pinv @ innov), dof))
@@ -1317,8 +1318,10 @@ class ReferenceTrajectory:
     truth and filter model agree. Outliers on the ``rt`` channels are added to the emitted
     ``d`` only (the stored reference is wrong, the vehicle is not).
 
-    Call it as ``reference(k, t_k, C_nav)`` at consecutive IMU samples (what :func:`ekf`
-    does); ``history()`` returns the true divergence at the calls.
+    Call it as ``reference(k, t_k, C_nav_prev)`` at increasing IMU samples, with the
+    navigation attitude the control used since the previous call (the posterior after that
+    call's update; None at the first call) — what :func:`ekf` does. ``history()`` returns
+    the true divergence at the calls.
     """
 
     def __init__(self, trajectory, *, sigma_wind: float = 0.01, a1_sign: float = 1.0,
@@ -1338,28 +1341,29 @@ class ReferenceTrajectory:
         self._add = np.stack([channel_profile(outliers, f"rt_{a}", self._t) for a in _AXES],
                              axis=1)
         self._x = np.zeros(10)
-        self._last = None        # (k, e) of the previous call
+        self._last = None        # sample index of the previous call
         self._hist_t, self._hist_d = [], []
 
-    def __call__(self, k, t_k, C_nav):
+    def __call__(self, k, t_k, C_nav_prev):
         k = int(k)
-        C_true = self._C[k]
         if self._last is not None:
-            k_prev, e_prev = self._last
+            k_prev = self._last
             if k <= k_prev:
                 raise NavlibInputError("reference: calls must come at increasing samples")
             dt = self._t[k] - self._t[k_prev]
             drive = np.zeros(10)
-            drive[:3] = self._a1 * e_prev
+            if C_nav_prev is not None:
+                C_prev = self._C[k_prev]
+                psi = _rotvec(C_prev @ np.asarray(C_nav_prev).T)
+                drive[:3] = self._a1 * (C_prev.T @ psi)
             if self._noise and self._sigma > 0:
                 drive[7:] = self._sigma * self._rng.standard_normal(3)
             self._x = self._x + dt * (self._M @ self._x + drive)
-        psi = _rotvec(C_true @ np.asarray(C_nav).T)
-        self._last = (k, C_true.T @ psi)
+        self._last = k
         d = self._x[7:].copy()
         self._hist_t.append(self._t[k])
         self._hist_d.append(d)
-        return C_true @ _exp(d + self._add[k])
+        return self._C[k] @ _exp(d + self._add[k])
 
     def history(self) -> pd.DataFrame:
         """True divergence ``d`` (body axes, rad) at the calls: ``t, ref_x, ref_y, ref_z``."""

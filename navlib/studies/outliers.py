@@ -282,7 +282,7 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                 window: float = DEFAULTS["window"], record_every: int | None = None,
                 cache: FilterCache | None = None, divergence: bool = True,
-                **model_options) -> OutlierStudy:
+                time: float | None = None, **model_options) -> OutlierStudy:
     """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
 
     Parameters
@@ -299,6 +299,8 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
         Default: keep epochs about 20 ms apart.
     divergence : bool
         Also compute the T4 launcher-divergence response (Fig. 13).
+    time : float, optional
+        Outlier time, s (default the paper's 50 s).
     """
     traj = trajectory if trajectory is not None else (
         cache.trajectory if cache is not None else default_trajectory())
@@ -322,11 +324,12 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
             test = PAPER_TESTS[tid]
             for shape in shapes:
                 responses[(tid, sol, shape)] = outlier_response(
-                    sol, test.outlier(shape), test.watch, biases=biases, bias_model=bias_model,
-                    window=window, record_every=record_every, cache=cache)
+                    sol, test.outlier(shape, time=time), test.watch, biases=biases,
+                    bias_model=bias_model, window=window, record_every=record_every,
+                    cache=cache)
             if tid == "T4" and sol == "ins_gps_att_rt" and divergence:
                 responses[("T4", sol, "divergence")] = outlier_response(
-                    sol, test.outlier("spike"), "ref_roll", biases=biases,
+                    sol, test.outlier("spike", time=time), "ref_roll", biases=biases,
                     bias_model=bias_model, window=window, record_every=record_every,
                     cache=cache)
     capture = _capture(responses)

@@ -1,0 +1,259 @@
+"""Filters: linear error-state Monte Carlo (gains, consistency, linearity, outlier inputs) and
+the closed-loop EKF (noise-free closure, sigma against the covariance analysis, consistency,
+input errors)."""
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.spatial.transform import Rotation
+
+from navlib import NavlibInputError, filters
+from navlib.covariance import kalman_covariance
+from navlib.models import ecef21, launcher
+from navlib.models.base import DiscreteModel
+from navlib.outliers import Outlier
+from navlib.trajectory import launcher_ascent, sounding_rocket
+
+
+@pytest.fixture(scope="module")
+def short_launcher():
+    return launcher_ascent(duration_s=20.0, rate_hz=20.0)
+
+
+@pytest.fixture(scope="module")
+def rocket():
+    return sounding_rocket()
+
+
+def test_gains_reproduce_joseph_posteriors_with_singular_r(short_launcher):
+    """The batched gains give back kalman_covariance's posteriors, also with the noise-free
+    RT pseudo-measurement (R singular: pseudo-inverse path)."""
+    for solution in ("ins_gps", "ins_gps_att_rt"):
+        prep = filters.prepare_linear(launcher(solution, "GAP", "markov", short_launcher))
+        cov, K = prep.covariance, prep.gains.K
+        n = cov.n
+        for k in (0, 7, 150, len(cov.t) - 1):
+            H, R = prep.steps.H[k], prep.steps.R[k]
+            IKH = np.eye(n) - K[k] @ H
+            P = IKH @ cov.P_prior[k] @ IKH.T + K[k] @ R @ K[k].T
+            np.testing.assert_allclose(P, cov.P_post[k], rtol=1e-8,
+                                       atol=1e-12 * np.abs(cov.P_post[k]).max())
+
+
+def test_chi2_bounds_known_values():
+    lo, hi = filters.chi2_bounds(3, runs=1)
+    assert lo == pytest.approx(0.2158, abs=1e-4) and hi == pytest.approx(9.348, abs=1e-3)
+    lo, hi = filters.chi2_bounds(3, runs=100)
+    assert lo < 3 < hi and hi - lo < 1.0
+    with pytest.raises(NavlibInputError, match="runs"):
+        filters.chi2_bounds(3, runs=0)
+
+
+@pytest.mark.parametrize("solution,biases", [("ins_gps", "GA"), ("ins_gps_att_rt", "GAP")])
+def test_monte_carlo_nees_nis_inside_chi2_bounds(short_launcher, solution, biases):
+    """Consistency evidence: on nominal data the run-averaged NEES and NIS stay inside their
+    95 % chi-square bounds at most epochs and average to their degrees of freedom."""
+    model = launcher(solution, biases, "markov", short_launcher)
+    sim = filters.simulate_linear(model, runs=200, seed=11)
+    c = sim.consistency()
+    assert c["nis"] >= 0.9 and c["nees"] >= 0.85
+    assert 0.95 < c["nis_mean_over_dof"] < 1.05
+    assert 0.9 < c["nees_mean_over_dof"] < 1.1
+    # the RT pseudo-measurement is noise-free: one 3-D direction of P is singular
+    if solution.endswith("_rt"):
+        assert sim.nees_dof[-1] == model.n - 3
+
+
+def test_linearity_outlier_response_is_exact(short_launcher):
+    """Faulty run minus nominal run (same seed) equals the noise-free response."""
+    model = filters.prepare_linear(launcher("ins_gps_rt", "GA", "markov", short_launcher))
+    outs = [Outlier("gyro_x", 10.0, 0.002), Outlier("rt_x", 12.0, 0.002, "step")]
+    faulty = filters.simulate_linear(model, runs=3, seed=5, outliers=outs)
+    nominal = filters.simulate_linear(model, runs=3, seed=5)
+    resp = filters.simulate_linear(model, outliers=outs, noise=False, initial_error=False)
+    diff = faulty.error - nominal.error
+    scale = np.abs(resp.error).max(axis=(0, 1))
+    np.testing.assert_allclose(diff, np.broadcast_to(resp.error, diff.shape),
+                               atol=1e-9 * scale.max())
+    assert faulty.applied == (True, True)
+
+
+def test_gyro_outlier_enters_through_minus_T_B_E(short_launcher):
+    """A roll-gyro spike u over one Euler step adds -T_B^E [u dt, 0, 0] to psi (ECEF)."""
+    model = launcher("ins_gps", "", "none", short_launcher)
+    t = short_launcher.t
+    k = int(np.argmin(np.abs(t - 10.0)))
+    u = 0.002
+    resp = filters.simulate_linear(model, outliers=Outlier("gyro_x", 10.0, u), noise=False,
+                                   initial_error=False, record_every=1)
+    psi = resp.state_index(["psi_x", "psi_y", "psi_z"])
+    dt = t[k + 1] - t[k]
+    expected = -short_launcher.attitude[k].as_matrix()[:, 0] * u * dt
+    np.testing.assert_allclose(resp.truth[k + 1, 0, psi], expected, rtol=1e-12)
+    assert np.all(resp.truth[: k + 1] == 0.0)
+
+
+def test_expm_noise_input_matches_block_exponential(short_launcher):
+    model = launcher("ins_gps", "GA", "markov", short_launcher)
+    steps = filters.linear_steps(model, method="expm")
+    k = 100
+    dt = model.t[k + 1] - model.t[k]
+    n, q = model.n, model.G.shape[-1]
+    block = np.zeros((n + q, n + q))
+    block[:n, :n] = model.A[k] * dt
+    block[:n, n:] = model.G[k] * dt
+    E = expm(block)
+    np.testing.assert_allclose(steps.F[k], E[:n, :n], rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(steps.Gamma[k], E[:n, n:], rtol=1e-9, atol=1e-16)
+    np.testing.assert_allclose(steps.L[k] @ steps.L[k].T, steps.Q[k], rtol=1e-6,
+                               atol=1e-12 * np.abs(steps.Q[k]).max())
+
+
+def test_discrete_model_needs_noise_input_for_imu_outliers(short_launcher):
+    model = launcher("ins_gps", "GA", "markov", short_launcher)
+    steps = filters.linear_steps(model)
+    dm = DiscreteModel(steps.t, steps.F, steps.Q, steps.H, steps.R, model.state_names,
+                       model.measurement_names, model.P0)
+    with pytest.raises(NavlibInputError, match="noise input"):
+        filters.simulate_linear(dm, outliers=Outlier("gyro_x", 5.0, 0.01))
+    ok = filters.simulate_linear(dm, outliers=Outlier("gyro_x", 5.0, 0.01), noise=False,
+                                 initial_error=False, noise_input=steps.Gamma,
+                                 noise_names=model.noise_names)
+    ref = filters.simulate_linear(model, outliers=Outlier("gyro_x", 5.0, 0.01), noise=False,
+                                  initial_error=False)
+    np.testing.assert_allclose(ok.truth, ref.truth)
+    meas = filters.simulate_linear(dm, outliers=Outlier("gnss_vel", 5.0, 3.0), noise=False,
+                                   initial_error=False)
+    assert meas.applied == (True,) and np.abs(meas.estimate).max() > 0
+
+
+def test_update_every_and_record_every(short_launcher):
+    model = launcher("ins_gps", "GA", "markov", short_launcher)
+    sim = filters.simulate_linear(model, runs=2, seed=0, update_every=10, record_every=7)
+    assert sim.nis_t.size == int(np.ceil(len(short_launcher.t) / 10))
+    assert sim.t[-1] == short_launcher.t[-1] and np.all(np.diff(sim.index[:-1]) == 7)
+    frame = sim.to_frame(states=["psi_x"], runs=[1])
+    assert set(frame.columns) >= {"t", "run", "state", "truth", "estimate", "sigma"}
+    assert len(frame) == sim.t.size
+
+
+def test_bad_arguments(short_launcher):
+    model = launcher("ins_gps", "GA", "markov", short_launcher)
+    with pytest.raises(NavlibInputError, match="runs"):
+        filters.simulate_linear(model, runs=0)
+    with pytest.raises(NavlibInputError, match="seed, rng"):
+        filters.simulate_linear(model, seed=1, rng=np.random.default_rng(1))
+    with pytest.raises(NavlibInputError, match="method"):
+        filters.simulate_linear(model, method="rk4")
+    with pytest.raises(NavlibInputError, match="measured"):
+        filters.simulate_linear(model, measured=[True, False])
+    with pytest.raises(NavlibInputError, match="model"):
+        filters.simulate_linear("launcher")
+
+
+def test_rotation_helpers_match_scipy():
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(50, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    angles = np.repeat([1e-7, 1e-5, 1e-3, 0.5, 2.0, 2.9, 3.05, 3.13, 0.0, 1.0], 5)
+    phi = axes * angles[:, None]
+    C = filters._exp(phi)
+    np.testing.assert_allclose(C, Rotation.from_rotvec(phi).as_matrix(), atol=1e-13)
+    np.testing.assert_allclose(filters._rotvec(C), phi, atol=1e-9)
+
+
+# --- EKF --------------------------------------------------------------------------------------
+
+
+def test_ekf_noise_free_closure(short_launcher):
+    """Exact IMU, exact GNSS, no initial error: the closed loop stays on the truth."""
+    run = filters.simulate_ekf(short_launcher, solution="ins_gps_att", biases="GAP",
+                               noise=False, initial_error=False, gnss_rate_hz=20.0)
+    e = run.errors
+    assert np.abs(e[["pos_x", "pos_y", "pos_z"]].to_numpy()).max() < 1e-3
+    assert np.abs(e[["vel_x", "vel_y", "vel_z"]].to_numpy()).max() < 1e-4
+    assert np.abs(e[["att_x", "att_y", "att_z"]].to_numpy()).max() < 1e-7
+
+
+def test_ekf_sigma_matches_covariance_analysis(short_launcher):
+    """The EKF's posterior sigma equals the linear covariance analysis along the truth
+    (launcher model, Euler steps, GNSS + attitude sensor at every sample)."""
+    run = filters.simulate_ekf(short_launcher, solution="ins_gps_att", biases="GA", seed=2,
+                               gnss_rate_hz=20.0)
+    model = launcher("ins_gps_att", "GA", "markov", short_launcher)
+    steps = filters.linear_steps(model)
+    cov = kalman_covariance(steps.F, steps.Q, steps.H, steps.R, steps.P0, t=steps.t)
+    k = np.searchsorted(cov.t, run.result.t)
+    ratio = run.result.sigma / cov.sigma[k]
+    assert np.abs(ratio - 1).max() < 0.02
+
+
+def test_ekf_consistency_rocket(rocket):
+    """21-state EKF on the sounding rocket (1 Hz GNSS position): normalised navigation
+    errors over a few runs have RMS near 1 and the NIS averages its dimension."""
+    z = []
+    nis = []
+    for seed in range(4):
+        run = filters.simulate_ekf(rocket, sensors="motionpak_tactical", model="ecef21",
+                                   seed=seed, model_options={"sensors": "motionpak_tactical"})
+        e = run.errors
+        sig = run.result.sigma_of(["P_x", "P_y", "P_z", "V_x", "V_y", "V_z"])
+        err = e[["pos_x", "pos_y", "pos_z", "vel_x", "vel_y", "vel_z"]].to_numpy()
+        z.append(err / sig)
+        nis.append(run.result.nis / run.result.nis_dof)
+    rms = np.sqrt(np.mean(np.concatenate(z) ** 2))
+    assert 0.7 < rms < 1.4
+    assert 0.8 < np.mean(np.concatenate(nis)) < 1.25
+
+
+def test_ekf_reference_trajectory_consistency(short_launcher):
+    """With the RT pseudo-measurement (noise-free, closed-loop divergence) the attitude
+    errors stay consistent with the filter sigma."""
+    run = filters.simulate_ekf(short_launcher, solution="ins_gps_rt", biases="GA", seed=4,
+                               gnss_rate_hz=20.0)
+    e = run.errors[["att_x", "att_y", "att_z"]].to_numpy()[1:]
+    sig = run.result.sigma_of(["psi_x", "psi_y", "psi_z"])[1:]
+    # epoch 0: the noise-free RT update with psi_ref = 0 exactly pins the attitude
+    assert run.result.sigma_of(["psi_x"])[0, 0] < 1e-15
+    assert np.sqrt(np.mean((e / sig) ** 2)) < 2.0
+    assert run.reference is not None and len(run.reference) == len(short_launcher.t)
+    assert run.result.kept.shape[1] == 10
+
+
+def test_ekf_input_errors(short_launcher):
+    from navlib.sensors import load_preset, simulate_gnss, simulate_imu
+    from navlib.strapdown import StrapdownState
+
+    spec = load_preset("launcher_table1")
+    imu = simulate_imu(short_launcher, spec, seed=0)
+    gnss = simulate_gnss(short_launcher, spec, seed=0)
+    init = StrapdownState.from_trajectory(short_launcher)
+    with pytest.raises(NavlibInputError, match="attitude"):
+        filters.ekf(imu, gnss, initial=init, solution="ins_gps_att")
+    with pytest.raises(NavlibInputError, match="reference"):
+        filters.ekf(imu, gnss, initial=init, solution="ins_gps_rt")
+    with pytest.raises(NavlibInputError, match="gnss"):
+        filters.ekf(imu, gnss.drop(columns="z"), initial=init)
+    bad = gnss.copy()
+    bad["t"] = bad["t"] + 0.03
+    with pytest.raises(NavlibInputError, match="not on an IMU sample"):
+        filters.ekf(imu, bad, initial=init)
+    with pytest.raises(NavlibInputError, match="model"):
+        filters.ekf(imu, gnss, initial=init, model="ned15")
+    res = filters.ekf(imu, gnss, initial=init)
+    frame = res.to_frame()
+    assert {"t", "x", "vx", "qw", "bg_x", "nis"} <= set(frame.columns)
+    assert len(res.sigma_frame()) == res.t.size * len(res.state_names)
+
+
+def test_ecef21_model_builds_at_block(rocket):
+    """The EKF's block adapter gives the builder's own Jacobians on the reference."""
+    model = ecef21(rocket)
+    block = filters._BlockTrajectory(rocket.t[:5], rocket.position[:5], rocket.C_b_e()[:5],
+                                     rocket.specific_force[:5], rocket.angular_rate[:5])
+    fam = filters._family("ecef21", block, {})
+    A, G, H = fam.jacobians(block.t, block.position, block.C_b_e(), block.specific_force,
+                            block.angular_rate)
+    np.testing.assert_allclose(A, model.A[:5])
+    np.testing.assert_allclose(G, model.G[:5])
+    assert H.shape == (5, 3, 21)
