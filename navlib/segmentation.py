@@ -1,8 +1,9 @@
 """Automatic flight-phase segmentation from a trajectory's specific force and angular rate.
 
-A recorded flight is cut into phases whose excitation differs (spec excitability.md §6:
-excitability is computed per segment, the paper's segments being the pad, the boost and
-the coast of the sounding rocket). The phases are read from the kinematics of a (fitted)
+A recorded flight is cut into phases whose excitation differs (spec excitability.md §3, §6:
+excitability is computed per segment; the paper's segments of the sounding rocket are the
+pad [0, 19] s, the powered flight and spin [19, 60] s and the free fall [60, 86] s, where
+``|f| < 0.5 m/s^2``). The phases are read from the kinematics of a (fitted)
 :class:`~navlib.trajectory.Trajectory`, in ECEF, with ``f^e = C_b_e f^b``,
 ``omega_eb^e = C_b_e (omega_ib^b - C_e^b Omega)`` and the kinematic acceleration
 ``a^e = dV/dt = f^e + gamma(P) - 2 Omega x V``:
@@ -14,19 +15,23 @@ rest        ``|V| < rest_speed_m_s``, ``|omega_eb| < rest_rate_deg_s`` and
             ``|a^e| < rest_accel_m_s2``: the vehicle stands (or hovers) still
 powered     tangential specific force ``f_t = f^e . u > powered_accel_m_s2``: a thrust (or
             traction) pushes the vehicle forward along its path ``u``
-turn        ``max(omega_perp, omega_path) > turn_rate_deg_s``: the body rotates about an axis
-            across the path (a spin about the path axis, as a rocket's roll, is excluded),
-            or the velocity direction turns (``omega_path = |V x a| / |V|^2``, counted only
+turn        ``max(omega_perp, omega_path) > turn_rate_deg_s``: the body rotates about axes
+            other than its *roll axis*, the body axis closest to the path (a rocket's spin
+            or a car's roll is excluded; ``omega_perp`` drops that body-axis component of
+            ``omega_eb^b``, so a spin axis a degree off the path does not count as a
+            turn), or the velocity direction turns (``omega_path = |V x a| / |V|^2``, counted only
             above ``turn_speed_m_s``: at lower speed it is dominated by fit noise)
+free_fall   ``|f| < free_fall_m_s2`` (and not powered): no force acts, ballistic flight
+            above the atmosphere (the paper's "near free flight", ``|f| < 0.5 m/s^2``)
 coast       lateral specific force ``|f^e - f_t u| < coast_lateral_m_s2`` (and not powered):
-            nothing but drag along the path acts, ballistic flight or free fall
+            nothing but drag along the path acts (a rocket after burnout in the air)
 cruise      anything else: motion with the weight supported (level flight, driving)
 ==========  ===============================================================================
 
 The path direction ``u`` is ``V/|V|`` above ``direction_speed_m_s``; below it ``u`` is the
 direction of ``a^e`` when ``|a^e| > rest_accel_m_s2`` (a lift-off accelerates along its
 rail from zero speed) and undefined otherwise (then ``f_t = 0``, the lateral force is
-``|f|`` and ``omega_perp = |omega_eb|``).
+``|f|``, there is no roll axis and ``omega_perp = |omega_eb|``).
 
 A vehicle descending at constant speed under a force opposite to its velocity (a drone
 landing, a parachute) satisfies the coast condition: from ``f`` alone it cannot be told
@@ -34,10 +39,12 @@ from a body slowed by drag. Braking (``f_t < 0`` with the weight supported) show
 cruise.
 
 Against chatter the features are averaged over windows of ``resolution_s``, a phase is
-kept while its condition holds with every threshold relaxed by the factor ``hysteresis``
+kept until a phase earlier in the table holds or its own condition fails with every
+threshold relaxed by the factor ``hysteresis``
 (``rest``: limits times ``1 + h``; ``powered``, ``turn``: thresholds times ``1 - h``;
-``coast``: lateral limit times ``1 + h``), and runs shorter than ``min_duration_s`` are
-merged into their longer neighbour.
+``free_fall``, ``coast``: limits times ``1 + h``), and runs shorter than ``min_duration_s`` are
+merged into a neighbour (the longer one, or one of the same family: a short free fall next
+to a coast joins it).
 
 The result is an editable table (:meth:`Segmentation.to_frame`: ``phase, t_start, t_end``);
 :func:`segments_table` turns a user's edit (a DataFrame, a list of boundaries or of
@@ -67,7 +74,7 @@ __all__ = [
     "segments_table",
 ]
 
-PHASES = ("rest", "powered", "turn", "coast", "cruise")
+PHASES = ("rest", "powered", "turn", "free_fall", "coast", "cruise")
 """Phase labels in priority order (module docstring)."""
 
 SEGMENT_DEFAULTS = {
@@ -76,6 +83,7 @@ SEGMENT_DEFAULTS = {
     "rest_accel_m_s2": 0.5,
     "powered_accel_m_s2": 2.0,
     "turn_rate_deg_s": 5.0,
+    "free_fall_m_s2": 0.5,
     "coast_lateral_m_s2": 2.0,
     "direction_speed_m_s": 1.0,
     "turn_speed_m_s": 3.0,
@@ -86,6 +94,7 @@ SEGMENT_DEFAULTS = {
 """Default thresholds of :func:`segment_flight` (engineering choices, not from a paper)."""
 
 SEGMENT_COLUMNS = ("phase", "t_start", "t_end")
+_FAMILY = {"free_fall": "unpowered", "coast": "unpowered"}
 _FEATURES = ("speed", "accel", "f_norm", "gravity", "f_along", "f_lateral", "rate",
              "rate_across", "path_rate")
 _TIME_TOL = 1e-6
@@ -157,15 +166,15 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         ``t``; ``speed`` ``|V|`` (m/s); ``accel`` ``|a^e|``, ``f_norm`` ``|f|`` and
         ``gravity`` ``|gamma(P)|`` (m/s^2); ``f_along`` ``f^e . u`` and ``f_lateral``
         ``|f^e - f_along u|`` (m/s^2);
-        ``rate`` ``|omega_eb|``, ``rate_across`` its part across ``u`` and ``path_rate``
-        ``|V x a| / |V|^2`` (rad/s; 0 below ``turn_speed_m_s``).
+        ``rate`` ``|omega_eb|``, ``rate_across`` its part off the roll axis (the body axis
+        closest to ``u``) and ``path_rate`` ``|V x a| / |V|^2`` (rad/s; 0 below
+        ``turn_speed_m_s``).
     """
     t, P, V, f_b, w_ib_b, C_b_e = _trajectory_arrays(trajectory)
     omega = earth.EARTH_RATE_ECEF
     gamma = earth.normal_gravity_ecef(P)
     f_e = np.einsum("nij,nj->ni", C_b_e, f_b)
     w_eb_b = w_ib_b - np.einsum("nji,j->ni", C_b_e, omega)
-    w_eb_e = np.einsum("nij,nj->ni", C_b_e, w_eb_b)
     a_e = f_e + gamma - 2.0 * np.cross(omega, V)
     speed = np.linalg.norm(V, axis=1)
     a_norm = np.linalg.norm(a_e, axis=1)
@@ -175,7 +184,11 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
     u[moving] = V[moving] / speed[moving, None]
     u[pushed] = a_e[pushed] / a_norm[pushed, None]
     f_along = np.einsum("ni,ni->n", f_e, u)
-    w_along = np.einsum("ni,ni->n", w_eb_e, u)
+    # roll axis: the body axis closest to the path; its rate component is not a turn
+    u_b = np.einsum("nji,nj->ni", C_b_e, u)
+    roll = np.take_along_axis(w_eb_b, np.argmax(np.abs(u_b), axis=1)[:, None], axis=1)[:, 0]
+    roll[~(moving | pushed)] = 0.0
+    rate = np.linalg.norm(w_eb_b, axis=1)
     path_rate = np.zeros_like(speed)
     fast = speed >= max(turn_speed_m_s, direction_speed_m_s)
     path_rate[fast] = np.linalg.norm(np.cross(V[fast], a_e[fast]), axis=1) / speed[fast] ** 2
@@ -187,8 +200,8 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         "gravity": np.linalg.norm(gamma, axis=1),
         "f_along": f_along,
         "f_lateral": np.linalg.norm(f_e - f_along[:, None] * u, axis=1),
-        "rate": np.linalg.norm(w_eb_e, axis=1),
-        "rate_across": np.linalg.norm(w_eb_e - w_along[:, None] * u, axis=1),
+        "rate": rate,
+        "rate_across": np.sqrt(np.maximum(rate**2 - roll**2, 0.0)),
         "path_rate": path_rate,
     })
 
@@ -220,10 +233,11 @@ def _conditions(w: pd.DataFrame, p: dict, relax: float) -> dict[str, np.ndarray]
             & (w["accel"] < p["rest_accel_m_s2"] * wider))
     powered = w["f_along"] > p["powered_accel_m_s2"] * narrower
     turn = np.maximum(w["rate_across"], w["path_rate"]) > p["turn_rate_deg_s"] * DEG * narrower
-    coast = ((w["f_lateral"] < p["coast_lateral_m_s2"] * wider)
-             & (w["f_along"] <= p["powered_accel_m_s2"] * wider))
+    unpowered = w["f_along"] <= p["powered_accel_m_s2"] * wider
+    free_fall = (w["f_norm"] < p["free_fall_m_s2"] * wider) & unpowered
+    coast = (w["f_lateral"] < p["coast_lateral_m_s2"] * wider) & unpowered
     return {"rest": rest.to_numpy(), "powered": powered.to_numpy(), "turn": turn.to_numpy(),
-            "coast": coast.to_numpy()}
+            "free_fall": free_fall.to_numpy(), "coast": coast.to_numpy()}
 
 
 def _classify(conditions: dict[str, np.ndarray], n: int) -> np.ndarray:
@@ -234,11 +248,13 @@ def _classify(conditions: dict[str, np.ndarray], n: int) -> np.ndarray:
 
 
 def _with_hysteresis(strict: np.ndarray, relaxed: dict[str, np.ndarray]) -> np.ndarray:
-    """Keep the current phase while its relaxed condition holds, else take the strict one."""
+    """Keep the current phase while its relaxed condition holds and no phase of higher
+    priority holds strictly; otherwise take the strict label."""
+    rank = {phase: i for i, phase in enumerate(PHASES)}
     out = strict.copy()
     current = strict[0]
     for k in range(strict.size):
-        if not relaxed[current][k]:
+        if rank[strict[k]] < rank[current] or not relaxed[current][k]:
             current = strict[k]
         out[k] = current
     return out
@@ -254,7 +270,9 @@ def _runs(labels: np.ndarray) -> list[list]:
 
 def _merge_short(runs: list[list], t_start: np.ndarray, t_end: np.ndarray,
                  min_duration: float) -> list[list]:
-    """Merge the shortest run below ``min_duration`` into its longer neighbour, repeatedly."""
+    """Merge the shortest run below ``min_duration`` into a neighbour, repeatedly: one of the
+    same family (free fall and coast are both unpowered flight) if there is one, else the
+    longer."""
     def duration(run):
         return t_end[run[2]] - t_start[run[1]]
 
@@ -263,7 +281,10 @@ def _merge_short(runs: list[list], t_start: np.ndarray, t_end: np.ndarray,
         if duration(runs[k]) >= min_duration - _TIME_TOL:
             break
         neighbours = [i for i in (k - 1, k + 1) if 0 <= i < len(runs)]
-        j = max(neighbours, key=lambda i: duration(runs[i]))
+        family = _FAMILY.get(runs[k][0])
+        kin = [i for i in neighbours
+               if family is not None and _FAMILY.get(runs[i][0]) == family]
+        j = max(kin or neighbours, key=lambda i: duration(runs[i]))
         lo, hi = min(j, k), max(j, k)
         merged = [runs[j][0], runs[lo][1], runs[hi][2]]
         runs[lo:hi + 1] = [merged]
@@ -278,7 +299,8 @@ def _merge_short(runs: list[list], t_start: np.ndarray, t_end: np.ndarray,
 
 
 def segment_flight(trajectory, **thresholds) -> Segmentation:
-    """Cut a flight into phases (rest, powered, turn, coast, cruise) from its kinematics.
+    """Cut a flight into phases (rest, powered, turn, free fall, coast, cruise) from its
+    kinematics.
 
     Parameters
     ----------
@@ -288,10 +310,9 @@ def segment_flight(trajectory, **thresholds) -> Segmentation:
     **thresholds
         Any of :data:`SEGMENT_DEFAULTS`: ``rest_speed_m_s`` (1), ``rest_rate_deg_s`` (3),
         ``rest_accel_m_s2`` (0.5), ``powered_accel_m_s2`` (2), ``turn_rate_deg_s`` (5),
-        ``coast_lateral_m_s2`` (2), ``direction_speed_m_s`` (1), ``turn_speed_m_s`` (3),
-        ``resolution_s`` (0.1),
-        ``hysteresis`` (0.25, in [0, 0.9]), ``min_duration_s`` (2). Conditions in the
-        module docstring.
+        ``free_fall_m_s2`` (0.5), ``coast_lateral_m_s2`` (2), ``direction_speed_m_s`` (1),
+        ``turn_speed_m_s`` (3), ``resolution_s`` (0.1), ``hysteresis`` (0.25, in [0, 0.9]),
+        ``min_duration_s`` (2). Conditions in the module docstring.
 
     Returns
     -------

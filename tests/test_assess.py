@@ -89,9 +89,11 @@ def test_sample_script_is_deterministic(tmp_path):
 
 def test_sample_segments_and_fit(sample):
     table = sample.segment_table
-    assert table["phase"].tolist() == ["rest", "powered", "coast"]
+    # the paper's segments: pad [0, 19], powered and spin [19, 60], free fall [60, 86] s
+    assert table["phase"].tolist() == ["rest", "powered", "coast", "free_fall"]
     assert table["t_end"].iloc[0] == pytest.approx(18.0, abs=0.3)
     assert table["t_end"].iloc[1] == pytest.approx(46.0, abs=0.5)
+    assert table["t_end"].iloc[2] == pytest.approx(60.0, abs=1.0)
     # 1 Hz epochs inside each closed segment
     assert np.all(np.abs(table["n_epochs"] - table["duration"]) <= 1.0)
     fit = sample.fit.set_index(["quantity", "axis"])
@@ -123,7 +125,7 @@ def test_sample_tables_are_consistent(sample):
     assert len(ex) == 21 * len(sample.segment_table)
     assert (ex["excitable"] == (ex["e"] >= E_THRESHOLD)).all()
     wide = sample.excitability_table()
-    assert wide.shape == (21, 3) and list(wide.index) == list(STATE_NAMES)
+    assert wide.shape == (21, 4) and list(wide.index) == list(STATE_NAMES)
     # the per-segment results are those of the metrics wrappers on the same model
     for (a, b), result in zip(sample.segments, sample.excitability, strict=True):
         direct = excitability_segment(sample.model, a, b, eta=sample.thresholds["eta"])
@@ -139,7 +141,7 @@ def test_sample_tables_are_consistent(sample):
         assert row.n_excitable == part["excitable"].sum()
     sens = sample.sensability_frame()
     assert len(sens) == 21 * len(sample.sensability.t)
-    assert set(sens["phase"]) <= {"rest", "powered", "coast"}
+    assert set(sens["phase"]) == {"rest", "powered", "coast", "free_fall"}
 
 
 def test_sample_physics(sample):
@@ -157,7 +159,7 @@ def test_with_settings_reuses_the_model(sample):
     other = sample.with_settings([30.0], eta=1e-2, nu=0.99)
     assert other.model is sample.model and other.trajectory is sample.trajectory
     assert other.segments == ((0.0, 30.0), (30.0, 86.0))
-    assert other.segment_table["phase"].tolist() == ["rest", "coast"]     # majority labels
+    assert other.segment_table["phase"].tolist() == ["rest", "free_fall"]  # majority labels
     assert other.sensability.nu == 0.99
     # a larger eta keeps fewer directions in the excited subspace
     wider = sample.with_settings(eta=1e-2)
@@ -284,7 +286,7 @@ def test_figures_draw(sample):
 
 def test_panel_updates_and_reports_errors(sample):
     panel = AssessPanel(sample)
-    assert panel.status.value.startswith("ok: 3 segment(s)")
+    assert panel.status.value.startswith("ok: 4 segment(s)")
     panel.controls["boundaries"].value = "18, 46, 200"
     assert "outside the flight span" in panel.status.value
     assert panel.assessment.segments == sample.segments          # last good result kept
@@ -318,7 +320,7 @@ def test_px4_simulated_flight_assessment():
     assert result.options["gnss_rate_hz"] == pytest.approx(19.2, abs=0.5)
     assert result.options["gnss_sigma_m"] < 1.0          # the log's own eph/epv
     assert set(result.segment_table["phase"]) <= {"rest", "powered", "cruise", "turn",
-                                                  "coast"}
+                                                  "coast", "free_fall"}
     assert "rest" in set(result.segment_table["phase"])  # a quasi-static drone flight
     assert any("heading" in str(w.message) for w in caught)
     summary = result.summary()

@@ -65,26 +65,28 @@ def car():
                           lambda t: window(t, 15.0, 24.0, 10.0 * DEG))
 
 
-def test_sounding_rocket_pad_boost_coast(rocket):
+def test_sounding_rocket_pad_boost_coast_free_fall(rocket):
     seg = segment_flight(rocket).segments
-    assert seg["phase"].tolist() == ["rest", "powered", "coast"]
+    assert seg["phase"].tolist() == ["rest", "powered", "coast", "free_fall"]
     assert seg["t_start"].iloc[0] == pytest.approx(0.0)
     assert seg["t_end"].iloc[0] == pytest.approx(18.0, abs=0.3)      # lift-off 18.1 s
     assert seg["t_end"].iloc[1] == pytest.approx(46.0, abs=0.5)      # thrust below drag 45.7 s
-    assert seg["t_end"].iloc[2] == pytest.approx(rocket.t[-1])
+    # |f| < 0.5 m/s^2 from about 60 s (the paper's free-fall segment [60, 86] s)
+    assert seg["t_end"].iloc[2] == pytest.approx(rocket.events["free_flight"], abs=1.0)
+    assert seg["t_end"].iloc[3] == pytest.approx(rocket.t[-1])
     # contiguous and covering the flight
     assert np.allclose(seg["t_start"].iloc[1:].to_numpy(), seg["t_end"].iloc[:-1].to_numpy())
     assert np.allclose(seg["duration"], seg["t_end"] - seg["t_start"])
 
 
 def test_rocket_spin_and_despin_are_not_turns(rocket):
-    """The 2 Hz roll about the path axis and the de-spin at 73 s stay in the coast."""
+    """The 2 Hz roll about the path axis and the de-spin at 73 s are not turns."""
     seg = segment_flight(rocket)
     f = seg.features
     coast = f[f["t"] > 47.0]
     assert (coast["rate"] > 6.0).all()                 # spinning fast ...
     assert (coast["rate_across"] < 5 * DEG).all()      # ... about the path axis
-    assert set(coast["phase"]) == {"coast"}
+    assert set(coast["phase"]) == {"coast", "free_fall"}
 
 
 def test_stationary_is_one_rest_segment():
@@ -94,10 +96,11 @@ def test_stationary_is_one_rest_segment():
     assert seg["t_start"].iloc[0] == 0.0 and seg["t_end"].iloc[0] == pytest.approx(120.0)
 
 
-def test_launcher_stage_separation_is_a_short_coast():
+def test_launcher_stage_separation_is_a_short_free_fall():
+    """1.4 s below 0.5 m/s^2 and 1 s of drag: one unpowered run, kept as free fall."""
     traj = launcher_ascent()
     seg = segment_flight(traj).segments
-    assert seg["phase"].tolist() == ["powered", "coast", "powered"]
+    assert seg["phase"].tolist() == ["powered", "free_fall", "powered"]
     sep = traj.events
     assert seg["t_start"].iloc[1] == pytest.approx(sep["stage1_burnout"], abs=0.5)
     assert seg["t_end"].iloc[1] == pytest.approx(sep["stage2_ignition"], abs=0.5)
@@ -158,7 +161,8 @@ def test_hysteresis_prevents_chatter():
 def test_segments_have_known_phases_and_phase_at(rocket):
     seg = segment_flight(rocket)
     assert set(seg.features["phase"]) <= set(PHASES)
-    assert seg.phase_at([5.0, 30.0, 80.0]).tolist() == ["rest", "powered", "coast"]
+    assert seg.phase_at([5.0, 30.0, 50.0, 80.0]).tolist() == ["rest", "powered", "coast",
+                                                             "free_fall"]
     assert seg.thresholds["turn_rate_deg_s"] == SEGMENT_DEFAULTS["turn_rate_deg_s"]
 
 
@@ -185,7 +189,7 @@ def test_boundaries_with_and_without_ends(auto):
     a = segments_table([18.0, 46.0], 0.0, 86.0, auto)
     b = segments_table([0.0, 18.0, 46.0, 86.0], 0.0, 86.0, auto)
     pd.testing.assert_frame_equal(a, b)
-    assert a["phase"].tolist() == ["rest", "powered", "coast"]      # majority labels
+    assert a["phase"].tolist() == ["rest", "powered", "free_fall"]  # majority labels
     assert a[["t_start", "t_end"]].to_numpy().tolist() == [[0, 18], [18, 46], [46, 86]]
     unnamed = segments_table(np.array([30.0]), 0.0, 86.0)
     assert unnamed["phase"].tolist() == ["segment 1", "segment 2"]
@@ -197,7 +201,7 @@ def test_edited_frame_round_trip(auto):
     edited.loc[2, "t_start"] = 40.0
     edited.loc[2, "phase"] = "late boost + coast"
     table = segments_table(edited, 0.0, 86.0, auto)
-    assert table["phase"].tolist() == ["rest", "powered", "late boost + coast"]
+    assert table["phase"].tolist() == ["rest", "powered", "late boost + coast", "free_fall"]
     assert table["t_end"].tolist()[:2] == [pytest.approx(18.1), 40.0]
     assert segments_table(auto, 0.0, 86.0).equals(auto.segments)
 
@@ -205,7 +209,7 @@ def test_edited_frame_round_trip(auto):
 def test_windows_with_gaps_and_phases(auto):
     table = segments_table([("pad", 5.0, 15.0), (60.0, 80.0), {"t_start": 20, "t_end": 30}],
                            0.0, 86.0, auto)
-    assert table["phase"].tolist() == ["pad", "powered", "coast"]   # sorted by start
+    assert table["phase"].tolist() == ["pad", "powered", "free_fall"]   # sorted by start
     assert table["duration"].tolist() == [10.0, 10.0, 20.0]
 
 

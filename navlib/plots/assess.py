@@ -19,9 +19,9 @@ from matplotlib.patches import Patch
 from navlib.units import DEG
 
 PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
-                 "coast": "tab:blue", "cruise": "tab:green"}
+                 "free_fall": "tab:cyan", "coast": "tab:blue", "cruise": "tab:green"}
 """Colour of each automatic phase; user-named segments cycle through :data:`OTHER_COLOURS`."""
-OTHER_COLOURS = ("tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan")
+OTHER_COLOURS = ("tab:orange", "tab:brown", "tab:pink", "tab:olive", "0.3")
 _MAX_POINTS = 20_000
 
 
@@ -72,8 +72,8 @@ def phases_figure(assessment):
     axes[2].set_ylabel("auto", fontsize=8)
     present = [p for p in PHASE_COLOURS if p in set(auto["phase"])]
     axes[2].legend(handles=[Patch(color=PHASE_COLOURS[p], label=p) for p in present],
-                   fontsize=7, ncol=len(present), loc="upper center",
-                   bbox_to_anchor=(0.5, -0.35), frameon=False)
+                   fontsize=7, loc="center left", bbox_to_anchor=(1.005, 0.5),
+                   frameon=False)
     axes[2].set_xlabel("t [s]")
     fig.suptitle(f"Fitted specific force and angular rate, body axes "
                  f"({traj.name or 'flight'}); shading: assessed segments", fontsize=10)
