@@ -15,7 +15,8 @@ __version__ = "0.1.0"
 
 _SUBMODULES = (
     "covariance", "discretize", "earth", "filters", "io", "metrics", "models",
-    "observability", "outliers", "plots", "reports", "rotations", "sensors", "strapdown",
+    "observability", "outliers", "plots", "reports", "rotations", "segmentation", "sensors",
+    "strapdown",
     "studies", "trajectory", "units", "widgets",
 )
 

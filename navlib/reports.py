@@ -268,7 +268,9 @@ def parse_parameters(pairs: Iterable[Sequence[str]], cwd=None) -> dict[str, obje
 
     Values go through :func:`parse_parameter_value`. A string value naming an existing file
     or folder relative to ``cwd`` (default: the current directory) is made absolute, because
-    notebooks run with the notebooks folder as their working directory.
+    notebooks run with the notebooks folder as their working directory. A parameter whose
+    name ends in ``_path`` must name an existing file or folder: a missing one is refused
+    here, naming the folder it was looked up in, rather than inside the notebook.
     """
     base = Path.cwd() if cwd is None else Path(cwd)
     out: dict[str, object] = {}
@@ -284,10 +286,13 @@ def parse_parameters(pairs: Iterable[Sequence[str]], cwd=None) -> dict[str, obje
             raise NavlibInputError(
                 f"parameter name {key!r}: must be a Python identifier{hint}")
         value = parse_parameter_value(text)
-        if isinstance(value, str) and value and not Path(value).is_absolute():
-            candidate = base / value
+        if isinstance(value, str) and value:
+            candidate = Path(value) if Path(value).is_absolute() else base / value
             if candidate.exists():
                 value = str(candidate.resolve())
+            elif key.endswith("_path"):
+                raise NavlibInputError(
+                    f"parameter {key}: {value!r} not found (looked in {candidate.parent})")
         out[key] = value
     return out
 

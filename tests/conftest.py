@@ -4,6 +4,29 @@ Figures built in tests render off-screen (Agg). Notebook kernels are unaffected:
 runner starts them with the inline backend whatever MPLBACKEND says.
 """
 
+import os
+from pathlib import Path
+
 import matplotlib
+import pytest
 
 matplotlib.use("Agg")
+
+PX4_DIR = Path(
+    os.environ.get("NAVLIB_PX4_DIR")
+    or Path(__file__).resolve().parents[2] / "shared" / "data" / "px4"
+)
+"""The public PX4 sample logs: ``../shared/data/px4`` beside the checkout, or NAVLIB_PX4_DIR."""
+
+
+@pytest.fixture(scope="session")
+def px4_log_path():
+    """Locate a PX4 sample log by file name; skip cleanly when it is absent."""
+
+    def locate(name: str) -> Path:
+        path = PX4_DIR / name
+        if not path.is_file():
+            pytest.skip(f"PX4 sample log not found: {path} (set NAVLIB_PX4_DIR)")
+        return path
+
+    return locate

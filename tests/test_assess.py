@@ -1,6 +1,5 @@
 """Tests for the assess-a-flight pipeline (navlib.studies.assess), its figures and panel."""
 
-import os
 import subprocess
 import sys
 import warnings
@@ -30,11 +29,6 @@ from navlib.widgets.assess import AssessPanel, boundaries_text, parse_boundaries
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "data" / "sample_flight"
-
-
-def _px4_dir() -> Path:
-    env = os.environ.get("NAVLIB_PX4_DIR")
-    return Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "data" / "px4"
 
 
 @pytest.fixture(scope="module")
@@ -309,10 +303,8 @@ def test_boundary_text_round_trip(sample):
 # --------------------------------------------------------------------------- PX4 logs
 
 
-def test_px4_simulated_flight_assessment():
-    path = _px4_dir() / "sample_px4_events.ulg"
-    if not path.exists():
-        pytest.skip(f"PX4 sample log not found: {path} (set NAVLIB_PX4_DIR)")
+def test_px4_simulated_flight_assessment(px4_log_path):
+    path = px4_log_path("sample_px4_events.ulg")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         imu, gnss = io.read_ulog(path)

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import os
 import re
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -463,19 +461,12 @@ def test_gnss_round_trip(tmp_path, position, velocity):
 # ----------------------------------------------------------------------------- PX4 ULog
 
 
-def _px4_dir() -> Path:
-    env = os.environ.get("NAVLIB_PX4_DIR")
-    return Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "data" / "px4"
-
-
 PX4_LOGS = ("sample_log_small.ulg", "sample_px4_events.ulg")
 
 
 @pytest.fixture(scope="module", params=PX4_LOGS)
-def px4_log(request):
-    path = _px4_dir() / request.param
-    if not path.is_file():
-        pytest.skip(f"PX4 sample log not found: {path} (set NAVLIB_PX4_DIR)")
+def px4_log(request, px4_log_path):
+    path = px4_log_path(request.param)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         imu, gnss = read_ulog(path)
@@ -525,22 +516,8 @@ def test_px4_field_generations_map_to_the_same_quantities(px4_log):
                                np.linalg.norm(v_ned, axis=1), atol=1e-5)
 
 
-def _small_log():
-    path = _px4_dir() / "sample_log_small.ulg"
-    if not path.is_file():
-        pytest.skip(f"PX4 sample log not found: {path}")
-    return path
-
-
-def _sim_log():
-    path = _px4_dir() / "sample_px4_events.ulg"
-    if not path.is_file():
-        pytest.skip(f"PX4 sample log not found: {path}")
-    return path
-
-
-def test_px4_real_log_dropout_is_reported_split_or_refused():
-    path = _small_log()
+def test_px4_real_log_dropout_is_reported_split_or_refused(px4_log_path):
+    path = px4_log_path("sample_log_small.ulg")
     with pytest.warns(FlightDataWarning, match="sensor_combined.*1 gap"):
         imu, _ = read_ulog(path)
     assert imu.attrs["gaps"][0]["duration_s"] == pytest.approx(0.161303)
@@ -553,8 +530,8 @@ def test_px4_real_log_dropout_is_reported_split_or_refused():
         read_ulog(path, imu_max_gap_s=0.2)
 
 
-def test_px4_gps_topic_choice_fix_filter_and_altitude():
-    sim = _sim_log()
+def test_px4_gps_topic_choice_fix_filter_and_altitude(px4_log_path):
+    sim = px4_log_path("sample_px4_events.ulg")
     _, gnss = read_ulog(sim)
     assert gnss.attrs["topic"] == "vehicle_gps_position"  # 19 Hz beats sensor_gps at 1 Hz
     assert gnss.attrs["dropped_no_fix"] == 160
@@ -563,7 +540,7 @@ def test_px4_gps_topic_choice_fix_filter_and_altitude():
     assert np.median(np.diff(slow["t"])) == pytest.approx(0.988, abs=0.06)
     _, all_fixes = read_ulog(sim, min_fix_type=0)
     assert len(all_fixes) == len(gnss) + 160
-    small = _small_log()
+    small = px4_log_path("sample_log_small.ulg")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FlightDataWarning)
         _, ell = read_ulog(small)
@@ -575,8 +552,8 @@ def test_px4_gps_topic_choice_fix_filter_and_altitude():
     np.testing.assert_allclose(r_ell - r_msl, 39.95, atol=0.1)  # geoid height near Trondheim
 
 
-def test_px4_body_frame_mapping():
-    sim = _sim_log()
+def test_px4_body_frame_mapping(px4_log_path):
+    sim = px4_log_path("sample_px4_events.ulg")
     frd, _ = read_ulog(sim)
     flu, _ = read_ulog(sim, body_frame="flu")
     cols = ["f_x", "f_y", "f_z", "w_x", "w_y", "w_z"]
@@ -590,8 +567,8 @@ def test_px4_body_frame_mapping():
     _raises("body_frame: expected one of", read_ulog, sim, body_frame="enu")
 
 
-def test_px4_bad_files_and_options(tmp_path):
-    sim = _sim_log()
+def test_px4_bad_files_and_options(tmp_path, px4_log_path):
+    sim = px4_log_path("sample_px4_events.ulg")
     _raises("file not found", read_ulog, tmp_path / "none.ulg")
     _raises("file is empty", read_ulog, _write(tmp_path, "e.ulg", ""))
     _raises("not a readable PX4 ULog", read_ulog, _write(tmp_path, "a.ulg", "t,ax\n1,2\n"))
@@ -610,62 +587,67 @@ def test_px4_bad_files_and_options(tmp_path):
     _raises(r"no usable GPS data.*0 with fix_type >= 9", read_ulog, sim, min_fix_type=9)
 
 
-def _edited_sim_log(tmp_path, edit, topics=("sensor_combined", "vehicle_gps_position",
-                                            "sensor_gps")):
-    """A copy of the simulation log, reduced to ``topics`` and changed by ``edit(data)``."""
+@pytest.fixture
+def edited_sim_log(tmp_path, px4_log_path):
+    """Make a copy of the simulation log, reduced to ``topics`` and changed by ``edit(data)``."""
     pyulog = pytest.importorskip("pyulog")
-    ulog = pyulog.ULog(str(_sim_log()), message_name_filter_list=list(topics))
-    edit({(d.name, d.multi_id): d.data for d in ulog.data_list})
-    path = tmp_path / "edited.ulg"
-    ulog.write_ulog(str(path))
-    return path
+    source = px4_log_path("sample_px4_events.ulg")
+
+    def make(edit, topics=("sensor_combined", "vehicle_gps_position", "sensor_gps")):
+        ulog = pyulog.ULog(str(source), message_name_filter_list=list(topics))
+        edit({(d.name, d.multi_id): d.data for d in ulog.data_list})
+        path = tmp_path / "edited.ulg"
+        ulog.write_ulog(str(path))
+        return path
+
+    return make
 
 
-def test_px4_log_validation_names_topic_field_and_message(tmp_path):
+def test_px4_log_validation_names_topic_field_and_message(edited_sim_log):
     imu_key, gps_key = ("sensor_combined", 0), ("vehicle_gps_position", 0)
 
     def dup(data):
         data[imu_key]["timestamp"][50] = data[imu_key]["timestamp"][49]
 
-    msg = _raises("duplicate time stamp", read_ulog, _edited_sim_log(tmp_path, dup))
+    msg = _raises("duplicate time stamp", read_ulog, edited_sim_log(dup))
     assert "topic 'sensor_combined', column 'timestamp', message 50" in msg
 
     def nan(data):
         data[imu_key]["gyro_rad[1]"][7] = np.nan
 
     _raises(r"column 'gyro_rad\[1\]', message 7: value nan is not a finite",
-            read_ulog, _edited_sim_log(tmp_path, nan))
+            read_ulog, edited_sim_log(nan))
 
     def deg(data):
         for i in range(3):
             data[imu_key][f"gyro_rad[{i}]"][300] = 60.0
 
     _raises(r"'gyro_rad', message 300: angular rate 103.9 rad/s .* look like deg/s",
-            read_ulog, _edited_sim_log(tmp_path, deg))
+            read_ulog, edited_sim_log(deg))
 
     def clip(data):
         data[imu_key]["accelerometer_clipping"][[100, 200]] = 1
 
     with pytest.warns(FlightDataWarning, match="'accelerometer_clipping' flags 2 sample.*"
                                                "message 100"):
-        imu, _ = read_ulog(_edited_sim_log(tmp_path, clip))
+        imu, _ = read_ulog(edited_sim_log(clip))
     assert imu.attrs["clipping"]["accelerometer_clipping"] == 2
 
     def gps_dup(data):  # (pyulog writes messages in time order: no backward steps here)
         data[gps_key]["timestamp"][300] = data[gps_key]["timestamp"][299]
 
     _raises("vehicle_gps_position', column 'timestamp', message 300: duplicate time stamp",
-            read_ulog, _edited_sim_log(tmp_path, gps_dup))
+            read_ulog, edited_sim_log(gps_dup))
 
     def late(data):
         for key in (gps_key, ("sensor_gps", 0)):
             data[key]["timestamp"] += 100_000_000  # GNSS 100 s after the IMU record
 
-    path = _edited_sim_log(tmp_path, late)
+    path = edited_sim_log(late)
     _raises("do not overlap", read_ulog, path)
     assert len(read_ulog(path, require_overlap=False)[1]) == 423
 
-    path = _edited_sim_log(tmp_path, lambda data: None, topics=("sensor_combined",))
+    path = edited_sim_log(lambda data: None, topics=("sensor_combined",))
     _raises(r"no usable GPS data \(no GPS topic\)", read_ulog, path)
-    path = _edited_sim_log(tmp_path, lambda data: None, topics=("sensor_gps",))
+    path = edited_sim_log(lambda data: None, topics=("sensor_gps",))
     _raises("no 'sensor_combined' topic", read_ulog, path)

@@ -200,6 +200,8 @@ def test_parameter_parsing(tmp_path):
         reports.parse_parameters([("x=3", "1")])
     with pytest.raises(NavlibInputError, match="does not parse"):
         reports.parse_parameters([("x", "[1, 2")])
+    with pytest.raises(NavlibInputError, match=r"imu_path: 'nope.csv' not found \(looked in"):
+        reports.parse_parameters([("imu_path", "nope.csv")], cwd=tmp_path)
 
 
 def test_bad_requests_fail_before_running(good, tmp_path):

@@ -90,6 +90,7 @@ FIT_DEFAULTS = {
     "heading_deg": None,
     "initial_attitude": None,
     "level_s": 1.0,
+    "level_tolerance": 0.05,
     "attitude_prior_deg": 5.0,
     "attitude_drift_deg_s": 0.01,
     "correction_knot_spacing_s": 10.0,
@@ -134,7 +135,7 @@ def _options(options):
     reject_unknown(options, FIT_DEFAULTS, "fit_flight_data")
     p = {**FIT_DEFAULTS, **options}
     for key in ("knot_spacing_s", "sigma_position_m", "sigma_velocity_mps",
-                "sigma_specific_force_mps2", "level_s", "attitude_prior_deg",
+                "sigma_specific_force_mps2", "level_s", "level_tolerance", "attitude_prior_deg",
                 "attitude_drift_deg_s", "correction_knot_spacing_s"):
         p[key] = finite_scalar(p[key], key, 0.0, low_open=True)
     if p["attitude_knot_spacing_s"] is None:
@@ -322,7 +323,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``correction_knot_spacing_s=10`` (the attitude correction, method step 3),
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
         IMU sample of the overlap; replaces levelling and heading), ``level_s=1`` (rest
-        period used for levelling), ``iterations=3`` (gravity/Coriolis/heading
+        period used for levelling), ``level_tolerance=0.05`` (accepted relative difference
+        between the mean |f| of that period and normal gravity: consumer MEMS scale
+        factors reach a few percent), ``iterations=3`` (gravity/Coriolis/heading
         relinearisations), ``name``.
 
     Returns
@@ -382,11 +385,12 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         f_mean = f_b[rest].mean(axis=0)
         g = np.linalg.norm(gamma0)
         spread = np.linalg.norm(f_b[rest] - f_mean, axis=1).max()
-        if abs(np.linalg.norm(f_mean) - g) > 0.02 * g or spread > 0.5:
+        if abs(np.linalg.norm(f_mean) - g) > p["level_tolerance"] * g or spread > 0.5:
             raise NavlibInputError(
                 f"imu: levelling needs the vehicle at rest during the first level_s="
                 f"{p['level_s']} s (mean |f| = {np.linalg.norm(f_mean):.3f} m/s^2 against "
-                f"gravity {g:.3f}, spread {spread:.3f} m/s^2); pass initial_attitude")
+                f"gravity {g:.3f} within level_tolerance={p['level_tolerance']}, spread "
+                f"{spread:.3f} m/s^2); pass initial_attitude")
         heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
         att0 = _level(f_mean, gamma0, C_n_e, heading)
         source = "keyword"
