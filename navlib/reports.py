@@ -39,6 +39,7 @@ import json
 import os
 import re
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -316,7 +317,10 @@ def _kernel_manager_class():
     Whatever ``python3`` kernelspecs are installed per user or system-wide, the notebooks run
     in the interpreter (and virtual environment) that runs the report, with the inline
     matplotlib backend. On POSIX the kernel
-    talks over IPC sockets (local only, and no "TCP without encryption" warning).
+    talks over IPC sockets (local only, and no "TCP without encryption" warning). The kernel
+    process's own stderr (ipykernel's log, e.g. "KeyboardInterrupt caught in kernel" when a
+    failed run is shut down) is discarded so it cannot break the progress lines; everything
+    the notebook code writes still reaches the executed notebook's outputs.
     """
     from ipykernel.kernelspec import get_kernel_dict
     from jupyter_client.kernelspec import KernelSpec
@@ -327,6 +331,10 @@ def _kernel_manager_class():
         @default("transport")
         def _transport_default(self):
             return "ipc" if os.name == "posix" else "tcp"
+
+        async def _async_launch_kernel(self, kernel_cmd, **kw):
+            kw.setdefault("stderr", subprocess.DEVNULL)
+            return await super()._async_launch_kernel(kernel_cmd, **kw)
 
         @property
         def kernel_spec(self):
