@@ -186,3 +186,25 @@ def ekf_crosscheck_figure(check, title: str | None = None):
     ax.set_title(title or f"{SOLUTION_LABELS.get(check.linear.solution)}: "
                  f"{check.linear.outlier.label()}", fontsize=9)
     return fig
+
+
+def ekf_sigma_figure(frame, axes_names=("roll", "pitch", "yaw", "pos_x")):
+    """EKF sigma against the covariance analysis, with the EKF's actual error
+    (:func:`navlib.studies.outliers.ekf_vs_covariance`); attitude in deg, position in m."""
+    fig, axes = plt.subplots(1, len(axes_names), figsize=(4.2 * len(axes_names), 3.2),
+                             squeeze=False, constrained_layout=True)
+    for ax, name in zip(axes[0], axes_names, strict=True):
+        sel = frame[frame.axis == name]
+        f, unit = (1.0, "m") if name.startswith("pos") else (1.0 / DEG, "deg")
+        ax.plot(sel.t, sel.error * f, color="0.6", lw=0.7, label="EKF error")
+        ax.plot(sel.t, 3 * sel.sigma_ekf * f, color="C3", label="EKF 3 sigma")
+        ax.plot(sel.t, -3 * sel.sigma_ekf * f, color="C3")
+        ax.plot(sel.t, 3 * sel.sigma_cov * f, color="k", ls="--", lw=1,
+                label="covariance analysis")
+        ax.plot(sel.t, -3 * sel.sigma_cov * f, color="k", ls="--", lw=1)
+        ax.set_title(name)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel(f"[{unit}]")
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    return fig
