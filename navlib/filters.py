@@ -1441,6 +1441,28 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     Seeds: one ``numpy.random.SeedSequence(seed)`` spawns independent streams for the IMU,
     GNSS, attitude sensor, reference trajectory and initial error, so a run with an
     outlier and one without share every noise realisation.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Truth; the IMU samples are its samples.
+    sensors : str or navlib.sensors.SensorSpec
+        Sensor preset of the simulated data (default ``launcher_table1``). The GNSS
+        position bias is simulated only when the filter estimates it (launcher ``P``), so
+        truth and filter model agree; for ``ecef21`` the model's noise densities default to
+        the same preset.
+    model, solution, biases, bias_model, model_options, window_s, keep_covariance,
+    gnss_velocity_sigma
+        As in :func:`ekf`.
+    gnss_rate_hz : float, optional
+        GNSS fix rate (default the preset's; the paper's launcher uses every sample).
+    outliers : Outlier or sequence of Outlier, optional
+    seed : int, optional
+    initial_error, noise : bool
+
+    Returns
+    -------
+    EKFRun
     """
     from navlib import sensors as sensor_lib
     from navlib import strapdown
@@ -1481,6 +1503,8 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
                                       "gnss_vel")
 
     opts = dict(model_options or {})
+    if model == "ecef21" and isinstance(sensors, str):
+        opts.setdefault("sensors", sensors)      # the filter assumes the simulated sensors
     attitude = reference = None
     if model == "launcher" and solution.startswith("ins_gps_att"):
         sigma_att = opts.get("sigma_att", spec.attitude_sigma or 0.0)
