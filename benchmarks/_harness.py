@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cache
 
 
 @dataclass
@@ -40,3 +41,19 @@ def time_case(case: Case) -> dict:
     if case.notes:
         row["notes"] = case.notes
     return row
+
+
+@cache
+def rocket_flight():
+    """The default sounding-rocket trajectory, built once per benchmark run."""
+    from navlib.trajectory import sounding_rocket
+
+    return sounding_rocket()
+
+
+@cache
+def launcher_flight():
+    """The default launcher ascent, built once per benchmark run."""
+    from navlib.trajectory import launcher_ascent
+
+    return launcher_ascent()

@@ -28,21 +28,12 @@ from functools import cache
 import numpy as np
 import pandas as pd
 from _harness import Case
+from _harness import launcher_flight as _launcher
+from _harness import rocket_flight as _rocket
 from scipy.spatial.transform import Rotation
 
-import navlib.trajectory as trajectories
 from navlib import earth, filters, sensors, strapdown
 from navlib.models import launcher
-
-
-@cache
-def _rocket():
-    return trajectories.sounding_rocket()
-
-
-@cache
-def _launcher():
-    return trajectories.launcher_ascent()
 
 
 @cache

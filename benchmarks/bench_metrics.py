@@ -19,7 +19,7 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
-from _harness import Case
+from _harness import Case, rocket_flight
 from scipy.linalg import expm
 
 from navlib import metrics
@@ -48,18 +48,11 @@ def random_model(n_epochs: int = 86, seed: int = 0) -> DiscreteModel:
                          P0=np.diag(SIGMA0**2))
 
 
-@cache
-def rocket_trajectory():
-    from navlib.trajectory import sounding_rocket
-
-    return sounding_rocket()
-
-
 def discretised_rocket():
     """The uncached model chain (the ``ecef21_at_epochs`` cache would hide its cost)."""
     from navlib.models.ecef import ecef21
 
-    trajectory = rocket_trajectory()
+    trajectory = rocket_flight()
     return ecef21(trajectory, NOISE).discretize(epochs=trajectory.at_rate(1.0), method="series",
                                                 hold="mean")
 

@@ -18,16 +18,11 @@ from functools import cache
 
 import numpy as np
 from _harness import Case
+from _harness import launcher_flight as trajectory
 
 from navlib.models.launcher import launcher, state_names
 from navlib.observability import local_observability
 from navlib.studies.launcher import configurations, table2
-from navlib.trajectory import launcher_ascent
-
-
-@cache
-def trajectory():
-    return launcher_ascent()
 
 
 @cache

@@ -19,22 +19,12 @@ The trajectories are built once outside the strapdown and simulation timings.
 
 from __future__ import annotations
 
-from functools import cache
-
 from _harness import Case
+from _harness import launcher_flight as _launcher
+from _harness import rocket_flight as _rocket
 
 import navlib.trajectory as trajectories
 from navlib import sensors, strapdown
-
-
-@cache
-def _rocket():
-    return trajectories.sounding_rocket()
-
-
-@cache
-def _launcher():
-    return trajectories.launcher_ascent()
 
 
 def _integrate(traj):

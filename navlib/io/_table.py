@@ -120,17 +120,23 @@ def _looks_numeric(text: str) -> bool:
     return True
 
 
-def read_text_table(path, sep: str | None = None) -> TextTable:
-    """Read ``path`` as a delimited text table with a header row.
-
-    ``sep`` None detects ``,``, ``;``, tab or blanks from the header line.
-    """
+def existing_file(path) -> tuple[Path, str]:
+    """``(Path, "file '...'")`` for an existing regular file; NavlibInputError otherwise."""
     p = Path(path)
     label = f"file '{p}'"
     if not p.exists():
         raise NavlibInputError(f"{label}: file not found")
     if not p.is_file():
         raise NavlibInputError(f"{label}: not a regular file")
+    return p, label
+
+
+def read_text_table(path, sep: str | None = None) -> TextTable:
+    """Read ``path`` as a delimited text table with a header row.
+
+    ``sep`` None detects ``,``, ``;``, tab or blanks from the header line.
+    """
+    p, label = existing_file(path)
     data = p.read_bytes()
     if not data.strip():
         raise NavlibInputError(f"{label}: file is empty")

@@ -28,7 +28,6 @@ from __future__ import annotations
 import contextlib
 import io
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -37,7 +36,7 @@ from navlib import units
 from navlib._validation import finite_array, finite_scalar
 from navlib.earth import geodetic_to_ecef, ned_to_ecef_matrix
 from navlib.errors import NavlibInputError
-from navlib.io._table import Column, Source, check_finite
+from navlib.io._table import Column, Source, check_finite, existing_file
 from navlib.io.checks import (
     ON_GAP,
     RATE_MAX_RAD_S,
@@ -81,12 +80,7 @@ def body_rotation(body_frame) -> np.ndarray:
 def _load(path):
     from pyulog import ULog
 
-    p = Path(path)
-    label = f"file '{p}'"
-    if not p.exists():
-        raise NavlibInputError(f"{label}: file not found")
-    if not p.is_file():
-        raise NavlibInputError(f"{label}: not a regular file")
+    p, label = existing_file(path)
     if p.stat().st_size == 0:
         raise NavlibInputError(f"{label}: file is empty")
     try:
