@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -53,6 +53,7 @@ __all__ = [
     "ekf",
     "kalman_gains",
     "linear_steps",
+    "nees_basis",
     "nees_values",
     "prepare_linear",
     "simulate_attitude_sensor",
@@ -259,12 +260,14 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
     return lo, hi
 
 
-def nees_values(err, P, rtol: float = 1e-10):
-    """NEES ``e' P^+ e`` of errors (K, R, n) against covariances (K, n, n); returns the
-    NEES (K, R) and its degrees of freedom (K,).
+def nees_basis(P, rtol: float = 1e-10):
+    """The data-independent part of :func:`nees_values` for covariances (K, n, n).
 
-    Scaled to a correlation matrix first (states of very different units); directions with
-    (relative) zero variance are left out, and the degrees of freedom are the kept rank.
+    Returns ``(scale, active, V, inv_w, dof)``: the standard deviations used to scale ``P``
+    to a correlation matrix, the states with non-zero variance, the eigenvectors of that
+    matrix, the inverse of its kept eigenvalues (0 for dropped directions) and the kept
+    rank. Computed once per covariance history and reused for every error history
+    (:func:`simulate_linear` caches it on the :class:`LinearFilter`).
     """
     d = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0.0, None))
     active = d > 0
@@ -273,10 +276,23 @@ def nees_values(err, P, rtol: float = 1e-10):
     C = np.where(active[:, :, None] & active[:, None, :], C, 0.0)
     w, V = np.linalg.eigh(_sym(C))
     keep = w > rtol * np.maximum(w[:, -1:], 0.0)
+    inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
+    return safe, active, V, inv_w, keep.sum(axis=1)
+
+
+def nees_values(err, P, rtol: float = 1e-10, basis=None):
+    """NEES ``e' P^+ e`` of errors (K, R, n) against covariances (K, n, n); returns the
+    NEES (K, R) and its degrees of freedom (K,).
+
+    Scaled to a correlation matrix first (states of very different units); directions with
+    (relative) zero variance are left out, and the degrees of freedom are the kept rank.
+    ``basis``: :func:`nees_basis` of ``P`` when already computed (``P`` and ``rtol`` are
+    then not used).
+    """
+    safe, active, V, inv_w, dof = basis if basis is not None else nees_basis(P, rtol)
     en = np.where(active[:, None, :], err / safe[:, None, :], 0.0)
     proj = en @ V
-    inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
-    return (proj**2 @ inv_w[:, :, None])[..., 0], keep.sum(axis=1)
+    return (proj**2 @ inv_w[:, :, None])[..., 0], dof
 
 
 @dataclass(frozen=True, eq=False)
@@ -453,10 +469,22 @@ class LinearFilter:
     measured: np.ndarray
     gains: Gains
     covariance: object
+    _nees_bases: dict = field(default_factory=dict, init=False, repr=False)
 
     @property
     def t(self) -> np.ndarray:
         return self.steps.t
+
+    def nees_basis(self, index) -> tuple:
+        """:func:`nees_basis` of the posterior covariances at the epochs ``index``, cached
+        (it does not depend on the data, so every simulation recorded at the same epochs
+        shares it)."""
+        index = np.asarray(index)
+        key = index.tobytes()
+        if key not in self._nees_bases:
+            self._nees_bases.clear()          # keep one: (K, n, n) eigenvectors are large
+            self._nees_bases[key] = nees_basis(self.covariance.P_post[index])
+        return self._nees_bases[key]
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -608,6 +636,20 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     else:
         x = np.zeros((runs, n))
     x_hat = np.zeros((runs, n))
+    # a deterministic response from zero stays exactly zero until the first outlier input:
+    # start the recursion there and write the zero histories directly
+    k0 = 0
+    if not noise and not initial_error:
+        active = np.flatnonzero(np.any(z_add != 0, axis=1) & mask)
+        if x_input is not None:
+            active = np.concatenate([active, np.flatnonzero(np.any(x_input != 0, axis=1))])
+        k0 = int(active.min()) if active.size else N
+        before = rec[rec < k0]
+        truth_rec[slot[before]] = 0.0
+        est_rec[slot[before]] = 0.0
+        upd_before = upd[upd < k0]
+        nis[upd_slot[upd_before]] = 0.0
+        innov_rec[slot[upd_before[slot[upd_before] >= 0]]] = 0.0
     chunk = 256
     K_all, S_pinv = gains.K, gains.S_pinv
     for c0 in range(0, N, chunk):
@@ -615,7 +657,7 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         if noise:
             xi = rng.standard_normal((c1 - c0, runs, q))
             nu_noise = rng.standard_normal((c1 - c0, runs, m))
-        for k in range(c0, c1):
+        for k in range(max(c0, k0), c1):
             if mask[k]:
                 Hk = H[k]
                 z = x @ Hk.T + z_add[k]
@@ -640,7 +682,7 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         if progress is not None:
             progress(c1, N)
     P_rec = prepared.covariance.P_post[rec]
-    nees, nees_dof = nees_values(est_rec - truth_rec, P_rec)
+    nees, nees_dof = nees_values(est_rec - truth_rec, P_rec, basis=prepared.nees_basis(rec))
     return LinearSimulation(
         t=t[rec], truth=truth_rec, estimate=est_rec, P=P_rec, nees=nees, nees_dof=nees_dof,
         nis_t=t[upd], nis=nis, nis_dof=gains.dof[upd], innovation=innov_rec,

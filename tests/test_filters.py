@@ -11,7 +11,7 @@ from navlib import NavlibInputError, filters
 from navlib.covariance import kalman_covariance
 from navlib.models import ecef21, launcher
 from navlib.models.base import DiscreteModel
-from navlib.outliers import Outlier
+from navlib.outliers import Outlier, channel_profile, linear_mapping
 from navlib.trajectory import launcher_ascent, sounding_rocket
 
 
@@ -257,3 +257,39 @@ def test_ecef21_model_builds_at_block(rocket):
     np.testing.assert_allclose(A, model.A[:5])
     np.testing.assert_allclose(G, model.G[:5])
     assert H.shape == (5, 3, 21)
+
+
+def test_noise_free_response_matches_a_hand_recursion(short_launcher):
+    """The deterministic response (which starts its recursion at the first outlier input and
+    writes the exact zeros before it) equals the filter recursion run by hand from epoch 0;
+    innovations and NIS before the outlier are 0, and the cached NEES basis gives the same
+    NEES as a fresh one."""
+    prepared = filters.prepare_linear(launcher("ins_gps_rt", "GA", "markov", short_launcher))
+    out = Outlier("rt_x", 12.0, 0.002)
+    resp = filters.simulate_linear(prepared, outliers=out, noise=False, initial_error=False,
+                                   record_every=3)
+    steps, K = prepared.steps, prepared.gains.K
+    mp = linear_mapping("rt_x", steps.measurement_names, steps.noise_names)
+    z_add = np.zeros((steps.t.size, steps.H.shape[1]))
+    z_add[:, mp.index] = mp.sign * channel_profile((out,), "rt_x", steps.t)
+    x = np.zeros(steps.n)
+    x_hat = np.zeros(steps.n)
+    truth, est, innovations = [], [], []
+    for k in range(steps.t.size):
+        innov = steps.H[k] @ x + z_add[k] - steps.H[k] @ x_hat
+        x_hat = x_hat + K[k] @ innov
+        truth.append(x)
+        est.append(x_hat)
+        innovations.append(innov)
+        if k < steps.t.size - 1:
+            x, x_hat = steps.F[k] @ x, steps.F[k] @ x_hat
+    np.testing.assert_allclose(resp.truth[:, 0], np.array(truth)[resp.index], atol=1e-15)
+    np.testing.assert_allclose(resp.estimate[:, 0], np.array(est)[resp.index], atol=1e-15)
+    np.testing.assert_allclose(resp.innovation[:, 0], np.array(innovations)[resp.index],
+                               atol=1e-15)
+    before = resp.nis_t < 12.0
+    assert before.any() and np.all(resp.nis[before] == 0.0) and np.all(resp.nis[~before] >= 0)
+    nees, dof = filters.nees_values(resp.error, resp.P)
+    np.testing.assert_array_equal(resp.nees, nees)
+    np.testing.assert_array_equal(resp.nees_dof, dof)
+    assert prepared.nees_basis(resp.index) is prepared.nees_basis(resp.index)

@@ -2,6 +2,7 @@
 T1-T4 / Fig. 10 / roll-sigma study on a short launcher flight."""
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -226,3 +227,32 @@ def test_watch_rows_errors(flight):
     assert rows.shape == (3, 1, m.n)
     # the roll row is the first row of T_E^B on psi
     np.testing.assert_allclose(rows[:, 0, :3], np.swapaxes(C, 1, 2)[:, 0, :])
+
+
+def test_rt_only_options_leave_the_non_rt_models_unchanged(flight):
+    """The premise of the filter reuse across assumption variants: ``a1_sign`` and
+    ``sigma_wind`` change only the RT solutions."""
+    for sol in ("ins_gps", "ins_gps_att"):
+        a = launcher(sol, "GAP", "markov", flight)
+        b = launcher(sol, "GAP", "markov", flight, a1_sign=-1.0, sigma_wind=0.001)
+        for name in ("A", "G", "Qc", "H", "R", "P0"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    a = launcher("ins_gps_rt", "GAP", "markov", flight)
+    b = launcher("ins_gps_rt", "GAP", "markov", flight, a1_sign=-1.0)
+    assert not np.array_equal(a.A, b.A)
+
+
+def test_assumption_sensitivity_reuses_filters_without_changing_results(flight):
+    variants = {"printed": dict(a1_sign=1.0), "text": dict(a1_sign=-1.0),
+                "calm": dict(a1_sign=1.0, sigma_wind=0.001)}
+    kw = dict(tests=("T2", "T4"), window=15.0, time=20.0)
+    fresh = study.assumption_sensitivity(variants, flight, **kw)
+    shared = study.FilterCache(flight, size=4, a1_sign=1.0)
+    study.paper_tests(cache=shared, tests=("T2", "T4"), window=15.0, time=20.0)
+    reused = study.assumption_sensitivity(variants, **kw, cache=shared)
+    pd.testing.assert_frame_equal(fresh, reused)
+    # the text's A1 variant takes the non-RT filters of the shared cache as they are
+    other = study.FilterCache(flight, a1_sign=-1.0)
+    study._adopt(other, shared)
+    assert {k[0] for k in other._items} == {"ins_gps", "ins_gps_att"}
+    assert other.get("ins_gps") is shared.get("ins_gps")

@@ -89,6 +89,26 @@ class FilterCache:
         return value
 
 
+_RT_ONLY_OPTIONS = ("a1_sign", "sigma_wind")
+"""Launcher options that enter only the RT block (``psi_ref``, ``A1``, wind) of
+:func:`navlib.models.launcher`: the non-RT solutions do not depend on them."""
+
+
+def _adopt(cache: FilterCache, other: FilterCache) -> None:
+    """Put into ``cache`` the prepared filters of ``other`` that are the same models: all of
+    them when both use the same trajectory and model options, the non-RT ones when the
+    options differ only in :data:`_RT_ONLY_OPTIONS`."""
+    if other.trajectory is not cache.trajectory:
+        return
+    a, b = cache.model_options, other.model_options
+    differ = {k for k in a.keys() | b.keys() if k not in a or k not in b or a[k] != b[k]}
+    if differ and not differ <= set(_RT_ONLY_OPTIONS):
+        return
+    for key, value in other._items.items():
+        if not differ or not key[0].endswith("_rt"):
+            cache._items.setdefault(key, value)
+
+
 def record_stride(trajectory, spacing_s: float = 0.02) -> int:
     """Samples between recorded epochs about ``spacing_s`` apart (at least 1)."""
     return max(1, round(spacing_s * trajectory.rate_hz))
@@ -641,7 +661,7 @@ def _without(sim, resp, prepared):
     their NEES and their NIS at the recorded update epochs."""
     truth = sim.truth - resp.truth
     est = sim.estimate - resp.estimate
-    nees, dof = nees_values(est - truth, sim.P)
+    nees, dof = nees_values(est - truth, sim.P, basis=prepared.nees_basis(sim.index))
     upd = prepared.measured[sim.index]
     innov = (sim.innovation - resp.innovation)[upd]
     S_pinv = prepared.gains.S_pinv[sim.index[upd]]
@@ -679,10 +699,13 @@ class EKFCrossCheck:
 def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
                    biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                    window: float = DEFAULTS["window"], window_s: float = 0.1,
-                   **model_options) -> EKFCrossCheck:
+                   cache: FilterCache | None = None, **model_options) -> EKFCrossCheck:
     """Run the outlier through the closed-loop EKF (:func:`navlib.filters.simulate_ekf`,
     sensors at every sample as in the paper, noise-free so the response is isolated) and
-    compare its roll response with the linear filter's."""
+    compare its roll response with the linear filter's.
+
+    ``cache``: prepared linear filters to reuse for the linear response when it holds the
+    same trajectory and model options (else a fresh one is built)."""
     from navlib.filters import simulate_ekf
 
     traj = trajectory if trajectory is not None else default_trajectory()
@@ -696,9 +719,11 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     # the error state after feedback; the linear 'induced' is estimate - truth
     induced = -(faulty.errors["roll"].to_numpy() - nominal.errors["roll"].to_numpy())
     t = faulty.result.t
+    lin_cache = FilterCache(traj, size=1, **model_options)
+    if cache is not None:
+        _adopt(lin_cache, cache)
     lin = outlier_response(solution, outlier, "roll", biases=biases, bias_model=bias_model,
-                           window=window,
-                           cache=FilterCache(traj, size=1, **model_options))
+                           window=window, cache=lin_cache)
     score = score_recovery(t, induced, t_outlier=outlier.time, window=window)
     return EKFCrossCheck(t, induced, lin, score)
 
@@ -745,7 +770,8 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
 def assumption_sensitivity(variants: dict, trajectory=None, *,
                            tests: Sequence[str] = ("T1", "T2", "T3", "T4"),
                            window: float = DEFAULTS["window"], time: float | None = None,
-                           cache_size: int = 2) -> pd.DataFrame:
+                           cache_size: int = 2, cache: FilterCache | None = None
+                           ) -> pd.DataFrame:
     """Spike-outlier verdicts of T1-T4 under alternative readings of the paper.
 
     Parameters
@@ -754,6 +780,14 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
         Name -> keywords of :func:`paper_tests` (``biases``, ``bias_model``) and of
         :func:`navlib.models.launcher` (``a1_sign``, ``sigma_wind``, ...).
     trajectory : Trajectory, optional
+        Default: that of ``cache``, else :func:`default_trajectory`.
+    cache_size : int
+        Prepared filters kept per variant.
+    cache : FilterCache, optional
+        Filters already prepared (e.g. by :func:`paper_tests`): a variant reuses those that
+        are the same model (same trajectory and options; the non-RT solutions also when
+        only the RT-only options ``a1_sign``/``sigma_wind`` differ), so does a later
+        variant with the earlier variants' non-RT filters.
 
     Returns
     -------
@@ -762,14 +796,19 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
         ``time_constant``, the paper's outcome and whether they agree, plus each test's
         claim verdict.
     """
-    traj = trajectory if trajectory is not None else default_trajectory()
+    traj = trajectory if trajectory is not None else (
+        cache.trajectory if cache is not None else default_trajectory())
+    pool = [cache] if cache is not None else []
     rows = []
     for name, kw in variants.items():
         kw = dict(kw)
         study_kw = {k: kw.pop(k) for k in ("biases", "bias_model") if k in kw}
-        cache = FilterCache(traj, size=cache_size, **kw)
-        st = paper_tests(cache=cache, shapes=("spike",), tests=tests, window=window,
+        variant_cache = FilterCache(traj, size=cache_size, **kw)
+        for other in pool:
+            _adopt(variant_cache, other)
+        st = paper_tests(cache=variant_cache, shapes=("spike",), tests=tests, window=window,
                          time=time, divergence=False, **study_kw, **kw)
+        pool = [*pool[:1 if cache is not None else 0], variant_cache]
         claim = {c.claim_id: c.verdict for c in st.claims}
         for (tid, sol, _shape), r in st.responses.items():
             want = PAPER_TESTS[tid].reported[sol]
