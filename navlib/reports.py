@@ -332,6 +332,22 @@ def _kernel_manager_class():
         def _transport_default(self):
             return "ipc" if os.name == "posix" else "tcp"
 
+        @default("ip")
+        def _ip_default(self):
+            # IPC sockets live in a private folder: kernels started at the same time (two
+            # reports, pytest -n 2) would otherwise pick the same "kernel-ipc-N" files in the
+            # shared working directory and talk to each other's kernel (a silent hang).
+            if self.transport == "ipc":
+                return str(Path(tempfile.mkdtemp(prefix="navlib-kernel-")) / "kernel")
+            return "127.0.0.1"
+
+        async def _async_cleanup_resources(self, restart=False):
+            await super()._async_cleanup_resources(restart=restart)
+            if self.transport == "ipc" and not restart:
+                shutil.rmtree(Path(self.ip).parent, ignore_errors=True)
+
+        cleanup_resources = _async_cleanup_resources
+
         async def _async_launch_kernel(self, kernel_cmd, **kw):
             kw.setdefault("stderr", subprocess.DEVNULL)
             return await super()._async_launch_kernel(kernel_cmd, **kw)

@@ -6,6 +6,7 @@ so they always run. Each execution goes through the report runner in quick mode 
 test's own tmp folder, so ``pytest -n 2`` is safe.
 """
 
+import logging
 from pathlib import Path
 
 import nbformat
@@ -45,6 +46,18 @@ def test_notebook_has_quick_parameter_and_report_name(path):
         f"{path.name}: the parameters cell must set quick = False")
     assert nb.cells[0].cell_type == "markdown" and info.title != path.stem, (
         f"{path.name}: start with a markdown title")
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
+def test_parameters_cell_parses_for_papermill(path, caplog):
+    """Every parameter line parses (papermill logs a warning mid-report otherwise, e.g. for
+    an '=' or quotes inside a trailing comment)."""
+    import papermill
+
+    with caplog.at_level(logging.WARNING, logger="papermill"):
+        found = papermill.inspect_notebook(str(path))
+    assert "quick" in found
+    assert not [r.getMessage() for r in caplog.records if "Unable to parse" in r.getMessage()]
 
 
 @pytest.mark.notebook
