@@ -316,8 +316,8 @@ def _kernel_manager_class():
 
     Whatever ``python3`` kernelspecs are installed per user or system-wide, the notebooks run
     in the interpreter (and virtual environment) that runs the report, with the inline
-    matplotlib backend. On POSIX the kernel
-    talks over IPC sockets (local only, and no "TCP without encryption" warning). The kernel
+    matplotlib backend. The kernel talks over loopback TCP (jupyter_client's default; IPC
+    sockets in a shared working folder collided between concurrent kernels). The kernel
     process's own stderr (ipykernel's log, e.g. "KeyboardInterrupt caught in kernel" when a
     failed run is shut down) is discarded so it cannot break the progress lines; everything
     the notebook code writes still reaches the executed notebook's outputs.
@@ -325,29 +325,8 @@ def _kernel_manager_class():
     from ipykernel.kernelspec import get_kernel_dict
     from jupyter_client.kernelspec import KernelSpec
     from jupyter_client.manager import AsyncKernelManager
-    from traitlets import default
 
     class CurrentPythonKernelManager(AsyncKernelManager):
-        @default("transport")
-        def _transport_default(self):
-            return "ipc" if os.name == "posix" else "tcp"
-
-        @default("ip")
-        def _ip_default(self):
-            # IPC sockets live in a private folder: kernels started at the same time (two
-            # reports, pytest -n 2) would otherwise pick the same "kernel-ipc-N" files in the
-            # shared working directory and talk to each other's kernel (a silent hang).
-            if self.transport == "ipc":
-                return str(Path(tempfile.mkdtemp(prefix="navlib-kernel-")) / "kernel")
-            return "127.0.0.1"
-
-        async def _async_cleanup_resources(self, restart=False):
-            await super()._async_cleanup_resources(restart=restart)
-            if self.transport == "ipc" and not restart:
-                shutil.rmtree(Path(self.ip).parent, ignore_errors=True)
-
-        cleanup_resources = _async_cleanup_resources
-
         async def _async_launch_kernel(self, kernel_cmd, **kw):
             kw.setdefault("stderr", subprocess.DEVNULL)
             return await super()._async_launch_kernel(kernel_cmd, **kw)

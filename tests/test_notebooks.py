@@ -65,7 +65,9 @@ def test_parameters_cell_parses_for_papermill(path, caplog):
 def test_notebook_runs_quick_and_draws(path, tmp_path):
     out = tmp_path / "report"
     try:
-        (run,) = reports.run_reports(path.parent, out, quick=True, only=[path.stem])
+        # a per-cell limit turns a lost kernel message into a failure instead of a CI hang
+        (run,) = reports.run_reports(path.parent, out, quick=True, only=[path.stem],
+                                     timeout_s=600)
     except reports.ReportError as exc:
         pytest.fail(f"{exc}\n{exc.runs[-1].failure.traceback}", pytrace=False)
     assert run.parameters.get("quick") is True

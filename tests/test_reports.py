@@ -255,19 +255,3 @@ def test_cli_failure_exits_nonzero_naming_notebook_and_cell(good, tmp_path):
         in proc.stderr
     assert not (tmp_path / "out").exists()
 
-
-def test_concurrent_kernels_get_private_ipc_sockets():
-    """Two kernels started at once in one folder must not share socket files (a hang)."""
-    import shutil
-
-    manager = reports._kernel_manager_class()
-    first, second = manager(), manager()
-    if first.transport != "ipc":
-        pytest.skip("TCP transport on this platform")
-    folders = {Path(first.ip).parent, Path(second.ip).parent}
-    try:
-        assert len(folders) == 2
-        assert all(f.is_dir() and f != Path.cwd() for f in folders)
-    finally:
-        for folder in folders:
-            shutil.rmtree(folder, ignore_errors=True)
