@@ -1024,16 +1024,6 @@ _MEAS_KINDS = {
 }
 
 
-def _step_matrices(A, G, Qc, dt, method):
-    if method == "euler":
-        n = A.shape[-1]
-        F = np.eye(n) + A * dt[:, None, None]
-        GL = G @ _psd_sqrt(Qc)
-        Q = (GL @ np.swapaxes(GL, 1, 2)) * dt[:, None, None]
-        return F, Q
-    return discretize_steps(A, G, Qc, dt, method="series")
-
-
 def _joseph_update(P, H, R, innov):
     """Joseph-form update with the pseudo-inverse rule of kalman_covariance; returns
     ``(P_post, K, S_pinv, dof)``."""
@@ -1251,7 +1241,8 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
             Hv = np.zeros((tw.size, 3, n))
             Hv[:, :, vel_i] = np.eye(3)
             Hw = np.concatenate([Hw, Hv], axis=1)
-        F, Q = _step_matrices(A[:-1], G[:-1], Qc, np.diff(tw), method)
+        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(tw),
+                                method="euler" if method == "euler" else "series")
         rec = []   # (local index, dx, P)
         for j in range(tw.size):
             k = w0 + j
