@@ -1,7 +1,7 @@
 """Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
-2 for bad command-line input.
+2 for bad command-line input, 128 + signal number when interrupted (130 Ctrl-C, 143 SIGTERM).
 """
 
 from __future__ import annotations
@@ -44,14 +44,21 @@ def _parser() -> argparse.ArgumentParser:
                      help="list the notebooks and their parameters, run nothing")
     rep.add_argument("--fail-fast", action="store_true",
                      help="stop at the first failing notebook")
-    rep.add_argument("--timeout", type=float, default=None, metavar="S",
-                     help="per-cell execution timeout in seconds (default: none)")
+    rep.add_argument("--timeout", type=float, default=reports.DEFAULT_CELL_TIMEOUT_S,
+                     metavar="S",
+                     help="per-cell time limit in seconds; a cell over it fails its notebook "
+                          f"(default: {reports.DEFAULT_CELL_TIMEOUT_S:.0f}; 0: no limit). "
+                          "A kernel that stops answering is restarted once whatever the "
+                          "limit")
     return parser
 
 
 def _print_progress(position: int, total: int, name: str, run) -> None:
     if run is None:
         print(f"[{position}/{total}] {name} ... ", end="", file=sys.stderr, flush=True)
+    elif run.status == "restarting":
+        print(f"stalled at {run.failure.describe()}; restarting the kernel and re-running "
+              f"{name} ... ", end="", file=sys.stderr, flush=True)
     else:
         print(f"{run.status} ({run.seconds:.1f} s)", file=sys.stderr, flush=True)
 
@@ -73,7 +80,11 @@ def _report(args) -> int:
     try:
         runs = reports.run_reports(notebooks, output, quick=args.quick, only=args.only,
                                    parameters=parameters, progress=_print_progress,
-                                   fail_fast=args.fail_fast, timeout_s=args.timeout)
+                                   fail_fast=args.fail_fast,
+                                   timeout_s=None if args.timeout == 0 else args.timeout)
+    except reports.ReportInterrupted as exc:
+        print(f"\n{exc}", file=sys.stderr)
+        return 128 + exc.signum
     except reports.ReportError as exc:
         for run in exc.runs:
             if run.failure and run.failure.traceback:

@@ -32,22 +32,25 @@ parameter that no selected notebook defines is rejected as a likely typo.
 from __future__ import annotations
 
 import ast
+import contextlib
+import dataclasses
 import datetime as _dt
-import functools
 import html
 import json
 import os
 import re
 import shutil
-import subprocess
+import signal
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from navlib.errors import NavlibInputError
+from navlib.kernel_watch import KernelWatch, NotebookAborted, execute_notebook, kill_all_kernels
 
 NOTEBOOK_PATTERN = re.compile(r"^(\d{2})_\w+\.ipynb$")
 """Notebooks taking part in the report: ``NN_name.ipynb`` (two digits, underscore)."""
@@ -56,6 +59,12 @@ KERNEL_NAME = "python3"
 MANIFEST = "manifest.json"
 INDEX = "index.html"
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+
+DEFAULT_CELL_TIMEOUT_S = 600.0
+"""Per-cell time limit of a report run, s: the heaviest full-mode cell takes about a minute
+on an unloaded 2-core machine, so ten minutes only ever stops a runaway cell."""
+
+_ABORT_NAMES = {"timeout": "CellTimeout", "stall": "KernelStalled", "died": "KernelDied"}
 
 
 # --------------------------------------------------------------------------- results
@@ -130,6 +139,12 @@ class NotebookRun:
         File name of the executed notebook inside the output folder (None when failed).
     failure : CellFailure or None
         Set when ``status == "failed"``.
+    stalls : tuple of str
+        Stalls met on the way (each ended by killing the kernel); a run that stalled once
+        and then succeeded is ``ok`` with one entry here.
+    late_deliveries : int
+        Kernel messages found only by a re-poll (lost wake-ups recovered, see
+        :mod:`navlib.kernel_watch`).
     """
 
     name: str
@@ -140,10 +155,23 @@ class NotebookRun:
     ipynb: str | None = None
     failure: CellFailure | None = None
     title: str = ""
+    stalls: tuple[str, ...] = ()
+    late_deliveries: int = 0
 
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+
+class ReportInterrupted(BaseException):
+    """The run was interrupted (Ctrl-C or SIGTERM; a BaseException, like KeyboardInterrupt,
+    so no handler of ordinary errors swallows it); its kernels were stopped, its staging
+    folder removed and the previous report left untouched. ``signum`` names the signal."""
+
+    def __init__(self, signum: int):
+        self.signum = int(signum)
+        super().__init__(f"interrupted by {signal.Signals(self.signum).name}: kernels "
+                         "stopped, nothing published, the previous report was left untouched")
 
 
 class ReportError(RuntimeError):
@@ -310,53 +338,20 @@ def _parameters_for(info: NotebookInfo, quick: bool,
 # --------------------------------------------------------------------------- execution
 
 
-@functools.cache
-def _kernel_manager_class():
-    """A kernel manager that always starts ipykernel with ``sys.executable``.
-
-    Whatever ``python3`` kernelspecs are installed per user or system-wide, the notebooks run
-    in the interpreter (and virtual environment) that runs the report, with the inline
-    matplotlib backend. The kernel talks over loopback TCP (jupyter_client's default; IPC
-    sockets in a shared working folder collided between concurrent kernels). The kernel
-    process's own stderr (ipykernel's log, e.g. "KeyboardInterrupt caught in kernel" when a
-    failed run is shut down) is discarded so it cannot break the progress lines; everything
-    the notebook code writes still reaches the executed notebook's outputs.
-    """
-    from ipykernel.kernelspec import get_kernel_dict
-    from jupyter_client.kernelspec import KernelSpec
-    from jupyter_client.manager import AsyncKernelManager
-
-    class CurrentPythonKernelManager(AsyncKernelManager):
-        async def _async_launch_kernel(self, kernel_cmd, **kw):
-            kw.setdefault("stderr", subprocess.DEVNULL)
-            return await super()._async_launch_kernel(kernel_cmd, **kw)
-
-        @property
-        def kernel_spec(self):
-            if self._kernel_spec is None:
-                spec = get_kernel_dict()
-                # inline figures even when the caller exports MPLBACKEND=Agg (headless CI)
-                spec["env"] = {"MPLBACKEND": "module://matplotlib_inline.backend_inline"}
-                self._kernel_spec = KernelSpec(resource_dir="", **spec)
-            return self._kernel_spec
-
-    return CurrentPythonKernelManager
-
-
 def _failure_from(exc: BaseException, executed_path: Path, source_nb) -> CellFailure:
-    """Map a papermill error (or any other) to a CellFailure with a source-notebook index.
+    """Map a papermill error, an aborted run or any other error to a CellFailure.
 
-    papermill's ``cell_index`` counts its injected-parameters cell and the saved notebook
-    also gains error-banner cells, so the failing cell is located by its error output in the
-    saved notebook and mapped to the source notebook through its cell id (by source text if
-    ids are missing).
+    The failing cell is located by its error output in the saved executed notebook (papermill
+    adds its injected-parameters cell and error banners, so indices differ) and mapped to
+    the source notebook through its cell id, or by source text if ids are missing.
     """
     import nbformat
     from papermill.exceptions import PapermillExecutionError
 
-    if not isinstance(exc, PapermillExecutionError):
+    if not isinstance(exc, PapermillExecutionError | NotebookAborted):
         return CellFailure(-1, type(exc).__name__, str(exc))
     index = -1
+    failing = None
     try:
         executed = nbformat.read(executed_path, as_version=4)
         failing = next(c for c in executed.cells if c.cell_type == "code"
@@ -366,11 +361,14 @@ def _failure_from(exc: BaseException, executed_path: Path, source_nb) -> CellFai
             index = ids.index(failing.get("id"))
     except (OSError, StopIteration, ValueError):
         pass
+    source = getattr(exc, "source", None) or (failing.source if failing else "")
     if index < 0:
         sources = [c.source for c in source_nb.cells]
-        index = sources.index(exc.source) if exc.source in sources else -1
+        index = sources.index(source) if source in sources else -1
+    if isinstance(exc, NotebookAborted):
+        return CellFailure(index, _ABORT_NAMES[exc.kind], str(exc), source)
     tb = _ANSI.sub("", "\n".join(exc.traceback or []))
-    return CellFailure(index, exc.ename, exc.evalue, exc.source or "", tb)
+    return CellFailure(index, exc.ename, exc.evalue, source, tb)
 
 
 def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
@@ -383,32 +381,47 @@ def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
     html_path.write_text(body, encoding="utf-8")
 
 
-def _execute(info: NotebookInfo, staging: Path, params: dict,
-             timeout_s: float | None) -> NotebookRun:
-    import papermill
-
+def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float | None,
+             on_restart: Callable[[CellFailure], None] | None = None) -> NotebookRun:
+    """Run one notebook; a stalled kernel gets one restart of the whole notebook."""
     executed = staging / f"{info.name}.ipynb"
     source_nb = _read_notebook(info.path)
     start = time.perf_counter()
-    try:
-        papermill.execute_notebook(
-            str(info.path), str(executed), parameters=params, kernel_name=KERNEL_NAME,
-            cwd=str(info.path.parent), progress_bar=False, log_output=False,
-            execution_timeout=timeout_s, kernel_manager_class=_kernel_manager_class(),
-        )
-    except Exception as exc:  # any failure of the run is reported, not raised
-        seconds = time.perf_counter() - start
-        return NotebookRun(info.name, "failed", seconds, params,
-                           failure=_failure_from(exc, executed, source_nb), title=info.title)
+    stalls: list[str] = []
+    late = 0
+    while True:
+        watch = KernelWatch()
+        try:
+            execute_notebook(info.path, executed, parameters=params, cwd=info.path.parent,
+                             timeout_s=timeout_s, watch=watch)
+        except Exception as exc:  # any failure of the run is reported, not raised
+            late += watch.late_deliveries
+            failure = _failure_from(exc, executed, source_nb)
+            if isinstance(exc, NotebookAborted) and exc.kind == "stall" and not stalls:
+                stalls.append(failure.describe())
+                if on_restart:
+                    on_restart(failure)
+                continue
+            if stalls:
+                failure = dataclasses.replace(
+                    failure, evalue=f"{failure.evalue} (also on the first run, before the "
+                    "kernel was restarted)" if failure.ename == "KernelStalled"
+                    else failure.evalue)
+            return NotebookRun(info.name, "failed", time.perf_counter() - start, params,
+                               failure=failure, title=info.title, stalls=tuple(stalls),
+                               late_deliveries=late)
+        late += watch.late_deliveries
+        break
     seconds = time.perf_counter() - start
     try:
         _export_html(executed, staging / f"{info.name}.html", info.title)
     except Exception as exc:  # nbconvert errors are varied; report them as a failed page
         return NotebookRun(info.name, "failed", seconds, params,
                            failure=CellFailure(-1, type(exc).__name__, f"HTML export: {exc}"),
-                           title=info.title)
+                           title=info.title, stalls=tuple(stalls), late_deliveries=late)
     return NotebookRun(info.name, "ok", seconds, params, html=f"{info.name}.html",
-                       ipynb=f"{info.name}.ipynb", title=info.title)
+                       ipynb=f"{info.name}.ipynb", title=info.title, stalls=tuple(stalls),
+                       late_deliveries=late)
 
 
 # --------------------------------------------------------------------------- publishing
@@ -514,12 +527,13 @@ def _publish(staging: Path, output: Path, runs: Sequence[NotebookRun], partial: 
         return
     retired = Path(tempfile.mkdtemp(prefix=f".{output.name}.old-", dir=output.parent))
     retired.rmdir()
-    os.replace(output, retired)
-    try:
-        os.replace(staging, output)
-    except OSError:
-        os.replace(retired, output)  # put the good report back
-        raise
+    with _signals_deferred():  # an interrupt between the two renames would lose the report
+        os.replace(output, retired)
+        try:
+            os.replace(staging, output)
+        except OSError:
+            os.replace(retired, output)  # put the good report back
+            raise
     shutil.rmtree(retired, ignore_errors=True)
 
 
@@ -527,7 +541,7 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
                 only: Iterable[str] | None = None,
                 parameters: Mapping[str, object] | None = None,
                 progress: Progress | None = None, fail_fast: bool = False,
-                timeout_s: float | None = None) -> list[NotebookRun]:
+                timeout_s: float | None = DEFAULT_CELL_TIMEOUT_S) -> list[NotebookRun]:
     """Execute the report notebooks and publish them into ``output_dir``.
 
     Parameters
@@ -548,8 +562,12 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
         See :data:`Progress`.
     fail_fast : bool
         Stop at the first failing notebook instead of running the rest.
-    timeout_s : float, optional
-        Per-cell execution timeout, s (None: no limit).
+    timeout_s : float or None
+        Per-cell time limit, s (default :data:`DEFAULT_CELL_TIMEOUT_S`; None: no limit). A
+        cell over the limit fails the notebook. Independently of it, a kernel that stops
+        answering (idle without replying, or never starting a cell) is a stall: the kernel
+        is killed and the notebook re-run once, then the notebook fails
+        (:mod:`navlib.kernel_watch`).
 
     Returns
     -------
@@ -562,6 +580,9 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
         Unknown ``only`` entry, parameter defined by no selected notebook, bad folders.
     ReportError
         A notebook failed; the output folder was not touched.
+    ReportInterrupted
+        Ctrl-C or SIGTERM (when called from the main thread): the kernels were stopped, the
+        staging folder removed, the output folder not touched.
     """
     notebooks = Path(notebooks_dir).resolve()
     output = Path(output_dir).resolve()
@@ -588,23 +609,73 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     os.umask(umask)
     staging.chmod(0o777 & ~umask)  # mkdtemp makes it private; a report folder is not
     try:
-        runs: list[NotebookRun] = []
-        for position, info in enumerate(selected, start=1):
-            if progress:
-                progress(position, len(selected), info.name, None)
-            run = _execute(info, staging, _parameters_for(info, quick, parameters), timeout_s)
-            runs.append(run)
-            if progress:
-                progress(position, len(selected), info.name, run)
-            if fail_fast and not run.ok:
-                break
-        if not all(r.ok for r in runs):
-            raise ReportError(runs)
-        _publish(staging, output, runs, partial=only is not None)
+        with _signals_interrupt():
+            runs = _run_all(selected, staging, quick, parameters, progress, fail_fast,
+                            timeout_s)
+            _publish(staging, output, runs, partial=only is not None)
         return runs
+    except (ReportInterrupted, KeyboardInterrupt):
+        kill_all_kernels()
+        raise
     finally:
         if staging.exists():
             shutil.rmtree(staging, ignore_errors=True)
+
+
+def _run_all(selected: Sequence[NotebookInfo], staging: Path, quick: bool,
+             parameters: Mapping[str, object], progress: Progress | None, fail_fast: bool,
+             timeout_s: float | None) -> list[NotebookRun]:
+    """Execute the selected notebooks into ``staging``; ReportError unless all are ok."""
+    runs: list[NotebookRun] = []
+    for position, info in enumerate(selected, start=1):
+        if progress:
+            progress(position, len(selected), info.name, None)
+        params = _parameters_for(info, quick, parameters)
+
+        def restarting(failure, position=position, info=info, params=params):
+            if progress:
+                progress(position, len(selected), info.name, NotebookRun(
+                    info.name, "restarting", 0.0, params, failure=failure))
+
+        run = _execute(info, staging, params, timeout_s, on_restart=restarting)
+        runs.append(run)
+        if progress:
+            progress(position, len(selected), info.name, run)
+        if fail_fast and not run.ok:
+            break
+    if not all(r.ok for r in runs):
+        raise ReportError(runs)
+    return runs
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """Hold SIGINT and SIGTERM until the block ends (they are then delivered)."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+@contextlib.contextmanager
+def _signals_interrupt():
+    """Turn SIGINT and SIGTERM into :class:`ReportInterrupted` (main thread only; elsewhere
+    signals cannot be handled and this does nothing)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, _frame):
+        raise ReportInterrupted(signum)
+
+    previous = {sig: signal.signal(sig, interrupt) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def default_notebooks_dir() -> Path:
