@@ -604,7 +604,9 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     _check_output_dir(output, notebooks)
     output.parent.mkdir(parents=True, exist_ok=True)
 
-    staging = Path(tempfile.mkdtemp(prefix=f".{output.name}.tmp-", dir=output.parent))
+    _remove_orphaned_staging(output)
+    staging = Path(tempfile.mkdtemp(prefix=f".{output.name}.tmp-{os.getpid()}-",
+                                    dir=output.parent))
     umask = os.umask(0)
     os.umask(umask)
     staging.chmod(0o777 & ~umask)  # mkdtemp makes it private; a report folder is not
@@ -620,6 +622,17 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     finally:
         if staging.exists():
             shutil.rmtree(staging, ignore_errors=True)
+
+
+def _remove_orphaned_staging(output: Path) -> None:
+    """Delete staging folders of earlier runs whose process is gone (killed with SIGKILL,
+    which no handler can catch). A folder is named ``.NAME.tmp-PID-xxxx`` by its run."""
+    import psutil
+
+    for folder in output.parent.glob(f".{output.name}.tmp-*"):
+        pid = folder.name.removeprefix(f".{output.name}.tmp-").split("-")[0]
+        if folder.is_dir() and pid.isdigit() and not psutil.pid_exists(int(pid)):
+            shutil.rmtree(folder, ignore_errors=True)
 
 
 def _run_all(selected: Sequence[NotebookInfo], staging: Path, quick: bool,

@@ -232,3 +232,14 @@ def test_cli_default_timeout_is_the_report_default():
 
     args = _parser().parse_args(["report"])
     assert args.timeout == reports.DEFAULT_CELL_TIMEOUT_S
+
+
+def test_staging_of_a_killed_run_is_removed_by_the_next_run(tmp_path):
+    dead = psutil.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    orphan = tmp_path / f".out.tmp-{dead.pid}-abcd"
+    orphan.mkdir()
+    alive = tmp_path / f".out.tmp-{psutil.Process().pid}-efgh"  # a live run's: kept
+    alive.mkdir()
+    reports._remove_orphaned_staging(tmp_path / "out")
+    assert not orphan.exists() and alive.exists()
