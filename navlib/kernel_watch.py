@@ -12,9 +12,9 @@ make such a run wait without bound; this module removes the first and bounds the
    limit forever, with nbclient's per-cell limit exactly until that limit, after which the
    reply is found and the cell is recorded as "completed" (seen: notebook 02's widget cell,
    ``duration 600.03``). Here every wait is cut into :data:`POLL_SLICE_S` slices, each
-   ending in a real poll of the socket, so a lost wake-up costs at most one slice. Such late
-   deliveries are counted (:attr:`KernelWatch.late_deliveries`) so the stress script can
-   show how often they happen.
+   ending in a real poll of the socket, so a lost wake-up costs at most one slice. Each one
+   is counted (:attr:`KernelWatch.lost_wakeups`) so the stress script can show how often
+   they happen.
 2. **A kernel that stops answering.** A request the kernel reports idle for (or never
    starts) without sending its reply is a stall, not a slow cell. :class:`KernelWatch` runs
    a watchdog thread that sees every message, kills the kernel's process tree on a stall
@@ -46,9 +46,9 @@ IDLE_WITHOUT_REPLY_S = 15.0
 NOT_STARTED_S = 60.0
 """A request the kernel has not reported busy for this long is a stall, s."""
 
-LATE_DELIVERY_S = 1.0
-"""A message found by a re-poll more than this after it was sent counts as a late delivery
-(a lost wake-up that the slicing recovered), s."""
+LOST_WAKEUP_WAIT_S = 0.05
+"""A message found only when a poll slice expired, after waiting in the socket longer than
+this, counts as a lost wake-up (ZeroMQ never woke the poll; the slicing recovered it), s."""
 
 ENGINE_NAME = "navlib-bounded"
 
@@ -95,9 +95,9 @@ class KernelWatch:
     ----------
     stall : str or None
         Why the watchdog declared a stall (the kernel has then been killed).
-    late_deliveries : int
-        Messages found only by a re-poll, more than :data:`LATE_DELIVERY_S` after they were
-        sent (lost wake-ups recovered by the polling slices).
+    lost_wakeups : int
+        Messages found only when a poll slice expired though they had been waiting longer
+        than :data:`LOST_WAKEUP_WAIT_S` (wake-ups ZeroMQ never delivered, recovered).
     max_delivery_lag_s : float
         Largest delay between a message's send time and its receipt, s.
     """
@@ -108,7 +108,7 @@ class KernelWatch:
             IDLE_WITHOUT_REPLY_S if idle_without_reply_s is None else idle_without_reply_s)
         self.not_started_s = float(NOT_STARTED_S if not_started_s is None else not_started_s)
         self.stall: str | None = None
-        self.late_deliveries = 0
+        self.lost_wakeups = 0
         self.max_delivery_lag_s = 0.0
         self.pid: int | None = None
         self._requests: dict[str, _Request] = {}
@@ -124,15 +124,16 @@ class KernelWatch:
             with self._lock:
                 self._requests[msg["header"]["msg_id"]] = _Request(time.monotonic())
 
-    def received(self, msg: dict, repolled: bool) -> None:
-        """Record a message received from the kernel (``repolled``: found after a slice)."""
+    def received(self, msg: dict, at_slice_end: bool) -> None:
+        """Record a message received from the kernel (``at_slice_end``: the poll that found
+        it was not woken, it returned when its slice expired)."""
         now = time.monotonic()
         sent_at = msg.get("header", {}).get("date")
         if isinstance(sent_at, _dt.datetime) and sent_at.tzinfo is not None:
             lag = (_dt.datetime.now(_dt.UTC) - sent_at).total_seconds()
             self.max_delivery_lag_s = max(self.max_delivery_lag_s, lag)
-            if repolled and lag > LATE_DELIVERY_S:
-                self.late_deliveries += 1
+            if at_slice_end and lag > LOST_WAKEUP_WAIT_S:
+                self.lost_wakeups += 1
         parent = msg.get("parent_header", {}).get("msg_id")
         msg_type = msg.get("header", {}).get("msg_type")
         with self._lock:
@@ -239,18 +240,18 @@ def _classes() -> _Classes:
             from queue import Empty
 
             deadline = None if timeout is None else time.monotonic() + timeout
-            repolled = False
             while True:
                 left = POLL_SLICE_S if deadline is None else deadline - time.monotonic()
                 wait_s = max(0.0, min(POLL_SLICE_S, left))
+                polled_at = time.monotonic()
                 if await self.socket.poll(int(wait_s * 1000)):
+                    at_slice_end = wait_s > 0 and time.monotonic() - polled_at >= wait_s
                     msg = await self._recv()
                     if self.watch is not None:
-                        self.watch.received(msg, repolled)
+                        self.watch.received(msg, at_slice_end)
                     return msg
                 if deadline is not None and time.monotonic() >= deadline:
                     raise Empty
-                repolled = True
 
         def send(self, msg: dict) -> None:
             if self.watch is not None:

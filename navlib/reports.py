@@ -142,7 +142,7 @@ class NotebookRun:
     stalls : tuple of str
         Stalls met on the way (each ended by killing the kernel); a run that stalled once
         and then succeeded is ``ok`` with one entry here.
-    late_deliveries : int
+    lost_wakeups : int
         Kernel messages found only by a re-poll (lost wake-ups recovered, see
         :mod:`navlib.kernel_watch`).
     """
@@ -156,7 +156,7 @@ class NotebookRun:
     failure: CellFailure | None = None
     title: str = ""
     stalls: tuple[str, ...] = ()
-    late_deliveries: int = 0
+    lost_wakeups: int = 0
 
     @property
     def ok(self) -> bool:
@@ -388,14 +388,14 @@ def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float |
     source_nb = _read_notebook(info.path)
     start = time.perf_counter()
     stalls: list[str] = []
-    late = 0
+    lost = 0
     while True:
         watch = KernelWatch()
         try:
             execute_notebook(info.path, executed, parameters=params, cwd=info.path.parent,
                              timeout_s=timeout_s, watch=watch)
         except Exception as exc:  # any failure of the run is reported, not raised
-            late += watch.late_deliveries
+            lost += watch.lost_wakeups
             failure = _failure_from(exc, executed, source_nb)
             if isinstance(exc, NotebookAborted) and exc.kind == "stall" and not stalls:
                 stalls.append(failure.describe())
@@ -409,8 +409,8 @@ def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float |
                     else failure.evalue)
             return NotebookRun(info.name, "failed", time.perf_counter() - start, params,
                                failure=failure, title=info.title, stalls=tuple(stalls),
-                               late_deliveries=late)
-        late += watch.late_deliveries
+                               lost_wakeups=lost)
+        lost += watch.lost_wakeups
         break
     seconds = time.perf_counter() - start
     try:
@@ -418,10 +418,10 @@ def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float |
     except Exception as exc:  # nbconvert errors are varied; report them as a failed page
         return NotebookRun(info.name, "failed", seconds, params,
                            failure=CellFailure(-1, type(exc).__name__, f"HTML export: {exc}"),
-                           title=info.title, stalls=tuple(stalls), late_deliveries=late)
+                           title=info.title, stalls=tuple(stalls), lost_wakeups=lost)
     return NotebookRun(info.name, "ok", seconds, params, html=f"{info.name}.html",
                        ipynb=f"{info.name}.ipynb", title=info.title, stalls=tuple(stalls),
-                       late_deliveries=late)
+                       lost_wakeups=lost)
 
 
 # --------------------------------------------------------------------------- publishing

@@ -9,13 +9,13 @@ stopped answering). Used to find the cause of the hangs of issue 9 and to show t
     python scripts/stress_notebooks.py ... --load 1                    # + 1 busy process
 
 ``--runner bounded`` (default) is the report runner (:mod:`navlib.kernel_watch`): stalls are
-the watchdog's restarts, *late* the kernel messages found only by a re-poll (lost wake-ups the
-polling slices recovered). ``--runner papermill`` is plain papermill with jupyter_client's
-channels (the runner before the fix), given a per-cell limit so a stall ends: a stall there is
-a cell whose client-side duration exceeds the kernel's own reply time by more than
-``--lag`` seconds (the reply sat unread), or a timed-out cell. ``--load N`` starts N busy
-processes for the duration (the issue's "other core busy"). Prints one row per run and a
-summary table; not part of the test suite.
+the watchdog's restarts, *lost* the kernel messages whose ZeroMQ wake-up never came (found when
+a 0.25 s poll slice expired; recovered, not stalls). ``--runner papermill`` is plain papermill
+with jupyter_client's channels (the runner before the fix), given a per-cell limit so a stall
+ends: a stall there is a cell whose client-side duration exceeds the kernel's own reply time by
+more than ``--lag`` seconds (the reply sat unread: *lost* counts those cells), or a timed-out
+cell. ``--load N`` starts N busy processes for the duration (the issue's "other core busy").
+Prints one row per run and a summary table; not part of the test suite.
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def run_papermill(info, out: Path, timeout_s: float, min_lag_s: float) -> dict:
         error = f"{type(exc).__name__}: {str(exc).splitlines()[0][:80]}"
     lags = _reply_lags(executed, min_lag_s) if executed.exists() else []
     stalled = bool(lags) or "Timeout" in error
-    return {"stalls": int(stalled), "late": len(lags), "error": error, "detail": lags}
+    return {"stalls": int(stalled), "lost": len(lags), "error": error, "detail": lags}
 
 
 def run_bounded(info, out: Path, timeout_s: float) -> dict:
@@ -91,7 +91,7 @@ def run_bounded(info, out: Path, timeout_s: float) -> dict:
     run = reports._execute(info, out, {"quick": True}, timeout_s)
     error = "" if run.ok else run.failure.describe()
     return {"stalls": len(run.stalls) + int(not run.ok and "Stalled" in error),
-            "late": run.late_deliveries, "error": error, "detail": list(run.stalls)}
+            "lost": run.lost_wakeups, "error": error, "detail": list(run.stalls)}
 
 
 def main(argv=None) -> int:
@@ -109,7 +109,7 @@ def main(argv=None) -> int:
     busy = [multiprocessing.Process(target=_busy, daemon=True) for _ in range(args.load)]
     for process in busy:
         process.start()
-    totals = {info.name: {"runs": 0, "stalls": 0, "late": 0, "failed": 0, "seconds": 0.0}
+    totals = {info.name: {"runs": 0, "stalls": 0, "lost": 0, "failed": 0, "seconds": 0.0}
               for info in selected}
     try:
         for repeat in range(args.runs):
@@ -124,21 +124,21 @@ def main(argv=None) -> int:
                 total = totals[info.name]
                 total["runs"] += 1
                 total["stalls"] += row["stalls"]
-                total["late"] += row["late"]
+                total["lost"] += row["lost"]
                 total["failed"] += int(bool(row["error"]))
                 total["seconds"] += seconds
                 print(f"{repeat + 1:3d} {info.name:28s} {seconds:7.1f} s  stalls "
-                      f"{row['stalls']}  late {row['late']}  {row['error']} "
+                      f"{row['stalls']}  lost {row['lost']}  {row['error']} "
                       f"{row['detail'] or ''}", flush=True)
     finally:
         for process in busy:
             process.terminate()
     print(f"\nrunner={args.runner} load={args.load} timeout={args.timeout:.0f} s "
           f"(python {sys.version.split()[0]}, {KernelWatch.__module__})")
-    print(f"{'notebook':28s} {'runs':>5s} {'stalls':>7s} {'late':>5s} {'failed':>7s} "
+    print(f"{'notebook':28s} {'runs':>5s} {'stalls':>7s} {'lost':>5s} {'failed':>7s} "
           f"{'mean s':>7s}")
     for name, t in totals.items():
-        print(f"{name:28s} {t['runs']:5d} {t['stalls']:7d} {t['late']:5d} {t['failed']:7d} "
+        print(f"{name:28s} {t['runs']:5d} {t['stalls']:7d} {t['lost']:5d} {t['failed']:7d} "
               f"{t['seconds'] / max(t['runs'], 1):7.1f}")
     runs = sum(t["runs"] for t in totals.values())
     stalls = sum(t["stalls"] for t in totals.values())

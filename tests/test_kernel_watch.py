@@ -79,21 +79,21 @@ def test_stall_rule_idle_without_reply_and_not_started():
     assert watch.check(t0 + 29.0) is None
     assert "not started" in watch.check(t0 + 31.0)
     watch.received({"header": {"msg_type": "status"}, "parent_header": {"msg_id": "a"},
-                    "content": {"execution_state": "busy"}}, repolled=False)
+                    "content": {"execution_state": "busy"}}, at_slice_end=False)
     assert watch.check(t0 + 1000.0) is None  # busy for long is a slow cell, not a stall
     watch.received({"header": {"msg_type": "status"}, "parent_header": {"msg_id": "a"},
-                    "content": {"execution_state": "idle"}}, repolled=False)
+                    "content": {"execution_state": "idle"}}, at_slice_end=False)
     assert watch.check(time.monotonic() + 4.0) is None
     assert "idle" in watch.check(time.monotonic() + 6.0)
     watch.received({"header": {"msg_type": "execute_reply"}, "parent_header": {"msg_id": "a"},
-                    "content": {"status": "ok"}}, repolled=True)
+                    "content": {"status": "ok"}}, at_slice_end=True)
     assert watch.check(time.monotonic() + 1000.0) is None
 
 
 def test_messages_of_other_requests_are_ignored():
     watch = kernel_watch.KernelWatch(idle_without_reply_s=1.0)
     watch.received({"header": {"msg_type": "status"}, "parent_header": {"msg_id": "zz"},
-                    "content": {"execution_state": "idle"}}, repolled=False)
+                    "content": {"execution_state": "idle"}}, at_slice_end=False)
     assert watch.check(time.monotonic() + 100.0) is None
 
 
@@ -125,12 +125,14 @@ async def _lost_wakeup(channel_class):
     return msg
 
 
-def test_sliced_poll_recovers_a_lost_wakeup():
-    channel_class = kernel_watch._classes().channel
+def test_sliced_poll_recovers_a_lost_wakeup_and_counts_it():
+    watch = kernel_watch.KernelWatch()
+    channel_class = type("Watched", (kernel_watch._classes().channel,), {"watch": watch})
     start = time.perf_counter()
     msg = asyncio.run(_lost_wakeup(channel_class))
     assert msg is not None and msg["header"]["msg_type"] == "execute_reply"
     assert time.perf_counter() - start < 2.0
+    assert watch.lost_wakeups == 1
 
 
 def test_jupyter_client_channel_loses_that_wakeup():
