@@ -71,7 +71,7 @@ import pandas as pd
 import scipy.sparse as sp
 from scipy.interpolate import BSpline, make_lsq_spline
 from scipy.linalg import solveh_banded
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
@@ -91,6 +91,11 @@ FIT_DEFAULTS = {
     "initial_attitude": None,
     "level_s": 1.0,
     "level_tolerance": 0.05,
+    "level_search_s": 60.0,
+    "preset": None,
+    "vibration_allowance_mps2": 2.0,
+    "use_logged_attitude": True,
+    "max_bridge_s": 1.0,
     "attitude_prior_deg": 5.0,
     "attitude_drift_deg_s": 0.01,
     "correction_knot_spacing_s": 10.0,
@@ -107,6 +112,21 @@ _MIN_IMU = 20
 _MAX_PITCH = 80.0 * DEG     # adapted-frame pitch limit (Euler singularity at 90 deg)
 _MIN_HORIZONTAL_F = 0.3     # m/s^2, RMS needed to estimate the heading
 _HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
+SAMPLES_PER_KNOT = 2
+"""Fewest IMU samples in each knot interval of the splines (knots are merged until so)."""
+MAX_KNOT_SPACING_S = 0.5
+"""Longest knot interval the fit accepts: a quintic B-spline follows features about two knot
+intervals long, so 0.5 s intervals still resolve the ~1 Hz manoeuvres of aircraft and
+multicopters (and the 0.5 s de-spin of the sounding rocket)."""
+MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
+"""Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
+knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
+above (Nyquist), below which the gyro integration aliases the attitude."""
+HOLE_FACTOR = 10.0
+"""An IMU interval longer than this many median intervals is a hole (as the readers'
+``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
+REST_RATE_DEG_S = 3.0
+"""Largest mean angular rate of a levelling window, deg/s (the segmentation's rest rate)."""
 
 
 # --- input checking ----------------------------------------------------------------------
@@ -136,8 +156,19 @@ def _options(options):
     p = {**FIT_DEFAULTS, **options}
     for key in ("knot_spacing_s", "sigma_position_m", "sigma_velocity_mps",
                 "sigma_specific_force_mps2", "level_s", "level_tolerance", "attitude_prior_deg",
-                "attitude_drift_deg_s", "correction_knot_spacing_s"):
+                "attitude_drift_deg_s", "correction_knot_spacing_s", "level_search_s",
+                "max_bridge_s"):
         p[key] = finite_scalar(p[key], key, 0.0, low_open=True)
+    p["vibration_allowance_mps2"] = finite_scalar(p["vibration_allowance_mps2"],
+                                                  "vibration_allowance_mps2", 0.0)
+    if p["knot_spacing_s"] > MAX_KNOT_SPACING_S:
+        raise NavlibInputError(f"knot_spacing_s: {p['knot_spacing_s']:g} s exceeds "
+                               f"{MAX_KNOT_SPACING_S:g} s (MAX_KNOT_SPACING_S)")
+    if not isinstance(p["use_logged_attitude"], bool):
+        raise NavlibInputError("use_logged_attitude: expected True or False, got "
+                               f"{p['use_logged_attitude']!r}")
+    if p["preset"] is not None and not isinstance(p["preset"], str):
+        raise NavlibInputError(f"preset: expected a sensor preset name, got {p['preset']!r}")
     if p["attitude_knot_spacing_s"] is None:
         p["attitude_knot_spacing_s"] = p["knot_spacing_s"]
     p["attitude_knot_spacing_s"] = finite_scalar(p["attitude_knot_spacing_s"],
@@ -163,11 +194,24 @@ def _options(options):
 
 # --- B-spline machinery ------------------------------------------------------------------
 
-def _knots(t0, t1, spacing):
-    """Clamped quintic knot vector on [t0, t1] with interior knots about ``spacing`` apart."""
+def _knots(t, spacing):
+    """Clamped quintic knot vector on ``[t[0], t[-1]]``, interior knots about ``spacing`` apart.
+
+    Knots come from a uniform grid; a knot is dropped when fewer than ``SAMPLES_PER_KNOT``
+    samples ``t`` would lie between it and the previous knot kept (or after it), so holes
+    in the record and low rates merge knot intervals instead of leaving coefficients
+    without data (the normal equations stay definite).
+    """
+    t0, t1 = float(t[0]), float(t[-1])
     n_int = max(int(np.ceil((t1 - t0) / spacing - 1e-9)), 1)
-    inner = np.linspace(t0, t1, n_int + 1)
-    return np.r_[np.full(_K, t0), inner, np.full(_K, t1)]
+    grid = np.linspace(t0, t1, n_int + 1)[1:-1]
+    below = np.searchsorted(t, grid, side="left")     # samples before each candidate knot
+    keep, last = [], 0
+    for knot, count in zip(grid, below, strict=True):
+        if count - last >= SAMPLES_PER_KNOT and t.size - count >= SAMPLES_PER_KNOT:
+            keep.append(knot)
+            last = count
+    return np.r_[np.full(_K + 1, t0), keep, np.full(_K + 1, t1)]
 
 
 def _basis(x, knots, nu):
@@ -230,6 +274,141 @@ def _level(f_b, gamma_e, C_n_e, heading):
     return Rotation.from_matrix(T_e @ T_b.T)
 
 
+def _rate_and_holes(t, max_bridge_s):
+    """Median IMU rate (Hz) and the holes (index of the sample after each) to bridge.
+
+    Refuses rates below :data:`MIN_IMU_RATE_HZ` and holes longer than ``max_bridge_s``.
+    """
+    dt = np.diff(t)
+    rate = float(1.0 / np.median(dt))
+    if rate < MIN_IMU_RATE_HZ:
+        raise NavlibInputError(
+            f"imu: median rate {rate:.3g} Hz is below the minimum {MIN_IMU_RATE_HZ:g} Hz of "
+            f"the fit: it needs {SAMPLES_PER_KNOT} samples per spline knot interval of at most "
+            f"{MAX_KNOT_SPACING_S:g} s to follow ~1 Hz manoeuvres (and twice that motion "
+            "bandwidth to integrate the gyros without aliasing)")
+    after = np.flatnonzero(dt > HOLE_FACTOR / rate) + 1
+    longest = int(after[np.argmax(dt[after - 1])]) if after.size else None
+    if longest is not None and dt[longest - 1] > max_bridge_s:
+        raise NavlibInputError(
+            f"imu: hole of {dt[longest - 1]:.3g} s between t = {t[longest - 1]:.6g} s and "
+            f"{t[longest]:.6g} s is longer than max_bridge_s={max_bridge_s:g} s; assess the "
+            "pieces on either side separately (navlib.studies.assess.assess_flight splits "
+            "there itself) or raise max_bridge_s")
+    return rate, after
+
+
+def _hole_bounds(t, f_b, w_b, after):
+    """Stated uncertainty of each bridged IMU hole (module docstring, "Holes").
+
+    Across a hole of length ``L`` the gyro history and the position spline interpolate
+    between the samples on either side. If the signals vary monotonically inside, the
+    attitude error stays below ``theta = |w_b - w_a| L / 2`` and the position error below
+    ``(|f_b - f_a| / 2 + |f| theta) L^2 / 8`` (the deflection of a string of length ``L``
+    pinned at both ends under that acceleration error).
+    """
+    out = []
+    for k in after:
+        L = float(t[k] - t[k - 1])
+        theta = 0.5 * L * float(np.linalg.norm(w_b[k] - w_b[k - 1]))
+        f_mag = 0.5 * float(np.linalg.norm(f_b[k]) + np.linalg.norm(f_b[k - 1]))
+        acc = 0.5 * float(np.linalg.norm(f_b[k] - f_b[k - 1])) + f_mag * theta
+        out.append({"t_start": float(t[k - 1]), "t_end": float(t[k]), "duration_s": L,
+                    "attitude_bound_deg": float(np.degrees(theta)),
+                    "position_bound_m": acc * L**2 / 8.0})
+    return out
+
+
+def _white_sigmas(preset, rate):
+    """Per-sample white-noise sigmas (specific force m/s^2, rate rad/s) of a preset."""
+    from navlib.models.ecef import DEFAULT_SENSORS, imu_noise_densities
+
+    noise = imu_noise_densities(preset or DEFAULT_SENSORS)
+    root = np.sqrt(rate)
+    return (float(np.max(noise["vrw_m_s_sqrt_s"])) * root,
+            float(np.max(noise["arw_rad_sqrt_s"])) * root)
+
+
+def _quiet_window(t, f_b, w_b, g, p):
+    """The quietest window of ``level_s`` in which the vehicle stands still (or hovers).
+
+    Windows of ``level_s`` start every ``level_s / 2``. A window qualifies when its median
+    specific force has a norm within ``level_tolerance`` of gravity ``g``, its spread (the
+    RMS over the axes of the standard deviation of ``f``) is below ``3 sigma_f +
+    vibration_allowance_mps2`` (``sigma_f`` the preset's per-sample white noise: motor
+    vibration of an armed multicopter is 1-1.6 m/s^2 and averages out over the window) and
+    its mean angular rate is below ``REST_RATE_DEG_S`` (plus three sigmas of the gyro
+    white noise averaged over the window). Of the qualifying windows within the first
+    ``level_search_s`` the one with the smallest spread is taken, else the quietest later
+    one (the gyros carry its attitude back to the start). Returns sample indices
+    ``k0, k1`` and a description.
+    """
+    rate = 1.0 / float(np.median(np.diff(t)))
+    sigma_f, sigma_w = _white_sigmas(p["preset"], rate)
+    starts = np.arange(t[0], max(t[-1] - p["level_s"], t[0]) + 1e-12, 0.5 * p["level_s"])
+    k0 = np.searchsorted(t, starts, side="left")
+    k1 = np.searchsorted(t, starts + p["level_s"], side="right")
+    ok = k1 - k0 >= 3
+    k0, k1, starts = k0[ok], k1[ok], starts[ok]
+    if k0.size == 0:
+        raise NavlibInputError(f"imu: fewer than 3 samples in every level_s={p['level_s']:g} s "
+                               "window; raise level_s or pass initial_attitude")
+    c1 = np.r_[np.zeros((1, 3)), np.cumsum(f_b, axis=0)]
+    c2 = np.r_[np.zeros((1, 3)), np.cumsum(f_b**2, axis=0)]
+    cw = np.r_[np.zeros((1, 3)), np.cumsum(w_b, axis=0)]
+    n = (k1 - k0)[:, None]
+    mean = (c1[k1] - c1[k0]) / n
+    spread = np.sqrt(np.maximum((c2[k1] - c2[k0]) / n - mean**2, 0.0).sum(axis=1))
+    mean_rate = np.linalg.norm((cw[k1] - cw[k0]) / n, axis=1)
+    spread_max = 3.0 * sigma_f + p["vibration_allowance_mps2"]
+    rate_max = REST_RATE_DEG_S * DEG + 3.0 * sigma_w / np.sqrt(n[:, 0])
+    gravity_ok = np.abs(np.linalg.norm(mean, axis=1) - g) <= p["level_tolerance"] * g
+    good = gravity_ok & (spread <= spread_max) & (mean_rate <= rate_max)
+    early = good & (starts <= t[0] + p["level_search_s"])
+    pool = early if early.any() else good
+    if not pool.any():
+        best = int(np.argmin(np.abs(np.linalg.norm(mean, axis=1) - g) / g
+                             + spread / max(spread_max, 1e-12)))
+        raise NavlibInputError(
+            f"imu: no window of level_s={p['level_s']:g} s where the vehicle is at rest, so "
+            f"the initial attitude cannot be levelled; the closest, at t = {starts[best]:.6g} "
+            f"s, has mean |f| = {np.linalg.norm(mean[best]):.3f} m/s^2 (gravity {g:.3f}, "
+            f"level_tolerance={p['level_tolerance']:g}), spread {spread[best]:.3f} m/s^2 "
+            f"(limit {spread_max:.3f}: 3 x {sigma_f:.3g} white noise of preset "
+            f"{p['preset'] or 'motionpak_tactical'!r} + vibration_allowance_mps2="
+            f"{p['vibration_allowance_mps2']:g}) and mean rate "
+            f"{np.degrees(mean_rate[best]):.3g} deg/s (limit {np.degrees(rate_max[best]):.3g})"
+            "; pass initial_attitude, or a log with the autopilot's attitude")
+    i = int(np.flatnonzero(pool)[np.argmin(spread[pool])])
+    info = {"t_start": float(t[k0[i]]), "t_end": float(t[k1[i] - 1]),
+            "spread_mps2": float(spread[i]), "spread_limit_mps2": float(spread_max),
+            "mean_rate_deg_s": float(np.degrees(mean_rate[i]))}
+    return int(k0[i]), int(k1[i]), info
+
+
+def _logged_attitude(imu, t0, C_n_e):
+    """Body -> ECEF attitude at ``t0`` from the autopilot attitude a reader attached
+    (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None."""
+    att = imu.attrs.get("attitude") if hasattr(imu, "attrs") else None
+    if not isinstance(att, pd.DataFrame) or len(att) == 0 or not {
+            "t", "qw", "qx", "qy", "qz"} <= set(att.columns):
+        return None
+    t = att["t"].to_numpy(dtype=float)
+    q = att[["qx", "qy", "qz", "qw"]].to_numpy(dtype=float)
+    ok = np.all(np.isfinite(q), axis=1) & np.isfinite(t) & (np.linalg.norm(q, axis=1) > 0.5)
+    if not ok.any():
+        return None
+    t, q = t[ok], q[ok]
+    k = int(np.argmin(np.abs(t - t0)))
+    if abs(t[k] - t0) > 1.0:
+        return None
+    if k + 1 < t.size and t[k] < t0 < t[k + 1]:
+        C_b_n = Slerp(t[k:k + 2], Rotation.from_quat(q[k:k + 2]))([t0])[0]
+    else:
+        C_b_n = Rotation.from_quat(q[k])
+    return Rotation.from_matrix(C_n_e) * C_b_n
+
+
 def _heading_of(C_b_e0, C_n_e):
     """Azimuth (rad) of the body x axis at the start."""
     x_n = C_n_e.T @ C_b_e0.apply([1.0, 0.0, 0.0])
@@ -249,15 +428,24 @@ def _coarse_heading(t, f_e, axis_e, t_g, P_g):
     vel = (P2 - P0) / (h_prev + h_next)[:, None]
     gnss_f = acc + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel) - earth.normal_gravity_ecef(P1)
     # the second difference is the acceleration averaged with a triangle (B-spline) weight
-    imu_f = np.empty_like(gnss_f)
-    for j in range(len(P1)):
-        lo, mid, hi = t_g[j], t_g[j + 1], t_g[j + 2]
-        sel = (t >= lo) & (t <= hi)
-        if not np.any(sel):
-            imu_f[j] = np.nan
-            continue
-        w = np.where(t[sel] <= mid, (t[sel] - lo) / (mid - lo), (hi - t[sel]) / (hi - mid))
-        imu_f[j] = (w[:, None] * f_e[sel]).sum(0) / max(w.sum(), 1e-300)
+    lo, mid, hi = t_g[:-2], t_g[1:-1], t_g[2:]
+    i_lo = np.searchsorted(t, lo, side="left")
+    i_mid = np.searchsorted(t, mid, side="right")
+    i_hi = np.searchsorted(t, hi, side="right")
+    c_f = np.r_[np.zeros((1, 3)), np.cumsum(f_e, axis=0)]
+    c_tf = np.r_[np.zeros((1, 3)), np.cumsum(t[:, None] * f_e, axis=0)]
+    c_1 = np.arange(t.size + 1, dtype=float)
+    c_t = np.r_[0.0, np.cumsum(t)]
+
+    def part(i0, i1):
+        return c_f[i1] - c_f[i0], c_tf[i1] - c_tf[i0], c_1[i1] - c_1[i0], c_t[i1] - c_t[i0]
+
+    f1, tf1, n1, s1 = part(i_lo, i_mid)              # rising side: (t - lo) / (mid - lo)
+    f2, tf2, n2, s2 = part(i_mid, i_hi)              # falling side: (hi - t) / (hi - mid)
+    d1, d2 = (mid - lo)[:, None], (hi - mid)[:, None]
+    num = (tf1 - lo[:, None] * f1) / d1 + (hi[:, None] * f2 - tf2) / d2
+    den = (s1 - lo * n1) / d1[:, 0] + (hi * n2 - s2) / d2[:, 0]
+    imu_f = np.where((n1 + n2 > 0)[:, None], num / np.maximum(den, 1e-300)[:, None], np.nan)
     ok = np.all(np.isfinite(imu_f), axis=1)
     z = axis_e[0]
     u = imu_f[ok] - np.outer(imu_f[ok] @ z, z)
@@ -362,6 +550,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     t = t_all[keep]
     f_b = np.column_stack([imu_cols[c][keep] for c in ("f_x", "f_y", "f_z")])
     w_b = np.column_stack([imu_cols[c][keep] for c in ("w_x", "w_y", "w_z")])
+    rate, holes = _rate_and_holes(t, p["max_bridge_s"])
     g_keep = (gnss_cols["t"] >= t[0]) & (gnss_cols["t"] <= t[-1])
     if g_keep.sum() < _MIN_GNSS:
         raise NavlibInputError(
@@ -378,35 +567,36 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     lat0, lon0, _ = earth.ecef_to_geodetic(P_g[0])
     C_n_e = earth.ned_to_ecef_matrix(lat0, lon0)
     gamma0 = earth.normal_gravity_ecef(P_g[0])
+    P_start = P_g[0]
+    # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
+    earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
+    relative = strapdown.integrate(t, f_b, w_b, P_start, np.zeros(3), Rotation.identity()
+                                   ).attitude              # E(t) B(t): the start taken as I
+    logged = _logged_attitude(imu, t[0], C_n_e) if (
+        p["initial_attitude"] is None and p["use_logged_attitude"]) else None
+    level_info = {}
     if p["initial_attitude"] is not None:
         att0, source = p["initial_attitude"], "initial_attitude"
+    elif logged is not None:
+        att0, source = logged, "log"
     else:
-        rest = t <= t[0] + p["level_s"]
-        f_mean = f_b[rest].mean(axis=0)
-        g = np.linalg.norm(gamma0)
-        spread = np.linalg.norm(f_b[rest] - f_mean, axis=1).max()
-        if abs(np.linalg.norm(f_mean) - g) > p["level_tolerance"] * g or spread > 0.5:
-            raise NavlibInputError(
-                f"imu: levelling needs the vehicle at rest during the first level_s="
-                f"{p['level_s']} s (mean |f| = {np.linalg.norm(f_mean):.3f} m/s^2 against "
-                f"gravity {g:.3f} within level_tolerance={p['level_tolerance']}, spread "
-                f"{spread:.3f} m/s^2); pass initial_attitude")
+        k0, k1, level_info = _quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p)
         heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
-        att0 = _level(f_mean, gamma0, C_n_e, heading)
+        att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e, heading)
+        # attitude at the window start, carried back to t[0] through the gyro history
+        E_q, R_q = earth_turn[k0], relative[k0]
+        att0 = E_q.inv() * att_q * R_q.inv() * E_q
         source = "keyword"
-    P_start = P_g[0]
-    sd = strapdown.integrate(t, f_b, w_b, P_start, np.zeros(3), att0)
-    attitude = sd.attitude
+    attitude = earth_turn * att0 * earth_turn.inv() * relative
     # the vertical about which a heading change turns, carried along with the Earth
-    axis_e = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF)).apply(
-        gamma0 / np.linalg.norm(gamma0))
-    if p["initial_attitude"] is None and p["heading_deg"] is None:
+    axis_e = earth_turn.apply(gamma0 / np.linalg.norm(gamma0))
+    if source == "keyword" and p["heading_deg"] is None:
         delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g)
         attitude = Rotation.from_rotvec(axis_e * delta) * attitude
         source = "estimated"
 
     # 3: position spline and attitude correction --------------------------------------
-    knots = _knots(t[0], t[-1], p["knot_spacing_s"])
+    knots = _knots(t, p["knot_spacing_s"])
     rows = _Rows(knots, t, t_g, P_g, V_g, sigma, p, P_start)
     correction = _Correction(t, p)
     coef = None
@@ -418,7 +608,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
 
     # 4: smooth attitude -----------------------------------------------------------------
     C_L_e, perm, angles = _adapted_euler(attitude)
-    att_knots = _knots(t[0], t[-1], p["attitude_knot_spacing_s"])
+    att_knots = _knots(t, p["attitude_knot_spacing_s"])
     angle_spline = make_lsq_spline(t, angles, att_knots, k=_K)
     ang, dang = angle_spline(t), angle_spline(t, 1)
     C_r_e, w_er_r = zyx_attitude(C_L_e, ang[:, 0], ang[:, 1], ang[:, 2],
@@ -438,7 +628,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     residuals.update({
         "heading_deg": float(np.degrees(_heading_of(attitude_fit[0], C_n_e))),
         "heading_source": source, "n_imu": int(t.size), "n_gnss": int(t_g.size),
-        "n_knots": int(knots.size - 2 * _K),
+        "n_knots": int(knots.size - 2 * _K), "imu_rate_hz": rate,
+        "imu_holes": _hole_bounds(t, f_b, w_b, holes), "level": level_info,
+        "sigma_specific_force_used_mps2": float(rows.sigma_f),
     })
     params = {k: v for k, v in p.items() if k != "initial_attitude"}
     params["fit_residuals"] = residuals
@@ -460,6 +652,7 @@ class _Rows:
         self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
         self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
         self.sigma_f = p["sigma_specific_force_mps2"]
+        self.scaled = False
         w_g2 = 1.0 / sigma**2
         self.N_gnss = self.G0.T @ (self.G0 * w_g2[:, None])
         rhs_gnss = self.G0.T @ (w_g2[:, None] * (P_g - P_ref))
@@ -481,10 +674,18 @@ class _Rows:
         self.ab = _banded(self.N)
 
     def robust_weights(self, coef, f_e, eps):
-        """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma)."""
+        """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma).
+
+        The first call also raises ``sigma_f`` to the robust scale of the residuals
+        (1.4826 x their median absolute value) when that is larger: vibration then weighs
+        as the noise it is against the GNSS rows.
+        """
         P, V, a = self.evaluate(coef)
         r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
              - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
+        if not self.scaled:
+            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(np.abs(a - r))))
+            self.scaled = True
         size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
         self.set_weights(1.0 / np.maximum(size, 1.0))
 
@@ -511,16 +712,16 @@ class _Rows:
         rhs = self.B2.T @ (w * r) + self.rhs_gnss
         if correction is None:
             return self._solve(rhs), np.zeros_like(f_e)
-        G = correction.columns(f_e)                       # (3, N, n_u): axis, sample, unknown
-        Q = [self.B2.T @ (w * G[a]) for a in range(3)]
-        n_u = G.shape[2]
-        sol = self._solve(np.hstack([rhs, *Q]))
+        G = correction.columns(f_e)                       # 3 x sparse (N, n_u)
+        Q = [sp.csr_array(self.B2.T @ (G[a] * w)) for a in range(3)]
+        n_u = G[0].shape[1]
+        sol = self._solve(np.hstack([rhs, *(q.toarray() for q in Q)]))
         c0 = sol[:, :3]
         S = [sol[:, 3 + a * n_u: 3 + (a + 1) * n_u] for a in range(3)]
         lhs = correction.prior.copy()
         b = -correction.prior @ correction.total      # the prior holds the accumulated sum
         for a in range(3):
-            lhs += G[a].T @ (w * G[a]) - Q[a].T @ S[a]
+            lhs += (G[a].T @ (G[a] * w)).toarray() - Q[a].T @ S[a]
             b += Q[a].T @ c0[:, a] - G[a].T @ (w[:, 0] * r[:, a])
         e = np.linalg.solve(lhs, b)
         correction.total = correction.total + e
@@ -544,7 +745,7 @@ class _Correction:
         inner = np.linspace(t[0], t[-1], n_int + 1)
         knots = np.r_[np.full(k, t[0]), inner, np.full(k, t[-1])]
         x = np.minimum(t, np.nextafter(t[-1], -np.inf))
-        self.beta = BSpline.design_matrix(x, knots, k).toarray()   # (N, n_c)
+        self.beta = sp.csr_array(BSpline.design_matrix(x, knots, k))   # (N, n_c), sparse
         n_c = self.beta.shape[1]
         step = (t[-1] - t[0]) / n_int
         D = np.diff(np.eye(n_c), axis=0)
@@ -555,14 +756,16 @@ class _Correction:
         self.total = np.zeros(3 * n_c)                   # sum of the increments applied
 
     def columns(self, f_e):
-        """``G[a, k, (j, i)] = beta_i(t_k) (e_j x f_e(t_k))_a``."""
-        out = np.empty((3, f_e.shape[0], 3 * self.n_c))
-        for j in range(3):
-            e_j = np.zeros(3)
-            e_j[j] = 1.0
-            cross = np.cross(e_j, f_e)                   # (N, 3)
-            for a in range(3):
-                out[a, :, j * self.n_c:(j + 1) * self.n_c] = self.beta * cross[:, a:a + 1]
+        """Sparse ``G[a][k, (j, i)] = beta_i(t_k) (e_j x f_e(t_k))_a`` for the axes a."""
+        out = []
+        for a in range(3):
+            blocks = []
+            for j in range(3):
+                e_j = np.zeros(3)
+                e_j[j] = 1.0
+                cross = np.cross(e_j, f_e)[:, a]          # (N,)
+                blocks.append(sp.diags_array(cross) @ self.beta)
+            out.append(sp.csr_array(sp.hstack(blocks)))
         return out
 
     def evaluate(self, e):
