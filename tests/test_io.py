@@ -618,12 +618,24 @@ def test_px4_log_validation_names_topic_field_and_message(edited_sim_log):
     _raises(r"column 'gyro_rad\[1\]', message 7: value nan is not a finite",
             read_ulog, edited_sim_log(nan))
 
-    def deg(data):
+    def glitch(data):  # one non-physical sample: excluded, reported, not fatal
         for i in range(3):
             data[imu_key][f"gyro_rad[{i}]"][300] = 60.0
 
-    _raises(r"'gyro_rad', message 300: angular rate 103.9 rad/s .* look like deg/s",
-            read_ulog, edited_sim_log(deg))
+    with pytest.warns(FlightDataWarning, match=r"1 non-physical IMU sample.*message 300.*"
+                                               r"'gyro_rad' norm 103.9"):
+        imu, _ = read_ulog(edited_sim_log(glitch))
+    (flag,) = imu.attrs["outliers"]
+    assert flag["where"] == "message 300" and flag["value"] == pytest.approx(103.92, abs=0.01)
+    assert not np.isclose(imu["t"], flag["t"]).any()
+
+    def spinning(data):  # many: refused, with a hint naming keywords read_ulog has
+        for i in range(3):
+            data[imu_key][f"gyro_rad[{i}]"][200:400] = 60.0
+
+    msg = _raises(r"'gyro_rad', message 200: angular rate 103.9 rad/s .* 200 of \d+ samples",
+                  read_ulog, edited_sim_log(spinning))
+    assert "max_rate_rad_s" in msg and "gyro_unit" not in msg
 
     def clip(data):
         data[imu_key]["accelerometer_clipping"][[100, 200]] = 1

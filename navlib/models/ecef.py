@@ -29,13 +29,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from functools import lru_cache
+from itertools import pairwise
 
 import numpy as np
 
 from navlib import earth, units
 from navlib._validation import finite_scalar, reject_unknown
-from navlib.errors import NavlibInputError
 from navlib.discretize import chain, discretize_steps
+from navlib.errors import NavlibInputError
 from navlib.models.base import HOLDS, DiscreteModel, LinearModel
 from navlib.rotations import skew
 
@@ -403,7 +404,7 @@ def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step
                                f"over the {t[-1] - t[0]:.3g} s trajectory")
     stride = 1 if max_step_s is None else max(int(max_step_s * trajectory.rate_hz + 1e-9), 1)
     # step boundaries: every ``stride`` samples inside each epoch interval, and the epochs
-    bounds = [np.arange(a, b, stride) for a, b in zip(epochs[:-1], epochs[1:], strict=True)]
+    bounds = [np.arange(a, b, stride) for a, b in pairwise(epochs)]
     bounds = np.concatenate([*bounds, epochs[-1:]])
     at_epoch = np.searchsorted(bounds, epochs)
     C_b_e = trajectory.attitude
