@@ -196,6 +196,33 @@ def flag_imu_outliers(t: np.ndarray, f_b: np.ndarray, w_ib_b: np.ndarray, source
     return ~bad, out
 
 
+def validated_imu(t, f_b, w_ib_b, source: Source, time_label: str, f_labels: str,
+                  w_labels: str, *, check_magnitudes: bool, limits: dict,
+                  rate_hint: str) -> tuple[pd.DataFrame, Source]:
+    """The checks every log reader applies to an IMU record, and its frame.
+
+    Time stamps (:func:`check_times`, :func:`check_sample_interval`), then with
+    ``check_magnitudes`` the unit checks (:func:`check_imu_magnitudes`, m/s^2 declared) and
+    the non-physical samples (:func:`flag_imu_outliers` with ``limits``: ``max_rate_rad_s``,
+    ``max_accel_m_s2``, ``max_fraction``), which are excluded and listed in
+    ``attrs["outliers"]``. Returns the frame ``t, f_x..w_z`` and the source of its rows.
+    """
+    check_times(t, source, time_label)
+    check_sample_interval(t, source, time_label, "imu", 1.0)
+    outliers, keep = [], np.ones(t.size, dtype=bool)
+    if check_magnitudes:
+        check_imu_magnitudes(f_b, source, f_labels, False)
+        keep, outliers = flag_imu_outliers(t, f_b, w_ib_b, source, f_labels, w_labels,
+                                           **limits, rate_hint=rate_hint)
+    frame = pd.DataFrame({"t": t[keep], "f_x": f_b[keep, 0], "f_y": f_b[keep, 1],
+                          "f_z": f_b[keep, 2], "w_x": w_ib_b[keep, 0], "w_y": w_ib_b[keep, 1],
+                          "w_z": w_ib_b[keep, 2]})
+    frame.attrs["outliers"] = outliers
+    if outliers and source.lines is not None:
+        source = Source(source.label, source.lines[keep], row_word=source.row_word)
+    return frame, source
+
+
 def check_positions(r_e: np.ndarray, source: Source, labels: str,
                     length_factor: float | None = None) -> None:
     """Every ECEF position must lie between 6300 km and 7500 km from the Earth's centre.

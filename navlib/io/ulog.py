@@ -45,15 +45,14 @@ from navlib.io.checks import (
     SAMPLE_ACCEL_MAX,
     FlightDataWarning,
     apply_gap_policy,
-    check_imu_magnitudes,
     check_overlap,
     check_positions,
     check_sample_interval,
     check_times,
     check_velocities,
-    flag_imu_outliers,
+    validated_imu,
 )
-from navlib.io.csv_files import F_KEYS, NED_KEYS, R_KEYS, V_KEYS, W_KEYS, combine_sigma
+from navlib.io.csv_files import NED_KEYS, R_KEYS, V_KEYS, combine_sigma
 
 IMU_TOPIC = "sensor_combined"
 ATTITUDE_TOPIC = "vehicle_attitude"
@@ -313,17 +312,13 @@ def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, limits) -> pd.DataFr
     raw = {k: d.data[k].astype(float) for k in (*_GYRO, *_ACCEL)}
     check_finite(raw, {k: Column(k, k, None) for k in raw}, src)
     t = (ts - t0) * units.MICROSECOND
-    check_times(t, src, "'timestamp'")
-    check_sample_interval(t, src, "'timestamp'", "imu", 1.0)
     f_b = np.column_stack([raw[k] for k in _ACCEL]) @ C_b_frd.T
     w_ib_b = np.column_stack([raw[k] for k in _GYRO]) @ C_b_frd.T
-    outliers, keep = [], slice(None)
-    if check_magnitudes:
-        check_imu_magnitudes(f_b, src, "'accelerometer_m_s2'", False)
-        keep, outliers = flag_imu_outliers(
-            t, f_b, w_ib_b, src, "'accelerometer_m_s2'", "'gyro_rad'", **limits,
-            rate_hint="; PX4 logs gyro_rad in rad/s, so a vehicle this fast needs a larger "
-                      "max_rate_rad_s (or check_magnitudes=False)")
+    frame, kept = validated_imu(
+        t, f_b, w_ib_b, src, "'timestamp'", "'accelerometer_m_s2'", "'gyro_rad'",
+        check_magnitudes=check_magnitudes, limits=limits,
+        rate_hint="; PX4 logs gyro_rad in rad/s, so a vehicle this fast needs a larger "
+                  "max_rate_rad_s (or check_magnitudes=False)")
     clipped = {}
     for field in ("accelerometer_clipping", "gyro_clipping"):
         if field in d.data:
@@ -333,12 +328,8 @@ def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, limits) -> pd.DataFr
                 warnings.warn(f"{src.label}: '{field}' flags {rows.size} sample(s), the first "
                               f"at {src.where(int(rows[0]))}: the sensor saturated there",
                               FlightDataWarning, stacklevel=3)
-    frame = pd.DataFrame({"t": t[keep], **dict(zip(F_KEYS, f_b[keep].T, strict=True)),
-                          **dict(zip(W_KEYS, w_ib_b[keep].T, strict=True))})
     frame.attrs["clipping"] = clipped
-    frame.attrs["outliers"] = outliers
-    return frame, (src if not outliers else Source(src.label, src.lines[keep],
-                                                   row_word="message"))
+    return frame, kept
 
 
 def _gnss_frame(d, label, idx, ts, t0, altitude, check_magnitudes):
