@@ -54,7 +54,7 @@ class DataFlashWriter:
         for c, col in zip(fmt, cols, strict=True):
             v = values.get(col, 0)
             if c in _SCALE:
-                v = int(round(v * _SCALE[c]))
+                v = round(v * _SCALE[c])
             elif c in "nNZ":
                 v = str(v).encode()
             elif c in "QBiIhHb":
@@ -108,5 +108,5 @@ def write_flight(path, imu, gnss_geodetic, attitude=None, *, layout="4.x", t0_us
                                           "Yaw": row.yaw_deg}))
     events.sort(key=lambda e: e[0])
     for t, name, vals in events:
-        w.add(name, TimeUS=t0_us + int(round(t * 1e6)), **vals)
+        w.add(name, TimeUS=t0_us + round(t * 1e6), **vals)
     w.write(path)

@@ -36,7 +36,7 @@ def multicopter(duration_s=120.0, rate_hz=250.0, *, pad_s=10.0, climb_m=20.0,
     yaw = 0.3 + s * 0.8 * np.sin(0.5 * w * tau)
     spl = make_interp_spline(grid, ned, k=5)
     yaw_spl = make_interp_spline(grid, yaw, k=5)
-    n = int(round((duration_s - t_start) * rate_hz)) + 1
+    n = round((duration_s - t_start) * rate_hz) + 1
     t = t_start + np.arange(n) / rate_hz
     p_n, v_n, a_n = spl(t), spl(t, 1), spl(t, 2)
     psi, dpsi = yaw_spl(t), yaw_spl(t, 1)

@@ -39,8 +39,8 @@ Method (:func:`fit_flight_data`)
    that moves least, its z axis along the direction that axis never visits), so pitch
    stays far from +-90 deg; yaw and roll are unwrapped, which handles any amount of spin.
    Each angle gets a quintic least-squares spline with knots every
-   ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``). The body rate follows from
-   the analytic Euler kinematics.
+   ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``; banded normal equations). The
+   body rate follows from the analytic Euler kinematics.
 5. The position is refitted with the smooth attitude, and the exact IMU is derived.
 
 Observability caveat: accelerometers and GNSS see the attitude only through the direction
@@ -69,7 +69,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import scipy.sparse as sp
-from scipy.interpolate import BSpline, make_lsq_spline
+from scipy.interpolate import BSpline
 from scipy.linalg import solveh_banded
 from scipy.spatial.transform import Rotation, Slerp
 
@@ -415,26 +415,57 @@ def _heading_of(C_b_e0, C_n_e):
     return float(np.arctan2(x_n[1], x_n[0]))
 
 
-def _coarse_heading(t, f_e, axis_e, t_g, P_g):
-    """Heading correction (rad) rotating IMU specific force onto GNSS second differences.
+def _coarse_heading(t, f_e, axis_e, t_g, P_g, V_g=None):
+    """Heading correction (rad) rotating IMU specific force onto the GNSS-derived one.
 
     ``f_e`` is the IMU specific force in ECEF with the provisional attitude and ``axis_e``
-    the (Earth-fixed, rotating) vertical about which the heading turns.
+    the (Earth-fixed, rotating) vertical about which the heading turns. With GNSS velocity
+    the GNSS side is the velocity difference between consecutive epochs (the acceleration
+    averaged over the interval, against the IMU average over the same interval); without,
+    the second difference of positions (the acceleration averaged with a triangle weight,
+    against the same weighting of the IMU). Velocity differences are far less noisy: at
+    5 Hz, 2 m of position noise make second differences of ~100 m/s^2.
     """
+    c_f = np.r_[np.zeros((1, 3)), np.cumsum(f_e, axis=0)]
+    c_1 = np.arange(t.size + 1, dtype=float)
+    if V_g is not None:
+        h = np.diff(t_g)[:, None]
+        vel = 0.5 * (V_g[1:] + V_g[:-1])
+        gnss_f = (np.diff(V_g, axis=0) / h + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel)
+                  - earth.normal_gravity_ecef(0.5 * (P_g[1:] + P_g[:-1])))
+        i0 = np.searchsorted(t, t_g[:-1], side="left")
+        i1 = np.searchsorted(t, t_g[1:], side="right")
+        n = c_1[i1] - c_1[i0]
+        imu_f = np.where((n > 0)[:, None], (c_f[i1] - c_f[i0]) / np.maximum(n, 1)[:, None],
+                         np.nan)
+    else:
+        gnss_f, imu_f = _triangle_pairs(t, f_e, t_g, P_g, c_f, c_1)
+    ok = np.all(np.isfinite(imu_f), axis=1)
+    z = axis_e[0]
+    u = imu_f[ok] - np.outer(imu_f[ok] @ z, z)
+    w = gnss_f[ok] - np.outer(gnss_f[ok] @ z, z)
+    if not ok.any() or np.sqrt(np.mean(np.sum(u**2, 1))) < _MIN_HORIZONTAL_F:
+        raise NavlibInputError(
+            "heading_deg: the horizontal specific force is too small to derive the heading "
+            f"(needs an RMS above {_MIN_HORIZONTAL_F} m/s^2); pass heading_deg or "
+            "initial_attitude")
+    return float(np.arctan2(np.sum(np.cross(u, w) @ z), np.sum(u * w)))
+
+
+def _triangle_pairs(t, f_e, t_g, P_g, c_f, c_1):
+    """GNSS second differences and the triangle-weighted IMU averages over their windows
+    (the second difference is the acceleration averaged with a triangle, B-spline, weight)."""
     h_prev, h_next = np.diff(t_g)[:-1], np.diff(t_g)[1:]
     P0, P1, P2 = P_g[:-2], P_g[1:-1], P_g[2:]
     acc = 2.0 * ((P2 - P1) / h_next[:, None] - (P1 - P0) / h_prev[:, None]) / (
         h_prev + h_next)[:, None]
     vel = (P2 - P0) / (h_prev + h_next)[:, None]
     gnss_f = acc + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel) - earth.normal_gravity_ecef(P1)
-    # the second difference is the acceleration averaged with a triangle (B-spline) weight
     lo, mid, hi = t_g[:-2], t_g[1:-1], t_g[2:]
     i_lo = np.searchsorted(t, lo, side="left")
     i_mid = np.searchsorted(t, mid, side="right")
     i_hi = np.searchsorted(t, hi, side="right")
-    c_f = np.r_[np.zeros((1, 3)), np.cumsum(f_e, axis=0)]
     c_tf = np.r_[np.zeros((1, 3)), np.cumsum(t[:, None] * f_e, axis=0)]
-    c_1 = np.arange(t.size + 1, dtype=float)
     c_t = np.r_[0.0, np.cumsum(t)]
 
     def part(i0, i1):
@@ -446,16 +477,7 @@ def _coarse_heading(t, f_e, axis_e, t_g, P_g):
     num = (tf1 - lo[:, None] * f1) / d1 + (hi[:, None] * f2 - tf2) / d2
     den = (s1 - lo * n1) / d1[:, 0] + (hi * n2 - s2) / d2[:, 0]
     imu_f = np.where((n1 + n2 > 0)[:, None], num / np.maximum(den, 1e-300)[:, None], np.nan)
-    ok = np.all(np.isfinite(imu_f), axis=1)
-    z = axis_e[0]
-    u = imu_f[ok] - np.outer(imu_f[ok] @ z, z)
-    w = gnss_f[ok] - np.outer(gnss_f[ok] @ z, z)
-    if not ok.any() or np.sqrt(np.mean(np.sum(u**2, 1))) < _MIN_HORIZONTAL_F:
-        raise NavlibInputError(
-            "heading_deg: the horizontal specific force is too small to derive the heading "
-            f"(needs an RMS above {_MIN_HORIZONTAL_F} m/s^2); pass heading_deg or "
-            "initial_attitude")
-    return float(np.arctan2(np.sum(np.cross(u, w) @ z), np.sum(u * w)))
+    return gnss_f, imu_f
 
 
 def _adapted_euler(attitude):
@@ -591,7 +613,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     # the vertical about which a heading change turns, carried along with the Earth
     axis_e = earth_turn.apply(gamma0 / np.linalg.norm(gamma0))
     if source == "keyword" and p["heading_deg"] is None:
-        delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g)
+        delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g, V_g)
         attitude = Rotation.from_rotvec(axis_e * delta) * attitude
         source = "estimated"
 
@@ -609,8 +631,12 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     # 4: smooth attitude -----------------------------------------------------------------
     C_L_e, perm, angles = _adapted_euler(attitude)
     att_knots = _knots(t, p["attitude_knot_spacing_s"])
-    angle_spline = make_lsq_spline(t, angles, att_knots, k=_K)
-    ang, dang = angle_spline(t), angle_spline(t, 1)
+    B = _basis(t, att_knots, 0)
+    ab = _banded(sp.csr_array(B.T @ B))
+    rhs = B.T @ angles
+    coef = solveh_banded(ab, rhs)
+    coef = coef + solveh_banded(ab, rhs - B.T @ (B @ coef))   # one refinement step
+    ang, dang = B @ coef, _basis(t, att_knots, 1) @ coef
     C_r_e, w_er_r = zyx_attitude(C_L_e, ang[:, 0], ang[:, 1], ang[:, 2],
                                  dang[:, 0], dang[:, 1], dang[:, 2])
     C_b_e = C_r_e @ perm                      # relabelled body -> body: C_b_e = C_r_e P
