@@ -9,14 +9,20 @@ the fitted position and attitude to the last digit of the integrator.
 
 Method (:func:`fit_flight_data`)
 --------------------------------
-1. **Initial attitude.** ``initial_attitude`` if given; otherwise accelerometer levelling
-   over the first ``level_s`` seconds (the vehicle must be at rest there) plus a heading:
-   ``heading_deg`` (azimuth of the body x axis) if given, else a coarse closed-form
-   estimate that turns the IMU specific force about the vertical onto the GNSS-derived one
-   (second differences of the GNSS positions against triangle-weighted IMU averages over
-   the same windows).
-2. **Attitude history.** The gyros are integrated with :func:`navlib.strapdown.integrate`
-   (fourth-order attitude chain with Earth rate), giving ``C_b_e`` at every IMU sample.
+1. **Initial attitude.** ``initial_attitude`` if given; else the autopilot's own attitude
+   when the reader attached it (``imu.attrs["attitude"]``: PX4 ``vehicle_attitude``,
+   ArduPilot ``ATT``; ``use_logged_attitude=True``), interpolated to the first sample;
+   else accelerometer levelling on the median specific force of the quietest rest window
+   of ``level_s`` (:func:`_quiet_window`: thresholds from the ``preset``'s white noise plus
+   ``vibration_allowance_mps2``; the first ``level_search_s`` seconds are preferred, and
+   the gyros carry a later window's attitude back to the start, so a record may start in
+   the air) plus a heading: ``heading_deg`` (azimuth of the body x axis) if given, else a
+   coarse closed-form estimate that turns the IMU specific force about the vertical onto
+   the GNSS-derived one (velocity differences when GNSS velocity is given, else second
+   differences of the positions, against IMU averages over the same windows).
+2. **Attitude history.** The gyros are integrated with
+   :func:`navlib.strapdown.body_attitude` (the fourth-order attitude chain of
+   :func:`navlib.strapdown.integrate`, with Earth rate), giving ``C_b_e`` at every sample.
 3. **Position spline and attitude correction.** ``P(t)`` is a quintic B-spline with knots
    every ``knot_spacing_s`` (default 0.1 s: ten 100 Hz samples per knot interval, short
    enough for thrust ramps of a few tenths of a second and the 0.5 s de-spin of the
@@ -27,11 +33,13 @@ Method (:func:`fit_flight_data`)
    (``sigma_velocity_mps``) and, at every IMU sample,
    ``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'``
    (``sigma_specific_force_mps2``). ``eps(t)`` is a slowly varying attitude correction
-   (cubic B-spline, knots every ``correction_knot_spacing_s``; prior
-   ``attitude_prior_deg`` on its value and ``attitude_drift_deg_s`` on its change) that
-   absorbs levelling/heading errors and gyro drift, solved jointly through its Schur
-   complement. Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times;
-   specific-force rows whose residual exceeds 4 sigma are down-weighted (Huber), so a
+   (cubic B-spline, knots every ``correction_knot_spacing_s``, at most
+   ``MAX_CORRECTION_INTERVALS`` intervals; prior ``attitude_prior_deg`` on its value and
+   ``attitude_drift_deg_s`` on its change) that absorbs levelling/heading errors and gyro
+   drift, solved jointly through its Schur complement. Gravity, Coriolis and ``eps`` are
+   relinearised ``iterations`` times; specific-force rows whose residual exceeds 4 sigma
+   are down-weighted (Huber; on the first pass ``sigma_specific_force_mps2`` is raised to
+   the robust scale of the residuals, so vibration weighs as noise), so a
    transient the spline cannot follow does not bend the attitude. The normal equations of
    the spline are banded (one Cholesky factorisation serves the three axes).
 4. **Attitude spline.** The corrected attitude samples are written as yaw/pitch/roll in a
@@ -42,6 +50,18 @@ Method (:func:`fit_flight_data`)
    ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``; banded normal equations). The
    body rate follows from the analytic Euler kinematics.
 5. The position is refitted with the smooth attitude, and the exact IMU is derived.
+
+Holes and rates
+---------------
+An IMU interval longer than ``HOLE_FACTOR`` (10) median intervals is a hole. Holes up to
+``max_bridge_s`` (default 1 s) are bridged: knots inside them are dropped
+(:func:`_knots`: every knot interval keeps ``SAMPLES_PER_KNOT`` samples), so one polynomial
+piece and the gyro chain interpolate across, and ``fit_residuals["imu_holes"]`` states a
+bound for each (:func:`_hole_bounds`). Longer holes are refused (``assess_flight`` splits
+the record there). The same knot rule lets low rates through (at 10 Hz the knot intervals
+become 0.2 s); below ``MIN_IMU_RATE_HZ`` (4 Hz: 2 samples per interval of at most
+``MAX_KNOT_SPACING_S`` = 0.5 s, the longest that still follows 1 Hz manoeuvres) the fit
+refuses the record, naming the rate and the minimum.
 
 Observability caveat: accelerometers and GNSS see the attitude only through the direction
 of the specific force, so a rotation about that direction (on the pad: the heading; for a
@@ -56,8 +76,11 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   IMU minus the fitted trajectory's exact IMU, with their maxima
   ``specific_force_max_mps2`` and ``angular_rate_max_rad_s`` (norms);
 * ``heading_deg`` (body-x azimuth at the start) and ``heading_source``
-  (``keyword``, ``initial_attitude`` or ``estimated``); ``n_imu``, ``n_gnss``,
-  ``n_knots``.
+  (``keyword``, ``initial_attitude``, ``log`` or ``estimated``); ``n_imu``, ``n_gnss``,
+  ``n_knots``, ``imu_rate_hz``;
+* ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
+  ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
+  statistics, empty when not levelled) and ``sigma_specific_force_used_mps2``.
 
 With noiseless data of a trajectory the splines can represent, all residuals are near
 zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
@@ -122,6 +145,11 @@ MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
 above (Nyquist), below which the gyro integration aliases the attitude."""
+MAX_CORRECTION_INTERVALS = 60
+"""Most knot intervals of the attitude correction: flights longer than 60
+``correction_knot_spacing_s`` get wider intervals (10 min at the default 10 s), which keeps
+its dense Schur complement small; a cubic spline still holds the linear drift of a gyro
+bias exactly."""
 HOLE_FACTOR = 10.0
 """An IMU interval longer than this many median intervals is a hole (as the readers'
 ``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
@@ -532,11 +560,16 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``attitude_prior_deg=5``, ``attitude_drift_deg_s=0.01``,
         ``correction_knot_spacing_s=10`` (the attitude correction, method step 3),
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
-        IMU sample of the overlap; replaces levelling and heading), ``level_s=1`` (rest
-        period used for levelling), ``level_tolerance=0.05`` (accepted relative difference
-        between the mean |f| of that period and normal gravity: consumer MEMS scale
-        factors reach a few percent), ``iterations=3`` (gravity/Coriolis/heading
-        relinearisations), ``name``.
+        IMU sample of the overlap; replaces levelling and heading),
+        ``use_logged_attitude=True`` (start from ``imu.attrs["attitude"]`` when present),
+        ``level_s=1`` (length of the rest window used for levelling),
+        ``level_tolerance=0.05`` (accepted relative difference between its median |f| and
+        normal gravity: consumer MEMS scale factors reach a few percent),
+        ``level_search_s=60`` (windows starting this long after the start are preferred),
+        ``preset=None`` (sensor preset whose white noise sets the rest thresholds; None:
+        ``motionpak_tactical``), ``vibration_allowance_mps2=2`` (accelerometer spread of
+        motor vibration accepted at rest), ``max_bridge_s=1`` (longest IMU hole bridged),
+        ``iterations=3`` (gravity/Coriolis/heading relinearisations), ``name``.
 
     Returns
     -------
@@ -549,8 +582,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     ------
     NavlibInputError
         Missing or non-finite columns, non-increasing times, too few samples,
-        non-overlapping spans, a start not at rest (without ``initial_attitude``), a
-        heading that cannot be estimated, unknown options.
+        non-overlapping spans, an IMU rate below ``MIN_IMU_RATE_HZ``, a hole longer than
+        ``max_bridge_s``, no rest window to level in (without ``initial_attitude`` or a
+        logged attitude), a heading that cannot be estimated, unknown options.
     """
     p = _options(options)
     imu_cols = _columns(imu, "imu", IMU_COLUMNS)
@@ -592,8 +626,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     P_start = P_g[0]
     # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
     earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
-    relative = strapdown.integrate(t, f_b, w_b, P_start, np.zeros(3), Rotation.identity()
-                                   ).attitude              # E(t) B(t): the start taken as I
+    relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
     logged = _logged_attitude(imu, t[0], C_n_e) if (
         p["initial_attitude"] is None and p["use_logged_attitude"]) else None
     level_info = {}
@@ -768,6 +801,7 @@ class _Correction:
     def __init__(self, t, p):
         k = 3
         n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
+        n_int = min(n_int, MAX_CORRECTION_INTERVALS)
         inner = np.linspace(t[0], t[-1], n_int + 1)
         knots = np.r_[np.full(k, t[0]), inner, np.full(k, t[-1])]
         x = np.minimum(t, np.nextafter(t[-1], -np.inf))
