@@ -176,7 +176,9 @@ def test_stationary_flight(still):
     # no motion: the heading is not observable; the fallback is taken and reported
     assert any(issubclass(w.category, FlightDataWarning) and "heading" in str(w.message)
                for w in caught)
-    assert len(result.notes) == 1 and "heading_deg=0" in result.notes[0]
+    assert sum("heading_deg=0" in n for n in result.notes) == 1
+    assert result.notes[0] == ("sensor preset 'motionpak_tactical': default (the records do "
+                               "not say what the IMU is)")
     e = result.excitability_table().iloc[:, 0]
     assert (e[["P_x", "P_y", "P_z", "V_x", "V_y", "V_z"]] > 0.95).all()
     # at rest the horizontal accelerometer biases hide behind the tilt, the vertical one
@@ -223,7 +225,9 @@ def _bad_inputs(imu, gnss):
         ((imu, shifted), {}, "do not overlap"),
         ((imu[imu["t"] <= 1.5], gnss), {}, "overlap for 1.5 s only"),
         ((imu, gnss[gnss["t"] <= 2.0]), {}, "3 epoch"),
-        ((pieces, gnss), {}, "split at gaps"),
+        ((imu, gnss.assign(segment=(gnss["t"] > 10).astype(int))), {}, "split at gaps"),
+        ((pieces.assign(t=pieces["t"] * 0.01), gnss), {},
+         r"into 2 spans .* none could be assessed"),
         ((imu, gnss), {"eta": 0.0}, "eta"),
         ((imu, gnss), {"nu": 1.5}, "nu"),
         ((imu, gnss), {"min_fraction": -0.1}, "min_fraction"),
@@ -314,6 +318,10 @@ def test_px4_simulated_flight_assessment(px4_log_path):
     assert set(result.segment_table["phase"]) <= {"rest", "powered", "cruise", "turn",
                                                   "coast", "free_fall"}
     assert "rest" in set(result.segment_table["phase"])  # a quasi-static drone flight
-    assert any("heading" in str(w.message) for w in caught)
+    # the log says what it is and carries the autopilot's attitude: both are used, said so
+    assert result.options["preset"] == "pixhawk_mems"
+    assert result.options["attitude_source"] == "log"
+    assert any("autopilot's own attitude" in n for n in result.notes)
+    assert not any("heading_deg=0" in str(w.message) for w in caught)
     summary = result.summary()
     assert (summary["n_excitable"] >= 6).all()           # position and velocity at least

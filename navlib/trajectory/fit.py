@@ -36,11 +36,14 @@ Method (:func:`fit_flight_data`)
    (cubic B-spline, knots every ``correction_knot_spacing_s``, at most
    ``MAX_CORRECTION_INTERVALS`` intervals; prior ``attitude_prior_deg`` on its value and
    ``attitude_drift_deg_s`` on its change) that absorbs levelling/heading errors and gyro
-   drift, solved jointly through its Schur complement. Gravity, Coriolis and ``eps`` are
-   relinearised ``iterations`` times; specific-force rows whose residual exceeds 4 sigma
-   are down-weighted (Huber; on the first pass ``sigma_specific_force_mps2`` is raised to
-   the robust scale of the residuals, so vibration weighs as noise), so a
-   transient the spline cannot follow does not bend the attitude. The normal equations of
+   drift, and a constant accelerometer bias (body axes; prior ``sigma_accel_bias_mps2``,
+   by default the ``preset``'s turn-on bias; without a preset none is estimated), which
+   the fit would otherwise take for motion; all solved jointly through a Schur complement.
+   Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times; specific-force
+   rows whose residual exceeds 4 sigma are down-weighted (Huber; on the first pass
+   ``sigma_specific_force_mps2`` is raised to the robust scale of the residuals, so
+   vibration weighs as noise), so a transient the spline cannot follow does not bend the
+   attitude. The normal equations of
    the spline are banded (one Cholesky factorisation serves the three axes).
 4. **Attitude spline.** The corrected attitude samples are written as yaw/pitch/roll in a
    fixed frame adapted to the flight (its x axis along the mean direction of the body axis
@@ -80,7 +83,8 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   ``n_knots``, ``imu_rate_hz``;
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
-  statistics, empty when not levelled) and ``sigma_specific_force_used_mps2``.
+  statistics, empty when not levelled), ``sigma_specific_force_used_mps2`` and
+  ``accel_bias_mps2`` (the estimated accelerometer bias, body axes).
 
 With noiseless data of a trajectory the splines can represent, all residuals are near
 zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
@@ -119,8 +123,9 @@ FIT_DEFAULTS = {
     "vibration_allowance_mps2": 2.0,
     "use_logged_attitude": True,
     "max_bridge_s": 1.0,
+    "sigma_accel_bias_mps2": None,
     "attitude_prior_deg": 5.0,
-    "attitude_drift_deg_s": 0.01,
+    "attitude_drift_deg_s": None,
     "correction_knot_spacing_s": 10.0,
     "iterations": 3,
     "name": "fitted flight",
@@ -184,11 +189,18 @@ def _options(options):
     p = {**FIT_DEFAULTS, **options}
     for key in ("knot_spacing_s", "sigma_position_m", "sigma_velocity_mps",
                 "sigma_specific_force_mps2", "level_s", "level_tolerance", "attitude_prior_deg",
-                "attitude_drift_deg_s", "correction_knot_spacing_s", "level_search_s",
+                "correction_knot_spacing_s", "level_search_s",
                 "max_bridge_s"):
         p[key] = finite_scalar(p[key], key, 0.0, low_open=True)
+    if p["attitude_drift_deg_s"] is None:
+        p["attitude_drift_deg_s"] = _gyro_drift_deg_s(p["preset"])
+    p["attitude_drift_deg_s"] = finite_scalar(p["attitude_drift_deg_s"], "attitude_drift_deg_s",
+                                              0.0, low_open=True)
     p["vibration_allowance_mps2"] = finite_scalar(p["vibration_allowance_mps2"],
                                                   "vibration_allowance_mps2", 0.0)
+    if p["sigma_accel_bias_mps2"] is not None:
+        p["sigma_accel_bias_mps2"] = finite_scalar(p["sigma_accel_bias_mps2"],
+                                                   "sigma_accel_bias_mps2", 0.0)
     if p["knot_spacing_s"] > MAX_KNOT_SPACING_S:
         raise NavlibInputError(f"knot_spacing_s: {p['knot_spacing_s']:g} s exceeds "
                                f"{MAX_KNOT_SPACING_S:g} s (MAX_KNOT_SPACING_S)")
@@ -557,7 +569,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``sigma_position_m=5`` (when no ``sigma`` column), ``sigma_velocity_mps=0.5``,
         ``sigma_specific_force_mps2=0.05`` (weights of the three kinds of rows),
         ``heading_deg=None`` (azimuth of the body x axis at the start; None: estimated),
-        ``attitude_prior_deg=5``, ``attitude_drift_deg_s=0.01``,
+        ``attitude_prior_deg=5``, ``attitude_drift_deg_s=None`` (the named ``preset``'s
+        turn-on gyro bias, at least 0.01; 0.01 without a preset),
         ``correction_knot_spacing_s=10`` (the attitude correction, method step 3),
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
         IMU sample of the overlap; replaces levelling and heading),
@@ -569,6 +582,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``preset=None`` (sensor preset whose white noise sets the rest thresholds; None:
         ``motionpak_tactical``), ``vibration_allowance_mps2=2`` (accelerometer spread of
         motor vibration accepted at rest), ``max_bridge_s=1`` (longest IMU hole bridged),
+        ``sigma_accel_bias_mps2=None`` (prior sigma of the constant accelerometer bias the
+        fit estimates; None: the named ``preset``'s turn-on bias, no bias without a preset),
         ``iterations=3`` (gravity/Coriolis/heading relinearisations), ``name``.
 
     Returns
@@ -653,11 +668,12 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     # 3: position spline and attitude correction --------------------------------------
     knots = _knots(t, p["knot_spacing_s"])
     rows = _Rows(knots, t, t_g, P_g, V_g, sigma, p, P_start)
-    correction = _Correction(t, p)
+    correction = _Correction(t, p, _accel_bias_sigma(p))
     coef = None
     for _ in range(p["iterations"]):
-        f_e = attitude.apply(f_b)
-        coef, eps = rows.solve(f_e, coef, correction)
+        C = attitude.as_matrix()
+        f_e = np.einsum("nij,nj->ni", C, f_b - correction.bias)
+        coef, eps = rows.solve(f_e, coef, correction, C)
         rows.robust_weights(coef, f_e, eps)
         attitude = Rotation.from_rotvec(eps) * attitude
 
@@ -667,16 +683,16 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     B = _basis(t, att_knots, 0)
     ab = _banded(sp.csr_array(B.T @ B))
     rhs = B.T @ angles
-    coef = solveh_banded(ab, rhs)
-    coef = coef + solveh_banded(ab, rhs - B.T @ (B @ coef))   # one refinement step
-    ang, dang = B @ coef, _basis(t, att_knots, 1) @ coef
+    att_coef = solveh_banded(ab, rhs)
+    att_coef = att_coef + solveh_banded(ab, rhs - B.T @ (B @ att_coef))   # refinement step
+    ang, dang = B @ att_coef, _basis(t, att_knots, 1) @ att_coef
     C_r_e, w_er_r = zyx_attitude(C_L_e, ang[:, 0], ang[:, 1], ang[:, 2],
                                  dang[:, 0], dang[:, 1], dang[:, 2])
     C_b_e = C_r_e @ perm                      # relabelled body -> body: C_b_e = C_r_e P
     w_eb_b = w_er_r @ perm                    # omega_b = P^T omega_r
 
     # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
-    f_e = np.einsum("nij,nj->ni", C_b_e, f_b)
+    f_e = np.einsum("nij,nj->ni", C_b_e, f_b - correction.bias)
     for _ in range(p["iterations"]):
         coef, _ = rows.solve(f_e, coef)
     P, V, a = rows.evaluate(coef)
@@ -690,6 +706,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         "n_knots": int(knots.size - 2 * _K), "imu_rate_hz": rate,
         "imu_holes": _hole_bounds(t, f_b, w_b, holes), "level": level_info,
         "sigma_specific_force_used_mps2": float(rows.sigma_f),
+        "accel_bias_mps2": [float(b) for b in correction.bias],
     })
     params = {k: v for k, v in p.items() if k != "initial_attitude"}
     params["fit_residuals"] = residuals
@@ -755,7 +772,7 @@ class _Rows:
     def evaluate(self, coef):
         return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
 
-    def solve(self, f_e, coef, correction=None):
+    def solve(self, f_e, coef, correction=None, C=None):
         """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
 
         With a :class:`_Correction`, the specific force rows read
@@ -771,7 +788,7 @@ class _Rows:
         rhs = self.B2.T @ (w * r) + self.rhs_gnss
         if correction is None:
             return self._solve(rhs), np.zeros_like(f_e)
-        G = correction.columns(f_e)                       # 3 x sparse (N, n_u)
+        G = correction.columns(f_e, C)                    # 3 x sparse (N, n_u)
         Q = [sp.csr_array(self.B2.T @ (G[a] * w)) for a in range(3)]
         n_u = G[0].shape[1]
         sol = self._solve(np.hstack([rhs, *(q.toarray() for q in Q)]))
@@ -789,16 +806,19 @@ class _Rows:
 
 
 class _Correction:
-    """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector), cubic B-spline.
+    """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector, cubic B-spline)
+    and a constant accelerometer bias ``b_a`` (body axes).
 
     ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
-    the recorded specific force and GNSS reveal. Prior: each coefficient ~ N(0,
-    ``attitude_prior_deg``^2) and neighbouring coefficients differ by ~ N(0,
-    (``attitude_drift_deg_s`` x knot spacing)^2), so stretches without attitude information
-    (free fall) keep the gyro attitude.
+    the recorded specific force and GNSS reveal; ``f <- f - b_a`` the accelerometer bias,
+    which would otherwise be taken for motion (a parked vehicle drifting at a few m/s).
+    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and neighbouring
+    coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2), so
+    stretches without attitude information (free fall) keep the gyro attitude; each bias
+    component ~ N(0, ``sigma_ba``^2), the preset's turn-on accelerometer bias.
     """
 
-    def __init__(self, t, p):
+    def __init__(self, t, p, sigma_ba):
         k = 3
         n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
         n_int = min(n_int, MAX_CORRECTION_INTERVALS)
@@ -811,12 +831,23 @@ class _Correction:
         D = np.diff(np.eye(n_c), axis=0)
         per_axis = (np.eye(n_c) / (p["attitude_prior_deg"] * DEG) ** 2
                     + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
-        self.prior = np.kron(np.eye(3), per_axis)       # unknowns ordered (axis j, coef i)
+        # unknowns ordered (axis j, coef i) for eps, then the three bias components
+        n_b = 3 if sigma_ba > 0 else 0                  # no bias unknowns without a prior
+        self.prior = np.zeros((3 * n_c + n_b, 3 * n_c + n_b))
+        self.prior[:3 * n_c, :3 * n_c] = np.kron(np.eye(3), per_axis)
+        if n_b:
+            self.prior[3 * n_c:, 3 * n_c:] = np.eye(3) / sigma_ba**2
         self.n_c = n_c
-        self.total = np.zeros(3 * n_c)                   # sum of the increments applied
+        self.total = np.zeros(3 * n_c + n_b)             # sum of the increments applied
 
-    def columns(self, f_e):
-        """Sparse ``G[a][k, (j, i)] = beta_i(t_k) (e_j x f_e(t_k))_a`` for the axes a."""
+    @property
+    def bias(self):
+        """Accumulated accelerometer bias estimate (body axes, m/s^2)."""
+        return self.total[3 * self.n_c:] if self.total.size > 3 * self.n_c else np.zeros(3)
+
+    def columns(self, f_e, C):
+        """Sparse ``G[a]`` (N, n_u) for the axes a: ``beta_i(t_k) (e_j x f_e(t_k))_a`` for
+        ``eps`` and ``-C_b_e[k, a, j]`` for the bias."""
         out = []
         for a in range(3):
             blocks = []
@@ -825,12 +856,38 @@ class _Correction:
                 e_j[j] = 1.0
                 cross = np.cross(e_j, f_e)[:, a]          # (N,)
                 blocks.append(sp.diags_array(cross) @ self.beta)
+            if self.total.size > 3 * self.n_c:
+                blocks.append(sp.csr_array(-C[:, a, :]))
             out.append(sp.csr_array(sp.hstack(blocks)))
         return out
 
     def evaluate(self, e):
         return np.column_stack([self.beta @ e[j * self.n_c:(j + 1) * self.n_c]
                                 for j in range(3)])
+
+
+def _gyro_drift_deg_s(preset):
+    """Default ``attitude_drift_deg_s``: how fast an uncorrected gyro bias turns the
+    attitude, the preset's turn-on gyro bias (at least 0.01 deg/s); 0.01 without a preset."""
+    if preset is None:
+        return 0.01
+    from navlib.models.ecef import parameter_sigmas
+
+    if not isinstance(preset, str):
+        raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
+    return max(0.01, float(parameter_sigmas(preset)["sigma_bg_deg_s"]))
+
+
+def _accel_bias_sigma(p):
+    """Prior sigma of the fit's accelerometer bias, m/s^2: ``sigma_accel_bias_mps2``, else
+    the turn-on value of the named ``preset``, else 0 (no bias estimated)."""
+    from navlib.models.ecef import parameter_sigmas
+
+    if p["sigma_accel_bias_mps2"] is not None:
+        return p["sigma_accel_bias_mps2"]
+    if p["preset"] is None:
+        return 0.0
+    return float(parameter_sigmas(p["preset"])["sigma_ba_m_s2"])
 
 
 def _rms(x):
