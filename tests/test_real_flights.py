@@ -58,6 +58,33 @@ def test_clean_flight_reference(recs):
     _pad_is_rest(result, PAD_S - 1.5)
     assert result.options["attitude_source"] in ("estimated", "keyword")
     assert any(n.startswith("levelled over") for n in result.notes)
+    # the accelerometer bias (0.1 m/s^2 class) is estimated, not taken for motion
+    traj = result.trajectory
+    pad = traj.t < PAD_S - 1.0
+    assert np.linalg.norm(traj.velocity[pad], axis=1).max() < 0.3
+    bias = traj.parameters["fit_residuals"]["accel_bias_mps2"]
+    assert 0.0 < np.linalg.norm(bias) < 0.5
+
+
+def test_in_air_start_without_attitude_is_refused_by_name(recs):
+    imu, gnss = recs
+    air = imu[imu["t"] >= 15.0].reset_index(drop=True)
+    with pytest.raises(NavlibInputError, match=r"no window of level_s=1 s where the vehicle "
+                                               r"is at rest.*GNSS acceleration.*autopilot"):
+        _assess(air, gnss[gnss["t"] >= 15.0].reset_index(drop=True))
+
+
+def test_heading_keyword_holds_at_the_start_when_levelled_later(truth, recs):
+    imu, gnss = recs
+    quiet_late = imu.copy()
+    early = quiet_late["t"] < 3.0                          # a shaky start: level later
+    quiet_late.loc[early, ["f_x", "f_y", "f_z"]] += 3.0 * np.random.default_rng(0).standard_normal(
+        (int(early.sum()), 3))
+    heading = 17.19                                        # the truth's yaw at the start
+    result = _assess(quiet_late, gnss, fit_options={"heading_deg": heading})
+    level = result.trajectory.parameters["fit_residuals"]["level"]
+    assert level["t_start"] >= 2.0
+    assert result.options["heading_deg"] == pytest.approx(heading, abs=3.0)
 
 
 @pytest.mark.parametrize("length", [0.2, 0.7])
@@ -199,10 +226,14 @@ def small(tmp_path_factory):
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(step=st.sampled_from([1, 2, 5, 10, 25]),
        holes=st.lists(st.tuples(st.floats(0.5, 15.0), st.floats(0.05, 12.0)), max_size=2),
+       gnss_hole=st.one_of(st.none(), st.tuples(st.floats(0.0, 15.0), st.floats(0.5, 8.0))),
        glitches=st.lists(st.integers(0, 799), max_size=3),
        glitch_value=st.sampled_from([49.0, -80.0, 1e4]))
-def test_assess_raises_only_navlib_errors(small, step, holes, glitches, glitch_value):
+def test_assess_raises_only_navlib_errors(small, step, holes, gnss_hole, glitches,
+                                          glitch_value):
     imu, gnss, folder = small
+    if gnss_hole is not None:
+        gnss = _drop(gnss, *gnss_hole)
     bad = imu.copy()
     for k in glitches:
         bad.loc[k, "w_z"] = glitch_value

@@ -158,6 +158,9 @@ bias exactly."""
 HOLE_FACTOR = 10.0
 """An IMU interval longer than this many median intervals is a hole (as the readers'
 ``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
+REST_ACCEL_MPS2 = 0.5
+"""Largest GNSS-derived acceleration around a levelling window, m/s^2 (the segmentation's
+rest acceleration: 0.5 m/s^2 tilts the levelled attitude by 3 deg)."""
 REST_RATE_DEG_S = 3.0
 """Largest mean angular rate of a levelling window, deg/s (the segmentation's rest rate)."""
 
@@ -369,7 +372,26 @@ def _white_sigmas(preset, rate):
             float(np.max(noise["arw_rad_sqrt_s"])) * root)
 
 
-def _quiet_window(t, f_b, w_b, g, p):
+def _gnss_acceleration(tc, t_g, P_g, V_g, half_s):
+    """Norm of the GNSS-derived acceleration around ``tc``: the slope of a straight line
+    through the GNSS velocities within ``half_s`` (or the curvature of a parabola through
+    the positions within ``5 half_s``: position noise needs the longer baseline); NaN when
+    fewer than 3 epochs lie there."""
+    if V_g is not None:
+        sel = np.abs(t_g - tc) <= half_s
+        if sel.sum() < 3:
+            return np.nan
+        x = t_g[sel] - tc
+        slope = np.polyfit(x, V_g[sel], 1)[0]
+        return float(np.linalg.norm(slope))
+    sel = np.abs(t_g - tc) <= 5.0 * half_s
+    if sel.sum() < 3:
+        return np.nan
+    curv = np.polyfit(t_g[sel] - tc, P_g[sel], 2)[0]
+    return float(np.linalg.norm(2.0 * curv))
+
+
+def _quiet_window(t, f_b, w_b, g, p, gnss=None):
     """The quietest window of ``level_s`` in which the vehicle stands still (or hovers).
 
     Windows of ``level_s`` start every ``level_s / 2``. A window qualifies when its median
@@ -378,7 +400,9 @@ def _quiet_window(t, f_b, w_b, g, p):
     vibration_allowance_mps2`` (``sigma_f`` the preset's per-sample white noise: motor
     vibration of an armed multicopter is 1-1.6 m/s^2 and averages out over the window) and
     its mean angular rate is below ``REST_RATE_DEG_S`` (plus three sigmas of the gyro
-    white noise averaged over the window). Of the qualifying windows within the first
+    white noise averaged over the window) and the GNSS sees no acceleration above
+    ``REST_ACCEL_MPS2`` around it (:func:`_gnss_acceleration`; a turning or accelerating
+    vehicle would tilt the levelled attitude). Of the qualifying windows within the first
     ``level_search_s`` the one with the smallest spread is taken, else the quietest later
     one (the gyros carry its attitude back to the start). Returns sample indices
     ``k0, k1`` and a description.
@@ -404,6 +428,12 @@ def _quiet_window(t, f_b, w_b, g, p):
     rate_max = REST_RATE_DEG_S * DEG + 3.0 * sigma_w / np.sqrt(n[:, 0])
     gravity_ok = np.abs(np.linalg.norm(mean, axis=1) - g) <= p["level_tolerance"] * g
     good = gravity_ok & (spread <= spread_max) & (mean_rate <= rate_max)
+    accel = np.full(starts.size, np.nan)
+    if gnss is not None:
+        half = max(p["level_s"], 2.0)
+        for i in np.flatnonzero(good):
+            accel[i] = _gnss_acceleration(starts[i] + 0.5 * p["level_s"], *gnss, half)
+        good &= ~(accel > REST_ACCEL_MPS2)
     early = good & (starts <= t[0] + p["level_search_s"])
     pool = early if early.any() else good
     if not pool.any():
@@ -417,12 +447,14 @@ def _quiet_window(t, f_b, w_b, g, p):
             f"(limit {spread_max:.3f}: 3 x {sigma_f:.3g} white noise of preset "
             f"{p['preset'] or 'motionpak_tactical'!r} + vibration_allowance_mps2="
             f"{p['vibration_allowance_mps2']:g}) and mean rate "
-            f"{np.degrees(mean_rate[best]):.3g} deg/s (limit {np.degrees(rate_max[best]):.3g})"
-            "; pass initial_attitude, or a log with the autopilot's attitude")
+            f"{np.degrees(mean_rate[best]):.3g} deg/s (limit {np.degrees(rate_max[best]):.3g}),"
+            f" and no window passing these has a GNSS acceleration below {REST_ACCEL_MPS2:g} "
+            "m/s^2; pass initial_attitude, or a log with the autopilot's attitude")
     i = int(np.flatnonzero(pool)[np.argmin(spread[pool])])
     info = {"t_start": float(t[k0[i]]), "t_end": float(t[k1[i] - 1]),
             "spread_mps2": float(spread[i]), "spread_limit_mps2": float(spread_max),
-            "mean_rate_deg_s": float(np.degrees(mean_rate[i]))}
+            "mean_rate_deg_s": float(np.degrees(mean_rate[i])),
+            "gnss_accel_mps2": float(accel[i])}
     return int(k0[i]), int(k1[i]), info
 
 
@@ -650,12 +682,16 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     elif logged is not None:
         att0, source = logged, "log"
     else:
-        k0, k1, level_info = _quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p)
-        heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
-        att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e, heading)
-        # attitude at the window start, carried back to t[0] through the gyro history
+        k0, k1, level_info = _quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p,
+                                           (t_g, P_g, V_g))
+        att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e, 0.0)
+        # attitude at the window start, carried back to t[0] through the gyro history,
+        # then turned about the vertical to the heading asked for at t[0]
         E_q, R_q = earth_turn[k0], relative[k0]
         att0 = E_q.inv() * att_q * R_q.inv() * E_q
+        heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
+        down = gamma0 / np.linalg.norm(gamma0)
+        att0 = Rotation.from_rotvec(down * (heading - _heading_of(att0, C_n_e))) * att0
         source = "keyword"
     attitude = earth_turn * att0 * earth_turn.inv() * relative
     # the vertical about which a heading change turns, carried along with the Earth
