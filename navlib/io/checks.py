@@ -1,9 +1,11 @@
 """Validation of imported flight data: time stamps, gaps, plausible magnitudes, overlap.
 
 Every check raises :class:`navlib.NavlibInputError` naming the source (file or log topic),
-the column and the row. Gaps are the one finding that need not be fatal: ``on_gap`` chooses
-whether they are reported (``"warn"``), refused (``"raise"``) or split into segments
-(``"split"``: an integer ``segment`` column, see :func:`split_at_gaps`).
+the column and the row. Two findings need not be fatal. Gaps: ``on_gap`` chooses whether
+they are reported (``"warn"``), refused (``"raise"``) or split into segments (``"split"``:
+an integer ``segment`` column, see :func:`split_at_gaps`). Non-physical IMU samples
+(:func:`flag_imu_outliers`: beyond 35 rad/s or 100 g) are excluded and listed with time
+and value while they are at most 1 % of the record, and refuse it beyond.
 """
 
 from __future__ import annotations
