@@ -225,7 +225,6 @@ def _bad_inputs(imu, gnss):
         ((imu, shifted), {}, "do not overlap"),
         ((imu[imu["t"] <= 1.5], gnss), {}, "overlap for 1.5 s only"),
         ((imu, gnss[gnss["t"] <= 2.0]), {}, "3 epoch"),
-        ((imu, gnss.assign(segment=(gnss["t"] > 10).astype(int))), {}, "split at gaps"),
         ((pieces.assign(t=pieces["t"] * 0.01), gnss), {},
          r"into 2 spans .* none could be assessed"),
         ((imu, gnss), {"eta": 0.0}, "eta"),

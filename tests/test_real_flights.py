@@ -262,3 +262,12 @@ def test_rotation_helper_is_a_rotation(truth):
     q = logged_attitude(truth)[["qx", "qy", "qz", "qw"]].to_numpy()
     assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
     assert Rotation.from_quat(q).single is False
+
+
+def test_gnss_gap_split_by_the_reader_is_bridged(recs):
+    imu, gnss = recs
+    holed = _drop(gnss, 18.0, 4.0)
+    holed["segment"] = (holed["t"] > 18.0).astype(int)    # as read with on_gap="split"
+    result = _assess(imu, holed)
+    assert not result.spans and result.trajectory.t[-1] == pytest.approx(imu["t"].iloc[-1])
+    _pad_is_rest(result, PAD_S - 1.5)

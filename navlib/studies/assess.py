@@ -72,7 +72,7 @@ _GROUP_OF = {name: group for group, names in STATE_GROUPS.items() for name in na
 # --------------------------------------------------------------------------- inputs
 
 
-def _check_frame(frame, name: str, keys, pieces_ok: bool = True) -> None:
+def _check_frame(frame, name: str, keys) -> None:
     if not isinstance(frame, pd.DataFrame):
         raise NavlibInputError(f"{name}: expected a pandas DataFrame (navlib.io readers), got "
                                f"{type(frame).__name__}")
@@ -80,10 +80,6 @@ def _check_frame(frame, name: str, keys, pieces_ok: bool = True) -> None:
     if missing:
         raise NavlibInputError(f"{name}: missing column(s) {missing}; columns are "
                                f"{list(frame.columns)}")
-    if not pieces_ok and "segment" in frame.columns and frame["segment"].nunique() > 1:
-        raise NavlibInputError(
-            f"{name}: the record has {frame['segment'].nunique()} pieces split at gaps "
-            "(column 'segment'); pass the pieces of navlib.io.split_at_gaps one at a time")
     if len(frame) < 2:
         raise NavlibInputError(f"{name}: need at least 2 rows, got {len(frame)}")
 
@@ -564,11 +560,12 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         Records on a common time base, as from :func:`navlib.io.read_imu_csv`,
         :func:`navlib.io.read_gnss_csv`, :func:`navlib.io.read_ulog` or
         :func:`navlib.io.read_dataflash` (SI; ``gnss`` in ECEF, optional ``vx, vy, vz`` and
-        ``sigma``). A ``segment`` column (``on_gap="split"``) and IMU holes longer than the
-        fit's ``max_bridge_s`` (default 1 s) split the flight into spans assessed
+        ``sigma``). An IMU ``segment`` column (``on_gap="split"``) and IMU holes longer
+        than the fit's ``max_bridge_s`` (default 1 s) split the flight into spans assessed
         separately; shorter holes are bridged by the fit, with a stated bound
-        (``notes``). An autopilot attitude in ``imu.attrs["attitude"]`` (ULog, DataFlash)
-        is the initial attitude unless ``fit_options`` say otherwise.
+        (``notes``); GNSS gaps (and a GNSS ``segment`` column) are bridged by the IMU. An
+        autopilot attitude in ``imu.attrs["attitude"]`` (ULog, DataFlash) is the initial
+        attitude unless ``fit_options`` say otherwise.
     preset : str, optional
         Sensor preset (``data/sensors/*.toml``) giving the IMU noise densities and the
         turn-on sigmas of ``P0`` (:func:`navlib.models.ecef.parameter_sigmas`). None:
@@ -619,7 +616,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     thresholds = _thresholds({"eta": eta, "nu": nu, "e_threshold": e_threshold,
                               "s_threshold": s_threshold, "min_fraction": min_fraction})
     _check_frame(imu, "imu", _IMU_KEYS)
-    _check_frame(gnss, "gnss", _GNSS_KEYS, pieces_ok=False)
+    _check_frame(gnss, "gnss", _GNSS_KEYS)
+    gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
     preset, preset_reason = choose_preset(imu, preset)
     spec = sensors.load_preset(preset)  # unknown names fail here, before the fit
     fit_options = {"preset": preset, **dict(fit_options or {})}
