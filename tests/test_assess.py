@@ -72,13 +72,20 @@ def test_shipped_sample_is_small_and_readable(sample_records):
 
 
 def test_sample_script_is_deterministic(tmp_path):
-    """The script regenerates the shipped files byte for byte (seeded)."""
+    """The script regenerates the shipped files (seeded): GNSS and README byte for byte, the
+    IMU to 1e-5 relative and 1e-4 absolute (m/s^2, rad/s; the accelerometer white noise is
+    1.7e-3 m/s^2 per sample). Byte equality of the IMU does not hold across machines: the
+    rocket's ODE integration differs in the last bits between CPUs from the rail exit on
+    (measured up to 1.2e-5 m/s^2 between this machine and the one that wrote the files)."""
     done = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_sample_flight.py"),
                            "--out", str(tmp_path)], capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 0, done.stderr
-    for name in ("imu.csv", "gnss.csv", "README.md"):
+    for name in ("gnss.csv", "README.md"):
         assert (tmp_path / name).read_bytes() == (SAMPLE / name).read_bytes(), name
+    ours, shipped = pd.read_csv(tmp_path / "imu.csv"), pd.read_csv(SAMPLE / "imu.csv")
+    assert list(ours.columns) == list(shipped.columns) and ours.shape == shipped.shape
+    np.testing.assert_allclose(ours.to_numpy(), shipped.to_numpy(), rtol=1e-5, atol=1e-4)
 
 
 def test_sample_segments_and_fit(sample):
