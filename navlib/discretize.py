@@ -68,7 +68,7 @@ def _as_steps(matrix, n_steps: int, name: str) -> np.ndarray:
     )
 
 
-def discretize_steps(A, G, Qc, dt, method: str = "expm"):
+def discretize_steps(A, G, Qc, dt, method: str = "expm", *, W=None):
     """Per-step transition and process-noise matrices.
 
     Parameters
@@ -83,6 +83,10 @@ def discretize_steps(A, G, Qc, dt, method: str = "expm"):
         Step lengths, s.
     method : {"expm", "series", "euler"}
         See the module docstring.
+    W : ndarray (K, n, n), optional
+        ``G Qc G'`` of each step given directly (then ``G`` and ``Qc`` are not used): a
+        time average of ``G Qc G'`` over a step differs from ``G_mean Qc G_mean'`` when
+        ``G`` rotates within the step.
 
     Returns
     -------
@@ -98,10 +102,12 @@ def discretize_steps(A, G, Qc, dt, method: str = "expm"):
     if dt.size != n_steps or np.any(~np.isfinite(dt)) or np.any(dt <= 0):
         raise NavlibInputError(f"dt: expected {n_steps} positive finite step(s)")
     A = _as_steps(A, n_steps, "A")
-    G = _as_steps(G, n_steps, "G")
-    Qc = np.asarray(Qc, dtype=float)
+    if W is None:
+        G = _as_steps(G, n_steps, "G")
+        W = G @ np.asarray(Qc, dtype=float) @ np.swapaxes(G, 1, 2)
+    else:
+        W = _as_steps(W, n_steps, "W")
     n = A.shape[-1]
-    W = G @ Qc @ np.swapaxes(G, 1, 2)
     step = dt[:, None, None]
     if method == "euler":
         return np.eye(n) + A * step, W * step

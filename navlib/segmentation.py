@@ -216,7 +216,7 @@ def _windows(features: pd.DataFrame, resolution_s: float) -> pd.DataFrame:
     used = counts > 0
     # window edges rounded to the nanosecond so that 18.000000000000004 reads 18
     out = {"t_start": np.round(t0 + resolution_s * np.arange(n_bins)[used], 9)}
-    out["t_end"] = np.minimum(out["t_start"] + resolution_s, t1)
+    out["t_end"] = np.minimum(np.round(out["t_start"] + resolution_s, 9), t1)
     out["t"] = 0.5 * (out["t_start"] + out["t_end"])
     for name in _FEATURES:
         sums = np.bincount(k, weights=features[name].to_numpy(), minlength=n_bins)

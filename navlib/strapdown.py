@@ -384,6 +384,28 @@ def _attitude_quat(attitude0) -> np.ndarray:
     )
 
 
+def _body_products(phi):
+    body = np.empty((phi.shape[0] + 1, 4))
+    body[0] = (0.0, 0.0, 0.0, 1.0)
+    body[1:] = _prefix_products(_quat_from_rotvec(phi))
+    return body
+
+
+def body_attitude(t, w_ib_b) -> Rotation:
+    """Gyro-only attitude chain ``B_k`` of :func:`integrate`: ``C_k = E(t_k - t_0) C_0 B_k``.
+
+    ``B_k`` is the body's rotation from ``t[0]`` to ``t[k]`` relative to inertial space
+    (same fourth-order increments as :func:`integrate`), so any initial attitude ``C_0`` can
+    be applied afterwards without integrating again (the flight fit levels at a later
+    window). ``E`` is the Earth rotation ``exp(-S(Omega) (t_k - t_0))``.
+    """
+    t = increasing_times(t, "t")
+    w_ib_b = finite_array(w_ib_b, "w_ib_b", (t.size, 3))
+    h = np.diff(t)
+    phi, _ = _attitude_increments(w_ib_b[:-1], _interpolate(t, w_ib_b, 0.5), w_ib_b[1:], h)
+    return Rotation.from_quat(_body_products(phi))
+
+
 def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResult:
     """Integrate point-sampled IMU signals in ECEF from an initial state.
 
@@ -426,9 +448,7 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
     phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
 
     # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments.
-    body = np.empty((n, 4))
-    body[0] = (0.0, 0.0, 0.0, 1.0)
-    body[1:] = _prefix_products(_quat_from_rotvec(phi))
+    body = _body_products(phi)
     q = _quat_mul(_earth_quat(t - t[0]), _quat_mul(q0, body))
     q_mid = _quat_mul(
         _earth_quat(t[:-1] + 0.5 * h - t[0]),

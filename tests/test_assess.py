@@ -72,13 +72,20 @@ def test_shipped_sample_is_small_and_readable(sample_records):
 
 
 def test_sample_script_is_deterministic(tmp_path):
-    """The script regenerates the shipped files byte for byte (seeded)."""
+    """The script regenerates the shipped files (seeded): GNSS and README byte for byte, the
+    IMU to 1e-5 relative and 1e-4 absolute (m/s^2, rad/s; the accelerometer white noise is
+    1.7e-3 m/s^2 per sample). Byte equality of the IMU does not hold across machines: the
+    rocket's ODE integration differs in the last bits between CPUs from the rail exit on
+    (measured up to 1.2e-5 m/s^2 between this machine and the one that wrote the files)."""
     done = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_sample_flight.py"),
                            "--out", str(tmp_path)], capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 0, done.stderr
-    for name in ("imu.csv", "gnss.csv", "README.md"):
+    for name in ("gnss.csv", "README.md"):
         assert (tmp_path / name).read_bytes() == (SAMPLE / name).read_bytes(), name
+    ours, shipped = pd.read_csv(tmp_path / "imu.csv"), pd.read_csv(SAMPLE / "imu.csv")
+    assert list(ours.columns) == list(shipped.columns) and ours.shape == shipped.shape
+    np.testing.assert_allclose(ours.to_numpy(), shipped.to_numpy(), rtol=1e-5, atol=1e-4)
 
 
 def test_sample_segments_and_fit(sample):
@@ -176,7 +183,9 @@ def test_stationary_flight(still):
     # no motion: the heading is not observable; the fallback is taken and reported
     assert any(issubclass(w.category, FlightDataWarning) and "heading" in str(w.message)
                for w in caught)
-    assert len(result.notes) == 1 and "heading_deg=0" in result.notes[0]
+    assert sum("heading_deg=0" in n for n in result.notes) == 1
+    assert result.notes[0] == ("sensor preset 'motionpak_tactical': default (the records do "
+                               "not say what the IMU is)")
     e = result.excitability_table().iloc[:, 0]
     assert (e[["P_x", "P_y", "P_z", "V_x", "V_y", "V_z"]] > 0.95).all()
     # at rest the horizontal accelerometer biases hide behind the tilt, the vertical one
@@ -223,7 +232,8 @@ def _bad_inputs(imu, gnss):
         ((imu, shifted), {}, "do not overlap"),
         ((imu[imu["t"] <= 1.5], gnss), {}, "overlap for 1.5 s only"),
         ((imu, gnss[gnss["t"] <= 2.0]), {}, "3 epoch"),
-        ((pieces, gnss), {}, "split at gaps"),
+        ((pieces.assign(t=pieces["t"] * 0.01), gnss), {},
+         r"into 2 spans .* none could be assessed"),
         ((imu, gnss), {"eta": 0.0}, "eta"),
         ((imu, gnss), {"nu": 1.5}, "nu"),
         ((imu, gnss), {"min_fraction": -0.1}, "min_fraction"),
@@ -314,6 +324,10 @@ def test_px4_simulated_flight_assessment(px4_log_path):
     assert set(result.segment_table["phase"]) <= {"rest", "powered", "cruise", "turn",
                                                   "coast", "free_fall"}
     assert "rest" in set(result.segment_table["phase"])  # a quasi-static drone flight
-    assert any("heading" in str(w.message) for w in caught)
+    # the log says what it is and carries the autopilot's attitude: both are used, said so
+    assert result.options["preset"] == "pixhawk_mems"
+    assert result.options["attitude_source"] == "log"
+    assert any("autopilot's own attitude" in n for n in result.notes)
+    assert not any("heading_deg=0" in str(w.message) for w in caught)
     summary = result.summary()
     assert (summary["n_excitable"] >= 6).all()           # position and velocity at least

@@ -11,6 +11,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, strapdown
+from navlib.trajectory import fit as fit_mod
 from navlib.trajectory import fit_flight_data, sounding_rocket, stationary
 
 
@@ -169,10 +170,44 @@ def test_bad_records(short_records, mutate, match):
     ({"iterations": 1.5}, "iterations"),
     ({"initial_attitude": np.ones((3, 3))}, "initial_attitude"),
     ({"initial_attitude": Rotation.identity(2)}, "initial_attitude"),
+    ({"knot_spacing_s": 0.8}, "MAX_KNOT_SPACING_S"),
+    ({"use_logged_attitude": 1}, "use_logged_attitude"),
+    ({"vibration_allowance_mps2": -1.0}, "vibration_allowance_mps2"),
+    ({"sigma_accel_bias_mps2": float("nan")}, "sigma_accel_bias_mps2"),
+    ({"max_bridge_s": 0.0}, "max_bridge_s"),
+    ({"attitude_drift_deg_s": 0.0}, "attitude_drift_deg_s"),
+    ({"preset": 3}, "preset"),
+    ({"preset": "no_such_imu"}, "unknown sensor preset"),
 ])
 def test_bad_options(short_records, options, match):
     with pytest.raises(NavlibInputError, match=match):
         fit_flight_data(*short_records, **options)
+
+
+def test_knots_merge_over_holes_and_low_rates():
+    def counts(t, knots):
+        inner = knots[fit_mod._K + 1:-fit_mod._K - 1]
+        return inner, np.diff(np.searchsorted(t, np.r_[t[0], inner, t[-1] + 1e-9]))
+
+    t = np.r_[np.arange(0.0, 2.0, 0.01), np.arange(2.7, 4.0, 0.01)]    # a 0.7 s hole
+    inner, n = counts(t, fit_mod._knots(t, 0.1))
+    assert n.min() >= fit_mod.SAMPLES_PER_KNOT
+    assert np.sum((inner > 2.0) & (inner < 2.7)) <= 1                  # one piece spans it
+    slow = np.arange(0.0, 10.0, 0.1)                                   # 10 Hz
+    inner, n = counts(slow, fit_mod._knots(slow, 0.1))
+    assert n.min() >= fit_mod.SAMPLES_PER_KNOT and inner.size < 60
+
+
+def test_hole_longer_than_bridge_and_slow_imu_are_named(short_records):
+    imu, gnss = short_records
+    holed = imu[(imu["t"] < 3.0) | (imu["t"] > 4.5)]
+    with pytest.raises(NavlibInputError, match=r"hole of 1.5\d* s .* max_bridge_s=1"):
+        fit_flight_data(holed, gnss, heading_deg=0.0)
+    fit = fit_flight_data(holed, gnss, heading_deg=0.0, max_bridge_s=2.0)
+    (hole,) = fit.parameters["fit_residuals"]["imu_holes"]
+    assert hole["duration_s"] == pytest.approx(1.54)
+    with pytest.raises(NavlibInputError, match=r"median rate 3.33 Hz is below the minimum"):
+        fit_flight_data(imu.iloc[::15], gnss, heading_deg=0.0)
 
 
 def test_heading_needs_horizontal_excitation(short_records):

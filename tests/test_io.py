@@ -618,12 +618,24 @@ def test_px4_log_validation_names_topic_field_and_message(edited_sim_log):
     _raises(r"column 'gyro_rad\[1\]', message 7: value nan is not a finite",
             read_ulog, edited_sim_log(nan))
 
-    def deg(data):
+    def glitch(data):  # one non-physical sample: excluded, reported, not fatal
         for i in range(3):
             data[imu_key][f"gyro_rad[{i}]"][300] = 60.0
 
-    _raises(r"'gyro_rad', message 300: angular rate 103.9 rad/s .* look like deg/s",
-            read_ulog, edited_sim_log(deg))
+    with pytest.warns(FlightDataWarning, match=r"1 non-physical IMU sample.*message 300.*"
+                                               r"'gyro_rad' norm 103.9"):
+        imu, _ = read_ulog(edited_sim_log(glitch))
+    (flag,) = imu.attrs["outliers"]
+    assert flag["where"] == "message 300" and flag["value"] == pytest.approx(103.92, abs=0.01)
+    assert not np.isclose(imu["t"], flag["t"]).any()
+
+    def spinning(data):  # many: refused, with a hint naming keywords read_ulog has
+        for i in range(3):
+            data[imu_key][f"gyro_rad[{i}]"][200:400] = 60.0
+
+    msg = _raises(r"'gyro_rad', message 200: angular rate 103.9 rad/s .* 200 of \d+ samples",
+                  read_ulog, edited_sim_log(spinning))
+    assert "max_rate_rad_s" in msg and "gyro_unit" not in msg
 
     def clip(data):
         data[imu_key]["accelerometer_clipping"][[100, 200]] = 1
@@ -651,3 +663,23 @@ def test_px4_log_validation_names_topic_field_and_message(edited_sim_log):
     _raises(r"no usable GPS data \(no GPS topic\)", read_ulog, path)
     path = edited_sim_log(lambda data: None, topics=("sensor_gps",))
     _raises("no 'sensor_combined' topic", read_ulog, path)
+
+
+def test_non_physical_imu_samples_are_excluded_by_rule(tmp_path):
+    t, f, w = _imu_values(n=300)
+    f[120] = [0.0, 0.0, -2000.0]                   # one 204 g sample: beyond max_accel_m_s2
+    w[200] = [0.0, 0.0, 40.0]                      # one 40 rad/s sample: beyond max_rate_rad_s
+    path = _write(tmp_path, "glitch.csv", IMU_HEADER + "\n" + _rows(t, *f.T, *w.T))
+    with pytest.warns(FlightDataWarning, match="2 non-physical IMU sample"):
+        imu = read_imu_csv(path)
+    flags = imu.attrs["outliers"]
+    assert [o["row"] for o in flags] == [120, 200]
+    assert flags[0]["t"] == pytest.approx(t[120]) and flags[0]["value"] == pytest.approx(2000.0)
+    assert "max_accel_m_s2" in flags[0]["rule"] and "max_rate_rad_s" in flags[1]["rule"]
+    assert len(imu) == 298 and flags[1]["where"] == "line 202"
+    # the limits and the share are keywords; a lower share refuses the record
+    assert len(read_imu_csv(path, max_rate_rad_s=50.0, max_accel_m_s2=3000.0)) == 300
+    _raises(r"2 of 300 samples .* max_outlier_fraction=0.001", read_imu_csv, path,
+            max_outlier_fraction=0.001)
+    _raises("max_outlier_fraction", read_imu_csv, path, max_outlier_fraction=2.0)
+    assert len(read_imu_csv(path, check_magnitudes=False)) == 300

@@ -1,16 +1,18 @@
-"""Flight-data import and validation: IMU/GNSS CSV files and PX4 ULog logs.
+"""Flight-data import and validation: IMU/GNSS CSV files, PX4 ULog and ArduPilot DataFlash logs.
 
 Public contract (spec ``api.md``, "Flight data")::
 
     imu = navlib.io.read_imu_csv(path, **units)    # t, f_x, f_y, f_z, w_x, w_y, w_z (SI)
     gnss = navlib.io.read_gnss_csv(path, **units)  # t, x, y, z (ECEF m) [+ vx, vy, vz, sigma]
     imu, gnss = navlib.io.read_ulog(path)          # PX4 ULog via pyulog, same columns
+    imu, gnss = navlib.io.read_dataflash(path)     # ArduPilot .bin via pymavlink, same columns
 
 plus :func:`check_overlap` (IMU and GNSS spans), :func:`split_at_gaps` (records read with
 ``on_gap="split"``) and the inverse writers :func:`write_imu_csv`, :func:`write_gnss_csv`.
 Column names, aliases and unit keywords: :mod:`navlib.io.csv_files`; PX4 body frame and
-field mapping: :mod:`navlib.io.ulog`. Every problem raises :class:`navlib.NavlibInputError`
-naming file, column and line (or topic, field and message).
+field mapping: :mod:`navlib.io.ulog`; DataFlash messages: :mod:`navlib.io.dataflash`. Every
+problem raises :class:`navlib.NavlibInputError` naming file, column and line (or topic,
+field and message).
 """
 
 from navlib.io.checks import FlightDataWarning, TimeOverlap, check_overlap, split_at_gaps
@@ -23,6 +25,7 @@ from navlib.io.csv_files import (
     write_gnss_csv,
     write_imu_csv,
 )
+from navlib.io.dataflash import read_dataflash
 from navlib.io.ulog import read_ulog
 
 __all__ = [
@@ -32,6 +35,7 @@ __all__ = [
     "TimeOverlap",
     "check_overlap",
     "combine_sigma",
+    "read_dataflash",
     "read_gnss_csv",
     "read_imu_csv",
     "read_ulog",

@@ -1,9 +1,11 @@
 """Validation of imported flight data: time stamps, gaps, plausible magnitudes, overlap.
 
 Every check raises :class:`navlib.NavlibInputError` naming the source (file or log topic),
-the column and the row. Gaps are the one finding that need not be fatal: ``on_gap`` chooses
-whether they are reported (``"warn"``), refused (``"raise"``) or split into segments
-(``"split"``: an integer ``segment`` column, see :func:`split_at_gaps`).
+the column and the row. Two findings need not be fatal. Gaps: ``on_gap`` chooses whether
+they are reported (``"warn"``), refused (``"raise"``) or split into segments (``"split"``:
+an integer ``segment`` column, see :func:`split_at_gaps`). Non-physical IMU samples
+(:func:`flag_imu_outliers`: beyond 35 rad/s or 100 g) are excluded and listed with time
+and value while they are at most 1 % of the record, and refuse it beyond.
 """
 
 from __future__ import annotations
@@ -33,6 +35,11 @@ ACCEL_MAX = 30.0 * units.G0
 """Largest plausible median specific-force norm over a record, m/s^2."""
 RATE_MAX_RAD_S = 35.0
 """Default largest plausible angular rate, rad/s (about 2000 deg/s, MEMS full scale)."""
+SAMPLE_ACCEL_MAX = 100.0 * units.G0
+"""Largest plausible specific-force norm of a single sample, m/s^2 (100 g: beyond the full
+scale of autopilot and tactical accelerometers, 16-40 g)."""
+MAX_OUTLIER_FRACTION = 0.01
+"""Largest share of non-physical IMU samples a reader excludes before it refuses the record."""
 IMU_DT_RANGE_S = (1e-5, 1.0)
 """Plausible median IMU sample interval, s (1 Hz .. 100 kHz)."""
 GNSS_DT_RANGE_S = (1e-3, 100.0)
@@ -100,15 +107,16 @@ def check_sample_interval(t: np.ndarray, source: Source, column: str, kind: str,
                        f"data (expected {low:g}..{high:g} s){hint}")
 
 
-def check_imu_magnitudes(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source,
-                         f_labels: str, w_labels: str, accel_declared_g: bool,
-                         max_rate_rad_s: float) -> None:
+def check_imu_magnitudes(f_b: np.ndarray, source: Source, f_labels: str,
+                         accel_declared_g: bool) -> None:
     """Catch unit mix-ups in IMU data from their magnitudes.
 
     * median |f| in [0.5, 2] m/s^2 although m/s^2 was declared: the data look like g;
     * median |f| in [50, 200] m/s^2 although g was declared: the data look like m/s^2;
-    * median |f| above 30 g: implausible (mg, or a wrong scale);
-    * any |w| above ``max_rate_rad_s`` (default 35 rad/s): looks like deg/s.
+    * median |f| above 30 g: implausible (mg, or a wrong scale).
+
+    Angular rates in deg/s declared as rad/s, and single non-physical samples, are found by
+    :func:`flag_imu_outliers`.
 
     The median over the record (not the maximum) keeps short shocks and burns from
     triggering; a record that legitimately violates these passes with ``check_magnitudes=False``.
@@ -128,13 +136,93 @@ def check_imu_magnitudes(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source,
         raise source.error(f_labels, None,
                            f"median specific-force norm {med:.3g} m/s^2 "
                            f"({med / units.G0:.3g} g) is implausible; mg or a wrong scale?")
+
+
+def flag_imu_outliers(t: np.ndarray, f_b: np.ndarray, w_ib_b: np.ndarray, source: Source,
+                      f_labels: str, w_labels: str, *, max_rate_rad_s: float = RATE_MAX_RAD_S,
+                      max_accel_m_s2: float = SAMPLE_ACCEL_MAX,
+                      max_fraction: float = MAX_OUTLIER_FRACTION,
+                      rate_hint: str = "") -> tuple[np.ndarray, list[dict]]:
+    """Non-physical IMU samples: flagged, listed, and excluded unless there are many.
+
+    Rule: a sample whose angular-rate norm exceeds ``max_rate_rad_s`` (default 35 rad/s,
+    about 2000 deg/s, the MEMS full scale) or whose specific-force norm exceeds
+    ``max_accel_m_s2`` (default 100 g) cannot be a measurement of the vehicle's motion (a
+    glitch, a bus error, a crash). When such samples make up at most ``max_fraction``
+    (default 1 %) of the record they are excluded (the fit bridges the one-sample holes
+    they leave) and returned in a list of ``{"t", "row", "where", "column", "value",
+    "rule"}``; more of them refuse the record, naming the first, their count and share,
+    and ``rate_hint`` (a keyword the reader has, such as a unit).
+
+    Returns
+    -------
+    keep : ndarray of bool (N,)
+        Samples to keep.
+    outliers : list of dict
+    """
     w_norm = np.linalg.norm(w_ib_b, axis=1)
-    k = int(np.argmax(w_norm))
-    if w_norm[k] > max_rate_rad_s:
-        raise source.error(w_labels, k,
-                           f"angular rate {w_norm[k]:.4g} rad/s exceeds max_rate_rad_s="
-                           f"{max_rate_rad_s:g}: the data look like deg/s; set "
-                           f"gyro_unit='deg/s' (or raise max_rate_rad_s for a fast spinner)")
+    f_norm = np.linalg.norm(f_b, axis=1)
+    bad_w, bad_f = w_norm > max_rate_rad_s, f_norm > max_accel_m_s2
+    bad = bad_w | bad_f
+    rows = np.flatnonzero(bad)
+    if rows.size == 0:
+        return ~bad, []
+    share = rows.size / t.size
+    if share > max_fraction:
+        k = int(rows[0])
+        if bad_w[k]:
+            what, labels = (f"angular rate {w_norm[k]:.4g} rad/s exceeds max_rate_rad_s="
+                            f"{max_rate_rad_s:g}"), w_labels
+        else:
+            what, labels = (f"specific force {f_norm[k]:.4g} m/s^2 exceeds max_accel_m_s2="
+                            f"{max_accel_m_s2:g}"), f_labels
+        raise source.error(labels, k,
+                           f"{what}, and {rows.size} of {t.size} samples ({100 * share:.3g} %) "
+                           f"are beyond these limits, more than max_outlier_fraction="
+                           f"{max_fraction:g}{rate_hint}")
+    out = []
+    for k in rows:
+        k = int(k)
+        if bad_w[k]:
+            out.append({"t": float(t[k]), "row": k, "where": source.where(k),
+                        "column": w_labels, "value": float(w_norm[k]),
+                        "rule": f"|w| > max_rate_rad_s={max_rate_rad_s:g}"})
+        else:
+            out.append({"t": float(t[k]), "row": k, "where": source.where(k),
+                        "column": f_labels, "value": float(f_norm[k]),
+                        "rule": f"|f| > max_accel_m_s2={max_accel_m_s2:g}"})
+    first = out[0]
+    warnings.warn(f"{source.label}: {len(out)} non-physical IMU sample(s) excluded, the first "
+                  f"at {first['where']} (t = {first['t']:.6g} s, {first['column']} norm "
+                  f"{first['value']:.4g}: {first['rule']})", FlightDataWarning, stacklevel=3)
+    return ~bad, out
+
+
+def validated_imu(t, f_b, w_ib_b, source: Source, time_label: str, f_labels: str,
+                  w_labels: str, *, check_magnitudes: bool, limits: dict,
+                  rate_hint: str) -> tuple[pd.DataFrame, Source]:
+    """The checks every log reader applies to an IMU record, and its frame.
+
+    Time stamps (:func:`check_times`, :func:`check_sample_interval`), then with
+    ``check_magnitudes`` the unit checks (:func:`check_imu_magnitudes`, m/s^2 declared) and
+    the non-physical samples (:func:`flag_imu_outliers` with ``limits``: ``max_rate_rad_s``,
+    ``max_accel_m_s2``, ``max_fraction``), which are excluded and listed in
+    ``attrs["outliers"]``. Returns the frame ``t, f_x..w_z`` and the source of its rows.
+    """
+    check_times(t, source, time_label)
+    check_sample_interval(t, source, time_label, "imu", 1.0)
+    outliers, keep = [], np.ones(t.size, dtype=bool)
+    if check_magnitudes:
+        check_imu_magnitudes(f_b, source, f_labels, False)
+        keep, outliers = flag_imu_outliers(t, f_b, w_ib_b, source, f_labels, w_labels,
+                                           **limits, rate_hint=rate_hint)
+    frame = pd.DataFrame({"t": t[keep], "f_x": f_b[keep, 0], "f_y": f_b[keep, 1],
+                          "f_z": f_b[keep, 2], "w_x": w_ib_b[keep, 0], "w_y": w_ib_b[keep, 1],
+                          "w_z": w_ib_b[keep, 2]})
+    frame.attrs["outliers"] = outliers
+    if outliers and source.lines is not None:
+        source = Source(source.label, source.lines[keep], row_word=source.row_word)
+    return frame, source
 
 
 def check_positions(r_e: np.ndarray, source: Source, labels: str,

@@ -30,6 +30,7 @@ angle_unit     ``deg`` ``rad``                          ``lat lon`` (``lat_deg``
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -51,8 +52,10 @@ from navlib.io._table import (
     resolve_columns,
 )
 from navlib.io.checks import (
+    MAX_OUTLIER_FRACTION,
     ON_GAP,
     RATE_MAX_RAD_S,
+    SAMPLE_ACCEL_MAX,
     apply_gap_policy,
     check_imu_magnitudes,
     check_positions,
@@ -60,6 +63,7 @@ from navlib.io.checks import (
     check_sample_interval,
     check_times,
     check_velocities,
+    flag_imu_outliers,
 )
 
 AXES = ("x", "y", "z")
@@ -145,8 +149,9 @@ def _labels(cols: Mapping[str, Column], keys) -> str:
 def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None = None,
                  gyro_unit: str | None = None, columns: Mapping[str, str] | None = None,
                  sep: str | None = None, max_gap_s: float | None = None, on_gap: str = "warn",
-                 check_magnitudes: bool = True,
-                 max_rate_rad_s: float = RATE_MAX_RAD_S) -> pd.DataFrame:
+                 check_magnitudes: bool = True, max_rate_rad_s: float = RATE_MAX_RAD_S,
+                 max_accel_m_s2: float = SAMPLE_ACCEL_MAX,
+                 max_outlier_fraction: float = MAX_OUTLIER_FRACTION) -> pd.DataFrame:
     """Read an IMU record (time, 3 specific forces, 3 angular rates) from a CSV file.
 
     Parameters
@@ -168,9 +173,14 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
         add an integer ``segment`` column (split the frame with :func:`split_at_gaps`).
         The gaps are always listed in ``frame.attrs["gaps"]``.
     check_magnitudes : bool
-        Reject magnitudes typical of unit mix-ups (:func:`~navlib.io.checks.check_imu_magnitudes`).
-    max_rate_rad_s : float
-        Largest plausible angular-rate norm, rad/s (default 35).
+        Reject magnitudes typical of unit mix-ups (:func:`~navlib.io.checks.check_imu_magnitudes`)
+        and exclude non-physical samples (:func:`~navlib.io.checks.flag_imu_outliers`).
+    max_rate_rad_s, max_accel_m_s2 : float
+        Largest plausible angular-rate norm (default 35 rad/s) and specific-force norm
+        (default 100 g) of a sample; samples beyond are excluded and listed in
+        ``attrs["outliers"]`` (time, value, rule), with a :class:`~navlib.io.FlightDataWarning`.
+    max_outlier_fraction : float
+        Largest share of such samples (default 0.01) before the record is refused.
 
     Returns
     -------
@@ -178,8 +188,9 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
         Columns ``t`` (s), ``f_x, f_y, f_z`` (specific force f^b in body axes, m/s^2, what
         an ideal accelerometer reads: about -g "up" at rest), ``w_x, w_y, w_z`` (omega_ib^b,
         rad/s), plus ``segment`` with ``on_gap="split"``. ``attrs`` holds ``source``,
-        ``gaps`` and ``max_gap_s``. Times are kept on the file's time base (not shifted), so
-        an IMU and a GNSS file written against the same clock stay aligned.
+        ``gaps``, ``max_gap_s`` and ``outliers`` (the excluded samples). Times are kept on
+        the file's time base (not shifted), so an IMU and a GNSS file written against the
+        same clock stay aligned.
 
     Accepted header names (normalised): ``t``: t, time, timestamp, time_s, time_ms, time_us
     (the suffix sets the unit), ...; ``f_x``: f_x, fx, ax, a_x, acc_x, accel_x,
@@ -195,10 +206,14 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
         duplicate columns, non-numeric, empty, NaN or infinite cells, duplicate or
         decreasing time stamps, implausible sample interval (time unit), gaps with
         ``on_gap="raise"``, implausible magnitudes (accelerations in g declared as m/s^2,
-        angular rates in deg/s declared as rad/s).
+        angular rates in deg/s declared as rad/s: more than ``max_outlier_fraction`` of the
+        samples beyond the limits).
     """
     _check_options(on_gap, max_gap_s)
     max_rate_rad_s = finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0, low_open=True)
+    max_accel_m_s2 = finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0, low_open=True)
+    max_outlier_fraction = finite_scalar(max_outlier_fraction, "max_outlier_fraction", 0.0,
+                                         1.0)
     declared = {"time": ("time_unit", time_unit, "s"),
                 "accel": ("accel_unit", accel_unit, "m/s^2"),
                 "gyro": ("gyro_unit", gyro_unit, "rad/s")}
@@ -219,13 +234,25 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
     check_sample_interval(t, src, cols["t"].label, "imu", fac["t"])
     f_b = np.column_stack([values[k] * fac[k] for k in F_KEYS])
     w_ib_b = np.column_stack([values[k] * fac[k] for k in W_KEYS])
+    outliers = []
     if check_magnitudes:
         declared_g = all(np.isclose(fac[k], units.G0) for k in F_KEYS)
-        check_imu_magnitudes(f_b, w_ib_b, src, _labels(cols, F_KEYS), _labels(cols, W_KEYS),
-                             declared_g, max_rate_rad_s)
+        check_imu_magnitudes(f_b, src, _labels(cols, F_KEYS), declared_g)
+        keep, outliers = flag_imu_outliers(
+            t, f_b, w_ib_b, src, _labels(cols, F_KEYS), _labels(cols, W_KEYS),
+            max_rate_rad_s=max_rate_rad_s, max_accel_m_s2=max_accel_m_s2,
+            max_fraction=max_outlier_fraction,
+            rate_hint="; the data look like deg/s: set gyro_unit='deg/s' (or raise "
+                      "max_rate_rad_s for a fast spinner)")
+        if outliers:
+            t, f_b, w_ib_b = t[keep], f_b[keep], w_ib_b[keep]
+            src = replace(src, lines=None if src.lines is None else src.lines[keep],
+                          raw=None if src.raw is None else [r for r, k in zip(
+                              src.raw, keep, strict=True) if k])
     frame = pd.DataFrame({"t": t, **dict(zip(F_KEYS, f_b.T, strict=True)),
                           **dict(zip(W_KEYS, w_ib_b.T, strict=True))})
     frame.attrs["source"] = str(path)
+    frame.attrs["outliers"] = outliers
     return apply_gap_policy(frame, src, cols["t"].label, max_gap_s, on_gap)
 
 

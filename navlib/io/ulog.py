@@ -31,6 +31,7 @@ import warnings
 
 import numpy as np
 import pandas as pd
+from scipy.spatial.transform import Rotation
 
 from navlib import units
 from navlib._validation import finite_array, finite_scalar
@@ -38,20 +39,23 @@ from navlib.earth import geodetic_to_ecef, ned_to_ecef_matrix
 from navlib.errors import NavlibInputError
 from navlib.io._table import Column, Source, check_finite, existing_file
 from navlib.io.checks import (
+    MAX_OUTLIER_FRACTION,
     ON_GAP,
     RATE_MAX_RAD_S,
+    SAMPLE_ACCEL_MAX,
     FlightDataWarning,
     apply_gap_policy,
-    check_imu_magnitudes,
     check_overlap,
     check_positions,
     check_sample_interval,
     check_times,
     check_velocities,
+    validated_imu,
 )
-from navlib.io.csv_files import F_KEYS, NED_KEYS, R_KEYS, V_KEYS, W_KEYS, combine_sigma
+from navlib.io.csv_files import NED_KEYS, R_KEYS, V_KEYS, combine_sigma
 
 IMU_TOPIC = "sensor_combined"
+ATTITUDE_TOPIC = "vehicle_attitude"
 GPS_TOPICS = ("vehicle_gps_position", "sensor_gps")
 BODY_FRAMES = {"frd": np.eye(3), "flu": np.diag([1.0, -1.0, -1.0])}
 """Named body frames: ``C_b_frd`` taking PX4 FRD axes to the navlib body axes."""
@@ -86,7 +90,8 @@ def _load(path):
     try:
         # pyulog prints corruption notices; a library must not print, so catch them.
         with contextlib.redirect_stdout(io.StringIO()):
-            ulog = ULog(str(p), message_name_filter_list=[IMU_TOPIC, *GPS_TOPICS])
+            ulog = ULog(str(p), message_name_filter_list=[IMU_TOPIC, ATTITUDE_TOPIC,
+                                                          *GPS_TOPICS])
     except Exception as exc:  # pyulog raises several types on foreign or broken files
         raise NavlibInputError(f"{label}: not a readable PX4 ULog file ({exc})") from exc
     if ulog.file_corruption:
@@ -169,6 +174,8 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
               altitude: str = "ellipsoid", imu_max_gap_s: float | None = None,
               gnss_max_gap_s: float | None = None, on_gap: str = "warn",
               check_magnitudes: bool = True, max_rate_rad_s: float = RATE_MAX_RAD_S,
+              max_accel_m_s2: float = SAMPLE_ACCEL_MAX,
+              max_outlier_fraction: float = MAX_OUTLIER_FRACTION,
               require_overlap: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Read the IMU and GNSS records of a PX4 ULog file (via ``pyulog``).
 
@@ -191,8 +198,9 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         :class:`~navlib.io.FlightDataWarning`, when the log has no ellipsoidal height.
     imu_max_gap_s, gnss_max_gap_s : float, optional
         Longest accepted interval in each record, s; None: 10 median intervals.
-    on_gap, check_magnitudes, max_rate_rad_s
-        As in :func:`~navlib.io.read_imu_csv` (applied to both records).
+    on_gap, check_magnitudes, max_rate_rad_s, max_accel_m_s2, max_outlier_fraction
+        As in :func:`~navlib.io.read_imu_csv` (gaps: both records; non-physical samples are
+        excluded from the IMU and listed in ``attrs["outliers"]``).
     require_overlap : bool
         Raise when the IMU and GNSS time spans do not overlap (:func:`check_overlap`).
 
@@ -204,7 +212,10 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         common origin, the earlier of the first IMU and first kept GNSS time stamps; that
         origin, in PX4 boot-time microseconds, is ``attrs["t0_us"]``. Other ``attrs``:
         ``source``, ``topic``, ``body_frame`` / ``altitude_reference``, ``dropped_no_fix``,
-        ``gaps``, and ``clipping`` (samples flagged by PX4's ``accelerometer_clipping`` /
+        ``gaps``, ``outliers``, ``autopilot`` (``"px4"``), ``hardware`` (the log's
+        ``ver_hw``), ``attitude`` (the autopilot's ``vehicle_attitude`` as ``t, qw, qx, qy,
+        qz``, navlib body -> NED, or None; the flight fit starts from it), and ``clipping``
+        (samples flagged by PX4's ``accelerometer_clipping`` /
         ``gyro_clipping``; any flag also warns). The IMU sample time is
         ``sensor_combined.timestamp`` (PX4 integrates the accelerometer over the gyro
         interval; ``accelerometer_timestamp_relative`` is not applied).
@@ -227,6 +238,9 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         raise NavlibInputError(f"gps_topic: expected one of {list(GPS_TOPICS)} or None, got "
                                f"{gps_topic!r}")
     max_rate_rad_s = finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0, low_open=True)
+    max_accel_m_s2 = finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0, low_open=True)
+    max_outlier_fraction = finite_scalar(max_outlier_fraction, "max_outlier_fraction", 0.0,
+                                         1.0)
     C_b_frd = body_rotation(body_frame)
     ulog, label = _load(path)
     topics = sorted({d.name for d in ulog.data_list})
@@ -256,10 +270,14 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     ts_gps = _gps_timestamps(d_gps, idx)[idx]
     t0 = int(min(ts_imu[0], ts_gps[0]))
 
-    imu = _imu_frame(d_imu, label, ts_imu, t0, C_b_frd, check_magnitudes, max_rate_rad_s)
+    limits = {"max_rate_rad_s": max_rate_rad_s, "max_accel_m_s2": max_accel_m_s2,
+              "max_fraction": max_outlier_fraction}
+    imu, src_imu = _imu_frame(d_imu, label, ts_imu, t0, C_b_frd, check_magnitudes, limits)
+    info = getattr(ulog, "msg_info_dict", {}) or {}
     imu.attrs.update(source=str(path), topic=IMU_TOPIC, t0_us=t0,
-                     body_frame=body_frame if isinstance(body_frame, str) else "custom")
-    src_imu = Source(f"{label}, topic '{IMU_TOPIC}'", np.arange(ts_imu.size), row_word="message")
+                     body_frame=body_frame if isinstance(body_frame, str) else "custom",
+                     autopilot="px4", hardware=str(info.get("ver_hw", "")),
+                     attitude=_attitude(ulog, t0, C_b_frd))
     imu = apply_gap_policy(imu, src_imu, "'timestamp'", imu_max_gap_s, on_gap)
 
     gnss, src_gps = _gnss_frame(d_gps, label, idx, ts_gps, t0, altitude, check_magnitudes)
@@ -271,18 +289,36 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     return imu, gnss
 
 
-def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, max_rate_rad_s) -> pd.DataFrame:
+def _attitude(ulog, t0: int, C_b_frd: np.ndarray) -> pd.DataFrame | None:
+    """The autopilot's attitude estimate (``vehicle_attitude.q``, FRD -> NED, scalar first)
+    as ``t, qw, qx, qy, qz`` of the navlib body frame -> NED, or None when not logged."""
+    sets = [d for d in _dataset(ulog, ATTITUDE_TOPIC, None)
+            if all(f"q[{i}]" in d.data for i in range(4))]
+    if not sets:
+        return None
+    d = max(sets, key=lambda d: len(d.data["timestamp"]))
+    q = np.column_stack([d.data[f"q[{i}]"].astype(float) for i in (1, 2, 3, 0)])
+    ok = np.all(np.isfinite(q), axis=1) & (np.linalg.norm(q, axis=1) > 0.5)
+    if not ok.any():
+        return None
+    C_b_n = Rotation.from_quat(q[ok]) * Rotation.from_matrix(C_b_frd.T)
+    x, y, z, w = C_b_n.as_quat().T
+    t = (d.data["timestamp"].astype(np.int64)[ok] - t0) * units.MICROSECOND
+    return pd.DataFrame({"t": t, "qw": w, "qx": x, "qy": y, "qz": z})
+
+
+def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, limits) -> pd.DataFrame:
     src = Source(f"{label}, topic '{d.name}'", np.arange(ts.size), row_word="message")
     raw = {k: d.data[k].astype(float) for k in (*_GYRO, *_ACCEL)}
     check_finite(raw, {k: Column(k, k, None) for k in raw}, src)
     t = (ts - t0) * units.MICROSECOND
-    check_times(t, src, "'timestamp'")
-    check_sample_interval(t, src, "'timestamp'", "imu", 1.0)
     f_b = np.column_stack([raw[k] for k in _ACCEL]) @ C_b_frd.T
     w_ib_b = np.column_stack([raw[k] for k in _GYRO]) @ C_b_frd.T
-    if check_magnitudes:
-        check_imu_magnitudes(f_b, w_ib_b, src, "'accelerometer_m_s2'", "'gyro_rad'", False,
-                             max_rate_rad_s)
+    frame, kept = validated_imu(
+        t, f_b, w_ib_b, src, "'timestamp'", "'accelerometer_m_s2'", "'gyro_rad'",
+        check_magnitudes=check_magnitudes, limits=limits,
+        rate_hint="; PX4 logs gyro_rad in rad/s, so a vehicle this fast needs a larger "
+                  "max_rate_rad_s (or check_magnitudes=False)")
     clipped = {}
     for field in ("accelerometer_clipping", "gyro_clipping"):
         if field in d.data:
@@ -292,10 +328,8 @@ def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, max_rate_rad_s) -> p
                 warnings.warn(f"{src.label}: '{field}' flags {rows.size} sample(s), the first "
                               f"at {src.where(int(rows[0]))}: the sensor saturated there",
                               FlightDataWarning, stacklevel=3)
-    frame = pd.DataFrame({"t": t, **dict(zip(F_KEYS, f_b.T, strict=True)),
-                          **dict(zip(W_KEYS, w_ib_b.T, strict=True))})
     frame.attrs["clipping"] = clipped
-    return frame
+    return frame, kept
 
 
 def _gnss_frame(d, label, idx, ts, t0, altitude, check_magnitudes):

@@ -29,13 +29,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from functools import lru_cache
+from itertools import pairwise
 
 import numpy as np
 
 from navlib import earth, units
 from navlib._validation import finite_scalar, reject_unknown
+from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.models.base import DiscreteModel, LinearModel
+from navlib.models.base import HOLDS, DiscreteModel, LinearModel
 from navlib.rotations import skew
 
 STATE_NAMES = (
@@ -255,24 +257,36 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         ``A`` (N, 21, 21), ``G`` (N, 21, 18), ``Qc`` (18, 18), ``H`` (3, 21), ``R`` (3, 3),
         ``P0`` (21, 21), ``t`` the trajectory times, ``parameters`` every assumed value.
     """
+    for attr in ("t", "position", "specific_force", "angular_rate", "attitude"):
+        if not hasattr(trajectory, attr):
+            raise NavlibInputError(f"trajectory: expected a navlib Trajectory (no {attr!r})")
+    parts = _constant_parts(sensors, attitude_error, gnss_sigma_m, {
+        "sigma_p0_m": sigma_p0_m, "sigma_v0_m_s": sigma_v0_m_s,
+        "sigma_theta0_deg": sigma_theta0_deg, "sigma_bg_deg_s": sigma_bg_deg_s,
+        "sigma_ba_m_s2": sigma_ba_m_s2, "sigma_sg_ppm": sigma_sg_ppm,
+        "sigma_sa_ppm": sigma_sa_ppm})
+    A, G = ecef21_jacobians(trajectory.position, trajectory.C_b_e(),
+                            trajectory.specific_force, trajectory.angular_rate, attitude_error)
+    parameters = {**parts["parameters"], "imu_rate_hz": float(trajectory.rate_hz)}
+    return LinearModel(
+        state_names=STATE_NAMES, A=A, G=G, Qc=parts["Qc"], H=parts["H"], R=parts["R"],
+        t=np.asarray(trajectory.t, dtype=float), P0=parts["P0"],
+        measurement_names=("gnss_x", "gnss_y", "gnss_z"),
+        noise_names=NOISE_NAMES, name=f"ecef21 ({attitude_error} attitude error)",
+        parameters=parameters,
+    )
+
+
+def _constant_parts(sensors, attitude_error: str, gnss_sigma_m, sigmas: Mapping) -> dict:
+    """``Qc``, ``H``, ``R``, ``P0`` and the assumed values of :func:`ecef21` (no trajectory)."""
     if attitude_error not in ATTITUDE_ERRORS:
         raise NavlibInputError(
             f"attitude_error: expected one of {ATTITUDE_ERRORS}, got {attitude_error!r}"
         )
-    given = {"sigma_p0_m": sigma_p0_m, "sigma_v0_m_s": sigma_v0_m_s,
-             "sigma_theta0_deg": sigma_theta0_deg, "sigma_bg_deg_s": sigma_bg_deg_s,
-             "sigma_ba_m_s2": sigma_ba_m_s2, "sigma_sg_ppm": sigma_sg_ppm,
-             "sigma_sa_ppm": sigma_sa_ppm}
-    P0, p0 = _initial_covariance({k: v for k, v in given.items() if v is not None}, "ecef21",
+    P0, p0 = _initial_covariance({k: v for k, v in sigmas.items() if v is not None}, "ecef21",
                                  sensors)
-    for attr in ("t", "position", "specific_force", "angular_rate", "attitude"):
-        if not hasattr(trajectory, attr):
-            raise NavlibInputError(f"trajectory: expected a navlib Trajectory (no {attr!r})")
     gnss_sigma_m = finite_scalar(gnss_sigma_m, "gnss_sigma_m", 0.0, low_open=True)
     noise = imu_noise_densities(sensors)
-
-    A, G = ecef21_jacobians(trajectory.position, trajectory.C_b_e(),
-                            trajectory.specific_force, trajectory.angular_rate, attitude_error)
     psd = np.concatenate([noise[k] for k in ("vrw_m_s_sqrt_s", "arw_rad_sqrt_s",
                                              "bg_rw_rad_s_sqrt_s", "ba_rw_m_s2_sqrt_s",
                                              "sg_rw_per_sqrt_s", "sa_rw_per_sqrt_s")]) ** 2
@@ -289,15 +303,9 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         "imu_inverse_model": "f = (I + diag s_a)^-1 (f_hat - b_a), likewise omega (spec A7)",
         "gravity": "normal gravity (J2 + centrifugal) and its Jacobian (spec A5)",
         "noise_channels": "18: acc/gyro white noise + random walks of b_g, b_a, s_g, s_a (A6)",
-        "imu_rate_hz": float(trajectory.rate_hz),
     }
-    return LinearModel(
-        state_names=STATE_NAMES, A=A, G=G, Qc=np.diag(psd), H=H,
-        R=gnss_sigma_m**2 * np.eye(3), t=np.asarray(trajectory.t, dtype=float),
-        P0=P0, measurement_names=("gnss_x", "gnss_y", "gnss_z"),
-        noise_names=NOISE_NAMES, name=f"ecef21 ({attitude_error} attitude error)",
-        parameters=parameters,
-    )
+    return {"Qc": np.diag(psd), "H": H, "R": gnss_sigma_m**2 * np.eye(3), "P0": P0,
+            "parameters": parameters}
 
 
 def _initial_covariance(sigmas: Mapping, where: str, sensors=None):
@@ -325,13 +333,16 @@ def initial_covariance(sensors=None, **sigmas) -> np.ndarray:
 
 
 def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "series",
-                     hold: str = "mean", sensors=None, **model_options) -> DiscreteModel:
+                     hold: str = "mean", sensors=None, max_step_s: float | None = None,
+                     **model_options) -> DiscreteModel:
     """The 21-state model discretised to the GNSS epochs of ``trajectory`` (cached).
 
-    Builds :func:`ecef21` at the IMU rate and chains the steps to epochs ``gnss_rate_hz``
-    apart (spec A8: 100 IMU steps per 1 Hz epoch). Results are cached on the trajectory
-    object's identity and the options, so that widgets changing only the metric settings
-    (eta, nu, segments) never rebuild the model.
+    Builds the model of :func:`ecef21` along the trajectory and chains the steps to epochs
+    ``gnss_rate_hz`` apart (spec A8: 100 IMU steps per 1 Hz epoch). The build streams over
+    blocks of epochs (at most :data:`STREAM_SAMPLES` trajectory samples at a time), so its
+    memory does not grow with the flight's length: only the per-epoch ``F``, ``Q`` are kept.
+    Results are cached on the trajectory object's identity and the options, so that widgets
+    changing only the metric settings (eta, nu, segments) never rebuild the model.
 
     Parameters
     ----------
@@ -343,10 +354,20 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
         two-sample mean hold) are fast and second order in the IMU step.
     sensors : None, str or mapping
         Sensor preset name or noise densities (see :func:`imu_noise_densities`).
+    max_step_s : float, optional
+        Longest model step (decimation). None: every IMU step, as above. Otherwise the IMU
+        steps are grouped ``k = floor(max_step_s / dt)`` at a time (never across an epoch)
+        and the model is evaluated at the group ends only: each group is one step whose
+        ``A`` and ``W = G Qc G'`` are the means of the two ends (trapezoidal rule, second
+        order in the group length; the fitted trajectories are smooth at that scale). On
+        the sounding rocket at 1 Hz epochs, 0.02 s steps change ``F`` by 3e-4 and ``Q`` by
+        4e-3 relative (``benchmarks/bench_assess.py`` prints both).
     **model_options
         Passed to :func:`ecef21` (``attitude_error``, ``gnss_sigma_m``, P0 sigmas).
     """
     gnss_rate_hz = finite_scalar(gnss_rate_hz, "gnss_rate_hz", 0.0, low_open=True)
+    if max_step_s is not None:
+        max_step_s = finite_scalar(max_step_s, "max_step_s", 0.0, low_open=True)
     if isinstance(sensors, Mapping):  # frozen to a hashable key for the cache
         sensors = tuple(sorted((k, tuple(_per_axis(v, f"sensors[{k!r}]")))
                                for k, v in sensors.items()))
@@ -359,16 +380,78 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
         hash(key)
     except TypeError as exc:
         raise NavlibInputError("model options must be plain numbers or strings") from exc
-    return _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key)
+    return _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s)
+
+
+STREAM_SAMPLES = 20_000
+"""Trajectory samples per block of the streamed model build of :func:`ecef21_at_epochs`."""
 
 
 @lru_cache(maxsize=32)
-def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key):
+def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
     if isinstance(sensors, tuple):
         sensors = dict(sensors)
-    model = ecef21(trajectory, sensors, **dict(key))
-    discrete = model.discretize(epochs=trajectory.at_rate(gnss_rate_hz), method=method,
-                                hold=hold)
-    for arr in (discrete.F, discrete.Q, discrete.H, discrete.R, discrete.P0, discrete.t):
+    options = dict(key)
+    reject_unknown(options, ("attitude_error", "gnss_sigma_m", *P0_DEFAULTS), "ecef21")
+    attitude_error = options.pop("attitude_error", "ecef")
+    parts = _constant_parts(sensors, attitude_error, options.pop("gnss_sigma_m", 5.0),
+                            options)
+    if hold not in HOLDS:
+        raise NavlibInputError(f"hold: expected one of {HOLDS}, got {hold!r}")
+    t = np.asarray(trajectory.t, dtype=float)
+    epochs = trajectory.at_rate(gnss_rate_hz)
+    if epochs.size < 2:
+        raise NavlibInputError(f"gnss_rate_hz: {gnss_rate_hz:g} Hz gives fewer than 2 epochs "
+                               f"over the {t[-1] - t[0]:.3g} s trajectory")
+    stride = 1 if max_step_s is None else max(int(max_step_s * trajectory.rate_hz + 1e-9), 1)
+    # step boundaries: every ``stride`` samples inside each epoch interval, and the epochs
+    bounds = [np.arange(a, b, stride) for a, b in pairwise(epochs)]
+    bounds = np.concatenate([*bounds, epochs[-1:]])
+    at_epoch = np.searchsorted(bounds, epochs)
+    C_b_e = trajectory.attitude
+    F, Q = [], []
+    e0 = 0
+    while e0 < epochs.size - 1:                     # blocks of whole epoch intervals
+        e1 = e0 + 1
+        while e1 < epochs.size - 1 and epochs[e1 + 1] - epochs[e0] <= STREAM_SAMPLES:
+            e1 += 1
+        b = bounds[at_epoch[e0]:at_epoch[e1] + 1]
+        # the model is needed at the step boundaries only (every sample when stride is 1)
+        A, G = ecef21_jacobians(trajectory.position[b], C_b_e[b].as_matrix(),
+                                trajectory.specific_force[b], trajectory.angular_rate[b],
+                                attitude_error)
+        A_bar, W_bar = _step_means(A, G, parts["Qc"], hold, stride > 1)
+        del A, G
+        F_steps, Q_steps = discretize_steps(A_bar, None, None, np.diff(t[b]), method,
+                                            W=W_bar)
+        del A_bar, W_bar
+        Fi, Qi = chain(F_steps, Q_steps, at_epoch[e0:e1 + 1] - at_epoch[e0])
+        F.append(Fi)
+        Q.append(Qi)
+        e0 = e1
+    n_ep = epochs.size
+    discrete = DiscreteModel(t[epochs], np.concatenate(F), np.concatenate(Q),
+                             np.broadcast_to(parts["H"], (n_ep, 3, 21)),
+                             np.broadcast_to(parts["R"], (n_ep, 3, 3)), STATE_NAMES,
+                             ("gnss_x", "gnss_y", "gnss_z"), parts["P0"])
+    for arr in (discrete.F, discrete.Q, discrete.P0, discrete.t):
         arr.flags.writeable = False  # shared by every caller of the cache
     return discrete
+
+
+def _step_means(A, G, Qc, hold, decimated):
+    """``A`` and ``W = G Qc G'`` held over each step from the model at the step ends: the
+    left end (``hold="left"``) or the mean of the two ends (``"mean"``, the trapezoidal
+    first Magnus term). Over one IMU step ``G`` is averaged before forming ``W``, as
+    :meth:`LinearModel.discretize` does; over a decimated step of several IMU steps ``W``
+    itself is averaged (the mean of a ``G`` that rotates within the step would shrink it).
+    """
+    def noise(G):
+        return G @ Qc @ np.swapaxes(G, 1, 2)
+
+    if hold == "left":
+        return A[:-1], noise(G[:-1])
+    if decimated:
+        W = noise(G)
+        return 0.5 * (A[:-1] + A[1:]), 0.5 * (W[:-1] + W[1:])
+    return 0.5 * (A[:-1] + A[1:]), noise(0.5 * (G[:-1] + G[1:]))

@@ -47,9 +47,10 @@ from navlib.segmentation import (
     segments_table,
 )
 from navlib.trajectory import fit_flight_data
+from navlib.trajectory.fit import FIT_DEFAULTS
 
-__all__ = ["FlightAssessment", "assess_flight", "describe_inputs", "fit_report",
-           "fit_residuals"]
+__all__ = ["FlightAssessment", "assess_flight", "choose_preset", "describe_inputs",
+           "fit_report", "fit_residuals"]
 
 E_THRESHOLD = 1.0 / math.sqrt(2.0)
 """Default excitability threshold: ``e^2 > 1/2``, the state lies mostly in the excited
@@ -79,10 +80,6 @@ def _check_frame(frame, name: str, keys) -> None:
     if missing:
         raise NavlibInputError(f"{name}: missing column(s) {missing}; columns are "
                                f"{list(frame.columns)}")
-    if "segment" in frame.columns and frame["segment"].nunique() > 1:
-        raise NavlibInputError(
-            f"{name}: the record has {frame['segment'].nunique()} pieces split at gaps "
-            "(column 'segment'); assess each piece of navlib.io.split_at_gaps separately")
     if len(frame) < 2:
         raise NavlibInputError(f"{name}: need at least 2 rows, got {len(frame)}")
 
@@ -94,7 +91,9 @@ def _median_rate(t: np.ndarray) -> float:
 def describe_inputs(imu: pd.DataFrame, gnss: pd.DataFrame) -> pd.DataFrame:
     """One row per record (``imu``, ``gnss``, and their ``overlap``): samples, first and
     last time (s), duration (s), median rate (Hz), longest interval (s), gaps reported by
-    the reader (``attrs["gaps"]``) and the source file."""
+    the reader (``attrs["gaps"]``), samples the reader excluded as outliers
+    (``attrs["outliers"]``, :func:`navlib.io.checks.flag_imu_outliers`) and the source
+    file."""
     _check_frame(imu, "imu", _IMU_KEYS)
     _check_frame(gnss, "gnss", _GNSS_KEYS)
     rows = []
@@ -104,13 +103,14 @@ def describe_inputs(imu: pd.DataFrame, gnss: pd.DataFrame) -> pd.DataFrame:
                      "duration_s": t[-1] - t[0], "rate_hz": _median_rate(t),
                      "longest_interval_s": float(np.max(np.diff(t))),
                      "gaps": len(frame.attrs.get("gaps", [])),
+                     "outliers": len(frame.attrs.get("outliers", [])),
                      "source": str(frame.attrs.get("source", ""))})
     span = check_overlap(imu, gnss)
     t_i = imu["t"].to_numpy(dtype=float)
     inside = int(np.count_nonzero((t_i >= span.t_start) & (t_i <= span.t_end)))
     rows.append({"record": "overlap", "samples": inside, "t_first": span.t_start,
                  "t_last": span.t_end, "duration_s": span.duration, "rate_hz": np.nan,
-                 "longest_interval_s": np.nan, "gaps": np.nan,
+                 "longest_interval_s": np.nan, "gaps": np.nan, "outliers": np.nan,
                  "source": f"{span.n_gnss} GNSS epochs inside"})
     return pd.DataFrame(rows)
 
@@ -291,7 +291,11 @@ class FlightAssessment:
     gnss_residuals, imu_residuals : DataFrame
         Fit residuals over time (:func:`fit_residuals`).
     notes : tuple of str
-        Fallbacks taken (e.g. an assumed heading).
+        Assumptions and fallbacks taken (preset, initial attitude, levelling window, bridged
+        holes, excluded samples, an assumed heading, a split record).
+    spans : tuple of FlightAssessment
+        When the record was split at long holes: every span's assessment in time order
+        (this one among them); empty otherwise.
 
     ``segments`` (tuple of ``(t_start, t_end)``), ``settings`` and ``state_names`` give the
     view the figure builders of :mod:`navlib.plots.metrics` read (as from a
@@ -311,6 +315,7 @@ class FlightAssessment:
     gnss_residuals: pd.DataFrame | None = None
     imu_residuals: pd.DataFrame | None = None
     notes: tuple[str, ...] = ()
+    spans: tuple = ()
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -493,24 +498,79 @@ def _gnss_sigma(gnss: pd.DataFrame, spec) -> float:
     return 5.0
 
 
-def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpak_tactical",
+DEFAULT_PRESET = "motionpak_tactical"
+"""Sensor preset of records that do not say what their hardware is (CSV files)."""
+AUTOPILOT_PRESETS = {"px4": "pixhawk_mems", "ardupilot": "pixhawk_mems"}
+"""Preset chosen by default for logs whose reader found the autopilot (``attrs["autopilot"]``):
+the consumer MEMS class of the Pixhawk family (``data/sensors/pixhawk_mems.toml``)."""
+MODEL_STEP_S = 0.02
+"""Longest model step of the assessment (``ecef21_at_epochs(max_step_s=...)``), s: IMU steps
+are grouped to 50 Hz, which keeps long flights fast while the 1 s transitions move by less
+than 1e-3 relative on the sample flight (benchmarks/bench_assess.py)."""
+
+
+def choose_preset(imu: pd.DataFrame, preset: str | None = None) -> tuple[str, str]:
+    """The sensor preset to assess ``imu`` with and why: ``preset`` when given, else the
+    :data:`AUTOPILOT_PRESETS` entry of the autopilot the reader found in the log, else
+    :data:`DEFAULT_PRESET`."""
+    if preset is not None:
+        if not isinstance(preset, str):
+            raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
+        return preset, "given"
+    autopilot = str(getattr(imu, "attrs", {}).get("autopilot", "")).lower()
+    if autopilot in AUTOPILOT_PRESETS:
+        hardware = imu.attrs.get("hardware") or "hardware not named"
+        return AUTOPILOT_PRESETS[autopilot], f"{autopilot} log ({hardware})"
+    return DEFAULT_PRESET, "default (the records do not say what the IMU is)"
+
+
+def _pieces(imu: pd.DataFrame, max_bridge_s: float) -> list[tuple[float, float]]:
+    """IMU time spans separated by holes longer than ``max_bridge_s`` or by the reader's
+    ``segment`` column (``on_gap="split"``)."""
+    t = imu["t"].to_numpy(dtype=float)
+    cut = np.diff(t) > max_bridge_s
+    if "segment" in imu.columns:
+        cut |= np.diff(imu["segment"].to_numpy()) != 0
+    after = np.flatnonzero(cut) + 1
+    starts, ends = np.r_[0, after], np.r_[after - 1, t.size - 1]
+    return [(float(t[a]), float(t[b])) for a, b in zip(starts, ends, strict=True)]
+
+
+def _piece(frame: pd.DataFrame, t0: float, t1: float) -> pd.DataFrame:
+    t = frame["t"].to_numpy(dtype=float)
+    out = frame[(t >= t0) & (t <= t1)].drop(columns="segment", errors="ignore")
+    out = out.reset_index(drop=True)
+    out.attrs = dict(frame.attrs)
+    return out
+
+
+def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = None,
                   segments=None, eta: float = 1e-3, nu: float = 0.985,
                   gnss_rate_hz: float | None = None, *, e_threshold: float = E_THRESHOLD,
                   s_threshold: float = S_THRESHOLD, min_fraction: float = MIN_FRACTION,
                   gnss_sigma_m: float | None = None, heading_fallback_deg: float | None = 0.0,
                   fit_options: Mapping | None = None, segment_options: Mapping | None = None,
-                  model_options: Mapping | None = None) -> FlightAssessment:
+                  model_options: Mapping | None = None,
+                  model_step_s: float | None = MODEL_STEP_S) -> FlightAssessment:
     """Fit, segment and assess a recorded flight with the 21-state ECEF model.
 
     Parameters
     ----------
     imu, gnss : DataFrame
         Records on a common time base, as from :func:`navlib.io.read_imu_csv`,
-        :func:`navlib.io.read_gnss_csv` or :func:`navlib.io.read_ulog` (SI; ``gnss`` in
-        ECEF, optional ``vx, vy, vz`` and ``sigma``).
-    preset : str
+        :func:`navlib.io.read_gnss_csv`, :func:`navlib.io.read_ulog` or
+        :func:`navlib.io.read_dataflash` (SI; ``gnss`` in ECEF, optional ``vx, vy, vz`` and
+        ``sigma``). An IMU ``segment`` column (``on_gap="split"``) and IMU holes longer
+        than the fit's ``max_bridge_s`` (default 1 s) split the flight into spans assessed
+        separately; shorter holes are bridged by the fit, with a stated bound
+        (``notes``); GNSS gaps (and a GNSS ``segment`` column) are bridged by the IMU. An
+        autopilot attitude in ``imu.attrs["attitude"]`` (ULog, DataFlash) is the initial
+        attitude unless ``fit_options`` say otherwise.
+    preset : str, optional
         Sensor preset (``data/sensors/*.toml``) giving the IMU noise densities and the
-        turn-on sigmas of ``P0`` (:func:`navlib.models.ecef.parameter_sigmas`).
+        turn-on sigmas of ``P0`` (:func:`navlib.models.ecef.parameter_sigmas`). None:
+        :func:`choose_preset` (the Pixhawk-class preset for PX4 and ArduPilot logs, else
+        ``motionpak_tactical``); the choice and its reason are in ``options``.
     segments : None, DataFrame or list
         None: the automatic segmentation (:func:`navlib.segmentation.segment_flight`).
         Otherwise anything :func:`navlib.segmentation.segments_table` accepts: an edited
@@ -521,7 +581,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpa
     nu : float in (0, 1)
         Sensability threshold (spec A11; 0.985 is the paper's value for 21 states).
     gnss_rate_hz : float, optional
-        Measurement rate of the model; None: the median rate of the GNSS record.
+        Measurement rate of the model; None: the median rate of the GNSS record (at most
+        the IMU rate).
     e_threshold, s_threshold, min_fraction : float in [0, 1]
         Summary thresholds (module docstring).
     gnss_sigma_m : float, optional
@@ -532,27 +593,34 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpa
         rest); recorded in ``notes`` with a :class:`~navlib.io.FlightDataWarning`. None
         lets the fit's error through.
     fit_options, segment_options, model_options : mapping, optional
-        Keywords of :func:`navlib.trajectory.fit_flight_data`,
-        :func:`navlib.segmentation.segment_flight` and
+        Keywords of :func:`navlib.trajectory.fit_flight_data` (its ``preset`` defaults to
+        ``preset``), :func:`navlib.segmentation.segment_flight` and
         :func:`navlib.models.ecef.ecef21_at_epochs` (``attitude_error``, P0 sigmas...).
+    model_step_s : float or None
+        Longest step of the model build (:data:`MODEL_STEP_S`); None: every IMU step.
 
     Returns
     -------
     FlightAssessment
+        Of the longest span when the record was split; ``spans`` then holds every span's
+        assessment in time order.
 
     Raises
     ------
     NavlibInputError
-        Records that are not DataFrames or lack columns, records split at gaps, records
-        that do not overlap, overlap shorter than 2 s or holding fewer than 4 GNSS epochs,
-        bad thresholds or segments (naming the segment), and the fit's own input errors.
+        Records that are not DataFrames or lack columns, records that do not overlap,
+        overlap shorter than 2 s or holding fewer than 4 GNSS epochs (of every span), IMU
+        rates below the fit's minimum (:data:`navlib.trajectory.fit.MIN_IMU_RATE_HZ`), bad
+        thresholds or segments (naming the segment), and the fit's own input errors.
     """
     thresholds = _thresholds({"eta": eta, "nu": nu, "e_threshold": e_threshold,
                               "s_threshold": s_threshold, "min_fraction": min_fraction})
-    if not isinstance(preset, str):
-        raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
+    _check_frame(imu, "imu", _IMU_KEYS)
+    _check_frame(gnss, "gnss", _GNSS_KEYS)
+    gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
+    preset, preset_reason = choose_preset(imu, preset)
     spec = sensors.load_preset(preset)  # unknown names fail here, before the fit
-    fit_options = dict(fit_options or {})
+    fit_options = {"preset": preset, **dict(fit_options or {})}
     segment_options = dict(segment_options or {})
     reject_unknown(segment_options, SEGMENT_DEFAULTS, "segment_options")
     model_options = dict(model_options or {})
@@ -561,6 +629,47 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpa
     if heading_fallback_deg is not None:
         heading_fallback_deg = finite_scalar(heading_fallback_deg, "heading_fallback_deg",
                                              -360.0, 360.0)
+    if model_step_s is not None:
+        model_step_s = finite_scalar(model_step_s, "model_step_s", 0.0, low_open=True)
+    max_bridge_s = finite_scalar(fit_options.get("max_bridge_s", FIT_DEFAULTS["max_bridge_s"]),
+                                 "max_bridge_s", 0.0, low_open=True)
+    kwargs = {"spec": spec, "preset": preset, "preset_reason": preset_reason,
+              "segments": segments, "thresholds": thresholds, "gnss_rate_hz": gnss_rate_hz,
+              "gnss_sigma_m": gnss_sigma_m, "heading_fallback_deg": heading_fallback_deg,
+              "fit_options": fit_options, "segment_options": segment_options,
+              "model_options": model_options, "model_step_s": model_step_s}
+    pieces = _pieces(imu, max_bridge_s)
+    if len(pieces) == 1:
+        return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
+    results, skipped = [], []
+    for t0, t1 in pieces:
+        try:
+            results.append(_assess_span(_piece(imu, t0, t1), _piece(gnss, t0, t1), **kwargs))
+        except NavlibInputError as exc:
+            skipped.append(f"{t0:.6g}..{t1:.6g} s ({exc})")
+    listing = ", ".join(f"{a:.6g}..{b:.6g} s" for a, b in pieces)
+    if not results:
+        raise NavlibInputError(
+            f"imu: holes longer than max_bridge_s={max_bridge_s:g} s (or the reader's "
+            f"'segment' column) split the record into {len(pieces)} spans ({listing}) and "
+            f"none could be assessed: {'; '.join(skipped)}")
+    main = max(results, key=lambda r: float(r.trajectory.t[-1] - r.trajectory.t[0]))
+    index = next(i for i, r in enumerate(results) if r is main)
+    note = (f"the IMU record has {len(pieces) - 1} hole(s) longer than max_bridge_s="
+            f"{max_bridge_s:g} s, so it was split into {len(pieces)} spans ({listing}) assessed "
+            f"separately; this result is the longest assessed span "
+            f"{main.trajectory.t[0]:.6g}..{main.trajectory.t[-1]:.6g} s, all {len(results)} "
+            f"are in .spans" + (f"; not assessed: {'; '.join(skipped)}" if skipped else ""))
+    warnings.warn(note, FlightDataWarning, stacklevel=2)
+    results[index] = replace(main, notes=(*main.notes, note))
+    spans = tuple(results)
+    return replace(results[index], spans=spans)
+
+
+def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
+                 gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
+                 segment_options, model_options, model_step_s) -> FlightAssessment:
+    """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = _validate(imu, gnss)
     inputs = describe_inputs(imu, gnss)
     t_g = gnss["t"].to_numpy(dtype=float)
@@ -572,6 +681,9 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpa
     sigma = finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True)
 
     trajectory, notes = _fit(imu, gnss, fit_options, heading_fallback_deg)
+    gnss_rate_hz = min(gnss_rate_hz, trajectory.rate_hz)
+    notes = [f"sensor preset {preset!r}: {preset_reason}", *notes, *_fit_notes(trajectory),
+             *_outlier_notes(imu)]
     fit = fit_report(trajectory, preset, sigma)
     gnss_res, imu_res = fit_residuals(trajectory, imu, gnss)
 
@@ -581,18 +693,54 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str = "motionpa
     automatic = segment_flight(trajectory, **seg_opts)
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
-                             **model_options)
+                             max_step_s=model_step_s, **model_options)
     table = _segment_table(automatic.segments if segments is None else segments, model,
                            automatic, trajectory.t)
     excit = _excitability(model, table, thresholds["eta"])
     sens = sensability_model(model, nu=thresholds["nu"])
-    options = {"preset": preset, "gnss_rate_hz": gnss_rate_hz, "gnss_sigma_m": sigma,
-               "heading_fallback_deg": heading_fallback_deg, "fit_options": fit_options,
-               "segment_options": seg_opts, "model_options": model_options,
-               "imu_rate_hz": trajectory.rate_hz,
-               "heading_deg": trajectory.parameters.get("fit_residuals", {}).get("heading_deg")}
+    residuals = trajectory.parameters.get("fit_residuals", {})
+    options = {"preset": preset, "preset_reason": preset_reason, "gnss_rate_hz": gnss_rate_hz,
+               "gnss_sigma_m": sigma, "heading_fallback_deg": heading_fallback_deg,
+               "fit_options": fit_options, "segment_options": seg_opts,
+               "model_options": model_options, "model_step_s": model_step_s,
+               "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
+               "attitude_source": residuals.get("heading_source")}
     return FlightAssessment(trajectory=trajectory, inputs=inputs, fit=fit, automatic=automatic,
                             segment_table=table, model=model, excitability=excit,
                             sensability=sens, thresholds=thresholds, options=options,
                             gnss_residuals=gnss_res, imu_residuals=imu_res,
                             notes=tuple(notes))
+
+
+def _fit_notes(trajectory) -> list[str]:
+    """What the fit assumed or bridged, in words (initial attitude, levelling window,
+    bridged holes with their bounds)."""
+    res = trajectory.parameters.get("fit_residuals", {})
+    out = []
+    if res.get("heading_source") == "log":
+        out.append("initial attitude: the autopilot's own attitude estimate logged at the "
+                   f"start (heading {res.get('heading_deg', float('nan')):.1f} deg)")
+    level = res.get("level") or {}
+    if level:
+        out.append(f"levelled over {level['t_start']:.6g}..{level['t_end']:.6g} s (the quietest"
+                   f" rest window: spread {level['spread_mps2']:.3g} m/s^2, limit "
+                   f"{level['spread_limit_mps2']:.3g}; mean rate "
+                   f"{level['mean_rate_deg_s']:.3g} deg/s)")
+    holes = res.get("imu_holes") or []
+    if holes:
+        worst = max(holes, key=lambda h: h["duration_s"])
+        out.append(f"{len(holes)} IMU hole(s) bridged by the fit (longest {worst['duration_s']:.3g}"
+                   f" s at t = {worst['t_start']:.6g} s: attitude within "
+                   f"{worst['attitude_bound_deg']:.3g} deg, position within "
+                   f"{worst['position_bound_m']:.3g} m if the motion varied monotonically "
+                   "across it)")
+    return out
+
+
+def _outlier_notes(imu) -> list[str]:
+    flagged = getattr(imu, "attrs", {}).get("outliers") or []
+    if not flagged:
+        return []
+    shown = "; ".join(f"t = {o['t']:.6g} s {o['column']} = {o['value']:.4g}" for o in flagged[:5])
+    more = f" and {len(flagged) - 5} more" if len(flagged) > 5 else ""
+    return [f"{len(flagged)} IMU sample(s) excluded by the reader as non-physical ({shown}{more})"]

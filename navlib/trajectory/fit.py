@@ -9,14 +9,20 @@ the fitted position and attitude to the last digit of the integrator.
 
 Method (:func:`fit_flight_data`)
 --------------------------------
-1. **Initial attitude.** ``initial_attitude`` if given; otherwise accelerometer levelling
-   over the first ``level_s`` seconds (the vehicle must be at rest there) plus a heading:
-   ``heading_deg`` (azimuth of the body x axis) if given, else a coarse closed-form
-   estimate that turns the IMU specific force about the vertical onto the GNSS-derived one
-   (second differences of the GNSS positions against triangle-weighted IMU averages over
-   the same windows).
-2. **Attitude history.** The gyros are integrated with :func:`navlib.strapdown.integrate`
-   (fourth-order attitude chain with Earth rate), giving ``C_b_e`` at every IMU sample.
+1. **Initial attitude.** ``initial_attitude`` if given; else the autopilot's own attitude
+   when the reader attached it (``imu.attrs["attitude"]``: PX4 ``vehicle_attitude``,
+   ArduPilot ``ATT``; ``use_logged_attitude=True``), interpolated to the first sample;
+   else accelerometer levelling on the median specific force of the quietest rest window
+   of ``level_s`` (:func:`_quiet_window`: thresholds from the ``preset``'s white noise plus
+   ``vibration_allowance_mps2``; the first ``level_search_s`` seconds are preferred, and
+   the gyros carry a later window's attitude back to the start, so a record may start in
+   the air) plus a heading: ``heading_deg`` (azimuth of the body x axis) if given, else a
+   coarse closed-form estimate that turns the IMU specific force about the vertical onto
+   the GNSS-derived one (velocity differences when GNSS velocity is given, else second
+   differences of the positions, against IMU averages over the same windows).
+2. **Attitude history.** The gyros are integrated with
+   :func:`navlib.strapdown.body_attitude` (the fourth-order attitude chain of
+   :func:`navlib.strapdown.integrate`, with Earth rate), giving ``C_b_e`` at every sample.
 3. **Position spline and attitude correction.** ``P(t)`` is a quintic B-spline with knots
    every ``knot_spacing_s`` (default 0.1 s: ten 100 Hz samples per knot interval, short
    enough for thrust ramps of a few tenths of a second and the 0.5 s de-spin of the
@@ -27,21 +33,38 @@ Method (:func:`fit_flight_data`)
    (``sigma_velocity_mps``) and, at every IMU sample,
    ``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'``
    (``sigma_specific_force_mps2``). ``eps(t)`` is a slowly varying attitude correction
-   (cubic B-spline, knots every ``correction_knot_spacing_s``; prior
-   ``attitude_prior_deg`` on its value and ``attitude_drift_deg_s`` on its change) that
-   absorbs levelling/heading errors and gyro drift, solved jointly through its Schur
-   complement. Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times;
-   specific-force rows whose residual exceeds 4 sigma are down-weighted (Huber), so a
-   transient the spline cannot follow does not bend the attitude. The normal equations of
+   (cubic B-spline, knots every ``correction_knot_spacing_s``, at most
+   ``MAX_CORRECTION_INTERVALS`` intervals; prior ``attitude_prior_deg`` on its value and
+   ``attitude_drift_deg_s`` on its change) that absorbs levelling/heading errors and gyro
+   drift, and a constant accelerometer bias (body axes; prior ``sigma_accel_bias_mps2``,
+   by default the ``preset``'s turn-on bias; without a preset none is estimated), which
+   the fit would otherwise take for motion; all solved jointly through a Schur complement.
+   Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times; specific-force
+   rows whose residual exceeds 4 sigma are down-weighted (Huber; on the first pass
+   ``sigma_specific_force_mps2`` is raised to the robust scale of the residuals, so
+   vibration weighs as noise), so a transient the spline cannot follow does not bend the
+   attitude. The normal equations of
    the spline are banded (one Cholesky factorisation serves the three axes).
 4. **Attitude spline.** The corrected attitude samples are written as yaw/pitch/roll in a
    fixed frame adapted to the flight (its x axis along the mean direction of the body axis
    that moves least, its z axis along the direction that axis never visits), so pitch
    stays far from +-90 deg; yaw and roll are unwrapped, which handles any amount of spin.
    Each angle gets a quintic least-squares spline with knots every
-   ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``). The body rate follows from
-   the analytic Euler kinematics.
+   ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``; banded normal equations). The
+   body rate follows from the analytic Euler kinematics.
 5. The position is refitted with the smooth attitude, and the exact IMU is derived.
+
+Holes and rates
+---------------
+An IMU interval longer than ``HOLE_FACTOR`` (10) median intervals is a hole. Holes up to
+``max_bridge_s`` (default 1 s) are bridged: knots inside them are dropped
+(:func:`_knots`: every knot interval keeps ``SAMPLES_PER_KNOT`` samples), so one polynomial
+piece and the gyro chain interpolate across, and ``fit_residuals["imu_holes"]`` states a
+bound for each (:func:`_hole_bounds`). Longer holes are refused (``assess_flight`` splits
+the record there). The same knot rule lets low rates through (at 10 Hz the knot intervals
+become 0.2 s); below ``MIN_IMU_RATE_HZ`` (4 Hz: 2 samples per interval of at most
+``MAX_KNOT_SPACING_S`` = 0.5 s, the longest that still follows 1 Hz manoeuvres) the fit
+refuses the record, naming the rate and the minimum.
 
 Observability caveat: accelerometers and GNSS see the attitude only through the direction
 of the specific force, so a rotation about that direction (on the pad: the heading; for a
@@ -56,8 +79,12 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   IMU minus the fitted trajectory's exact IMU, with their maxima
   ``specific_force_max_mps2`` and ``angular_rate_max_rad_s`` (norms);
 * ``heading_deg`` (body-x azimuth at the start) and ``heading_source``
-  (``keyword``, ``initial_attitude`` or ``estimated``); ``n_imu``, ``n_gnss``,
-  ``n_knots``.
+  (``keyword``, ``initial_attitude``, ``log`` or ``estimated``); ``n_imu``, ``n_gnss``,
+  ``n_knots``, ``imu_rate_hz``;
+* ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
+  ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
+  statistics, empty when not levelled), ``sigma_specific_force_used_mps2`` and
+  ``accel_bias_mps2`` (the estimated accelerometer bias, body axes).
 
 With noiseless data of a trajectory the splines can represent, all residuals are near
 zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
@@ -69,9 +96,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import scipy.sparse as sp
-from scipy.interpolate import BSpline, make_lsq_spline
+from scipy.interpolate import BSpline
 from scipy.linalg import solveh_banded
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
@@ -91,8 +118,14 @@ FIT_DEFAULTS = {
     "initial_attitude": None,
     "level_s": 1.0,
     "level_tolerance": 0.05,
+    "level_search_s": 60.0,
+    "preset": None,
+    "vibration_allowance_mps2": 2.0,
+    "use_logged_attitude": True,
+    "max_bridge_s": 1.0,
+    "sigma_accel_bias_mps2": None,
     "attitude_prior_deg": 5.0,
-    "attitude_drift_deg_s": 0.01,
+    "attitude_drift_deg_s": None,
     "correction_knot_spacing_s": 10.0,
     "iterations": 3,
     "name": "fitted flight",
@@ -107,6 +140,29 @@ _MIN_IMU = 20
 _MAX_PITCH = 80.0 * DEG     # adapted-frame pitch limit (Euler singularity at 90 deg)
 _MIN_HORIZONTAL_F = 0.3     # m/s^2, RMS needed to estimate the heading
 _HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
+SAMPLES_PER_KNOT = 2
+"""Fewest IMU samples in each knot interval of the splines (knots are merged until so)."""
+MAX_KNOT_SPACING_S = 0.5
+"""Longest knot interval the fit accepts: a quintic B-spline follows features about two knot
+intervals long, so 0.5 s intervals still resolve the ~1 Hz manoeuvres of aircraft and
+multicopters (and the 0.5 s de-spin of the sounding rocket)."""
+MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
+"""Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
+knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
+above (Nyquist), below which the gyro integration aliases the attitude."""
+MAX_CORRECTION_INTERVALS = 60
+"""Most knot intervals of the attitude correction: flights longer than 60
+``correction_knot_spacing_s`` get wider intervals (10 min at the default 10 s), which keeps
+its dense Schur complement small; a cubic spline still holds the linear drift of a gyro
+bias exactly."""
+HOLE_FACTOR = 10.0
+"""An IMU interval longer than this many median intervals is a hole (as the readers'
+``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
+REST_ACCEL_MPS2 = 0.5
+"""Largest GNSS-derived acceleration around a levelling window, m/s^2 (the segmentation's
+rest acceleration: 0.5 m/s^2 tilts the levelled attitude by 3 deg)."""
+REST_RATE_DEG_S = 3.0
+"""Largest mean angular rate of a levelling window, deg/s (the segmentation's rest rate)."""
 
 
 # --- input checking ----------------------------------------------------------------------
@@ -136,8 +192,26 @@ def _options(options):
     p = {**FIT_DEFAULTS, **options}
     for key in ("knot_spacing_s", "sigma_position_m", "sigma_velocity_mps",
                 "sigma_specific_force_mps2", "level_s", "level_tolerance", "attitude_prior_deg",
-                "attitude_drift_deg_s", "correction_knot_spacing_s"):
+                "correction_knot_spacing_s", "level_search_s",
+                "max_bridge_s"):
         p[key] = finite_scalar(p[key], key, 0.0, low_open=True)
+    if p["attitude_drift_deg_s"] is None:
+        p["attitude_drift_deg_s"] = _gyro_drift_deg_s(p["preset"])
+    p["attitude_drift_deg_s"] = finite_scalar(p["attitude_drift_deg_s"], "attitude_drift_deg_s",
+                                              0.0, low_open=True)
+    p["vibration_allowance_mps2"] = finite_scalar(p["vibration_allowance_mps2"],
+                                                  "vibration_allowance_mps2", 0.0)
+    if p["sigma_accel_bias_mps2"] is not None:
+        p["sigma_accel_bias_mps2"] = finite_scalar(p["sigma_accel_bias_mps2"],
+                                                   "sigma_accel_bias_mps2", 0.0)
+    if p["knot_spacing_s"] > MAX_KNOT_SPACING_S:
+        raise NavlibInputError(f"knot_spacing_s: {p['knot_spacing_s']:g} s exceeds "
+                               f"{MAX_KNOT_SPACING_S:g} s (MAX_KNOT_SPACING_S)")
+    if not isinstance(p["use_logged_attitude"], bool):
+        raise NavlibInputError("use_logged_attitude: expected True or False, got "
+                               f"{p['use_logged_attitude']!r}")
+    if p["preset"] is not None and not isinstance(p["preset"], str):
+        raise NavlibInputError(f"preset: expected a sensor preset name, got {p['preset']!r}")
     if p["attitude_knot_spacing_s"] is None:
         p["attitude_knot_spacing_s"] = p["knot_spacing_s"]
     p["attitude_knot_spacing_s"] = finite_scalar(p["attitude_knot_spacing_s"],
@@ -163,11 +237,24 @@ def _options(options):
 
 # --- B-spline machinery ------------------------------------------------------------------
 
-def _knots(t0, t1, spacing):
-    """Clamped quintic knot vector on [t0, t1] with interior knots about ``spacing`` apart."""
+def _knots(t, spacing):
+    """Clamped quintic knot vector on ``[t[0], t[-1]]``, interior knots about ``spacing`` apart.
+
+    Knots come from a uniform grid; a knot is dropped when fewer than ``SAMPLES_PER_KNOT``
+    samples ``t`` would lie between it and the previous knot kept (or after it), so holes
+    in the record and low rates merge knot intervals instead of leaving coefficients
+    without data (the normal equations stay definite).
+    """
+    t0, t1 = float(t[0]), float(t[-1])
     n_int = max(int(np.ceil((t1 - t0) / spacing - 1e-9)), 1)
-    inner = np.linspace(t0, t1, n_int + 1)
-    return np.r_[np.full(_K, t0), inner, np.full(_K, t1)]
+    grid = np.linspace(t0, t1, n_int + 1)[1:-1]
+    below = np.searchsorted(t, grid, side="left")     # samples before each candidate knot
+    keep, last = [], 0
+    for knot, count in zip(grid, below, strict=True):
+        if count - last >= SAMPLES_PER_KNOT and t.size - count >= SAMPLES_PER_KNOT:
+            keep.append(knot)
+            last = count
+    return np.r_[np.full(_K + 1, t0), keep, np.full(_K + 1, t1)]
 
 
 def _basis(x, knots, nu):
@@ -230,34 +317,201 @@ def _level(f_b, gamma_e, C_n_e, heading):
     return Rotation.from_matrix(T_e @ T_b.T)
 
 
+def _rate_and_holes(t, max_bridge_s):
+    """Median IMU rate (Hz) and the holes (index of the sample after each) to bridge.
+
+    Refuses rates below :data:`MIN_IMU_RATE_HZ` and holes longer than ``max_bridge_s``.
+    """
+    dt = np.diff(t)
+    rate = float(1.0 / np.median(dt))
+    if rate < MIN_IMU_RATE_HZ:
+        raise NavlibInputError(
+            f"imu: median rate {rate:.3g} Hz is below the minimum {MIN_IMU_RATE_HZ:g} Hz of "
+            f"the fit: it needs {SAMPLES_PER_KNOT} samples per spline knot interval of at most "
+            f"{MAX_KNOT_SPACING_S:g} s to follow ~1 Hz manoeuvres (and twice that motion "
+            "bandwidth to integrate the gyros without aliasing)")
+    after = np.flatnonzero(dt > HOLE_FACTOR / rate) + 1
+    longest = int(after[np.argmax(dt[after - 1])]) if after.size else None
+    if longest is not None and dt[longest - 1] > max_bridge_s:
+        raise NavlibInputError(
+            f"imu: hole of {dt[longest - 1]:.3g} s between t = {t[longest - 1]:.6g} s and "
+            f"{t[longest]:.6g} s is longer than max_bridge_s={max_bridge_s:g} s; assess the "
+            "pieces on either side separately (navlib.studies.assess.assess_flight splits "
+            "there itself) or raise max_bridge_s")
+    return rate, after
+
+
+def _hole_bounds(t, f_b, w_b, after):
+    """Stated uncertainty of each bridged IMU hole (module docstring, "Holes").
+
+    Across a hole of length ``L`` the gyro history and the position spline interpolate
+    between the samples on either side. If the signals vary monotonically inside, the
+    attitude error stays below ``theta = |w_b - w_a| L / 2`` and the position error below
+    ``(|f_b - f_a| / 2 + |f| theta) L^2 / 8`` (the deflection of a string of length ``L``
+    pinned at both ends under that acceleration error).
+    """
+    out = []
+    for k in after:
+        L = float(t[k] - t[k - 1])
+        theta = 0.5 * L * float(np.linalg.norm(w_b[k] - w_b[k - 1]))
+        f_mag = 0.5 * float(np.linalg.norm(f_b[k]) + np.linalg.norm(f_b[k - 1]))
+        acc = 0.5 * float(np.linalg.norm(f_b[k] - f_b[k - 1])) + f_mag * theta
+        out.append({"t_start": float(t[k - 1]), "t_end": float(t[k]), "duration_s": L,
+                    "attitude_bound_deg": float(np.degrees(theta)),
+                    "position_bound_m": acc * L**2 / 8.0})
+    return out
+
+
+def _white_sigmas(preset, rate):
+    """Per-sample white-noise sigmas (specific force m/s^2, rate rad/s) of a preset."""
+    from navlib.models.ecef import DEFAULT_SENSORS, imu_noise_densities
+
+    noise = imu_noise_densities(preset or DEFAULT_SENSORS)
+    root = np.sqrt(rate)
+    return (float(np.max(noise["vrw_m_s_sqrt_s"])) * root,
+            float(np.max(noise["arw_rad_sqrt_s"])) * root)
+
+
+def _gnss_acceleration(tc, t_g, P_g, V_g, half_s):
+    """Norm of the GNSS-derived acceleration around ``tc``: the slope of a straight line
+    through the GNSS velocities within ``half_s`` (or the curvature of a parabola through
+    the positions within ``5 half_s``: position noise needs the longer baseline); NaN when
+    fewer than 3 epochs lie there."""
+    if V_g is not None:
+        sel = np.abs(t_g - tc) <= half_s
+        if sel.sum() < 3:
+            return np.nan
+        x = t_g[sel] - tc
+        slope = np.polyfit(x, V_g[sel], 1)[0]
+        return float(np.linalg.norm(slope))
+    sel = np.abs(t_g - tc) <= 5.0 * half_s
+    if sel.sum() < 3:
+        return np.nan
+    curv = np.polyfit(t_g[sel] - tc, P_g[sel], 2)[0]
+    return float(np.linalg.norm(2.0 * curv))
+
+
+def _quiet_window(t, f_b, w_b, g, p, gnss=None):
+    """The quietest window of ``level_s`` in which the vehicle stands still (or hovers).
+
+    Windows of ``level_s`` start every ``level_s / 2``. A window qualifies when its median
+    specific force has a norm within ``level_tolerance`` of gravity ``g``, its spread (the
+    RMS over the axes of the standard deviation of ``f``) is below ``3 sigma_f +
+    vibration_allowance_mps2`` (``sigma_f`` the preset's per-sample white noise: motor
+    vibration of an armed multicopter is 1-1.6 m/s^2 and averages out over the window) and
+    its mean angular rate is below ``REST_RATE_DEG_S`` (plus three sigmas of the gyro
+    white noise averaged over the window) and the GNSS sees no acceleration above
+    ``REST_ACCEL_MPS2`` around it (:func:`_gnss_acceleration`; a turning or accelerating
+    vehicle would tilt the levelled attitude). Of the qualifying windows within the first
+    ``level_search_s`` the one with the smallest spread is taken, else the quietest later
+    one (the gyros carry its attitude back to the start). Returns sample indices
+    ``k0, k1`` and a description.
+    """
+    rate = 1.0 / float(np.median(np.diff(t)))
+    sigma_f, sigma_w = _white_sigmas(p["preset"], rate)
+    starts = np.arange(t[0], max(t[-1] - p["level_s"], t[0]) + 1e-12, 0.5 * p["level_s"])
+    k0 = np.searchsorted(t, starts, side="left")
+    k1 = np.searchsorted(t, starts + p["level_s"], side="right")
+    ok = k1 - k0 >= 3
+    k0, k1, starts = k0[ok], k1[ok], starts[ok]
+    if k0.size == 0:
+        raise NavlibInputError(f"imu: fewer than 3 samples in every level_s={p['level_s']:g} s "
+                               "window; raise level_s or pass initial_attitude")
+    c1 = np.r_[np.zeros((1, 3)), np.cumsum(f_b, axis=0)]
+    c2 = np.r_[np.zeros((1, 3)), np.cumsum(f_b**2, axis=0)]
+    cw = np.r_[np.zeros((1, 3)), np.cumsum(w_b, axis=0)]
+    n = (k1 - k0)[:, None]
+    mean = (c1[k1] - c1[k0]) / n
+    spread = np.sqrt(np.maximum((c2[k1] - c2[k0]) / n - mean**2, 0.0).sum(axis=1))
+    mean_rate = np.linalg.norm((cw[k1] - cw[k0]) / n, axis=1)
+    spread_max = 3.0 * sigma_f + p["vibration_allowance_mps2"]
+    rate_max = REST_RATE_DEG_S * DEG + 3.0 * sigma_w / np.sqrt(n[:, 0])
+    gravity_ok = np.abs(np.linalg.norm(mean, axis=1) - g) <= p["level_tolerance"] * g
+    good = gravity_ok & (spread <= spread_max) & (mean_rate <= rate_max)
+    accel = np.full(starts.size, np.nan)
+    if gnss is not None:
+        half = max(p["level_s"], 2.0)
+        for i in np.flatnonzero(good):
+            accel[i] = _gnss_acceleration(starts[i] + 0.5 * p["level_s"], *gnss, half)
+        good &= ~(accel > REST_ACCEL_MPS2)
+    early = good & (starts <= t[0] + p["level_search_s"])
+    pool = early if early.any() else good
+    if not pool.any():
+        best = int(np.argmin(np.abs(np.linalg.norm(mean, axis=1) - g) / g
+                             + spread / max(spread_max, 1e-12)))
+        raise NavlibInputError(
+            f"imu: no window of level_s={p['level_s']:g} s where the vehicle is at rest, so "
+            f"the initial attitude cannot be levelled; the closest, at t = {starts[best]:.6g} "
+            f"s, has mean |f| = {np.linalg.norm(mean[best]):.3f} m/s^2 (gravity {g:.3f}, "
+            f"level_tolerance={p['level_tolerance']:g}), spread {spread[best]:.3f} m/s^2 "
+            f"(limit {spread_max:.3f}: 3 x {sigma_f:.3g} white noise of preset "
+            f"{p['preset'] or 'motionpak_tactical'!r} + vibration_allowance_mps2="
+            f"{p['vibration_allowance_mps2']:g}) and mean rate "
+            f"{np.degrees(mean_rate[best]):.3g} deg/s (limit {np.degrees(rate_max[best]):.3g}),"
+            f" and no window passing these has a GNSS acceleration below {REST_ACCEL_MPS2:g} "
+            "m/s^2; pass initial_attitude, or a log with the autopilot's attitude")
+    i = int(np.flatnonzero(pool)[np.argmin(spread[pool])])
+    info = {"t_start": float(t[k0[i]]), "t_end": float(t[k1[i] - 1]),
+            "spread_mps2": float(spread[i]), "spread_limit_mps2": float(spread_max),
+            "mean_rate_deg_s": float(np.degrees(mean_rate[i])),
+            "gnss_accel_mps2": float(accel[i])}
+    return int(k0[i]), int(k1[i]), info
+
+
+def _logged_attitude(imu, t0, C_n_e):
+    """Body -> ECEF attitude at ``t0`` from the autopilot attitude a reader attached
+    (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None."""
+    att = imu.attrs.get("attitude") if hasattr(imu, "attrs") else None
+    if not isinstance(att, pd.DataFrame) or len(att) == 0 or not {
+            "t", "qw", "qx", "qy", "qz"} <= set(att.columns):
+        return None
+    t = att["t"].to_numpy(dtype=float)
+    q = att[["qx", "qy", "qz", "qw"]].to_numpy(dtype=float)
+    ok = np.all(np.isfinite(q), axis=1) & np.isfinite(t) & (np.linalg.norm(q, axis=1) > 0.5)
+    if not ok.any():
+        return None
+    t, q = t[ok], q[ok]
+    k = int(np.argmin(np.abs(t - t0)))
+    if abs(t[k] - t0) > 1.0:
+        return None
+    if k + 1 < t.size and t[k] < t0 < t[k + 1]:
+        C_b_n = Slerp(t[k:k + 2], Rotation.from_quat(q[k:k + 2]))([t0])[0]
+    else:
+        C_b_n = Rotation.from_quat(q[k])
+    return Rotation.from_matrix(C_n_e) * C_b_n
+
+
 def _heading_of(C_b_e0, C_n_e):
     """Azimuth (rad) of the body x axis at the start."""
     x_n = C_n_e.T @ C_b_e0.apply([1.0, 0.0, 0.0])
     return float(np.arctan2(x_n[1], x_n[0]))
 
 
-def _coarse_heading(t, f_e, axis_e, t_g, P_g):
-    """Heading correction (rad) rotating IMU specific force onto GNSS second differences.
+def _coarse_heading(t, f_e, axis_e, t_g, P_g, V_g=None):
+    """Heading correction (rad) rotating IMU specific force onto the GNSS-derived one.
 
     ``f_e`` is the IMU specific force in ECEF with the provisional attitude and ``axis_e``
-    the (Earth-fixed, rotating) vertical about which the heading turns.
+    the (Earth-fixed, rotating) vertical about which the heading turns. With GNSS velocity
+    the GNSS side is the velocity difference between consecutive epochs (the acceleration
+    averaged over the interval, against the IMU average over the same interval); without,
+    the second difference of positions (the acceleration averaged with a triangle weight,
+    against the same weighting of the IMU). Velocity differences are far less noisy: at
+    5 Hz, 2 m of position noise make second differences of ~100 m/s^2.
     """
-    h_prev, h_next = np.diff(t_g)[:-1], np.diff(t_g)[1:]
-    P0, P1, P2 = P_g[:-2], P_g[1:-1], P_g[2:]
-    acc = 2.0 * ((P2 - P1) / h_next[:, None] - (P1 - P0) / h_prev[:, None]) / (
-        h_prev + h_next)[:, None]
-    vel = (P2 - P0) / (h_prev + h_next)[:, None]
-    gnss_f = acc + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel) - earth.normal_gravity_ecef(P1)
-    # the second difference is the acceleration averaged with a triangle (B-spline) weight
-    imu_f = np.empty_like(gnss_f)
-    for j in range(len(P1)):
-        lo, mid, hi = t_g[j], t_g[j + 1], t_g[j + 2]
-        sel = (t >= lo) & (t <= hi)
-        if not np.any(sel):
-            imu_f[j] = np.nan
-            continue
-        w = np.where(t[sel] <= mid, (t[sel] - lo) / (mid - lo), (hi - t[sel]) / (hi - mid))
-        imu_f[j] = (w[:, None] * f_e[sel]).sum(0) / max(w.sum(), 1e-300)
+    c_f = np.r_[np.zeros((1, 3)), np.cumsum(f_e, axis=0)]
+    c_1 = np.arange(t.size + 1, dtype=float)
+    if V_g is not None:
+        h = np.diff(t_g)[:, None]
+        vel = 0.5 * (V_g[1:] + V_g[:-1])
+        gnss_f = (np.diff(V_g, axis=0) / h + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel)
+                  - earth.normal_gravity_ecef(0.5 * (P_g[1:] + P_g[:-1])))
+        i0 = np.searchsorted(t, t_g[:-1], side="left")
+        i1 = np.searchsorted(t, t_g[1:], side="right")
+        n = c_1[i1] - c_1[i0]
+        imu_f = np.where((n > 0)[:, None], (c_f[i1] - c_f[i0]) / np.maximum(n, 1)[:, None],
+                         np.nan)
+    else:
+        gnss_f, imu_f = _triangle_pairs(t, f_e, t_g, P_g, c_f, c_1)
     ok = np.all(np.isfinite(imu_f), axis=1)
     z = axis_e[0]
     u = imu_f[ok] - np.outer(imu_f[ok] @ z, z)
@@ -268,6 +522,34 @@ def _coarse_heading(t, f_e, axis_e, t_g, P_g):
             f"(needs an RMS above {_MIN_HORIZONTAL_F} m/s^2); pass heading_deg or "
             "initial_attitude")
     return float(np.arctan2(np.sum(np.cross(u, w) @ z), np.sum(u * w)))
+
+
+def _triangle_pairs(t, f_e, t_g, P_g, c_f, c_1):
+    """GNSS second differences and the triangle-weighted IMU averages over their windows
+    (the second difference is the acceleration averaged with a triangle, B-spline, weight)."""
+    h_prev, h_next = np.diff(t_g)[:-1], np.diff(t_g)[1:]
+    P0, P1, P2 = P_g[:-2], P_g[1:-1], P_g[2:]
+    acc = 2.0 * ((P2 - P1) / h_next[:, None] - (P1 - P0) / h_prev[:, None]) / (
+        h_prev + h_next)[:, None]
+    vel = (P2 - P0) / (h_prev + h_next)[:, None]
+    gnss_f = acc + 2.0 * np.cross(earth.EARTH_RATE_ECEF, vel) - earth.normal_gravity_ecef(P1)
+    lo, mid, hi = t_g[:-2], t_g[1:-1], t_g[2:]
+    i_lo = np.searchsorted(t, lo, side="left")
+    i_mid = np.searchsorted(t, mid, side="right")
+    i_hi = np.searchsorted(t, hi, side="right")
+    c_tf = np.r_[np.zeros((1, 3)), np.cumsum(t[:, None] * f_e, axis=0)]
+    c_t = np.r_[0.0, np.cumsum(t)]
+
+    def part(i0, i1):
+        return c_f[i1] - c_f[i0], c_tf[i1] - c_tf[i0], c_1[i1] - c_1[i0], c_t[i1] - c_t[i0]
+
+    f1, tf1, n1, s1 = part(i_lo, i_mid)              # rising side: (t - lo) / (mid - lo)
+    f2, tf2, n2, s2 = part(i_mid, i_hi)              # falling side: (hi - t) / (hi - mid)
+    d1, d2 = (mid - lo)[:, None], (hi - mid)[:, None]
+    num = (tf1 - lo[:, None] * f1) / d1 + (hi[:, None] * f2 - tf2) / d2
+    den = (s1 - lo * n1) / d1[:, 0] + (hi * n2 - s2) / d2[:, 0]
+    imu_f = np.where((n1 + n2 > 0)[:, None], num / np.maximum(den, 1e-300)[:, None], np.nan)
+    return gnss_f, imu_f
 
 
 def _adapted_euler(attitude):
@@ -319,14 +601,22 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``sigma_position_m=5`` (when no ``sigma`` column), ``sigma_velocity_mps=0.5``,
         ``sigma_specific_force_mps2=0.05`` (weights of the three kinds of rows),
         ``heading_deg=None`` (azimuth of the body x axis at the start; None: estimated),
-        ``attitude_prior_deg=5``, ``attitude_drift_deg_s=0.01``,
+        ``attitude_prior_deg=5``, ``attitude_drift_deg_s=None`` (the named ``preset``'s
+        turn-on gyro bias, at least 0.01; 0.01 without a preset),
         ``correction_knot_spacing_s=10`` (the attitude correction, method step 3),
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
-        IMU sample of the overlap; replaces levelling and heading), ``level_s=1`` (rest
-        period used for levelling), ``level_tolerance=0.05`` (accepted relative difference
-        between the mean |f| of that period and normal gravity: consumer MEMS scale
-        factors reach a few percent), ``iterations=3`` (gravity/Coriolis/heading
-        relinearisations), ``name``.
+        IMU sample of the overlap; replaces levelling and heading),
+        ``use_logged_attitude=True`` (start from ``imu.attrs["attitude"]`` when present),
+        ``level_s=1`` (length of the rest window used for levelling),
+        ``level_tolerance=0.05`` (accepted relative difference between its median |f| and
+        normal gravity: consumer MEMS scale factors reach a few percent),
+        ``level_search_s=60`` (windows starting this long after the start are preferred),
+        ``preset=None`` (sensor preset whose white noise sets the rest thresholds; None:
+        ``motionpak_tactical``), ``vibration_allowance_mps2=2`` (accelerometer spread of
+        motor vibration accepted at rest), ``max_bridge_s=1`` (longest IMU hole bridged),
+        ``sigma_accel_bias_mps2=None`` (prior sigma of the constant accelerometer bias the
+        fit estimates; None: the named ``preset``'s turn-on bias, no bias without a preset),
+        ``iterations=3`` (gravity/Coriolis/heading relinearisations), ``name``.
 
     Returns
     -------
@@ -339,8 +629,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     ------
     NavlibInputError
         Missing or non-finite columns, non-increasing times, too few samples,
-        non-overlapping spans, a start not at rest (without ``initial_attitude``), a
-        heading that cannot be estimated, unknown options.
+        non-overlapping spans, an IMU rate below ``MIN_IMU_RATE_HZ``, a hole longer than
+        ``max_bridge_s``, no rest window to level in (without ``initial_attitude`` or a
+        logged attitude), a heading that cannot be estimated, unknown options.
     """
     p = _options(options)
     imu_cols = _columns(imu, "imu", IMU_COLUMNS)
@@ -362,6 +653,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     t = t_all[keep]
     f_b = np.column_stack([imu_cols[c][keep] for c in ("f_x", "f_y", "f_z")])
     w_b = np.column_stack([imu_cols[c][keep] for c in ("w_x", "w_y", "w_z")])
+    rate, holes = _rate_and_holes(t, p["max_bridge_s"])
     g_keep = (gnss_cols["t"] >= t[0]) & (gnss_cols["t"] <= t[-1])
     if g_keep.sum() < _MIN_GNSS:
         raise NavlibInputError(
@@ -378,56 +670,65 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     lat0, lon0, _ = earth.ecef_to_geodetic(P_g[0])
     C_n_e = earth.ned_to_ecef_matrix(lat0, lon0)
     gamma0 = earth.normal_gravity_ecef(P_g[0])
+    P_start = P_g[0]
+    # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
+    earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
+    relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
+    logged = _logged_attitude(imu, t[0], C_n_e) if (
+        p["initial_attitude"] is None and p["use_logged_attitude"]) else None
+    level_info = {}
     if p["initial_attitude"] is not None:
         att0, source = p["initial_attitude"], "initial_attitude"
+    elif logged is not None:
+        att0, source = logged, "log"
     else:
-        rest = t <= t[0] + p["level_s"]
-        f_mean = f_b[rest].mean(axis=0)
-        g = np.linalg.norm(gamma0)
-        spread = np.linalg.norm(f_b[rest] - f_mean, axis=1).max()
-        if abs(np.linalg.norm(f_mean) - g) > p["level_tolerance"] * g or spread > 0.5:
-            raise NavlibInputError(
-                f"imu: levelling needs the vehicle at rest during the first level_s="
-                f"{p['level_s']} s (mean |f| = {np.linalg.norm(f_mean):.3f} m/s^2 against "
-                f"gravity {g:.3f} within level_tolerance={p['level_tolerance']}, spread "
-                f"{spread:.3f} m/s^2); pass initial_attitude")
+        k0, k1, level_info = _quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p,
+                                           (t_g, P_g, V_g))
+        att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e, 0.0)
+        # attitude at the window start, carried back to t[0] through the gyro history,
+        # then turned about the vertical to the heading asked for at t[0]
+        E_q, R_q = earth_turn[k0], relative[k0]
+        att0 = E_q.inv() * att_q * R_q.inv() * E_q
         heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
-        att0 = _level(f_mean, gamma0, C_n_e, heading)
+        down = gamma0 / np.linalg.norm(gamma0)
+        att0 = Rotation.from_rotvec(down * (heading - _heading_of(att0, C_n_e))) * att0
         source = "keyword"
-    P_start = P_g[0]
-    sd = strapdown.integrate(t, f_b, w_b, P_start, np.zeros(3), att0)
-    attitude = sd.attitude
+    attitude = earth_turn * att0 * earth_turn.inv() * relative
     # the vertical about which a heading change turns, carried along with the Earth
-    axis_e = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF)).apply(
-        gamma0 / np.linalg.norm(gamma0))
-    if p["initial_attitude"] is None and p["heading_deg"] is None:
-        delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g)
+    axis_e = earth_turn.apply(gamma0 / np.linalg.norm(gamma0))
+    if source == "keyword" and p["heading_deg"] is None:
+        delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g, V_g)
         attitude = Rotation.from_rotvec(axis_e * delta) * attitude
         source = "estimated"
 
     # 3: position spline and attitude correction --------------------------------------
-    knots = _knots(t[0], t[-1], p["knot_spacing_s"])
+    knots = _knots(t, p["knot_spacing_s"])
     rows = _Rows(knots, t, t_g, P_g, V_g, sigma, p, P_start)
-    correction = _Correction(t, p)
+    correction = _Correction(t, p, _accel_bias_sigma(p))
     coef = None
     for _ in range(p["iterations"]):
-        f_e = attitude.apply(f_b)
-        coef, eps = rows.solve(f_e, coef, correction)
+        C = attitude.as_matrix()
+        f_e = np.einsum("nij,nj->ni", C, f_b - correction.bias)
+        coef, eps = rows.solve(f_e, coef, correction, C)
         rows.robust_weights(coef, f_e, eps)
         attitude = Rotation.from_rotvec(eps) * attitude
 
     # 4: smooth attitude -----------------------------------------------------------------
     C_L_e, perm, angles = _adapted_euler(attitude)
-    att_knots = _knots(t[0], t[-1], p["attitude_knot_spacing_s"])
-    angle_spline = make_lsq_spline(t, angles, att_knots, k=_K)
-    ang, dang = angle_spline(t), angle_spline(t, 1)
+    att_knots = _knots(t, p["attitude_knot_spacing_s"])
+    B = _basis(t, att_knots, 0)
+    ab = _banded(sp.csr_array(B.T @ B))
+    rhs = B.T @ angles
+    att_coef = solveh_banded(ab, rhs)
+    att_coef = att_coef + solveh_banded(ab, rhs - B.T @ (B @ att_coef))   # refinement step
+    ang, dang = B @ att_coef, _basis(t, att_knots, 1) @ att_coef
     C_r_e, w_er_r = zyx_attitude(C_L_e, ang[:, 0], ang[:, 1], ang[:, 2],
                                  dang[:, 0], dang[:, 1], dang[:, 2])
     C_b_e = C_r_e @ perm                      # relabelled body -> body: C_b_e = C_r_e P
     w_eb_b = w_er_r @ perm                    # omega_b = P^T omega_r
 
     # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
-    f_e = np.einsum("nij,nj->ni", C_b_e, f_b)
+    f_e = np.einsum("nij,nj->ni", C_b_e, f_b - correction.bias)
     for _ in range(p["iterations"]):
         coef, _ = rows.solve(f_e, coef)
     P, V, a = rows.evaluate(coef)
@@ -438,7 +739,10 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     residuals.update({
         "heading_deg": float(np.degrees(_heading_of(attitude_fit[0], C_n_e))),
         "heading_source": source, "n_imu": int(t.size), "n_gnss": int(t_g.size),
-        "n_knots": int(knots.size - 2 * _K),
+        "n_knots": int(knots.size - 2 * _K), "imu_rate_hz": rate,
+        "imu_holes": _hole_bounds(t, f_b, w_b, holes), "level": level_info,
+        "sigma_specific_force_used_mps2": float(rows.sigma_f),
+        "accel_bias_mps2": [float(b) for b in correction.bias],
     })
     params = {k: v for k, v in p.items() if k != "initial_attitude"}
     params["fit_residuals"] = residuals
@@ -460,6 +764,7 @@ class _Rows:
         self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
         self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
         self.sigma_f = p["sigma_specific_force_mps2"]
+        self.scaled = False
         w_g2 = 1.0 / sigma**2
         self.N_gnss = self.G0.T @ (self.G0 * w_g2[:, None])
         rhs_gnss = self.G0.T @ (w_g2[:, None] * (P_g - P_ref))
@@ -481,10 +786,18 @@ class _Rows:
         self.ab = _banded(self.N)
 
     def robust_weights(self, coef, f_e, eps):
-        """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma)."""
+        """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma).
+
+        The first call also raises ``sigma_f`` to the robust scale of the residuals
+        (1.4826 x their median absolute value) when that is larger: vibration then weighs
+        as the noise it is against the GNSS rows.
+        """
         P, V, a = self.evaluate(coef)
         r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
              - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
+        if not self.scaled:
+            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(np.abs(a - r))))
+            self.scaled = True
         size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
         self.set_weights(1.0 / np.maximum(size, 1.0))
 
@@ -495,7 +808,7 @@ class _Rows:
     def evaluate(self, coef):
         return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
 
-    def solve(self, f_e, coef, correction=None):
+    def solve(self, f_e, coef, correction=None, C=None):
         """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
 
         With a :class:`_Correction`, the specific force rows read
@@ -511,16 +824,16 @@ class _Rows:
         rhs = self.B2.T @ (w * r) + self.rhs_gnss
         if correction is None:
             return self._solve(rhs), np.zeros_like(f_e)
-        G = correction.columns(f_e)                       # (3, N, n_u): axis, sample, unknown
-        Q = [self.B2.T @ (w * G[a]) for a in range(3)]
-        n_u = G.shape[2]
-        sol = self._solve(np.hstack([rhs, *Q]))
+        G = correction.columns(f_e, C)                    # 3 x sparse (N, n_u)
+        Q = [sp.csr_array(self.B2.T @ (G[a] * w)) for a in range(3)]
+        n_u = G[0].shape[1]
+        sol = self._solve(np.hstack([rhs, *(q.toarray() for q in Q)]))
         c0 = sol[:, :3]
         S = [sol[:, 3 + a * n_u: 3 + (a + 1) * n_u] for a in range(3)]
         lhs = correction.prior.copy()
         b = -correction.prior @ correction.total      # the prior holds the accumulated sum
         for a in range(3):
-            lhs += G[a].T @ (w * G[a]) - Q[a].T @ S[a]
+            lhs += (G[a].T @ (G[a] * w)).toarray() - Q[a].T @ S[a]
             b += Q[a].T @ c0[:, a] - G[a].T @ (w[:, 0] * r[:, a])
         e = np.linalg.solve(lhs, b)
         correction.total = correction.total + e
@@ -529,45 +842,88 @@ class _Rows:
 
 
 class _Correction:
-    """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector), cubic B-spline.
+    """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector, cubic B-spline)
+    and a constant accelerometer bias ``b_a`` (body axes).
 
     ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
-    the recorded specific force and GNSS reveal. Prior: each coefficient ~ N(0,
-    ``attitude_prior_deg``^2) and neighbouring coefficients differ by ~ N(0,
-    (``attitude_drift_deg_s`` x knot spacing)^2), so stretches without attitude information
-    (free fall) keep the gyro attitude.
+    the recorded specific force and GNSS reveal; ``f <- f - b_a`` the accelerometer bias,
+    which would otherwise be taken for motion (a parked vehicle drifting at a few m/s).
+    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and neighbouring
+    coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2), so
+    stretches without attitude information (free fall) keep the gyro attitude; each bias
+    component ~ N(0, ``sigma_ba``^2), the preset's turn-on accelerometer bias.
     """
 
-    def __init__(self, t, p):
+    def __init__(self, t, p, sigma_ba):
         k = 3
         n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
+        n_int = min(n_int, MAX_CORRECTION_INTERVALS)
         inner = np.linspace(t[0], t[-1], n_int + 1)
         knots = np.r_[np.full(k, t[0]), inner, np.full(k, t[-1])]
         x = np.minimum(t, np.nextafter(t[-1], -np.inf))
-        self.beta = BSpline.design_matrix(x, knots, k).toarray()   # (N, n_c)
+        self.beta = sp.csr_array(BSpline.design_matrix(x, knots, k))   # (N, n_c), sparse
         n_c = self.beta.shape[1]
         step = (t[-1] - t[0]) / n_int
         D = np.diff(np.eye(n_c), axis=0)
         per_axis = (np.eye(n_c) / (p["attitude_prior_deg"] * DEG) ** 2
                     + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
-        self.prior = np.kron(np.eye(3), per_axis)       # unknowns ordered (axis j, coef i)
+        # unknowns ordered (axis j, coef i) for eps, then the three bias components
+        n_b = 3 if sigma_ba > 0 else 0                  # no bias unknowns without a prior
+        self.prior = np.zeros((3 * n_c + n_b, 3 * n_c + n_b))
+        self.prior[:3 * n_c, :3 * n_c] = np.kron(np.eye(3), per_axis)
+        if n_b:
+            self.prior[3 * n_c:, 3 * n_c:] = np.eye(3) / sigma_ba**2
         self.n_c = n_c
-        self.total = np.zeros(3 * n_c)                   # sum of the increments applied
+        self.total = np.zeros(3 * n_c + n_b)             # sum of the increments applied
 
-    def columns(self, f_e):
-        """``G[a, k, (j, i)] = beta_i(t_k) (e_j x f_e(t_k))_a``."""
-        out = np.empty((3, f_e.shape[0], 3 * self.n_c))
-        for j in range(3):
-            e_j = np.zeros(3)
-            e_j[j] = 1.0
-            cross = np.cross(e_j, f_e)                   # (N, 3)
-            for a in range(3):
-                out[a, :, j * self.n_c:(j + 1) * self.n_c] = self.beta * cross[:, a:a + 1]
+    @property
+    def bias(self):
+        """Accumulated accelerometer bias estimate (body axes, m/s^2)."""
+        return self.total[3 * self.n_c:] if self.total.size > 3 * self.n_c else np.zeros(3)
+
+    def columns(self, f_e, C):
+        """Sparse ``G[a]`` (N, n_u) for the axes a: ``beta_i(t_k) (e_j x f_e(t_k))_a`` for
+        ``eps`` and ``-C_b_e[k, a, j]`` for the bias."""
+        out = []
+        for a in range(3):
+            blocks = []
+            for j in range(3):
+                e_j = np.zeros(3)
+                e_j[j] = 1.0
+                cross = np.cross(e_j, f_e)[:, a]          # (N,)
+                blocks.append(sp.diags_array(cross) @ self.beta)
+            if self.total.size > 3 * self.n_c:
+                blocks.append(sp.csr_array(-C[:, a, :]))
+            out.append(sp.csr_array(sp.hstack(blocks)))
         return out
 
     def evaluate(self, e):
         return np.column_stack([self.beta @ e[j * self.n_c:(j + 1) * self.n_c]
                                 for j in range(3)])
+
+
+def _gyro_drift_deg_s(preset):
+    """Default ``attitude_drift_deg_s``: how fast an uncorrected gyro bias turns the
+    attitude, the preset's turn-on gyro bias (at least 0.01 deg/s); 0.01 without a preset."""
+    if preset is None:
+        return 0.01
+    from navlib.models.ecef import parameter_sigmas
+
+    if not isinstance(preset, str):
+        raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
+    return max(0.01, float(parameter_sigmas(preset)["sigma_bg_deg_s"]))
+
+
+def _accel_bias_sigma(p):
+    """Prior sigma of the fit's accelerometer bias, m/s^2: ``sigma_accel_bias_mps2``, else
+    the turn-on value of the named ``preset``, else 0 (no bias estimated)."""
+    from navlib.models.ecef import parameter_sigmas
+
+    if p["sigma_accel_bias_mps2"] is not None:
+        return p["sigma_accel_bias_mps2"]
+    if p["preset"] is None:
+        return 0.0
+    return float(parameter_sigmas(p["preset"])["sigma_ba_m_s2"])
 
 
 def _rms(x):

@@ -1,0 +1,137 @@
+"""Long-flight assessment in bounded memory (issue 12).
+
+``assess.long_flight_<N>s``: :func:`navlib.studies.assess.assess_flight` of a generated
+multicopter flight (``tests/flights.py``: pad, climb, figure-eight survey) of N seconds at
+250 Hz with 5 Hz GNSS and the ``pixhawk_mems`` errors. The flight is generated and saved by
+one subprocess; a fresh subprocess loads it and assesses it, and reports its wall time and
+its peak resident memory (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, measured, not
+estimated; the loaded records are inside it). Goals: 30 minutes under 60 s and 2 GB.
+
+``assess.model_step_error``: what the 50 Hz model steps of the assessment
+(``MODEL_STEP_S``) change in the discretised 21-state model of the sounding rocket at 1 Hz
+(largest relative difference of ``F`` and of each epoch's ``Q`` against every-IMU-step).
+
+Run alone (``python benchmarks/bench_assess.py [seconds ...]``) for the table with memory.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _harness import Case
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+GOAL_S = {1800: 60.0}
+GOAL_MB = 2048.0
+
+_GENERATE = """
+import sys, numpy as np
+sys.path.insert(0, {tests!r})
+from flights import multicopter, records
+imu, gnss = records(multicopter({duration}, 250.0, pad_s=20.0), seed=1)
+np.savez({path!r}, imu=imu.to_numpy(), gnss=gnss.to_numpy(),
+         imu_cols=list(imu.columns), gnss_cols=list(gnss.columns))
+"""
+
+_ASSESS = """
+import json, resource, time, warnings
+import numpy as np, pandas as pd
+from navlib.studies.assess import assess_flight
+d = np.load({path!r})
+imu = pd.DataFrame(d["imu"], columns=[str(c) for c in d["imu_cols"]])
+gnss = pd.DataFrame(d["gnss"], columns=[str(c) for c in d["gnss_cols"]])
+start = time.perf_counter()
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    result = assess_flight(imu, gnss, preset="pixhawk_mems")
+elapsed = time.perf_counter() - start
+peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps({{"time_s": elapsed, "peak_mb": peak_kb / 1024.0, "samples": len(imu),
+                  "segments": len(result.segment_table), "epochs": int(result.model.t.size)}}))
+"""
+
+
+def measure(duration_s: float) -> dict:
+    """Generate, then assess in a fresh process; wall time and peak memory of the latter."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = str(Path(tmp) / "flight.npz")
+        subprocess.run([sys.executable, "-c", _GENERATE.format(
+            tests=str(ROOT / "tests"), duration=float(duration_s), path=path)],
+            check=True, timeout=1800)
+        out = subprocess.run([sys.executable, "-c", _ASSESS.format(path=path)], check=True,
+                             capture_output=True, text=True, timeout=1800)
+    row = json.loads(out.stdout.strip().splitlines()[-1])
+    row["duration_s"] = duration_s
+    row["mb_per_flight_s"] = row["peak_mb"] / duration_s
+    return row
+
+
+def model_step_error() -> dict:
+    """Relative change of F and Q (1 Hz epochs, sounding rocket) with 50 Hz model steps."""
+    import numpy as np
+
+    from navlib.models.ecef import ecef21_at_epochs
+    from navlib.studies.assess import MODEL_STEP_S
+    from navlib.trajectory import sounding_rocket
+
+    traj = sounding_rocket()
+    full = ecef21_at_epochs(traj, 1.0)
+    coarse = ecef21_at_epochs(traj, 1.0, max_step_s=MODEL_STEP_S)
+    dF = np.abs(coarse.F - full.F).max() / np.abs(full.F).max()
+    dQ = (np.abs(coarse.Q - full.Q).max(axis=(1, 2)) / np.abs(full.Q).max(axis=(1, 2))).max()
+    return {"F_rel": float(dF), "Q_rel": float(dQ)}
+
+
+def _long_case(duration_s: int) -> Case:
+    seen = {}
+
+    def run():
+        seen.update(measure(duration_s))
+
+    def extra(_elapsed):
+        return {"assess_s": seen["time_s"], "peak_mb": seen["peak_mb"],
+                "mem_ratio": seen["peak_mb"] / GOAL_MB}
+
+    return Case(f"assess.long_flight_{duration_s}s", f"{duration_s} s at 250 Hz", run,
+                GOAL_S.get(duration_s, duration_s / 30.0), repeat=1, warmup=False,
+                extra=extra, notes="time_s includes generating the flight")
+
+
+def cases():
+    return [_long_case(1800),
+            Case("assess.model_step_error", "rocket, 1 Hz epochs", model_step_error, 5.0,
+                 repeat=1, warmup=False, extra=lambda _e: model_step_error())]
+
+
+def main(argv: list[str]) -> int:
+    import pandas as pd
+
+    durations = [float(a) for a in argv] or [60.0, 600.0, 1800.0]
+    rows = []
+    for d in durations:
+        t0 = time.perf_counter()
+        row = measure(d)
+        row["total_s"] = time.perf_counter() - t0
+        row["goal_s"] = GOAL_S.get(int(d), float("nan"))
+        row["goal_mb"] = GOAL_MB
+        rows.append(row)
+        print(f"{d:.0f} s flight: assessed in {row['time_s']:.1f} s, peak "
+              f"{row['peak_mb']:.0f} MB", file=sys.stderr, flush=True)
+    table = pd.DataFrame(rows)[["duration_s", "samples", "epochs", "segments", "time_s",
+                                "goal_s", "peak_mb", "goal_mb", "mb_per_flight_s",
+                                "total_s"]]
+    with pd.option_context("display.width", 200, "display.float_format", "{:.4g}".format):
+        print(table.to_string(index=False))
+        print("model steps of", model_step_error())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(HERE))
+    raise SystemExit(main(sys.argv[1:]))

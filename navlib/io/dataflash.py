@@ -1,0 +1,265 @@
+"""ArduPilot DataFlash (``.bin``) import through ``pymavlink``: IMU, GPS and ATT messages.
+
+A DataFlash log is a stream of self-describing binary records: ``FMT`` records declare each
+message type (name, field formats, column names), data records follow.
+:func:`read_dataflash` reads them with ``pymavlink.DFReader.DFReader_binary``.
+
+Messages and layouts
+--------------------
+* ``IMU``: ``TimeUS`` (us since boot), ``GyrX/Y/Z`` (rad/s), ``AccX/Y/Z`` (m/s^2, specific
+  force), body frame FRD (x forward, y right, z down). ArduPilot 4.x logs every IMU as
+  ``IMU`` with an instance column ``I``; 3.x logs use ``IMU``, ``IMU2``, ``IMU3`` without
+  one. Both are read; ``imu_instance`` picks one (default: the instance with most samples,
+  the lowest on a tie).
+* ``GPS``: ``Status`` (3: 3-D fix and better, kept from ``min_fix_type``), ``Lat``/``Lng``
+  (deg), ``Alt`` (m above mean sea level: DataFlash logs no ellipsoidal height, so the
+  positions are off by the geoid undulation, up to ~100 m; a constant offset the
+  assessment does not depend on), ``Spd`` (ground speed, m/s), ``GCrs`` (course over
+  ground, deg), ``VZ`` (vertical speed, m/s, down positive), giving the NED velocity
+  ``(Spd cos GCrs, Spd sin GCrs, VZ)``. Layouts: ``GPS`` with ``I`` (4.x) or ``GPS``/``GPS2``.
+* ``ATT``: ``Roll``, ``Pitch``, ``Yaw`` (deg), the autopilot's attitude estimate, body (FRD)
+  to NED as ``Rz(yaw) Ry(pitch) Rx(roll)``; attached as ``imu.attrs["attitude"]``, from
+  which the flight fit takes its initial attitude.
+
+The body frame is FRD by default, as in :mod:`navlib.io.ulog` (``body_frame`` changes it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import warnings
+
+import numpy as np
+import pandas as pd
+from scipy.spatial.transform import Rotation
+
+from navlib import units
+from navlib._validation import finite_scalar
+from navlib.earth import geodetic_to_ecef, ned_to_ecef_matrix
+from navlib.errors import NavlibInputError
+from navlib.io._table import Column, Source, check_finite, existing_file
+from navlib.io.checks import (
+    MAX_OUTLIER_FRACTION,
+    ON_GAP,
+    RATE_MAX_RAD_S,
+    SAMPLE_ACCEL_MAX,
+    FlightDataWarning,
+    apply_gap_policy,
+    check_overlap,
+    check_positions,
+    check_sample_interval,
+    check_times,
+    check_velocities,
+    validated_imu,
+)
+from navlib.io.csv_files import R_KEYS, V_KEYS
+from navlib.io.ulog import body_rotation
+
+_IMU_FIELDS = ("GyrX", "GyrY", "GyrZ", "AccX", "AccY", "AccZ")
+_GPS_FIELDS = ("Lat", "Lng", "Alt")
+_TYPES = ("IMU", "IMU2", "IMU3", "GPS", "GPS2", "ATT", "MSG")
+_VEHICLES = ("ArduCopter", "ArduPlane", "ArduRover", "ArduSub", "Blimp", "AntennaTracker")
+
+
+def _load(path) -> dict[str, dict]:
+    """Columns of the messages of interest: ``{(type, instance): {field: ndarray}}``."""
+    from pymavlink import DFReader
+
+    p, label = existing_file(path)
+    if p.stat().st_size == 0:
+        raise NavlibInputError(f"{label}: file is empty")
+    rows: dict = {}
+    messages = []
+    sink = io.StringIO()
+    try:
+        # pymavlink prints notices on odd bytes; a library must not print, so catch them
+        with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+            log = DFReader.DFReader_binary(str(p))
+            while True:
+                m = log.recv_match(type=list(_TYPES))
+                if m is None:
+                    break
+                kind = m.get_type()
+                data = m.to_dict()
+                if kind == "MSG":
+                    messages.append(str(data.get("Message", "")))
+                    continue
+                base = kind.rstrip("23")
+                inst = int(data["I"]) if "I" in data else (int(kind[-1]) - 1 if kind[-1] in "23"
+                                                            else 0)
+                rows.setdefault((base, inst), []).append(data)
+    except Exception as exc:  # pymavlink raises several types on foreign or broken files
+        raise NavlibInputError(f"{label}: not a readable ArduPilot DataFlash log ({exc})"
+                               ) from exc
+    if "Skipped" in sink.getvalue():
+        warnings.warn(f"{label}: pymavlink skipped bad bytes; data may be incomplete",
+                      FlightDataWarning, stacklevel=3)
+    columns = {key: {f: np.array([r.get(f, np.nan) for r in rs]) for f in rs[0]}
+               for key, rs in rows.items()}
+    return columns, messages, label
+
+
+def _pick(columns, kind: str, instance, label: str, fields, found_types) -> tuple[int, dict]:
+    candidates = {inst: c for (k, inst), c in columns.items() if k == kind}
+    if not candidates:
+        raise NavlibInputError(f"{label}: no '{kind}' messages in the log; message types of "
+                               f"interest found: {found_types}")
+    if instance is None:
+        instance = max(sorted(candidates), key=lambda i: candidates[i]["TimeUS"].size)
+    elif instance not in candidates:
+        raise NavlibInputError(f"{label}: no '{kind}' instance {instance}; instances are "
+                               f"{sorted(candidates)}")
+    data = candidates[instance]
+    missing = [f for f in ("TimeUS", *fields) if f not in data]
+    if missing:
+        raise NavlibInputError(f"{label}, message '{kind}' instance {instance}: missing "
+                               f"field(s) {missing}; fields are {sorted(data)}")
+    return instance, data
+
+
+def _hardware(messages) -> str:
+    for text in messages:
+        if text.startswith(_VEHICLES):
+            return text
+    return ""
+
+
+def read_dataflash(path, *, body_frame="frd", imu_instance: int | None = None,
+                   gps_instance: int | None = None, min_fix_type: int = 3,
+                   imu_max_gap_s: float | None = None, gnss_max_gap_s: float | None = None,
+                   on_gap: str = "warn", check_magnitudes: bool = True,
+                   max_rate_rad_s: float = RATE_MAX_RAD_S,
+                   max_accel_m_s2: float = SAMPLE_ACCEL_MAX,
+                   max_outlier_fraction: float = MAX_OUTLIER_FRACTION,
+                   require_overlap: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Read the IMU and GNSS records of an ArduPilot DataFlash log (via ``pymavlink``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.bin`` file.
+    body_frame : {"frd", "flu"} or (3, 3) array
+        The navlib body frame relative to ArduPilot's FRD axes, as ``C_b_frd``
+        (:func:`navlib.io.ulog.body_rotation`).
+    imu_instance, gps_instance : int, optional
+        IMU / GPS instance (0-based: ``I`` column, or ``IMU2`` = 1). None: the instance with
+        most messages.
+    min_fix_type : int
+        Smallest accepted GPS ``Status`` (3: 3-D fix); other fixes are dropped.
+    imu_max_gap_s, gnss_max_gap_s, on_gap, check_magnitudes, max_rate_rad_s, \
+max_accel_m_s2, max_outlier_fraction, require_overlap
+        As in :func:`~navlib.io.read_ulog`.
+
+    Returns
+    -------
+    imu, gnss : DataFrame
+        The columns of :func:`~navlib.io.read_ulog` (``gnss``: ``t, x, y, z, vx, vy, vz``;
+        ``t`` in s from the earlier of the first IMU and first kept GPS ``TimeUS``, which is
+        ``attrs["t0_us"]``). ``imu.attrs``: ``source``, ``message``, ``instance``,
+        ``body_frame``, ``gaps``, ``outliers``, ``autopilot`` (``"ardupilot"``),
+        ``hardware`` (the firmware banner, e.g. ``ArduCopter V4.5.0``), ``attitude`` (``ATT``
+        as ``t, qw, qx, qy, qz``, navlib body -> NED, or None). ``gnss.attrs``: ``source``,
+        ``instance``, ``altitude_reference`` (``"msl"``), ``dropped_no_fix``, ``gaps``.
+
+    Raises
+    ------
+    NavlibInputError
+        Missing, empty or foreign file; no IMU or GPS messages or a missing field; no fix;
+        NaN/inf values, duplicate or decreasing time stamps, gaps with ``on_gap="raise"``,
+        implausible magnitudes, non-overlapping IMU and GNSS spans (naming message, field
+        and message index).
+    """
+    if on_gap not in ON_GAP:
+        raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
+    for name, value in (("imu_max_gap_s", imu_max_gap_s), ("gnss_max_gap_s", gnss_max_gap_s)):
+        if value is not None:
+            finite_scalar(value, name, 0.0, low_open=True)
+    limits = {"max_rate_rad_s": finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0,
+                                              low_open=True),
+              "max_accel_m_s2": finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0,
+                                              low_open=True),
+              "max_fraction": finite_scalar(max_outlier_fraction, "max_outlier_fraction",
+                                            0.0, 1.0)}
+    C_b_frd = body_rotation(body_frame)
+    columns, messages, label = _load(path)
+    found = sorted({k for k, _ in columns})
+    i_imu, d_imu = _pick(columns, "IMU", imu_instance, label, _IMU_FIELDS, found)
+    i_gps, d_gps = _pick(columns, "GPS", gps_instance, label, _GPS_FIELDS, found)
+
+    status = d_gps.get("Status", np.full(d_gps["TimeUS"].size, 3))
+    idx = np.flatnonzero(status >= min_fix_type)
+    if idx.size < 2:
+        raise NavlibInputError(f"{label}: no usable GPS data (message 'GPS' instance {i_gps}: "
+                               f"{status.size} messages, {idx.size} with Status >= "
+                               f"{min_fix_type}); need at least 2 fixes")
+    ts_imu = d_imu["TimeUS"].astype(np.int64)
+    ts_gps = d_gps["TimeUS"].astype(np.int64)[idx]
+    t0 = int(min(ts_imu[0], ts_gps[0]))
+
+    imu_label = f"{label}, message 'IMU' instance {i_imu}"
+    src = Source(imu_label, np.arange(ts_imu.size), row_word="message")
+    raw = {k: d_imu[k].astype(float) for k in _IMU_FIELDS}
+    check_finite(raw, {k: Column(k, k, None) for k in raw}, src)
+    f_b = np.column_stack([raw[k] for k in _IMU_FIELDS[3:]]) @ C_b_frd.T
+    w_ib_b = np.column_stack([raw[k] for k in _IMU_FIELDS[:3]]) @ C_b_frd.T
+    imu, src = validated_imu(
+        (ts_imu - t0) * units.MICROSECOND, f_b, w_ib_b, src, "'TimeUS'", "'AccX/AccY/AccZ'",
+        "'GyrX/GyrY/GyrZ'", check_magnitudes=check_magnitudes, limits=limits,
+        rate_hint="; ArduPilot logs GyrX/Y/Z in rad/s, so a vehicle this fast needs a larger "
+                  "max_rate_rad_s (or check_magnitudes=False)")
+    imu.attrs.update(source=str(path), message="IMU", instance=i_imu, t0_us=t0,
+                     body_frame=body_frame if isinstance(body_frame, str) else "custom",
+                     autopilot="ardupilot", hardware=_hardware(messages),
+                     attitude=_attitude(columns, t0, C_b_frd))
+    imu = apply_gap_policy(imu, src, "'TimeUS'", imu_max_gap_s, on_gap)
+
+    gnss, src_gps = _gnss_frame(d_gps, f"{label}, message 'GPS' instance {i_gps}", idx,
+                                (ts_gps - t0) * units.MICROSECOND, check_magnitudes)
+    gnss.attrs.update(source=str(path), instance=i_gps, t0_us=t0, altitude_reference="msl",
+                      dropped_no_fix=int(status.size - idx.size))
+    gnss = apply_gap_policy(gnss, src_gps, "'TimeUS'", gnss_max_gap_s, on_gap)
+    if require_overlap:
+        check_overlap(imu, gnss)
+    return imu, gnss
+
+
+def _gnss_frame(d, label, idx, t, check_magnitudes):
+    src = Source(label, idx, row_word="message")
+    lat, lon, alt = (d[k][idx].astype(float) for k in _GPS_FIELDS)
+    check_finite({"Lat": lat, "Lng": lon, "Alt": alt},
+                 {k: Column(k, k, None) for k in _GPS_FIELDS}, src)
+    check_times(t, src, "'TimeUS'")
+    check_sample_interval(t, src, "'TimeUS'", "gnss", 1.0)
+    lat, lon = units.deg2rad(lat), units.deg2rad(lon)
+    r_e = geodetic_to_ecef(lat, lon, alt)
+    if check_magnitudes:
+        check_positions(r_e, src, "'Lat/Lng/Alt'")
+    out = {"t": t, **dict(zip(R_KEYS, r_e.T, strict=True))}
+    if all(k in d for k in ("Spd", "GCrs", "VZ")):
+        spd, crs, vz = (d[k][idx].astype(float) for k in ("Spd", "GCrs", "VZ"))
+        check_finite({"Spd": spd, "GCrs": crs, "VZ": vz},
+                     {k: Column(k, k, None) for k in ("Spd", "GCrs", "VZ")}, src)
+        crs = units.deg2rad(crs)
+        v_n = np.column_stack([spd * np.cos(crs), spd * np.sin(crs), vz])
+        v_e = np.einsum("kij,kj->ki", ned_to_ecef_matrix(lat, lon), v_n)
+        if check_magnitudes:
+            check_velocities(v_e, src, "'Spd/GCrs/VZ'")
+        out.update(zip(V_KEYS, v_e.T, strict=True))
+    return pd.DataFrame(out), src
+
+
+def _attitude(columns, t0: int, C_b_frd: np.ndarray) -> pd.DataFrame | None:
+    """``ATT`` Roll/Pitch/Yaw (deg, FRD -> NED) as navlib body -> NED quaternions."""
+    data = columns.get(("ATT", 0))
+    if data is None or not all(k in data for k in ("TimeUS", "Roll", "Pitch", "Yaw")):
+        return None
+    angles = np.column_stack([data[k].astype(float) for k in ("Yaw", "Pitch", "Roll")])
+    ok = np.all(np.isfinite(angles), axis=1)
+    if not ok.any():
+        return None
+    C_b_n = (Rotation.from_euler("ZYX", angles[ok], degrees=True)
+             * Rotation.from_matrix(C_b_frd.T))
+    x, y, z, w = C_b_n.as_quat().T
+    t = (data["TimeUS"].astype(np.int64)[ok] - t0) * units.MICROSECOND
+    return pd.DataFrame({"t": t, "qw": w, "qx": x, "qy": y, "qz": z})

@@ -1,0 +1,176 @@
+"""navlib.io.read_dataflash: ArduPilot .bin logs, generated here and the public ones."""
+
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from dataflash_writer import write_flight
+from flights import multicopter, records
+from scipy.spatial.transform import Rotation
+
+from navlib import NavlibInputError, earth, io
+from navlib.studies.assess import assess_flight
+
+AP_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "ardupilot"
+if not AP_DIR.is_dir():
+    AP_DIR = Path("/work/shared/data/ardupilot")
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _public(name):
+    path = AP_DIR / name
+    if not path.is_file():
+        pytest.skip(f"ArduPilot sample log not found: {path}")
+    return path
+
+
+@pytest.fixture(scope="module")
+def flight():
+    truth = multicopter(24.0, 50.0, pad_s=6.0)
+    imu, gnss = records(truth, seed=5)
+    lat, lon, alt = truth.geodetic
+    g = truth.at_rate(5.0)
+    v_n = np.einsum("kji,kj->ki", earth.ned_to_ecef_matrix(lat[g], lon[g]), truth.velocity[g])
+    geo = pd.DataFrame({"t": truth.t[g], "lat_deg": np.degrees(lat[g]),
+                        "lon_deg": np.degrees(lon[g]), "alt_m": alt[g], "vn": v_n[:, 0],
+                        "ve": v_n[:, 1], "vd": v_n[:, 2]})
+    C_n_e = earth.ned_to_ecef_matrix(lat[0], lon[0])
+    ypr = Rotation.from_matrix(C_n_e.T @ truth.C_b_e()[::5]).as_euler("ZYX", degrees=True)
+    att = pd.DataFrame({"t": truth.t[::5], "yaw_deg": ypr[:, 0], "pitch_deg": ypr[:, 1],
+                        "roll_deg": ypr[:, 2]})
+    return truth, imu, gnss, geo, att
+
+
+@pytest.fixture(scope="module")
+def bin4(flight, tmp_path_factory):
+    _, imu, _, geo, att = flight
+    path = tmp_path_factory.mktemp("df") / "flight4.bin"
+    write_flight(path, imu, geo, att, layout="4.x", imu_instances=(0, 1))
+    return path
+
+
+def test_generated_log_round_trip(flight, bin4):
+    truth, imu_in, _, geo, _ = flight
+    imu, gnss = io.read_dataflash(bin4)
+    assert len(imu) == len(imu_in) and len(gnss) == len(geo)
+    np.testing.assert_allclose(imu["t"], imu_in["t"] - imu_in["t"][0], atol=1e-6)
+    for col in ("f_x", "f_y", "f_z", "w_x", "w_y", "w_z"):
+        np.testing.assert_allclose(imu[col], imu_in[col], rtol=1e-6, atol=1e-6)
+    r = earth.geodetic_to_ecef(np.radians(geo["lat_deg"]), np.radians(geo["lon_deg"]),
+                               geo["alt_m"])
+    assert np.abs(gnss[["x", "y", "z"]].to_numpy() - r).max() < 0.02   # 1e-7 deg, cm
+    g = truth.at_rate(5.0)
+    assert np.abs(gnss[["vx", "vy", "vz"]].to_numpy() - truth.velocity[g]).max() < 1e-3
+    assert imu.attrs["autopilot"] == "ardupilot"
+    assert imu.attrs["hardware"].startswith("ArduCopter V4.5.0")
+    assert imu.attrs["instance"] == 0 and gnss.attrs["altitude_reference"] == "msl"
+    att = imu.attrs["attitude"]
+    C_n_e = earth.ned_to_ecef_matrix(*truth.geodetic[0][:1], *truth.geodetic[1][:1])
+    q = Rotation.from_quat(att[["qx", "qy", "qz", "qw"]].to_numpy()[:1])
+    err = (Rotation.from_matrix(C_n_e) * q).inv() * truth.attitude[:1]
+    assert np.degrees(err.magnitude()[0]) < 1e-3
+
+
+def test_instances_of_both_layouts(flight, tmp_path, bin4):
+    _, imu_in, _, geo, _ = flight
+    imu1, _ = io.read_dataflash(bin4, imu_instance=1)
+    np.testing.assert_allclose(imu1["w_x"], imu_in["w_x"] + 1e-3, atol=1e-6)
+    path = tmp_path / "flight3.bin"
+    write_flight(path, imu_in, geo, layout="3.x", imu_instances=(0, 1))
+    imu, _ = io.read_dataflash(path)
+    assert imu.attrs["instance"] == 0 and imu.attrs["attitude"] is None
+    imu2, _ = io.read_dataflash(path, imu_instance=1)
+    np.testing.assert_allclose(imu2["w_x"], imu_in["w_x"] + 1e-3, atol=1e-6)
+    with pytest.raises(NavlibInputError, match=r"no 'IMU' instance 2; instances are \[0, 1\]"):
+        io.read_dataflash(path, imu_instance=2)
+
+
+def test_generated_log_is_assessed(bin4, flight):
+    imu, gnss = io.read_dataflash(bin4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = assess_flight(imu, gnss)
+    assert result.options["preset"] == "pixhawk_mems"
+    assert result.options["attitude_source"] == "log"
+    assert result.segment_table["phase"].iloc[0] == "rest"
+
+
+@pytest.mark.parametrize("content, match", [
+    (b"", "file is empty"),
+    (b"time,ax\n0,1\n" * 50, "no 'IMU' messages"),
+])
+def test_bad_files(tmp_path, content, match):
+    path = tmp_path / "bad.bin"
+    path.write_bytes(content)
+    with pytest.raises(NavlibInputError, match=match):
+        io.read_dataflash(path)
+
+
+def test_missing_file_and_no_fix(tmp_path, flight):
+    with pytest.raises(NavlibInputError, match=r"does not exist|not found|no such"):
+        io.read_dataflash(tmp_path / "absent.bin")
+    _, imu, _, geo, _ = flight
+    path = tmp_path / "nofix.bin"
+    write_flight(path, imu, geo, gps_status=1)
+    with pytest.raises(NavlibInputError, match=r"no usable GPS data .* 0 with Status >= 3"):
+        io.read_dataflash(path)
+
+
+def test_glitch_in_dataflash_is_excluded(tmp_path, flight):
+    _, imu, _, geo, _ = flight
+    bad = imu.copy()
+    bad.loc[300, "w_z"] = 49.0
+    path = tmp_path / "glitch.bin"
+    write_flight(path, bad, geo)
+    with pytest.warns(io.FlightDataWarning, match="1 non-physical IMU sample.*message 300"):
+        read, _ = io.read_dataflash(path)
+    assert read.attrs["outliers"][0]["value"] == pytest.approx(49.0, rel=1e-3)
+    assert len(read) == len(imu) - 1
+
+
+# --------------------------------------------------------------------------- public logs
+
+
+def test_public_sitl_copter_log_is_read_and_assessed():
+    path = _public("sitl_copter_flight.bin")
+    imu, gnss = io.read_dataflash(path)
+    assert 1.0 / np.median(np.diff(imu["t"])) == pytest.approx(25.0, rel=0.01)
+    assert imu.attrs["hardware"].startswith("ArduCopter V4.7")
+    assert len(gnss) > 200 and {"vx", "vy", "vz"} <= set(gnss.columns)
+    assert imu.attrs["attitude"] is not None and len(imu.attrs["attitude"]) > 500
+    imu1, _ = io.read_dataflash(path, imu_instance=1)
+    assert len(imu1) == len(imu)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = assess_flight(imu, gnss)
+    assert result.options["preset"] == "pixhawk_mems"
+    assert result.options["attitude_source"] == "log"
+    assert len(result.segment_table) >= 2
+    assert set(result.segment_table["phase"]) - {"rest"}
+
+
+def test_public_pymavlink_fixture_3x_layout():
+    path = _public("pymavlink_test.bin")
+    imu, gnss = io.read_dataflash(path, require_overlap=False)
+    imu2, _ = io.read_dataflash(path, imu_instance=1, require_overlap=False)
+    assert imu.attrs["hardware"].startswith("ArduPlane V3.8")
+    assert len(imu) == len(imu2) > 20 and len(gnss) >= 2
+    assert not np.allclose(imu["w_x"], imu2["w_x"])
+    r = np.linalg.norm(gnss[["x", "y", "z"]].to_numpy(), axis=1)
+    assert np.all((r > 6.3e6) & (r < 6.4e6))
+
+
+@pytest.mark.notebook
+def test_notebook_runs_on_a_dataflash_log(bin4, tmp_path):
+    done = subprocess.run(
+        [sys.executable, "-m", "navlib", "report", "--quick", "--only", "07_assess_flight",
+         "-p", "bin_path", str(bin4), "-p", "read_options", '{"imu_instance": 1}',
+         "-p", "fit_options", '{"max_bridge_s": 2}', "--output", str(tmp_path / "rep")],
+        capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert done.returncode == 0, done.stdout + done.stderr
+    html = (tmp_path / "rep" / "07_assess_flight.html").read_text()
+    assert "pixhawk_mems" in html and "autopilot" in html
