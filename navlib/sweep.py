@@ -615,8 +615,12 @@ def _parts_dir(output: Path) -> Path:
 
 
 def _metadata(evaluate, columns) -> dict:
-    name = evaluate if isinstance(evaluate, str) else \
-        f"{getattr(evaluate, '__module__', '?')}.{getattr(evaluate, '__qualname__', '?')}"
+    if isinstance(evaluate, str):
+        name = evaluate
+    else:
+        func = getattr(evaluate, "func", evaluate)  # functools.partial
+        qual = getattr(func, "__qualname__", None) or type(func).__qualname__
+        name = f"{getattr(func, '__module__', '?')}.{qual}"
     return {"evaluate": name, "parameters": list(columns)}
 
 
