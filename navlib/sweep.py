@@ -35,7 +35,8 @@ builds it at most once. Callables keep their own caches (``functools.cache`` in 
 process); points reach them in grid order, batched.
 
 :func:`map_tasks` is the same engine for the existing heavy loops (Table 2, the rocket
-sensitivity sweep), which accept ``scheduler=`` and keep their local default.
+sensitivity sweep) and :func:`monte_carlo_linear` for the linear Monte Carlo, which accept
+``scheduler=`` and keep their local default.
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 
 __all__ = ["EVALUATIONS", "SCHEDULER_ENV", "Evaluation", "executor", "grid_points",
-           "map_tasks", "sweep"]
+           "map_tasks", "monte_carlo_linear", "sweep"]
 
 SCHEDULER_ENV = "NAVLIB_SCHEDULER"
 """Environment variable naming the default scheduler (an address or a keyword)."""
@@ -186,6 +187,74 @@ def map_tasks(func: Callable, items: Sequence, scheduler=None, *, shared: Mappin
         finally:
             client.cancel(futures)
         return out
+
+
+# --------------------------------------------------------------------------- Monte Carlo
+
+_PREPARE_KEYS = ("method", "update_every", "measured", "P0", "noise_input", "noise_names")
+_FILTERS: dict = {}
+"""This process's prepared filter: ``{id(model): (model, LinearFilter)}`` (one kept)."""
+
+
+def _prepared_filter(model, options: dict):
+    from navlib.filters import prepare_linear
+
+    key = (id(model), repr(sorted((k, repr(v)) for k, v in options.items())))
+    hit = _FILTERS.get(key)
+    if hit is None or hit[0] is not model:
+        _FILTERS.clear()
+        hit = (model, prepare_linear(model, **options))
+        _FILTERS[key] = hit
+    return hit[1]
+
+
+def _monte_carlo_chunk(chunk: tuple, model, prepare: dict, simulate: dict):
+    from navlib.filters import simulate_linear
+
+    seed, runs = chunk
+    return simulate_linear(_prepared_filter(model, prepare), runs=runs, seed=seed, **simulate)
+
+
+def monte_carlo_linear(model, *, runs: int, seed=None, runs_per_task: int = 25,
+                       scheduler=None, record_every: int | None = None,
+                       progress: bool = False, **options):
+    """:func:`navlib.filters.simulate_linear` with the runs split over Dask tasks.
+
+    The runs are cut into chunks of ``runs_per_task``; chunk ``i`` draws from the child
+    ``i`` of ``numpy.random.SeedSequence(seed)`` (so the result depends on ``seed`` and
+    ``runs_per_task``, never on the scheduler or the number of workers, but it is another
+    random stream than one ``simulate_linear(model, runs=runs, seed=seed)`` batch). The model
+    is scattered once to each worker, which discretises it and runs the covariance
+    recursion once (:func:`navlib.filters.prepare_linear`) for all its chunks. The chunks'
+    runs are joined on the run axis in order.
+
+    ``options``: the other keywords of ``simulate_linear`` (``outliers``, ``noise``,
+    ``method``, ``update_every``...); ``record_every`` defaults to the value
+    ``simulate_linear`` picks for all ``runs`` at once.
+    """
+    from navlib._validation import finite_scalar
+    from navlib.filters import _MEMORY_BUDGET
+
+    runs = int(finite_scalar(runs, "runs", low=1))
+    per_task = int(finite_scalar(runs_per_task, "runs_per_task", low=1))
+    if "rng" in options:
+        raise NavlibInputError("rng: a split Monte Carlo draws from seed (SeedSequence)")
+    reject_unknown(options, (*_PREPARE_KEYS, "outliers", "noise", "initial_error"),
+                   "monte_carlo_linear")
+    if record_every is None:
+        n_epochs, n = np.asarray(model.t).size, len(model.state_names)
+        record_every = max(1, int(np.ceil(n_epochs * 2 * 8 * runs * n / _MEMORY_BUDGET)))
+    sizes = [min(per_task, runs - i) for i in range(0, runs, per_task)]
+    seeds = np.random.SeedSequence(seed).spawn(len(sizes))
+    prepare = {k: v for k, v in options.items() if k in _PREPARE_KEYS}
+    simulate = {k: v for k, v in options.items() if k not in _PREPARE_KEYS}
+    simulate["record_every"] = record_every
+    parts = map_tasks(_monte_carlo_chunk, list(zip(seeds, sizes, strict=True)), scheduler,
+                      shared={"model": model, "prepare": prepare, "simulate": simulate},
+                      progress=progress, desc="Monte Carlo")
+    first = parts[0]
+    return replace(first, **{name: np.concatenate([getattr(p, name) for p in parts], axis=1)
+                             for name in ("truth", "estimate", "nees", "nis", "innovation")})
 
 
 # --------------------------------------------------------------------------- grid

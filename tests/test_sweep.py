@@ -214,3 +214,44 @@ def test_output_of_another_sweep_is_refused(tmp_path):
     with pytest.raises(NavlibInputError, match="not a readable Parquet"):
         sweep.sweep(GRID, _quadratic, scheduler="synchronous",
                     output=tmp_path / "junk.parquet")
+
+
+# --------------------------------------------------------------------------- study hooks
+
+
+def test_table2_on_the_cluster_equals_local(client):
+    from navlib.studies.launcher import table2
+
+    traj = launcher_ascent(duration_s=20.0, rate_hz=20.0)
+    kw = {"stride": 10, "solutions": ("ins_gps_att",)}
+    local = table2(traj, **kw)
+    remote = table2(traj, scheduler=client, **kw)
+    assert len(remote.frame) == 15
+    pd.testing.assert_frame_equal(local.frame, remote.frame, check_exact=True)
+
+
+def test_rocket_sensitivity_sweep_on_the_cluster_equals_local(client):
+    from navlib.studies.rocket import sensitivity_sweep
+
+    grid = {"eta": (1e-2, 1e-4), "gnss_sigma_m": (15.0,)}
+    local = sensitivity_sweep(grid, progress=False)
+    remote = sensitivity_sweep(grid, progress=False, scheduler=client)
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+
+
+def test_monte_carlo_split_over_tasks(client):
+    from navlib.filters import simulate_linear
+
+    model = launcher("ins_gps", "G", "markov",
+                     trajectory=launcher_ascent(duration_s=10.0, rate_hz=20.0))
+    serial = simulate_linear(model, runs=7, seed=3, scheduler="synchronous", runs_per_task=3)
+    remote = simulate_linear(model, runs=7, seed=3, scheduler=client, runs_per_task=3)
+    assert serial.runs == 7
+    for name in ("truth", "estimate", "nees", "nis", "innovation", "P"):
+        np.testing.assert_array_equal(getattr(serial, name), getattr(remote, name))
+    # chunk 2 (runs 3-5) is one plain batch drawn from the second child seed
+    child = np.random.SeedSequence(3).spawn(3)[1]
+    alone = simulate_linear(model, runs=3, seed=child, record_every=1)
+    np.testing.assert_array_equal(serial.truth[:, 3:6], alone.truth)
+    with pytest.raises(NavlibInputError, match="rng"):
+        simulate_linear(model, runs=4, rng=np.random.default_rng(0), scheduler="synchronous")
