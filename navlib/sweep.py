@@ -59,8 +59,9 @@ import pandas as pd
 from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 
-__all__ = ["EVALUATIONS", "SCHEDULER_ENV", "Evaluation", "executor", "grid_points",
-           "map_tasks", "monte_carlo_linear", "sweep"]
+__all__ = ["EVALUATIONS", "SCHEDULER_ENV", "Evaluation", "evaluations_frame", "executor",
+           "grid_points", "map_tasks", "monte_carlo_linear", "parameter_columns", "pivot",
+           "read", "sweep"]
 
 SCHEDULER_ENV = "NAVLIB_SCHEDULER"
 """Environment variable naming the default scheduler (an address or a keyword)."""
@@ -798,7 +799,8 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
     -------
     DataFrame
         The parameter columns (grid order) then the result columns, one row per point in
-        grid order. ``attrs["sweep"]`` holds ``n_points``, ``n_computed`` (points not taken
+        grid order. ``attrs["sweep"]`` holds ``parameters`` (the parameter columns),
+        ``n_points``, ``n_computed`` (points not taken
         from ``output``), ``n_tasks``, ``n_workers``, ``wall_s`` (from submission to the last
         result), ``compute_s`` (time spent inside the evaluations) and ``prepare_s`` (building
         the shared inputs).
@@ -835,7 +837,8 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
     todo = [(i, {k: _plain(v) for k, v in records[i].items()})
             for i, k in enumerate(keys) if k not in done]
     rows: dict[int, dict] = {i: done[k] for i, k in enumerate(keys) if k in done}
-    stats = {"n_points": len(points), "n_computed": len(todo), "n_tasks": 0, "n_workers": 0,
+    stats = {"parameters": columns, "n_points": len(points), "n_computed": len(todo),
+             "n_tasks": 0, "n_workers": 0,
              "wall_s": 0.0, "compute_s": 0.0, "prepare_s": 0.0}
     if todo:
         parts = None
@@ -917,6 +920,72 @@ def _run_on(client, evaluate, batches, save, bar, stats) -> None:
                 [client.submit(_seconds, p, pure=False) for p in prepared.values()]))
     finally:
         client.cancel(futures + list(prepared.values()))
+
+
+AGGREGATES = ("mean", "min", "max", "median")
+"""How :func:`pivot` combines the points that share an ``(x, y)`` cell."""
+
+
+def parameter_columns(frame: pd.DataFrame) -> list[str]:
+    """The parameter columns of a sweep result (from :func:`sweep` or :func:`read`)."""
+    params = frame.attrs.get("sweep", {}).get("parameters") \
+        if isinstance(frame, pd.DataFrame) else None
+    if not params:
+        raise NavlibInputError("frame: not a sweep result (no attrs['sweep']['parameters']); "
+                               "pass the parameter names explicitly")
+    return list(params)
+
+
+def read(path) -> pd.DataFrame:
+    """A sweep result saved by :func:`sweep` (``output=``), parameters in ``attrs``."""
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    if not path.is_file():
+        raise NavlibInputError(f"path: no sweep result at {path}")
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:
+        raise NavlibInputError(f"path: {path} is not a readable Parquet file ({exc})") from exc
+    stored = (table.schema.metadata or {}).get(_METADATA_KEY)
+    if not stored:
+        raise NavlibInputError(f"path: {path} is not a navlib sweep result")
+    frame = table.to_pandas()
+    meta = json.loads(stored)
+    frame.attrs["sweep"] = {"parameters": meta["parameters"], "evaluate": meta["evaluate"]}
+    return frame
+
+
+def pivot(frame: pd.DataFrame, x: str, y: str, value: str, fixed: Mapping | None = None,
+          agg: str = "mean") -> pd.DataFrame:
+    """A heat-map table of a sweep result: ``value`` by ``y`` (rows) and ``x`` (columns).
+
+    ``fixed`` selects rows (``{column: value}``); the points left in a cell (other
+    parameters) are combined with ``agg`` (:data:`AGGREGATES`).
+    """
+    if not isinstance(frame, pd.DataFrame):
+        raise NavlibInputError(f"frame: expected a sweep DataFrame, got {type(frame).__name__}")
+    missing = [c for c in (x, y, value, *(fixed or {})) if c not in frame.columns]
+    if missing:
+        raise NavlibInputError(f"pivot: unknown column(s) {missing}; columns are "
+                               f"{list(frame.columns)}")
+    if x == y:
+        raise NavlibInputError(f"pivot: x and y must differ, both are {x!r}")
+    if agg not in AGGREGATES:
+        raise NavlibInputError(f"agg: expected one of {AGGREGATES}, got {agg!r}")
+    sel = np.ones(len(frame), dtype=bool)
+    for col, val in (fixed or {}).items():
+        sel &= (frame[col] == val).to_numpy()
+    part = frame[sel]
+    if part.empty:
+        raise NavlibInputError(f"pivot: no point matches {dict(fixed or {})}")
+    values = part[value]
+    if values.dtype == bool:
+        values = values.astype(float)
+    if not pd.api.types.is_numeric_dtype(values):
+        raise NavlibInputError(f"pivot: value {value!r} is not numeric")
+    return part.assign(**{value: values}).pivot_table(index=y, columns=x, values=value,
+                                                      aggfunc=agg, dropna=False)
 
 
 def evaluations_frame() -> pd.DataFrame:
