@@ -255,3 +255,74 @@ def test_monte_carlo_split_over_tasks(client):
     np.testing.assert_array_equal(serial.truth[:, 3:6], alone.truth)
     with pytest.raises(NavlibInputError, match="rng"):
         simulate_linear(model, runs=4, rng=np.random.default_rng(0), scheduler="synchronous")
+
+
+# --------------------------------------------------------------------------- heat maps
+
+
+def _study():
+    return sweep.sweep({"a": [0.5, 1.0, 2.0], "b": [1.0, 4.0], "tag": ["x", "y"]}, _quadratic,
+                       scheduler="synchronous")
+
+
+def test_pivot_selects_and_combines():
+    frame = _study()
+    table = sweep.pivot(frame, "a", "b", "y", fixed={"tag": "x"})
+    assert table.shape == (2, 3)
+    assert table.loc[4.0, 2.0] == _quadratic(2.0, 4.0)["y"]
+    both = sweep.pivot(frame, "a", "b", "big", agg="max")
+    assert set(np.unique(both.to_numpy())) <= {0.0, 1.0}
+    for kwargs, match in (({"x": "a", "y": "a", "value": "y"}, "differ"),
+                          ({"x": "a", "y": "zz", "value": "y"}, "unknown column"),
+                          ({"x": "a", "y": "b", "value": "label"}, "not numeric"),
+                          ({"x": "a", "y": "b", "value": "y", "agg": "sum"}, "agg"),
+                          ({"x": "a", "y": "b", "value": "y", "fixed": {"tag": "q"}},
+                           "no point")):
+        with pytest.raises(NavlibInputError, match=match):
+            sweep.pivot(frame, **kwargs)
+
+
+def test_heatmap_annotates_the_pivot_values():
+    import matplotlib.pyplot as plt
+
+    from navlib.plots.sweep import heatmap, heatmaps_figure
+
+    frame = _study()
+    fig = heatmap(frame, "a", "b", "y", fixed={"tag": "y"}, threshold=3.0)
+    texts = sorted(float(t.get_text()) for t in fig.axes[0].texts)
+    expected = sorted(float(f"{v:.3g}") for v in
+                      sweep.pivot(frame, "a", "b", "y", fixed={"tag": "y"}).to_numpy().ravel())
+    assert texts == expected
+    n_outlined = sum(1 for p in fig.axes[0].patches if p.get_edgecolor()[0] == 1.0)
+    assert n_outlined == int((sweep.pivot(frame, "a", "b", "y").to_numpy() >= 3.0).sum())
+    plt.close(fig)
+    fig = heatmaps_figure(frame, "a", "b", ["y", "n"])
+    assert len(fig.axes) == 4  # two maps, two colour bars
+    plt.close(fig)
+
+
+def test_sweep_panel_fixes_and_reports_bad_choices():
+    from navlib.widgets.sweep import sweep_panel
+
+    frame = _study()
+    panel = sweep_panel(frame, x="a", y="b", value="y")
+    assert set(panel.values) == {"y", "n", "big"}
+    panel.controls["fix:tag"].value = "y"
+    assert panel.fixed() == {"tag": "y"}
+    panel.controls["y"].value = "a"
+    assert "must differ" in panel.status.value
+    with pytest.raises(NavlibInputError, match="parameter"):
+        sweep_panel(frame.drop(columns="tag").assign(), parameters=["a"])
+    frame.attrs = {}
+    with pytest.raises(NavlibInputError, match="not a sweep result"):
+        sweep_panel(frame)
+
+
+def test_read_back_a_saved_sweep(tmp_path):
+    out = tmp_path / "s.parquet"
+    frame = sweep.sweep(GRID, _quadratic, scheduler="synchronous", output=out)
+    back = sweep.read(out)
+    assert sweep.parameter_columns(back) == ["a", "b"]
+    pd.testing.assert_frame_equal(back, frame)
+    with pytest.raises(NavlibInputError, match="no sweep result"):
+        sweep.read(tmp_path / "none.parquet")

@@ -38,7 +38,10 @@ def heatmap(frame, x: str, y: str, value: str, *, fixed: Mapping | None = None,
         fig = ax.figure
     data = table.to_numpy(dtype=float)
     image = ax.imshow(data, cmap=cmap, aspect="auto", vmin=vmin, vmax=vmax, origin="lower")
-    ax.set_xticks(range(table.shape[1]), [_label(v) for v in table.columns])
+    xlabels = [_label(v) for v in table.columns]
+    long = max(len(t) for t in xlabels) > 5
+    ax.set_xticks(range(table.shape[1]), xlabels, rotation=30 if long else 0,
+                  ha="right" if long else "center")
     ax.set_yticks(range(table.shape[0]), [_label(v) for v in table.index])
     ax.set_xlabel(x)
     ax.set_ylabel(y)
@@ -54,7 +57,7 @@ def heatmap(frame, x: str, y: str, value: str, *, fixed: Mapping | None = None,
     fig.colorbar(image, ax=ax, label=value)
     where = ", ".join(f"{k}={_label(v)}" for k, v in (fixed or {}).items())
     ax.set_title(title or f"{value}" + (f" ({where})" if where else "")
-                 + (f", {agg} over other parameters" if len(table) else ""), fontsize=9)
+                 + f", {agg} of the other points", fontsize=9)
     return fig
 
 
@@ -71,7 +74,7 @@ def heatmaps_figure(frame, x: str, y: str, values: Sequence[str], *,
     n_x = frame[x].nunique() if x in frame.columns else 1
     n_y = frame[y].nunique() if y in frame.columns else 1
     fig, axes = plt.subplots(1, len(values), figsize=(len(values) * (1.6 + 0.8 * n_x),
-                                                      1.6 + 0.5 * n_y),
+                                                      2.4 + 0.5 * n_y),
                              layout="constrained", squeeze=False)
     for ax, value in zip(axes[0], values, strict=True):
         heatmap(frame, x, y, value, fixed=fixed, agg=agg, threshold=thresholds.get(value),
