@@ -6,8 +6,9 @@ speed-up >= 1.8 on 2 cores. It prints, per configuration: wall time of the sweep
 submission to the last result; cluster start-up excluded and shown apart), the speed-up
 against 1 worker, time inside the evaluations and the shared-input builds, and the overhead
 per task ``(workers x wall - evaluation - builds) / tasks``; then the round trip of an empty
-task (200 no-op points, one per task). The machine load (``os.getloadavg``) is printed too:
-on a shared machine the speed-up is bounded by the idle cores, not by Dask.
+task (200 no-op points, one per task). The machine load (``os.getloadavg``) is printed too,
+and ``eval_cpu_share`` (CPU time / wall time inside the evaluations): on a shared machine
+the workers get only part of a core each, and the speed-up is bounded by that, not by Dask.
 
 The sweep: the ``nees`` evaluation (21-state rocket model, 20-run linear Monte Carlo per
 point) over 2 spin rates x 5 GNSS sigmas x N/10 seeds; the two spin rates are the two
@@ -40,7 +41,8 @@ def _row(label, frame, start_s, base_wall=None) -> dict:
     return {"run": label, "workers": s["n_workers"], "points": s["n_points"],
             "tasks": s["n_tasks"], "startup_s": start_s, "wall_s": s["wall_s"],
             "speed_up": (base_wall / s["wall_s"]) if base_wall else 1.0,
-            "eval_s": s["compute_s"], "build_s": s["prepare_s"],
+            "eval_s": s["compute_s"], "eval_cpu_share": s["compute_cpu_s"] / s["compute_s"],
+            "build_s": s["prepare_s"],
             "overhead_ms_per_task": 1e3 * overhead}
 
 

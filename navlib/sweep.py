@@ -633,13 +633,14 @@ def _check_row(row, point: Mapping, columns) -> dict:
     return out
 
 
-def _run_batch(evaluate, batch: list, prepared=None) -> tuple[list, float]:
-    """Evaluate a batch of ``(index, point)``; returns ``[(index, row)], seconds``.
+def _run_batch(evaluate, batch: list, prepared=None) -> tuple[list, float, float]:
+    """Evaluate a batch of ``(index, point)``; returns ``[(index, row)]``, wall and CPU
+    seconds (the CPU time of this process: the share of a core the task got).
 
     ``prepared``: the ``(value, seconds)`` of :func:`_prepare_task` for the batch's shared
     input (named evaluations with ``prepare``), or None.
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     rows = []
     with _single_thread_blas():
         for index, point in batch:
@@ -650,7 +651,7 @@ def _run_batch(evaluate, batch: list, prepared=None) -> tuple[list, float]:
             else:
                 row = evaluate(**point)
             rows.append((index, _check_row(row, point, point.keys())))
-    return rows, time.perf_counter() - t0
+    return rows, time.perf_counter() - t0, time.process_time() - c0
 
 
 def _batches(evaluate, points: list[tuple[int, dict]], size: int) -> list[tuple]:
@@ -802,8 +803,9 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
         grid order. ``attrs["sweep"]`` holds ``parameters`` (the parameter columns),
         ``n_points``, ``n_computed`` (points not taken
         from ``output``), ``n_tasks``, ``n_workers``, ``wall_s`` (from submission to the last
-        result), ``compute_s`` (time spent inside the evaluations) and ``prepare_s`` (building
-        the shared inputs).
+        result), ``compute_s`` (wall time spent inside the evaluations), ``compute_cpu_s``
+        (their CPU time: below ``compute_s`` when the cores are shared) and ``prepare_s``
+        (building the shared inputs).
 
     Raises
     ------
@@ -839,7 +841,7 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
     rows: dict[int, dict] = {i: done[k] for i, k in enumerate(keys) if k in done}
     stats = {"parameters": columns, "n_points": len(points), "n_computed": len(todo),
              "n_tasks": 0, "n_workers": 0,
-             "wall_s": 0.0, "compute_s": 0.0, "prepare_s": 0.0}
+             "wall_s": 0.0, "compute_s": 0.0, "compute_cpu_s": 0.0, "prepare_s": 0.0}
     if todo:
         parts = None
         if output is not None:
@@ -868,9 +870,11 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
                         if _needs_prepare(evaluate) and key not in prepared:
                             prepared = {key: _prepare_task(evaluate, key)}
                             stats["prepare_s"] += prepared[key][1]
-                        batch_rows, seconds = _run_batch(evaluate, batch, prepared.get(key))
+                        batch_rows, seconds, cpu = _run_batch(evaluate, batch,
+                                                              prepared.get(key))
                         save(batch_rows)
                         stats["compute_s"] += seconds
+                        stats["compute_cpu_s"] += cpu
                         bar.update(len(batch_rows))
                 else:
                     _run_on(client, evaluate, batches, save, bar, stats)
@@ -911,9 +915,10 @@ def _run_on(client, evaluate, batches, save, bar, stats) -> None:
                for key, batch in batches]
     try:
         for fut in as_completed(futures):
-            batch_rows, seconds = fut.result()
+            batch_rows, seconds, cpu = fut.result()
             save(batch_rows)
             stats["compute_s"] += seconds
+            stats["compute_cpu_s"] += cpu
             bar.update(len(batch_rows))
         if prepared:
             stats["prepare_s"] += sum(client.gather(

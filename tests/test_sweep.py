@@ -74,7 +74,7 @@ def test_evaluate_and_scheduler_validation(tmp_path):
         sweep.sweep(GRID, _quadratic, scheduler="my-laptop")
     with pytest.raises(NavlibInputError, match="scheduler"):
         sweep.sweep(GRID, _quadratic, scheduler=8786)
-    with pytest.raises(NavlibInputError, match=".parquet"):
+    with pytest.raises(NavlibInputError, match=r"\.parquet"):
         sweep.sweep(GRID, _quadratic, scheduler="synchronous", output=tmp_path / "r.csv")
     with pytest.raises(NavlibInputError, match="mapping"):
         sweep.sweep(GRID, lambda a, b: a + b, scheduler="synchronous")
