@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     for workers in (1, 2):
         t0 = time.perf_counter()
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                          dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+                          dashboard_address=":0", silence_logs=logging.ERROR) as cluster, \
                 Client(cluster) as client:
             client.run(lambda: __import__("navlib.sweep"))  # imports are start-up, not work
             startup = time.perf_counter() - t0

@@ -84,9 +84,9 @@ def _local_cluster(processes: bool, n_workers: int | None):
     cores = max(1, os.cpu_count() or 1)
     if processes:
         return LocalCluster(n_workers=n_workers or cores, threads_per_worker=1, processes=True,
-                            dashboard_address=None, silence_logs=logging.ERROR)
+                            dashboard_address=":0", silence_logs=logging.ERROR)
     return LocalCluster(n_workers=1, threads_per_worker=n_workers or cores, processes=False,
-                        dashboard_address=None, silence_logs=logging.ERROR)
+                        dashboard_address=":0", silence_logs=logging.ERROR)
 
 
 @contextmanager
@@ -176,7 +176,8 @@ def map_tasks(func: Callable, items: Sequence, scheduler=None, *, shared: Mappin
                     tqdm(items, desc=desc, disable=not progress)]
         from distributed import as_completed
 
-        scattered = {k: client.scatter(v, broadcast=True) for k, v in shared.items()}
+        # a one-element list: scatter() would split a dict or list value into items
+        scattered = {k: client.scatter([v], broadcast=True)[0] for k, v in shared.items()}
         futures = [client.submit(_call, func, item, scattered, pure=False) for item in items]
         order = {f.key: i for i, f in enumerate(futures)}
         out: list = [None] * len(items)

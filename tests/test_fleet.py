@@ -79,3 +79,17 @@ def test_fleet_on_a_px4_log(tmp_path):
     assert row.status == "ok", row.error
     assert "FlightDataWarning" in row.warnings
     assert pages[0] is not None
+
+
+def test_fleet_on_a_worker_process(tmp_path):
+    """Flights run as tasks on a Dask worker give the same table as in-process."""
+    distributed = pytest.importorskip("distributed")
+    logs = [PAIR, str(tmp_path / "missing.ulg")]
+    local, _ = fleet.assess_logs(logs, scheduler="synchronous")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster, \
+            distributed.Client(cluster) as client:
+        remote, pages = fleet.assess_logs(logs, scheduler=client)
+    pd.testing.assert_frame_equal(local.drop(columns="seconds"),
+                                  remote.drop(columns="seconds"))
+    assert pages[0].startswith("<!DOCTYPE html>") and pages[1] is None

@@ -147,7 +147,7 @@ def client():
 
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
+                                       dashboard_address=":0")
     with distributed.Client(cluster) as c:
         yield c
     cluster.close()
@@ -326,3 +326,12 @@ def test_read_back_a_saved_sweep(tmp_path):
     pd.testing.assert_frame_equal(back, frame)
     with pytest.raises(NavlibInputError, match="no sweep result"):
         sweep.read(tmp_path / "none.parquet")
+
+
+def test_address_and_thread_schedulers_equal_serial(client):
+    serial = sweep.sweep(GRID, _quadratic, scheduler="synchronous")
+    by_address = sweep.sweep(GRID, _quadratic, scheduler=client.scheduler.address)
+    pd.testing.assert_frame_equal(serial, by_address, check_exact=True)
+    threads = sweep.sweep(GRID, _quadratic, scheduler="threads")
+    pd.testing.assert_frame_equal(serial, threads, check_exact=True)
+    assert threads.attrs["sweep"]["n_workers"] >= 1
