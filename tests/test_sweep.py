@@ -335,3 +335,24 @@ def test_address_and_thread_schedulers_equal_serial(client):
     threads = sweep.sweep(GRID, _quadratic, scheduler="threads")
     pd.testing.assert_frame_equal(serial, threads, check_exact=True)
     assert threads.attrs["sweep"]["n_workers"] >= 1
+
+
+def test_named_claims_and_outliers_match_the_studies():
+    from navlib.outliers import Outlier
+    from navlib.studies import rocket
+    from navlib.studies.outliers import outlier_response
+
+    claims = sweep.EVALUATIONS["claims"](nu=0.99)
+    analysis = rocket.analyze(nu=0.99)
+    table = rocket.claims_table(analysis)
+    expected = dict(zip(table["claim_id"], table["verdict"] == "reproduced", strict=True))
+    assert {k: claims[k] for k in expected} == expected
+    frame = sweep.sweep({"solution": ["ins_gps", "ins_gps_att"], "duration_s": [40.0],
+                         "rate_hz": [20.0], "time_s": [20.0], "window_s": [15.0]},
+                        "outliers", scheduler="synchronous")
+    traj = launcher_ascent(duration_s=40.0, rate_hz=20.0)
+    for row in frame.itertuples():
+        direct = outlier_response(row.solution, Outlier("gyro_x", 20.0, 0.002), "roll",
+                                  trajectory=traj, window=15.0).score
+        assert row.verdict == direct.verdict
+        assert row.retained == pytest.approx(direct.retained, rel=1e-9)
