@@ -713,20 +713,26 @@ def _write(frame: pd.DataFrame, path: Path, meta: dict) -> None:
                                f"columns need one type each") from exc
 
 
-def _read(path: Path, meta: dict) -> pd.DataFrame:
+def _parquet(path: Path, name: str) -> tuple[pd.DataFrame, dict | None]:
+    """A Parquet file's table and its navlib sweep metadata (None when absent)."""
     import pyarrow.parquet as pq
 
     try:
         table = pq.read_table(path)
     except Exception as exc:
-        raise NavlibInputError(f"output: {path} is not a readable Parquet file ({exc})") from exc
+        raise NavlibInputError(f"{name}: {path} is not a readable Parquet file ({exc})") \
+            from exc
     stored = (table.schema.metadata or {}).get(_METADATA_KEY)
-    stored = json.loads(stored) if stored else None
+    return table.to_pandas(), (json.loads(stored) if stored else None)
+
+
+def _read(path: Path, meta: dict) -> pd.DataFrame:
+    frame, stored = _parquet(path, "output")
     if stored != meta:
         raise NavlibInputError(
             f"output: {path} holds another sweep ({stored or 'not a navlib sweep'}); this one "
             f"is {meta}. Use another output file or delete it")
-    return table.to_pandas()
+    return frame
 
 
 def _load_done(output: Path, meta: dict) -> pd.DataFrame:
@@ -944,20 +950,12 @@ def parameter_columns(frame: pd.DataFrame) -> list[str]:
 
 def read(path) -> pd.DataFrame:
     """A sweep result saved by :func:`sweep` (``output=``), parameters in ``attrs``."""
-    import pyarrow.parquet as pq
-
     path = Path(path)
     if not path.is_file():
         raise NavlibInputError(f"path: no sweep result at {path}")
-    try:
-        table = pq.read_table(path)
-    except Exception as exc:
-        raise NavlibInputError(f"path: {path} is not a readable Parquet file ({exc})") from exc
-    stored = (table.schema.metadata or {}).get(_METADATA_KEY)
-    if not stored:
+    frame, meta = _parquet(path, "path")
+    if meta is None:
         raise NavlibInputError(f"path: {path} is not a navlib sweep result")
-    frame = table.to_pandas()
-    meta = json.loads(stored)
     frame.attrs["sweep"] = {"parameters": meta["parameters"], "evaluate": meta["evaluate"]}
     return frame
 
