@@ -14,10 +14,10 @@ from navlib.errors import NavlibInputError
 __version__ = "0.1.0"
 
 _SUBMODULES = (
-    "covariance", "discretize", "earth", "filters", "io", "metrics", "models",
+    "covariance", "discretize", "earth", "filters", "fleet", "io", "metrics", "models",
     "observability", "outliers", "plots", "reports", "rotations", "segmentation", "sensors",
     "strapdown",
-    "studies", "trajectory", "units", "widgets",
+    "studies", "sweep", "trajectory", "units", "widgets",
 )
 
 __all__ = ["NavlibInputError", "__version__", *_SUBMODULES]

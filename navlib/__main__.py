@@ -1,4 +1,5 @@
-"""Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]``.
+"""Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]``
+and ``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
 2 for bad command-line input, 128 + signal number when interrupted (130 Ctrl-C, 143 SIGTERM).
@@ -50,7 +51,45 @@ def _parser() -> argparse.ArgumentParser:
                           f"(default: {reports.DEFAULT_CELL_TIMEOUT_S:.0f}; 0: no limit). "
                           "A kernel that stops answering is restarted once whatever the "
                           "limit")
+    _add_assess(sub)
     return parser
+
+
+def _add_assess(sub) -> None:
+    ass = sub.add_parser(
+        "assess", help="assess many flights (Dask tasks) into a summary table",
+        description="Assess each flight with navlib.studies.assess.assess_flight as a Dask "
+                    "task; write DIR/summary.csv (one row per flight) and one HTML page per "
+                    "assessed flight. A failed flight is reported in the table; the exit "
+                    "status is 1 when any failed.")
+    ass.add_argument("logs", nargs="+", metavar="LOG",
+                     help="a .ulg file, a DataFlash .bin file or an 'imu.csv,gnss.csv' pair")
+    ass.add_argument("--output", type=Path, required=True, metavar="DIR",
+                     help="folder for summary.csv and the flight pages")
+    ass.add_argument("--scheduler", default=None, metavar="ADDR",
+                     help="Dask scheduler address (tcp://host:8786) or processes, threads, "
+                          "synchronous (default: $NAVLIB_SCHEDULER, else a local cluster)")
+    ass.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
+                     metavar=("KEY", "VALUE"),
+                     help="a keyword of assess_flight (preset, eta, nu, gnss_rate_hz, ...); "
+                          "VALUE parsed as JSON or a Python literal, else a string")
+
+
+def _assess(args) -> int:
+    from navlib import fleet
+
+    options = {}
+    for key, text in args.parameter:
+        options[key] = reports.parse_parameter_value(text)
+    table, pages = fleet.assess_logs(args.logs, options, scheduler=args.scheduler,
+                                     progress=True)
+    path = fleet.write_fleet(table, pages, args.output)
+    failed = table[table["status"] != "ok"]
+    for row in failed.itertuples(index=False):
+        print(f"failed: {row.log}: {row.error}", file=sys.stderr)
+    print(f"{len(table) - len(failed)} of {len(table)} flight(s) assessed; summary: "
+          f"{path.resolve()}", file=sys.stderr)
+    return 1 if len(failed) else 0
 
 
 def _print_progress(position: int, total: int, name: str, run) -> None:
@@ -105,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "report":
             return _report(args)
+        if args.command == "assess":
+            return _assess(args)
     except NavlibInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

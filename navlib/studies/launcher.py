@@ -17,6 +17,7 @@ rows depend on the trajectory and on the frozen / time-varying reading of eq. (6
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -174,10 +175,23 @@ class Table2Result:
         return table2_claims(self.frame, self.cond_tol, self.variant)
 
 
+def _config_row(config, trajectory, *, window, variant, stride, rtol, method, n_jobs,
+                model_kw) -> dict:
+    """Our Table 2 row of one ``(solution, biases, bias_model)`` configuration."""
+    solution, biases, bias_model = config
+    model = launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
+    res = local_observability(model, window=window, variant=variant, stride=stride,
+                              rtol=rtol, method=method, n_jobs=n_jobs)
+    return {"solution": solution, "biases": biases, "bias_model": bias_model,
+            "n_states": model.n, "n_unobservable": res.n_unobservable,
+            "log10_cond": res.log10_max_cond, "rank_constant": res.rank_constant,
+            **_mid_step_analysis(model, res, trajectory, window, variant, method, rtol)}
+
+
 def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
            window: int | None = None, rtol: float | None = None, method: str = "euler",
            solutions=SOLUTIONS, cond_tol: float = 1.0, n_jobs: int | None = None,
-           progress=None, **model_kw) -> Table2Result:
+           progress=None, scheduler=None, **model_kw) -> Table2Result:
     """Regenerate Table 2 (spec launcher.md §6.1, §7.2).
 
     Parameters
@@ -196,7 +210,11 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     cond_tol : float
         |log10 cond - paper| allowed for a match (numerically singular pairs always match).
     progress : callable, optional
-        Called as ``progress(i, total, config)`` before each configuration.
+        Called as ``progress(i, total, config)`` before each configuration (local run).
+    scheduler : optional
+        Run the configurations as Dask tasks (:func:`navlib.sweep.map_tasks`: a Client, an
+        address ``tcp://host:port``, ``"processes"``...), the trajectory scattered once to
+        the workers; default None: here, ``n_jobs`` threads per configuration.
     **model_kw
         Passed to :func:`navlib.models.launcher` (e.g. ``a1_sign``, ``c_p``).
 
@@ -210,19 +228,19 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
 
         trajectory = launcher_ascent()
     configs = configurations(solutions)
-    rows = []
-    for i, (solution, biases, bias_model) in enumerate(configs):
-        if progress is not None:
-            progress(i, len(configs), (solution, biases, bias_model))
-        model = launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
-        res = local_observability(model, window=window, variant=variant, stride=stride,
-                                  rtol=rtol, method=method, n_jobs=n_jobs)
-        rows.append({"solution": solution, "biases": biases, "bias_model": bias_model,
-                     "n_states": model.n, "n_unobservable": res.n_unobservable,
-                     "log10_cond": res.log10_max_cond, "rank_constant": res.rank_constant,
-                     **_mid_step_analysis(model, res, trajectory, window, variant, method,
-                                          rtol)})
-        del model, res
+    options = {"window": window, "variant": variant, "stride": stride, "rtol": rtol,
+               "method": method, "model_kw": model_kw}
+    if scheduler is not None:  # one task per configuration (navlib.sweep.map_tasks)
+        from navlib.sweep import map_tasks
+
+        rows = map_tasks(partial(_config_row, n_jobs=1, **options), configs, scheduler,
+                         shared={"trajectory": trajectory}, desc="Table 2")
+    else:
+        rows = []
+        for i, config in enumerate(configs):
+            if progress is not None:
+                progress(i, len(configs), config)
+            rows.append(_config_row(config, trajectory, n_jobs=n_jobs, **options))
     ours = pd.DataFrame(rows)
     paper = paper_table2().rename(columns={"n_unobservable": "paper_unobservable",
                                            "log10_cond": "paper_log10_cond",

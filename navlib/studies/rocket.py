@@ -30,7 +30,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 
 import numpy as np
 import pandas as pd
@@ -980,9 +980,39 @@ def _sweep_rows(grid: dict, mode: str) -> list[dict]:
     return rows
 
 
+def _sweep_key(row: dict) -> tuple:
+    """The settings that share one discretised model and sensability recursion."""
+    return (row["spin_hz"], row["imu_grade"], row["p0"], row["gnss_sigma_m"])
+
+
+def _sweep_group(rows: list, sensors, attitude_error: str) -> list[dict]:
+    """Claim verdicts of sweep rows sharing one :func:`_sweep_key`."""
+    first = rows[0]
+    imu, grade_sigmas = _graded(sensors, first["imu_grade"])
+    model = rocket_chain(first["spin_hz"], attitude_error, imu, first["gnss_sigma_m"],
+                         **grade_sigmas, **P0_SETS[first["p0"]])
+    se = metrics.sensability_model(model, nu=SWEEP_BASELINE["nu"])
+    excitations: dict = {}
+    out = []
+    for row in rows:
+        if row["d0"] not in excitations:
+            excitations[row["d0"]] = excitability_segments(model, SEGMENTS, 1e-3, row["d0"], se)
+        ex = tuple(e.with_eta(row["eta"]) for e in excitations[row["d0"]])
+        settings = {**BASELINE, "spin_hz": row["spin_hz"], "eta": row["eta"], "nu": row["nu"],
+                    "d0": row["d0"], "gnss_sigma_m": row["gnss_sigma_m"],
+                    "attitude_error": attitude_error, "prior_update": False}
+        analysis = RocketAnalysis(model, rocket_trajectory(row["spin_hz"]),
+                                  se.with_nu(row["nu"]), ex, SEGMENTS, settings)
+        claims = excitability_claims(analysis) + sensability_claims(analysis)
+        passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
+        out.append({"factor": row["factor"], **{k: row[k] for k in SWEEP_BASELINE}, **passed,
+                    "n_reproduced": sum(passed.values())})
+    return out
+
+
 def sensitivity_sweep(grid: dict | None = None, mode: str = "one_at_a_time",
                       quick: bool = False, sensors=None, progress: bool = True,
-                      attitude_error: str = "ecef") -> pd.DataFrame:
+                      attitude_error: str = "ecef", scheduler=None) -> pd.DataFrame:
     """Pass/fail matrix of X1-X7 and S1-S8 over eta, nu, P0, GNSS sigma, spin and IMU grade.
 
     Parameters
@@ -999,6 +1029,10 @@ def sensitivity_sweep(grid: dict | None = None, mode: str = "one_at_a_time",
         Base IMU (default preset ``motionpak_tactical``).
     progress : bool
         Show a tqdm progress bar.
+    scheduler : optional
+        Run the groups of settings sharing one model as Dask tasks
+        (:func:`navlib.sweep.map_tasks`: a Client, ``tcp://host:port``, ``"processes"``...);
+        default None: in this process.
 
     Returns
     -------
@@ -1027,30 +1061,19 @@ def sensitivity_sweep(grid: dict | None = None, mode: str = "one_at_a_time",
     rows = _sweep_rows(grid, mode)
     rows.sort(key=lambda r: (r["spin_hz"], r["imu_grade"], r["p0"], r["gnss_sigma_m"],
                              r["d0"], r["nu"], r["eta"]))
-    out = []
-    cache: dict = {}
-    for row in tqdm(rows, desc="sensitivity sweep", disable=not progress):
-        key = (row["spin_hz"], row["imu_grade"], row["p0"], row["gnss_sigma_m"])
-        if key not in cache:
-            cache.clear()
-            imu, grade_sigmas = _graded(sensors, row["imu_grade"])
-            model = rocket_chain(row["spin_hz"], attitude_error, imu, row["gnss_sigma_m"],
-                                 **grade_sigmas, **P0_SETS[row["p0"]])
-            se = metrics.sensability_model(model, nu=SWEEP_BASELINE["nu"])
-            cache[key] = (model, se, {})
-        model, se, excitations = cache[key]
-        if row["d0"] not in excitations:
-            excitations[row["d0"]] = excitability_segments(model, SEGMENTS, 1e-3, row["d0"], se)
-        ex = tuple(e.with_eta(row["eta"]) for e in excitations[row["d0"]])
-        settings = {**BASELINE, "spin_hz": row["spin_hz"], "eta": row["eta"], "nu": row["nu"],
-                    "d0": row["d0"], "gnss_sigma_m": row["gnss_sigma_m"],
-                    "attitude_error": attitude_error, "prior_update": False}
-        analysis = RocketAnalysis(model, rocket_trajectory(row["spin_hz"]),
-                                  se.with_nu(row["nu"]), ex, SEGMENTS, settings)
-        claims = excitability_claims(analysis) + sensability_claims(analysis)
-        passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
-        out.append({"factor": row["factor"], **{k: row[k] for k in SWEEP_BASELINE}, **passed,
-                    "n_reproduced": sum(passed.values())})
+    groups = [list(g) for _, g in itertools.groupby(rows, key=_sweep_key)]
+    if scheduler is not None:  # one task per shared model (navlib.sweep.map_tasks)
+        from navlib.sweep import map_tasks
+
+        parts = map_tasks(partial(_sweep_group, sensors=sensors, attitude_error=attitude_error),
+                          groups, scheduler, progress=progress, desc="sensitivity sweep")
+        out = [row for part in parts for row in part]
+    else:
+        out = []
+        with tqdm(total=len(rows), desc="sensitivity sweep", disable=not progress) as bar:
+            for group in groups:
+                out += _sweep_group(group, sensors, attitude_error)
+                bar.update(len(group))
     frame = pd.DataFrame(out)
     order = {f: i for i, f in enumerate(["baseline", *grid])}
     frame["_order"] = frame["factor"].map(order).fillna(len(order))
