@@ -5,7 +5,7 @@ Public contract (spec ``api.md``, "Scale")::
     python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]
 
 Each ``LOG`` is a PX4 ``.ulg`` file, an ArduPilot DataFlash ``.bin`` file (read with
-``navlib.io.read_dataflash`` where this navlib has it) or an ``imu.csv,gnss.csv`` pair; each
+``navlib.io.read_dataflash``) or an ``imu.csv,gnss.csv`` pair; each
 flight goes through :func:`navlib.studies.assess.assess_flight` as one task
 (:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords. :func:`assess_logs` returns one
 row per flight and :func:`write_fleet` writes ``DIR/summary.csv`` plus one HTML page per
@@ -73,11 +73,7 @@ def _read(kind: str, paths: tuple[Path, ...]):
         return io.read_ulog(paths[0])
     if kind == "csv":
         return io.read_imu_csv(paths[0]), io.read_gnss_csv(paths[1])
-    reader = getattr(io, "read_dataflash", None)
-    if reader is None:
-        raise NavlibInputError("DataFlash reader not available in this navlib "
-                               "(navlib.io.read_dataflash)")
-    return reader(paths[0])
+    return io.read_dataflash(paths[0])
 
 
 def _per_segment(summary: pd.DataFrame, column: str) -> str:
