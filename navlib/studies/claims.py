@@ -23,8 +23,9 @@ Each claim also carries a **basis**:
 Every study registers itself with :func:`register` (a :class:`Study`: a function returning
 its baseline claims, its declared assumption set as data, and a function evaluating the
 claims over that set). :func:`all_claims` runs every registered study and returns the one
-table of the contract (spec api.md, "Claims"), with the **robustness** of each measured
-claim: the fraction of its study's declared assumption set in which it is reproduced.
+table of the contract (spec api.md, "Claims"), with the **robustness** of each measured or
+fitted claim: the fraction of its study's declared assumption set in which it is reproduced
+(NaN for claims by construction and where the study declares no set).
 """
 
 from __future__ import annotations
@@ -346,7 +347,7 @@ def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> p
     fractions = study.robustness(quick) if (robustness and study.robustness) else {}
     rows = []
     for r in results:
-        frac = fractions.get(r.claim_id, float("nan")) if r.basis == "measured" \
+        frac = fractions.get(r.claim_id, float("nan")) if r.basis != "by construction" \
             else float("nan")
         rows.append({"study": study.name, "paper_ref": study.paper, "claim_id": r.claim_id,
                      "statement": r.claim, "paper": r.paper, "ours": r.ours,
@@ -419,3 +420,39 @@ def summary_markdown(table: pd.DataFrame) -> str:
                          + ", ".join(f"{r.claim_id} ({r.robustness:.2f})"
                                      for r in fragile.itertuples()) + ".")
     return "\n\n".join(lines)
+
+
+_READING_ORDER = (("reproduced", "Reproduced"), ("partly", "Partly"),
+                  ("not reproduced", "Not reproduced"), (NOT_EVALUATED, "Not evaluated"))
+
+
+def reading_markdown(results: Iterable[ClaimResult], lines: Sequence[str] = (),
+                     robustness: Mapping[str, float] | None = None) -> str:
+    """A generated "Reading" for a notebook: the claims grouped by verdict, each
+    partly / not reproduced one with the checks that failed, then ``lines`` (further
+    sentences the study computed). No number in it is typed, so a ``-p`` override never
+    leaves a stale sentence.
+
+    ``robustness``: claim id -> fraction of its assumption set where it reproduces.
+    """
+    results = list(results)
+    out = []
+    for verdict, label in _READING_ORDER:
+        group = [r for r in results if r.verdict == verdict]
+        if not group:
+            continue
+        out.append(f"**{label}** ({len(group)}):")
+        for r in group:
+            tag = "" if r.basis == "measured" else f" *({r.basis})*"
+            rob = ""
+            if robustness and not math.isnan(robustness.get(r.claim_id, float("nan"))):
+                rob = f" — reproduces in {robustness[r.claim_id]:.0%} of its assumption set"
+            failed = [c.text() for c in r.checks if not c.passed]
+            why = f": {'; '.join(failed)}" if failed and verdict != "reproduced" else ""
+            if verdict == NOT_EVALUATED:
+                why = f": {r.note}"
+            out.append(f"* **{r.claim_id}**{tag} — {r.claim}{why}{rob}")
+        out.append("")
+    if lines:
+        out += [f"* {line}" for line in lines]
+    return "\n".join(out).strip()

@@ -649,7 +649,7 @@ STRONG = 1.5
 
 
 def evolution_claims(evo: pd.DataFrame) -> list[ClaimResult]:
-    """Figs. 2, 3, 5, 6, §3.8 and conclusion 2 on a :func:`covariance_evolution` table.
+    """Figs. 2, 3, 5, 6, §3.8 and conclusions 2 and 4 on a :func:`covariance_evolution` table.
 
     Thresholds in the paper's words: "barely" = the aided sigma keeps more than
     :data:`BARELY` of the unaided one; "identical" / "negligible" = within
@@ -746,6 +746,16 @@ def evolution_claims(evo: pd.DataFrame) -> list[ClaimResult]:
                abs(np.log(model_1000)) - abs(np.log(model_ratio)), "<", 0.0)],
         assumption="gyro_bias (Markov sigma and random-walk density) times 1000: 50 deg/h"))
 
+    perf = {ax: ratio("att/GAP/random_walk", "att/GAP/markov", ax)
+            for ax in ("roll", "pitch", "yaw")}
+    out.append(claim(
+        "C4-models", "Markov or random-walk bias models make little difference to the "
+        "navigation performance", "either can be used (conclusion 4)",
+        "end attitude sigma RW / Markov: " + ", ".join(f"{ax} {v:.3f}" for ax, v in perf.items()),
+        [check("largest |attitude sigma RW / Markov - 1|",
+               max(abs(v - 1) for v in perf.values()), "<=", IDENTICAL, True)],
+        assumption=f"INS/GPS + attitude sensors, GAP; 'little' = within {IDENTICAL:.0%}"))
+
     roll_att = ratio("att/GAP/markov", "ins-only/GAP/markov", "roll")
     roll_gps = ratio("gps/GAP/markov", "ins-only/GAP/markov", "roll")
     g_gps = ratio("gps/GAP/markov", "ins-only/GAP/markov", "gyro_bias")
@@ -761,6 +771,23 @@ def evolution_claims(evo: pd.DataFrame) -> list[ClaimResult]:
         assumption="GAP Markov biases; 'observable' read as the covariance falling below "
                    f"{BARELY:g} of INS-only within the mission"))
     return out
+
+
+def reading_markdown(result: Table2Result | None = None, fig1=None, evolution=None) -> str:
+    """The notebook's generated reading: Fig. 1, Table 2 and covariance-evolution claims with
+    the Table 2 match count at several tolerances (:func:`engine.reading_markdown`)."""
+    results, lines = [], []
+    results += list(fig1 or [])
+    if result is not None:
+        results += result.claims()
+        counts = result.match_counts()
+        lines.append("Table 2 configurations matching the paper (count and order): "
+                     + ", ".join(f"{n}/{len(result.frame)} within {tol:g} decade"
+                                 for tol, n in counts.items())
+                     + f"; the verdicts use {result.cond_tol:g}.")
+    if evolution is not None:
+        results += evolution_claims(evolution)
+    return engine.reading_markdown(results, lines)
 
 
 # --------------------------------------------------------------------------------------------

@@ -1140,6 +1140,36 @@ def measure_disagreements(comparison: pd.DataFrame) -> pd.DataFrame:
 # --------------------------------------------------------------------------- claims engine
 
 
+def reading_markdown(analysis: RocketAnalysis, which: str = "all", sweep=None,
+                     tension=None) -> str:
+    """The notebook's generated reading: the claims of ``analysis`` by verdict, the sweep's
+    pass rates (``sweep`` from :func:`sensitivity_sweep`) and the tension findings
+    (``tension`` from :func:`tension_table`)."""
+    results = []
+    if which in ("excitability", "all"):
+        results += excitability_claims(analysis)
+    if which in ("sensability", "all"):
+        results += sensability_claims(analysis)
+    if not results:
+        raise NavlibInputError(f"which: expected 'excitability', 'sensability' or 'all', "
+                               f"got {which!r}")
+    ids = [r.claim_id for r in results]
+    rates = sweep_pass_rates(sweep)[ids].to_dict() if sweep is not None else None
+    lines = []
+    proj = tangent_projections(analysis)
+    lines.append("Attitude-error axes projected on the pad's tangent plane: "
+                 + " / ".join(f"{v:.2f}" for v in proj) + " (the pad excites only the tilt "
+                 "plane, so these bound the pad excitability of each component).")
+    if rates is not None:
+        lines.append("The sweep above varies one assumption at a time; the fractions quoted "
+                     "with each claim are its pass rate there.")
+    if tension is not None:
+        lines += tension_findings(tension)
+    return engine.reading_markdown(results, lines, rates)
+
+
+
+
 ROBUSTNESS_GRID = {
     "eta": (1e-2, 1e-3, 1e-4),
     "nu": (0.98, 0.985, 0.99),
@@ -1157,9 +1187,13 @@ QUICK_ROBUSTNESS_GRID = {"eta": (1e-2, 1e-3, 1e-4), "nu": (0.98, 0.985, 0.99),
 
 
 def robustness_variants(grid: dict | None = None, sensors=None) -> list[list[ClaimResult]]:
-    """X1-X7 and S1-S8 at every point of ``grid`` (default :data:`ROBUSTNESS_GRID`)."""
+    """X1-X7 and S1-S8 at every point of ``grid`` (default :data:`ROBUSTNESS_GRID`; a key
+    left out keeps its :data:`BASELINE` value)."""
     grid = ROBUSTNESS_GRID if grid is None else dict(grid)
     reject_unknown(grid, ROBUSTNESS_GRID, "grid")
+    grid = {"eta": (BASELINE["eta"],), "nu": (BASELINE["nu"],),
+            "p0": ("baseline (30 m, 3 m/s)",), "sigma_sg_ppm": (BASELINE["sigma_sg_ppm"],),
+            "spin_hz": (BASELINE["spin_hz"],), **grid}
     out = []
     for spin, p0, sg in itertools.product(grid["spin_hz"], grid["p0"], grid["sigma_sg_ppm"]):
         if p0 not in P0_SETS:

@@ -578,14 +578,16 @@ def _static_tables(lat_deg: float, alt_m: float, duration: float):
 
 def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG,
                 alt_m: float = SITE_ALT_M, p0_table: pd.DataFrame | None = None,
-                tables=None) -> list[ClaimResult]:
+                tables=None, reduced: SSACStudy | str | None = "run") -> list[ClaimResult]:
     """Every claim of ssac.md §5 the covariance reconstruction can test, judged by the
     claims engine.
 
     ``study`` defaults to the full 60 min matched-P0 run; claims about 30-60 min time scales
     are "not evaluated" on runs shorter than 40 min. ``p0_table``: a
     :func:`p0_sensitivity` table to reuse; ``tables``: the P0-independent
-    ``(observability_table, grouping_table, orientation_table)`` to reuse.
+    ``(observability_table, grouping_table, orientation_table)`` to reuse; ``reduced``: the
+    12-state run with the same settings (default ``"run"``: computed here; None: the
+    12-state claim is not evaluated).
     """
     study = study if study is not None else run(lat_deg=lat_deg, alt_m=alt_m)
     if study.model.n != 15:
@@ -596,6 +598,17 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
     long_run = duration >= 2400
     obs, groups, orient = tables if tables is not None else \
         _static_tables(lat_deg, alt_m, duration)
+    if isinstance(reduced, str):
+        if reduced != "run":
+            raise NavlibInputError(f"reduced: expected an SSACStudy, 'run' or None, got "
+                                   f"{reduced!r}")
+        p = study.model.parameters
+        variant = p.get("P0_variant", "matched")
+        rotated = p.get("C_b_n") is not None and not np.allclose(p["C_b_n"], np.eye(3))
+        reduced = None if variant == "custom" or rotated else \
+            run(duration, float(study.t[1] - study.t[0]), np.degrees(p["lat"]), p["alt"],
+                n_states=12, P0=variant, attitude_scale=p.get("attitude_scale", 1.0),
+                sigma_nu=p.get("sigma_nu"), track=False)
 
     for _, row in obs.iterrows():
         n = int(row["n_states"])
@@ -874,6 +887,28 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
         assumption=f"IMU at yaw/pitch/roll {ORIENTATION_DEG} deg, matched P0 per triad; "
                    "'points east' = more than 95 % of the portion's norm"))
 
+    if reduced is not None:
+        common = [s for s in reduced.state_names if s in model.state_names]
+        r12 = reduced.covariance.sigma[-1][[reduced.state_names.index(s) for s in common]]
+        r15 = study.covariance.sigma[-1][model.index(common)]
+        ratio12 = r12 / r15
+        worst, best = (common[int(np.argmax(ratio12))], common[int(np.argmin(ratio12))])
+        out.append(claim(
+            "SSAC-12state", "the position errors are the only states that may be dropped: the "
+            "12-state filter estimates the others at least as well as the 15-state one",
+            "12-state filter optimal (conclusions)",
+            f"final sigma 12-state / 15-state: largest {ratio12.max():.4f} ({worst}), smallest "
+            f"{ratio12.min():.3g} ({best})",
+            [check("largest sigma_12 / sigma_15 at the end", float(ratio12.max()), "<=",
+                   1.01, True)],
+            assumption="same P0, Q, R for the common states; 'as well' = not worse by more "
+                       "than 1 % (without dh the filter no longer confuses baD with the height "
+                       "mode)"))
+    else:
+        out.append(not_evaluated(
+            "SSAC-12state", "the position errors are the only states that may be dropped",
+            "12-state filter optimal (conclusions)", "no 12-state run given"))
+
     table = p0_table if p0_table is not None else p0_sensitivity(study)
     mod = table[table["P0"] != "matched"]
     base = table[table["P0"] == "matched"]
@@ -901,6 +936,11 @@ def claims_table(study: SSACStudy | None = None, **options) -> pd.DataFrame:
     return claims_frame(ssac_claims(study, **options))
 
 
+def reading_markdown(results: list[ClaimResult]) -> str:
+    """The notebook's generated reading of :func:`ssac_claims` results."""
+    return engine.reading_markdown(results)
+
+
 # --------------------------------------------------------------------------------------------
 # registration with the claims engine
 # --------------------------------------------------------------------------------------------
@@ -922,7 +962,8 @@ def _grid_claims(quick: bool) -> dict:
             if quick and (p0, scale) != ("matched", 1.0):
                 continue
             study = run(duration, P0=p0, attitude_scale=scale, track=False)
-            out[(p0, scale)] = ssac_claims(study, tables=tables)
+            reduced = run(duration, P0=p0, attitude_scale=scale, n_states=12, track=False)
+            out[(p0, scale)] = ssac_claims(study, tables=tables, reduced=reduced)
     return out
 
 
