@@ -203,3 +203,10 @@ def test_outlier_claims_can_fail_and_t3_does_not_count_the_absent_channel():
     assert [c.claim_id for c in longer.claims] == [c.claim_id for c in st.claims]
     r = next(iter(longer.responses.values()))
     assert r.score.window == 40.0
+    # the non-RT responses of a study that differs only in RT-only options are reused
+    again = outliers.paper_tests(cache=cache, window=20.0, time=30.0, shapes=("spike",),
+                                 reuse=st)
+    key = ("T2", "ins_gps", "spike")
+    assert again.responses[key].score == st.responses[key].score
+    with pytest.raises(NavlibInputError, match="reuse"):
+        outliers.paper_tests(cache=cache, window=20.0, time=30.0, biases="GA", reuse=st)

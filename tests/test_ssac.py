@@ -241,3 +241,13 @@ def test_figures_and_panel():
     panel.controls["lat_deg"].value = 45.0
     assert panel.study.model.parameters["lat"] == pytest.approx(45.0 * DEG)
     plt.close("all")
+
+
+def test_every_claim_can_fail(claims):
+    """Each claim has checks, and a failing headline makes it "not reproduced"."""
+    from navlib.studies.claims import with_failed_headline
+
+    for cid, c in claims.items():
+        assert c.checks, cid
+        assert with_failed_headline(c).verdict == "not reproduced", cid
+        assert all(not k.failing().passed for k in c.checks), cid

@@ -447,7 +447,7 @@ def reading_markdown(results: Iterable[ClaimResult], lines: Sequence[str] = (),
             rob = ""
             if robustness and not math.isnan(robustness.get(r.claim_id, float("nan"))):
                 rob = f" — reproduces in {robustness[r.claim_id]:.0%} of its assumption set"
-            failed = [c.text() for c in r.checks if not c.passed]
+            failed = [c.text().replace("*", "\\*") for c in r.checks if not c.passed]
             why = f": {'; '.join(failed)}" if failed and verdict != "reproduced" else ""
             if verdict == NOT_EVALUATED:
                 why = f": {r.note}"
