@@ -113,7 +113,8 @@ def test_fig1_claims_can_fail():
 
 
 def _evolution(roll=0.9, pitch=0.2, bp_rw=1.0, gyro_rw=2.0, aided_gyro=0.99,
-               x1000=0.3, model_1000=1.1, roll_att=0.1, roll_gps=0.9, gyro_gps=1.0):
+               x1000=0.3, model_1000=1.1, roll_att=0.1, roll_gps=0.9, gyro_gps=1.0,
+               att_rw=1.0):
     """A hand-made covariance_evolution table (ratios to INS-only = the given values)."""
     rows = []
 
@@ -128,7 +129,8 @@ def _evolution(roll=0.9, pitch=0.2, bp_rw=1.0, gyro_rw=2.0, aided_gyro=0.99,
     row("ins-only/GAP/markov")
     row("gps/GAP/markov", roll=roll_gps, gyro_bias=gyro_gps)
     row("att/GAP/markov", roll=roll_att, gyro_bias=aided_gyro)
-    row("att/GAP/random_walk", gyro_bias=aided_gyro * gyro_rw, gps_bias=bp_rw)
+    row("att/GAP/random_walk", gyro_bias=aided_gyro * gyro_rw, gps_bias=bp_rw,
+        roll=roll_att * att_rw, pitch=att_rw, yaw=att_rw)
     row("ins-only/GAP/markov x1000", gyro_bias=1.0)
     row("att/GAP/markov x1000", gyro_bias=x1000)
     row("att/GAP/random_walk x1000", gyro_bias=x1000 * model_1000)
@@ -138,6 +140,7 @@ def _evolution(roll=0.9, pitch=0.2, bp_rw=1.0, gyro_rw=2.0, aided_gyro=0.99,
 def test_evolution_claims_follow_the_table():
     good = {c.claim_id: c for c in launcher.evolution_claims(_evolution())}
     assert good["F2-roll"].verdict == "reproduced"
+    assert good["C4-models"].verdict == good["F5-ins-only"].verdict == "reproduced"
     assert good["F3-bp"].verdict == "reproduced"
     assert good["F6-x1000"].verdict == "reproduced"
     assert good["F5-barely"].verdict == "reproduced"
@@ -146,9 +149,10 @@ def test_evolution_claims_follow_the_table():
     assert good["C2-att"].verdict == "partly"
     bad = {c.claim_id: c for c in launcher.evolution_claims(_evolution(
         roll=0.1, pitch=0.2, bp_rw=1.5, gyro_rw=1.0, aided_gyro=0.3, x1000=0.9,
-        roll_att=0.9, roll_gps=0.2))}
-    for cid in ("F2-roll", "F2-ideal", "R-3.8", "F3-bp", "F5-model", "F5-barely", "F6-x1000",
-                "C2-att"):
+        roll_att=0.9, roll_gps=0.2, att_rw=1.5))}
+    assert set(bad) == set(good)
+    for cid in ("F2-roll", "F2-ideal", "R-3.8", "F3-bp", "F5-model", "F5-ins-only", "F5-barely",
+                "F6-x1000", "C4-models", "C2-att"):
         assert bad[cid].verdict == "not reproduced", (cid, bad[cid].checks_text())
     _assert_can_fail(good.values())
 
