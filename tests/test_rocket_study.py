@@ -59,11 +59,23 @@ def test_baseline_outcomes(baseline):
     assert np.all(s_sgx[40:] > 0.99)
 
 
-def test_verdict_rule():
-    assert rocket._verdict({"a": True, "b": {"x": True, "y": True}})[0] == "reproduced"
-    verdict, note = rocket._verdict({"a": True, "b": {"x": True, "y": False}})
-    assert verdict == "partly" and "b (1/2; y)" in note
-    assert rocket._verdict({"a": False, "b": {"x": True, "y": False}})[0] == "not reproduced"
+def test_every_claim_fails_when_its_headline_fails(baseline):
+    """Fed a result whose headline check fails, each of X1-X7, S1-S8 says "not
+    reproduced" (the rule lives in navlib.studies.claims, tested in test_claims.py)."""
+    from navlib.studies.claims import with_failed_headline
+
+    for c in rocket.excitability_claims(baseline) + rocket.sensability_claims(baseline):
+        assert c.checks, c.claim_id
+        assert with_failed_headline(c).verdict == "not reproduced", c.claim_id
+
+
+def test_robustness_grid_reuses_and_counts():
+    grid = {"eta": (1e-2, 1e-3), "nu": (0.985,), "p0": ("baseline (30 m, 3 m/s)",),
+            "sigma_sg_ppm": (5000.0,), "spin_hz": (2.0,)}
+    variants = rocket.robustness_variants(grid)
+    assert len(variants) == 2 and all(len(v) == 15 for v in variants)
+    with pytest.raises(NavlibInputError, match="grid"):
+        rocket.robustness_variants({"gamma": (1,)})
 
 
 def test_tangent_projections_and_heading(baseline):

@@ -41,7 +41,8 @@ from navlib.errors import NavlibInputError
 from navlib.filters import LinearFilter, nees_values, prepare_linear, simulate_linear
 from navlib.models.launcher import SOLUTIONS, launcher
 from navlib.outliers import PAPER_TESTS, Outlier, RecoveryScore, score_recovery
-from navlib.studies.verdict import ClaimResult, claims_frame
+from navlib.studies import claims as engine
+from navlib.studies.claims import Check, ClaimResult, check, claim, claims_frame
 
 WATCHES = ("roll", "pitch", "yaw", "bp", "ref_roll")
 """Watched quantities: body-axis attitude errors (``T_E^B psi``), the GPS position bias
@@ -302,7 +303,8 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                 window: float = DEFAULTS["window"], record_every: int | None = None,
                 cache: FilterCache | None = None, divergence: bool = True,
-                time: float | None = None, **model_options) -> OutlierStudy:
+                time: float | None = None, reuse: OutlierStudy | None = None,
+                **model_options) -> OutlierStudy:
     """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
 
     Parameters
@@ -322,6 +324,10 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
         Also compute the T4 launcher-divergence response (Fig. 13).
     time : float, optional
         Outlier time, s (default the paper's 50 s).
+    reuse : OutlierStudy, optional
+        A study on the same trajectory and configuration whose model options differ at
+        most in the RT-only ones (:data:`_RT_ONLY_OPTIONS`): its non-RT responses are the
+        same and are taken over instead of rerun.
     """
     traj = trajectory if trajectory is not None else (
         cache.trajectory if cache is not None else default_trajectory())
@@ -341,11 +347,32 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
             continue          # T1 watches the GPS-bias states: not applicable without them
         for sol in PAPER_TESTS[tid].solutions:
             jobs.setdefault(sol, []).append(tid)
+    same = {}
+    if reuse is not None:
+        mine = {"biases": biases, "bias_model": _bias_model(biases, bias_model),
+                "rate_hz": traj.rate_hz, "duration_s": float(traj.t[-1] - traj.t[0]),
+                **model_options}
+        theirs = dict(reuse.settings)
+        keys = (set(mine) | set(theirs)) - {"window", "shapes"}
+        differ = {k for k in keys if mine.get(k) != theirs.get(k)}
+        if differ - set(_RT_ONLY_OPTIONS):
+            raise NavlibInputError(f"reuse: the studies differ in {sorted(differ)}, not only "
+                                   f"in the RT-only options {_RT_ONLY_OPTIONS}")
+        same = {k: r for k, r in reuse.responses.items() if not k[1].endswith("_rt")
+                and (time is None or r.outlier.time == time)}
     responses = {}
     for sol, tids in jobs.items():
         for tid in tids:
             test = PAPER_TESTS[tid]
             for shape in shapes:
+                if (tid, sol, shape) in same:
+                    old = same[(tid, sol, shape)]
+                    induced = old.induced if old.induced.shape[1] > 1 else old.induced[:, 0]
+                    sigma = old.sigma if old.sigma.shape[1] > 1 else old.sigma[:, 0]
+                    responses[(tid, sol, shape)] = replace(old, score=score_recovery(
+                        old.t, induced, t_outlier=old.outlier.time, window=window,
+                        sigma=sigma, averaging=DEFAULTS["averaging"]))
+                    continue
                 responses[(tid, sol, shape)] = outlier_response(
                     sol, test.outlier(shape, time=time), test.watch, biases=biases,
                     bias_model=bias_model, window=window, record_every=record_every,
@@ -369,12 +396,6 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
     return OutlierStudy(responses, capture, outlier_claims(study), settings)
 
 
-def _verdict(n_ok: int, n_total: int) -> str:
-    if n_total == 0:
-        return "not applicable"
-    return "reproduced" if n_ok == n_total else ("partly" if n_ok else "not reproduced")
-
-
 def _fmt(r: OutlierResponse) -> str:
     s = r.score
     if s.verdict == "unaffected":
@@ -384,8 +405,28 @@ def _fmt(r: OutlierResponse) -> str:
             f"{s.residual_vs_3sigma:.2g} x 3 sigma)")
 
 
+def _outcome_check(r: OutlierResponse, want: str) -> Check:
+    """The paper's outcome for one solution as a check on our recovery score: "static
+    error" = retained fraction above 1/e, "recovers" = at most 1/e, "affected" = a non-zero
+    peak, "unaffected" = a zero peak."""
+    label = SOLUTION_LABELS[r.solution]
+    s = r.score
+    if want in ("affected", "unaffected"):
+        return check(f"{label}: peak of the induced error", s.peak,
+                     ">" if want == "affected" else "<=", 0.0, True)
+    op = ">" if want == "static error" else "<="
+    return check(f"{label}: retained fraction after {s.window:g} s ({want})", s.retained, op,
+                 s.recovered_fraction, True)
+
+
 def outlier_claims(study: OutlierStudy, shape: str = "spike") -> list[ClaimResult]:
-    """Verdicts for T1-T4 (and the T4 capture detail) from a study's ``shape`` runs."""
+    """T1-T4 (and the T4 capture detail) from a study's ``shape`` runs, judged by the
+    claims engine.
+
+    Each solution's reported outcome is a headline check on our recovery score (see
+    :func:`_outcome_check`). A solution the outlier cannot reach (T3's INS/GPS has no RT
+    channel) is shown but not checked: its "unaffected" holds by construction.
+    """
     claims = []
     settings = study.settings
     base = (f"linear KF, {settings.get('biases') or 'no'} biases "
@@ -397,29 +438,21 @@ def outlier_claims(study: OutlierStudy, shape: str = "spike") -> list[ClaimResul
         rs = [study.responses.get((tid, sol, shape)) for sol in test.solutions]
         if any(r is None for r in rs):
             continue
-        ok = 0
-        for r in rs:
-            want = test.reported[r.solution]
-            got = r.score.verdict
-            if want == "affected":
-                ok += got != "unaffected"
-            else:
-                ok += got == want
+        checks = [_outcome_check(r, test.reported[r.solution]) for r in rs if r.applied]
         ours = "; ".join(_fmt(r) for r in rs)
         alt = [study.responses.get((tid, sol, other)) for sol in test.solutions]
         if all(a is not None for a in alt):
             ours += f". With a {other}: " + ", ".join(
                 f"{SOLUTION_LABELS[a.solution]} {a.score.verdict}" for a in alt)
         paper = "; ".join(f"{SOLUTION_LABELS[s]}: {v}" for s, v in test.reported.items())
-        claims.append(ClaimResult(tid, test.description, paper, ours,
-                                  _verdict(ok, len(rs)), base))
+        absent = [SOLUTION_LABELS[r.solution] for r in rs if not r.applied]
+        claims.append(claim(tid, test.description, paper, ours, checks,
+                            assumption=base + (f"; not checked (channel absent, unaffected "
+                                               f"by construction): {', '.join(absent)}"
+                                               if absent else "")))
     cap = study.capture
     if {"ins_gps_att_first", "ins_gps_att_rt_first"} <= set(cap):
-        faster = cap["ins_gps_att_rt_first"] > cap["ins_gps_att_first"]
-        slower = cap["ins_gps_att_rt_later"] < cap["ins_gps_att_later"]
-        under = cap.get("divergence_ratio", np.nan) < 1.0
-        n_ok = int(faster) + int(slower) + int(under)
-        claims.append(ClaimResult(
+        claims.append(claim(
             "T4-detail",
             "With RT the roll error is captured faster at first, then corrected more slowly; "
             "the launcher divergence is then underestimated (Figs. 12-13)",
@@ -428,8 +461,29 @@ def outlier_claims(study: OutlierStudy, shape: str = "spike") -> list[ClaimResul
             f"{cap['ins_gps_att_first']:.3f}; after 5 s: RT {cap['ins_gps_att_rt_later']:.3f} "
             f"vs {cap['ins_gps_att_later']:.3f}; estimated/true divergence (median after "
             f"+5 s) {cap.get('divergence_ratio', np.nan):.2f}",
-            _verdict(n_ok, 3), base))
+            [check("captured fraction after 0.05 s, RT minus no RT",
+                   cap["ins_gps_att_rt_first"] - cap["ins_gps_att_first"], ">", 0.0, True),
+             check("captured fraction after 5 s, RT minus no RT",
+                   cap["ins_gps_att_rt_later"] - cap["ins_gps_att_later"], "<", 0.0),
+             check("estimated / true divergence after +5 s",
+                   cap.get("divergence_ratio", np.nan), "<", 1.0)],
+            assumption=base))
     return claims
+
+
+def rescore(study: OutlierStudy, window: float) -> OutlierStudy:
+    """The same responses scored with another recovery window (no new filter run)."""
+    window = finite_scalar(window, "window", 0.0, low_open=True)
+    responses = {}
+    for key, r in study.responses.items():
+        induced = r.induced if r.induced.shape[1] > 1 else r.induced[:, 0]
+        sigma = r.sigma if r.sigma.shape[1] > 1 else r.sigma[:, 0]
+        responses[key] = replace(r, score=score_recovery(
+            r.t, induced, t_outlier=r.outlier.time, window=window, sigma=sigma,
+            averaging=DEFAULTS["averaging"]))
+    settings = {**study.settings, "window": window}
+    new = OutlierStudy(responses, study.capture, [], settings)
+    return OutlierStudy(responses, study.capture, outlier_claims(new), settings)
 
 
 # --- covariance figures: Fig. 10 correlation and Figs. 7 / 11 roll sigma --------------------
@@ -521,21 +575,25 @@ def covariance_claims(correlation: pd.DataFrame, sigma: pd.DataFrame,
                       ratios: pd.Series | None = None, rho_threshold: float = -0.9,
                       ratio_threshold: float = 0.5, improved: float = 0.9
                       ) -> list[ClaimResult]:
-    """Verdicts for Fig. 10 (rho near -1 over the first 5 s) and Figs. 7 / 11 (RT lowers
-    the roll sigma, with and without attitude sensors; with ``ratios`` from
-    :func:`sigma_ratios` also "all other estimates are not improved": no non-attitude state
-    with a sigma ratio below ``improved``)."""
+    """Fig. 10 (rho near -1 over the first 5 s) and Figs. 7 / 11 (RT lowers the roll sigma,
+    with and without attitude sensors), judged by the claims engine.
+
+    "Greatly reduced" = an RMS sigma ratio RT / no RT at most ``ratio_threshold``; Fig. 7's
+    "all other estimates are not improved" = pitch, yaw and (with ``ratios`` from
+    :func:`sigma_ratios`) every non-attitude state keep a ratio of at least ``improved``.
+    """
     claims = []
     rho = correlation.dropna().groupby("axis")["rho"]
     worst = rho.max()                      # closest to zero over the window
     median = rho.median()
-    n_ok = int((median <= rho_threshold).sum())
-    claims.append(ClaimResult(
+    axes = [a for a in ("roll", "pitch", "yaw") if a in median]
+    claims.append(claim(
         "F10", "Attitude error (body axes) and launcher divergence are almost perfectly "
         "negatively correlated over the first 5 s (INS/GPS + RT)", "rho ~ -1",
-        ", ".join(f"{a}: median {median[a]:+.3f} (max {worst[a]:+.3f})"
-                  for a in ("roll", "pitch", "yaw") if a in median),
-        _verdict(n_ok, int(median.size)), f"median rho <= {rho_threshold} per axis"))
+        ", ".join(f"{a}: median {median[a]:+.3f} (max {worst[a]:+.3f})" for a in axes),
+        [check("largest per-axis median rho", float(median[axes].max()) if axes else np.nan,
+               "<=", rho_threshold, True)],
+        assumption=f"'almost perfect' = median rho <= {rho_threshold} on every axis"))
 
     def mean_sigma(sol, axis):
         sel = sigma[(sigma.solution == sol) & (sigma.axis == axis)]
@@ -549,25 +607,26 @@ def covariance_claims(correlation: pd.DataFrame, sigma: pd.DataFrame,
         r = {ax: mean_sigma(b, ax) / mean_sigma(a, ax) for ax in ("roll", "pitch", "yaw")}
         ours = "RMS sigma after 10 s, RT / no RT: " + ", ".join(
             f"{ax} {v:.2g}" for ax, v in r.items())
-        n_ok, n_total = int(r["roll"] <= ratio_threshold), 1
+        checks = [check("roll sigma RT / no RT", r["roll"], "<=", ratio_threshold, True)]
         paper = "roll sigma greatly reduced"
         if cid == "F7":
             paper += "; all other estimates not improved"
+            checks.append(check("smallest of pitch, yaw sigma RT / no RT",
+                                min(r["pitch"], r["yaw"]), ">=", improved))
             if ratios is not None:
                 others = ratios[[not s.startswith("psi") for s in ratios.index]]
                 better = others[others < improved]
-                n_total += 1
-                n_ok += int(better.empty)
+                checks.append(check("non-attitude states improved by the RT", len(better),
+                                    "==", 0))
                 ours += (f"; other states improved (ratio < {improved}): "
                          + (", ".join(f"{s} {v:.2f}" for s, v in better.items())
                             if len(better) else "none"))
-            ours += " (pitch and yaw are attitude states the RT also measures)"
         else:
             paper += " even with attitude sensors"
-        claims.append(ClaimResult(
-            cid, f"The RT greatly lowers the roll sigma of {text}", paper, ours,
-            _verdict(n_ok, n_total),
-            f"roll ratio <= {ratio_threshold}; pitch/yaw reported, not judged"))
+        claims.append(claim(
+            cid, f"The RT greatly lowers the roll sigma of {text}", paper, ours, checks,
+            assumption=f"'greatly' = ratio <= {ratio_threshold}; 'not improved' = ratio >= "
+                       f"{improved}"))
     return claims
 
 
@@ -819,3 +878,86 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
                          "time_constant": r.score.time_constant,
                          "claim_verdict": claim.get(tid, "")})
     return pd.DataFrame(rows)
+
+
+# --- registration with the claims engine ----------------------------------------------------
+
+
+def reading_markdown(study: OutlierStudy, covariance: Sequence[ClaimResult] = (),
+                     sensitivity: pd.DataFrame | None = None) -> str:
+    """The notebook's generated reading: T1-T4 and Figs. 7, 10, 11 by verdict, and (with
+    ``sensitivity`` from :func:`assumption_sensitivity`) which variants change a verdict."""
+    lines = []
+    if sensitivity is not None and len(sensitivity):
+        per = sensitivity.drop_duplicates(["variant", "test"]).pivot(
+            index="test", columns="variant", values="claim_verdict")
+        moved = per[per.nunique(axis=1) > 1]
+        for test, row in moved.iterrows():
+            lines.append(f"{test} depends on the reading: " + ", ".join(
+                f"{variant}: {verdict}" for variant, verdict in row.items()) + ".")
+        if not len(moved):
+            lines.append("No variant of the sensitivity table changes a test's verdict.")
+    return engine.reading_markdown(list(study.claims) + list(covariance), lines)
+
+
+
+
+ROBUSTNESS_GRID = {"window": (30.0, 50.0, 100.0), "a1_sign": (1.0, -1.0)}
+"""The declared assumption set of T1-T4, F7, F10, F11 (full factorial, 6 points): the
+recovery window the paper leaves open (30 s to the 100 s left of the mission) and the sign
+of A1 (printed +1, the text's -1, spec §10b). Windows re-score the same responses; the -1
+sign re-prepares only the two RT filters. Spike outliers only (notebook 05 adds the step)."""
+
+
+def study_claims(cache: FilterCache, window: float = DEFAULTS["window"],
+                 time: float | None = None, shapes: Sequence[str] = ("spike", "step"),
+                 reuse: OutlierStudy | None = None, **settings) -> tuple[OutlierStudy, list]:
+    """T1-T4 and Figs. 7, 10, 11 on the filters of ``cache`` (``settings``: ``biases``,
+    ``bias_model``): (the outlier study with its claims, the covariance claims)."""
+    st = paper_tests(cache=cache, window=window, time=time, shapes=shapes, reuse=reuse,
+                     **settings, **cache.model_options)
+    corr = correlation_fig10(cache=cache, **settings)
+    sig = roll_sigma(cache=cache, **settings)
+    ratios = sigma_ratios("ins_gps", "ins_gps_rt", cache=cache, **settings)
+    return st, covariance_claims(corr, sig, ratios)
+
+
+_CACHE: dict = {}
+
+
+def _variants(quick: bool) -> dict:
+    """Claims per (window, a1_sign) of :data:`ROBUSTNESS_GRID` (baseline: 100 s, +1)."""
+    if quick in _CACHE:
+        return _CACHE[quick]
+    _CACHE.clear()
+    traj = default_trajectory(quick)
+    windows = (30.0,) if quick else ROBUSTNESS_GRID["window"]
+    out, previous, first = {}, None, None
+    for sign in ROBUSTNESS_GRID["a1_sign"]:
+        cache = FilterCache(traj, size=4, a1_sign=sign)
+        if previous is not None:
+            _adopt(cache, previous)
+        previous = None
+        st, cov = study_claims(cache, window=max(windows), shapes=("spike",), reuse=first)
+        first = first or st
+        for window in windows:
+            rescored = st if window == max(windows) else rescore(st, window)
+            out[(window, sign)] = rescored.claims + cov
+        previous = cache
+        del cache
+    _CACHE[quick] = out
+    return out
+
+
+def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
+    v = _variants(quick)
+    return v[(30.0 if quick else DEFAULTS["window"], 1.0)]
+
+
+def _robustness(quick: bool = False) -> dict:
+    return engine.reproduced_fraction(list(_variants(quick).values()))
+
+
+engine.register(engine.Study("outliers", "Beaudoin et al. (2018)", _baseline_claims,
+                             ROBUSTNESS_GRID, _robustness,
+                             "full factorial; windows re-score, -1 re-prepares the RT filters"))

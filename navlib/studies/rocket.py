@@ -18,8 +18,9 @@ its [I] notes):
   are left out of the "weakly sensible" counts (every state is sensible at t0 under the
   literal reading of spec A9, and the sensible subspace is still large for a few epochs).
 
-A claim made of several checks is "reproduced" when every check passes, "partly" when more
-than half pass, "not reproduced" otherwise; each result lists the checks that failed.
+Each claim is a list of explicit checks judged by the one rule of
+:mod:`navlib.studies.claims` (the headline check decides "not reproduced"), and is
+registered there with its declared assumption set (:data:`ROBUSTNESS_GRID`).
 The metrics are *relative* (normalised by D0 and R0) and depend strongly on the assumed
 P0, GNSS sigma, eta and nu (spec §3 "What the prototype showed"): :func:`sensitivity_sweep`
 shows how much.
@@ -49,7 +50,8 @@ from navlib.models.ecef import (
     initial_covariance,
     parameter_sigmas,
 )
-from navlib.studies.verdict import ClaimResult, claims_frame
+from navlib.studies import claims as engine
+from navlib.studies.claims import ClaimResult, check, claim, claims_frame
 from navlib.trajectory import sounding_rocket
 
 SEGMENTS = ((0.0, 19.0), (19.0, 60.0), (60.0, 86.0))
@@ -364,33 +366,6 @@ def _require_three(analysis: RocketAnalysis) -> None:
             f"the analysis has {len(analysis.segments)}")
 
 
-def _verdict(statements: dict) -> tuple[str, str]:
-    """Verdict from the claim's statements, each a bool or a dict of named boolean checks.
-
-    A statement's score is the fraction of its checks that pass; the claim is "reproduced"
-    when every check passes, "partly" when the mean statement score exceeds 1/2, else "not
-    reproduced". The note lists the statements that failed and which checks.
-    """
-    scores, failures = [], []
-    for name, checks in statements.items():
-        checks = checks if isinstance(checks, dict) else {name: checks}
-        passed = sum(bool(v) for v in checks.values())
-        scores.append(passed / len(checks))
-        if passed < len(checks):
-            bad = [k for k, v in checks.items() if not v]
-            detail = "" if bad == [name] else f" ({passed}/{len(checks)}; {', '.join(bad)})"
-            failures.append(f"{name}{detail}")
-    score = float(np.mean(scores))
-    if score == 1.0:
-        verdict = "reproduced"
-    elif score > 0.5:
-        verdict = "partly"
-    else:
-        verdict = "not reproduced"
-    note = f"score {score:.2f}" + (f"; failed: {'; '.join(failures)}" if failures else "")
-    return verdict, note
-
-
 def _e(analysis: RocketAnalysis, state: str, segment: int) -> float:
     return float(analysis.excitability[segment].e[STATE_NAMES.index(state)])
 
@@ -429,57 +404,53 @@ def claim_x1(analysis: RocketAnalysis) -> ClaimResult:
     """X1: e1-e6 (P, V) lie mostly in S_O in all three segments (GNSS)."""
     _require_three(analysis)
     states = STATE_GROUPS["position"] + STATE_GROUPS["velocity"]
-    checks = {"P, V in S_O in every segment": {
-        f"{s}@{lab}": _e(analysis, s, i) >= IN_SO
-        for i, lab in enumerate(SEGMENT_LABELS) for s in states}}
-    verdict, note = _verdict(checks)
     mins = {lab: min(_e(analysis, s, i) for s in states) for i, lab in enumerate(SEGMENT_LABELS)}
-    return ClaimResult("X1", "P and V (e1-e6) lie mostly in S_O in all three segments",
-                       "e1-e6 high in tau1, tau2, tau3", f"min e: {_fmt(mins)}; {note}",
-                       verdict, _assumption(analysis, "sigma_P0/sigma_V0 vs R0 (small P0 "
-                                                      "breaks it)"))
+    checks = [check("min e(P, V) over tau1-tau3", min(mins.values()), ">=", IN_SO, True)]
+    return claim("X1", "P and V (e1-e6) lie mostly in S_O in all three segments",
+                 "e1-e6 high in tau1, tau2, tau3", f"min e: {_fmt(mins)}", checks,
+                 assumption=_assumption(analysis, "sigma_P0/sigma_V0 vs R0 (small P0 breaks "
+                                                  "it)"))
 
 
 def claim_x2(analysis: RocketAnalysis) -> ClaimResult:
     """X2: attitude (e7-e9) in S_O in tau1 and tau2, barely excited in tau3."""
     _require_three(analysis)
-    checks = {f"attitude in S_O in {lab}": {s: _e(analysis, s, i) >= IN_SO for s in ATTITUDE}
-              for i, lab in enumerate(SEGMENT_LABELS[:2])}
-    checks["attitude barely excited in tau3"] = {s: _e(analysis, s, 2) < LOW for s in ATTITUDE}
-    verdict, note = _verdict(checks)
+    checks = [check(f"min e(attitude) in {lab}", min(_e(analysis, s, i) for s in ATTITUDE),
+                    ">=", IN_SO, True) for i, lab in enumerate(SEGMENT_LABELS[:2])]
+    checks.append(check("max e(attitude) in tau3 ('barely')",
+                        max(_e(analysis, s, 2) for s in ATTITUDE), "<", LOW))
     ours = "; ".join(f"{lab}: " + "/".join(f"{_e(analysis, s, i):.2f}" for s in ATTITUDE)
                      for i, lab in enumerate(SEGMENT_LABELS))
-    return ClaimResult("X2", "Attitude in S_O in tau1 and tau2, barely excites the innovations "
-                       "in tau3", "e7-e9 high in tau1, tau2; low in tau3",
-                       f"e7/e8/e9 {ours}; {note}", verdict,
-                       _assumption(analysis, "heading is not excited at rest (only the tilt "
-                                             "plane), so ECEF components ~ their tangent-plane "
-                                             "projections"))
+    return claim("X2", "Attitude in S_O in tau1 and tau2, barely excites the innovations in "
+                 "tau3", "e7-e9 high in tau1, tau2; low in tau3", f"e7/e8/e9 {ours}", checks,
+                 assumption=_assumption(analysis, "heading is not excited at rest (only the "
+                                                  "tilt plane), so ECEF components ~ their "
+                                                  "tangent-plane projections"))
 
 
 def claim_x3(analysis: RocketAnalysis) -> ClaimResult:
     """X3: e16 (x-gyro scale factor) becomes excitable in tau2."""
     _require_three(analysis)
     e = [_e(analysis, "sg_x", i) for i in range(3)]
-    checks = {"e16@tau2 in S_O": e[1] >= IN_SO, "e16 tau2 > tau1": e[1] > e[0],
-              "e16 tau2 > tau3": e[1] > e[2]}
-    verdict, note = _verdict(checks)
-    return ClaimResult("X3", "x-gyro scale factor (e16) becomes excitable in tau2 "
-                       "(acceleration with spin)", "e16 high in tau2 only",
-                       f"e16 {_fmt(dict(zip(SEGMENT_LABELS, e, strict=True)))}; {note}",
-                       verdict, _assumption(analysis, "needs a large spin x sigma_sg"))
+    checks = [check("e16 in tau2", e[1], ">=", IN_SO, True),
+              check("e16 tau2 - tau1", e[1] - e[0], ">", 0.0),
+              check("e16 tau2 - tau3", e[1] - e[2], ">", 0.0)]
+    return claim("X3", "x-gyro scale factor (e16) becomes excitable in tau2 (acceleration "
+                 "with spin)", "e16 high in tau2 only",
+                 f"e16 {_fmt(dict(zip(SEGMENT_LABELS, e, strict=True)))}", checks,
+                 assumption=_assumption(analysis, "needs a large spin x sigma_sg"))
 
 
 def claim_x4(analysis: RocketAnalysis) -> ClaimResult:
     """X4: e19 (x-accelerometer scale factor) more excitable in tau2 than tau1, still < 1/√2."""
     _require_three(analysis)
     e = [_e(analysis, "sa_x", i) for i in range(3)]
-    checks = {"e19 tau2 > tau1": e[1] > e[0], "e19@tau2 < 1/sqrt2": e[1] < IN_SO}
-    verdict, note = _verdict(checks)
-    return ClaimResult("X4", "x-accelerometer scale factor (e19) more excitable in tau2 than "
-                       "tau1 but predominantly in S_NO", "e19 tau2 > tau1, < 1/sqrt(2)",
-                       f"e19 {_fmt(dict(zip(SEGMENT_LABELS, e, strict=True)))}; {note}",
-                       verdict, _assumption(analysis, "thrust ~110 m/s^2 x sigma_sa"))
+    checks = [check("e19 tau2 - tau1", e[1] - e[0], ">", 0.0, True),
+              check("e19 in tau2 (predominantly in S_NO)", e[1], "<", IN_SO)]
+    return claim("X4", "x-accelerometer scale factor (e19) more excitable in tau2 than tau1 "
+                 "but predominantly in S_NO", "e19 tau2 > tau1, < 1/sqrt(2)",
+                 f"e19 {_fmt(dict(zip(SEGMENT_LABELS, e, strict=True)))}", checks,
+                 assumption=_assumption(analysis, "thrust ~110 m/s^2 x sigma_sa"))
 
 
 OTHER_PARAMETERS = tuple(p for p in PARAMETERS if p not in ("sg_x", "sa_x"))
@@ -489,18 +460,16 @@ OTHER_PARAMETERS = tuple(p for p in PARAMETERS if p not in ("sg_x", "sa_x"))
 def claim_x5(analysis: RocketAnalysis) -> ClaimResult:
     """X5: all other IMU parameters very low in every segment."""
     _require_three(analysis)
-    checks = {"other parameters very low": {
-        f"{p}@{lab}": _e(analysis, p, i) < LOW
-        for i, lab in enumerate(SEGMENT_LABELS) for p in OTHER_PARAMETERS}}
-    verdict, note = _verdict(checks)
     top = {lab: max(OTHER_PARAMETERS, key=lambda p, i=i: _e(analysis, p, i))
            for i, lab in enumerate(SEGMENT_LABELS)}
+    worst = max(_e(analysis, p, i) for i, p in enumerate(top.values()))
     ours = ", ".join(f"{lab} max {_e(analysis, p, i):.2f} ({p})"
                      for i, (lab, p) in enumerate(top.items()))
-    return ClaimResult("X5", "All other IMU parameters very low in every segment",
-                       "e10-e15, e17, e18, e20, e21 ~ 0", f"{ours}; {note}", verdict,
-                       _assumption(analysis, f"'very low' = e < {LOW}; sigma_bg0 vs "
-                                             "sigma_theta0 sets the pad gyro-bias share"))
+    return claim("X5", "All other IMU parameters very low in every segment",
+                 "e10-e15, e17, e18, e20, e21 ~ 0", ours,
+                 [check("max e(other parameters), all segments", worst, "<", LOW, True)],
+                 assumption=_assumption(analysis, f"'very low' = e < {LOW}; sigma_bg0 vs "
+                                                  "sigma_theta0 sets the pad gyro-bias share"))
 
 
 def _rms(analysis: RocketAnalysis, states: Sequence[str], segment: int) -> float:
@@ -514,14 +483,15 @@ def claim_x6(analysis: RocketAnalysis) -> ClaimResult:
     scales = [p for p in OTHER_PARAMETERS if p.startswith("s")]
     rb = [_rms(analysis, biases, i) for i in range(3)]
     rs = [_rms(analysis, scales, i) for i in range(3)]
-    checks = {"biases highest in tau1": int(np.argmax(rb)) == 0,
-              "scale factors highest in tau2": int(np.argmax(rs)) == 1}
-    verdict, note = _verdict(checks)
+    checks = [check("segment with the largest rms e of the biases", int(np.argmax(rb)) + 1,
+                    "==", 1, True),
+              check("segment with the largest rms e of the scale factors",
+                    int(np.argmax(rs)) + 1, "==", 2, True)]
     ours = (f"rms e biases {'/'.join(f'{v:.3f}' for v in rb)}, scale factors "
-            f"{'/'.join(f'{v:.3f}' for v in rs)} (tau1/tau2/tau3); {note}")
-    return ClaimResult("X6", "Among the low values, biases relatively higher in tau1 and scale "
-                       "factors in tau2", "biases: tau1; scale factors: tau2", ours, verdict,
-                       _assumption(analysis, "rms over the non-e16/e19 parameters"))
+            f"{'/'.join(f'{v:.3f}' for v in rs)} (tau1/tau2/tau3)")
+    return claim("X6", "Among the low values, biases relatively higher in tau1 and scale "
+                 "factors in tau2", "biases: tau1; scale factors: tau2", ours, checks,
+                 assumption=_assumption(analysis, "rms over the non-e16/e19 parameters"))
 
 
 def claim_x7(analysis: RocketAnalysis) -> ClaimResult:
@@ -529,13 +499,13 @@ def claim_x7(analysis: RocketAnalysis) -> ClaimResult:
     _require_three(analysis)
     r = [_rms(analysis, PARAMETERS, i) for i in range(3)]
     top = max(_e(analysis, p, 2) for p in PARAMETERS)
-    checks = {"rms e(params) tau3 < tau1": r[2] < r[0], "rms e(params) tau3 < tau2": r[2] < r[1],
-              "max e(params)@tau3 low": top < LOW}
-    verdict, note = _verdict(checks)
+    checks = [check("max e(IMU parameters) in tau3", top, "<", LOW, True),
+              check("rms e(parameters) tau3 - tau1", r[2] - r[0], "<", 0.0),
+              check("rms e(parameters) tau3 - tau2", r[2] - r[1], "<", 0.0)]
     ours = f"rms e of the 12 parameters {'/'.join(f'{v:.3f}' for v in r)}, max tau3 {top:.2f}"
-    return ClaimResult("X7", "Free fall (tau3) is unfavourable for in-flight recalibration",
-                       "IMU parameters not excitable in tau3", f"{ours}; {note}", verdict,
-                       _assumption(analysis))
+    return claim("X7", "Free fall (tau3) is unfavourable for in-flight recalibration",
+                 "IMU parameters not excitable in tau3", ours, checks,
+                 assumption=_assumption(analysis))
 
 
 # --------------------------------------------------------------------------- S1-S8 (Figs 3-5)
@@ -561,12 +531,12 @@ def claim_s1(analysis: RocketAnalysis) -> ClaimResult:
     _require_three(analysis)
     k = analysis.epochs(*analysis.segments[0], open_start=True)
     s = _s(analysis, "P_x")
-    checks = {"s(P_x) >= 1/sqrt2 on tau1": bool(np.all(s[k] >= SENSIBLE))}
-    verdict, note = _verdict(checks)
     ours = f"min s(P_x) tau1 {s[k].min():.2f}; whole flight {s[1:].min():.2f}"
-    return ClaimResult("S1", "x-position sensability high from the very beginning",
-                       "s(P_x) high from t0", f"{ours}; {note}", verdict,
-                       _sens_assumption(analysis, "epoch t0 left out (s = 1 there by A9)"))
+    return claim("S1", "x-position sensability high from the very beginning",
+                 "s(P_x) high from t0", ours,
+                 [check("min s(P_x) over tau1", float(s[k].min()), ">=", SENSIBLE, True)],
+                 assumption=_sens_assumption(analysis, "epoch t0 left out (s = 1 there by "
+                                                       "A9)"))
 
 
 def claim_s2(analysis: RocketAnalysis) -> ClaimResult:
@@ -578,22 +548,19 @@ def claim_s2(analysis: RocketAnalysis) -> ClaimResult:
     kv = k1[np.argmin(s[k1])]
     t_v = float(t[kv])
     late = analysis.epochs(55.0, analysis.segments[2][1])
-    before = analysis.epochs(analysis.segments[1][0], 55.0 - 1e-6)
     rise = analysis.epochs(10.0, 16.0)
-    checks = {
-        "valley before 5 s": t_v <= 5.0 + 1e-9 and s[kv] < SENSIBLE,
-        "rise near 12 s": rise.size > 0 and t_v < 12.0 and s[rise].max() - s[kv] >= 0.2,
-        "~1 after 55 s": late.size > 0 and s[late].mean() >= 0.9
-        and s[late].max() >= s[before].max(),
-    }
-    verdict, note = _verdict(checks)
+    gain = float(s[rise].max() - s[kv]) if rise.size else float("nan")
+    mean_late = float(s[late].mean()) if late.size else float("nan")
+    checks = [check("time of the V_x valley in tau1, s", t_v, "<=", 5.0, True),
+              check("s(V_x) at the valley (deep)", float(s[kv]), "<", SENSIBLE, True),
+              check("rise of s(V_x) by 10-16 s above the valley", gain, ">=", 0.2),
+              check("mean s(V_x) after 55 s (~1)", mean_late, ">=", 0.9)]
     ours = (f"valley {s[kv]:.2f} at {t_v:.0f} s, max 10-16 s {s[rise].max():.2f}, "
-            f"mean after 55 s {s[late].mean():.2f}")
-    return ClaimResult("S2", "x-velocity sensability: deep valley before 5 s, rise near 12 s, "
-                       "~1 after 55 s", "valley < 5 s; rise ~12 s; ~1 after 55 s",
-                       f"{ours}; {note}", verdict,
-                       _sens_assumption(analysis, "valley timing set by sigma_V0 vs GNSS "
-                                                  "sigma"))
+            f"mean after 55 s {mean_late:.2f}")
+    return claim("S2", "x-velocity sensability: deep valley before 5 s, rise near 12 s, ~1 "
+                 "after 55 s", "valley < 5 s; rise ~12 s; ~1 after 55 s", ours, checks,
+                 assumption=_sens_assumption(analysis, "valley timing set by sigma_V0 vs "
+                                                       "GNSS sigma"))
 
 
 def claim_s3(analysis: RocketAnalysis) -> ClaimResult:
@@ -605,20 +572,19 @@ def claim_s3(analysis: RocketAnalysis) -> ClaimResult:
     kv = int(k1[np.argmin(s[k1])])
     after = analysis.epochs(t[kv], t[kv] + 7.0, open_start=True)
     k12, k55 = analysis.at(12.0), analysis.at(55.0)
-    checks = {
-        "band grows after the valley": after.size > 0 and sig[after].max() > 1.02 * sig[kv],
-        "band shrinks after ~12 s": sig[k55] < sig[k12],
-        "band minimum after 55 s": t[int(np.argmin(sig))] >= 55.0 - 1e-9,
-    }
-    verdict, note = _verdict(checks)
+    grow = float(sig[after].max() / sig[kv]) if after.size else float("nan")
+    t_min = float(t[int(np.argmin(sig))])
+    checks = [check("time of the smallest V_x band, s", t_min, ">=", 55.0, True),
+              check("band at 55 s / band at 12 s", float(sig[k55] / sig[k12]), "<", 1.0),
+              check("largest band within 7 s after the valley / band at the valley", grow,
+                    ">", 1.02)]
     ours = (f"2sigma(V_x) {2 * sig[kv]:.2f} m/s at the valley ({t[kv]:.0f} s), "
             f"max {2 * sig[after].max() if after.size else np.nan:.2f} in the next 7 s, "
-            f"{2 * sig[k12]:.2f} at 12 s, {2 * sig[k55]:.2f} at 55 s, "
-            f"min at {t[int(np.argmin(sig))]:.0f} s")
-    return ClaimResult("S3", "The V_x 2-sigma band lags the sensability: grows after the "
-                       "valley, shrinks after ~12 s, minimum after 55 s",
-                       "grow / shrink after 12 s / min after 55 s", f"{ours}; {note}",
-                       verdict, _sens_assumption(analysis))
+            f"{2 * sig[k12]:.2f} at 12 s, {2 * sig[k55]:.2f} at 55 s, min at {t_min:.0f} s")
+    return claim("S3", "The V_x 2-sigma band lags the sensability: grows after the valley, "
+                 "shrinks after ~12 s, minimum after 55 s",
+                 "grow / shrink after 12 s / min after 55 s", ours, checks,
+                 assumption=_sens_assumption(analysis))
 
 
 def _up(analysis: RocketAnalysis) -> np.ndarray:
@@ -677,19 +643,20 @@ def claim_s4(analysis: RocketAnalysis) -> ClaimResult:
     t_lift = analysis.segments[1][0]
     after = analysis.epochs(t_lift, t_lift + 10.0, open_start=True)
     mean_after = np.array([_s(analysis, s)[after].mean() for s in ATTITUDE])
-    checks = {"pad order follows tangent projection":
-              bool(np.array_equal(np.argsort(mean_pad), np.argsort(proj))),
-              "theta_x grows after lift-off": mean_after[0] > mean_pad[0],
-              "theta_y grows after lift-off": mean_after[1] > mean_pad[1]}
-    verdict, note = _verdict(checks)
+    same_order = bool(np.array_equal(np.argsort(mean_pad), np.argsort(proj)))
+    checks = [check("pad order of s(theta) follows the tangent projection", same_order,
+                    "==", True, True),
+              check("gain of s(theta_x) in the 10 s after lift-off",
+                    float(mean_after[0] - mean_pad[0]), ">", 0.0),
+              check("gain of s(theta_y) in the 10 s after lift-off",
+                    float(mean_after[1] - mean_pad[1]), ">", 0.0)]
     ours = (f"pad mean s {'/'.join(f'{v:.2f}' for v in mean_pad)} vs projections "
             f"{'/'.join(f'{v:.2f}' for v in proj)}; 10 s after lift-off "
             f"{'/'.join(f'{v:.2f}' for v in mean_after)}")
-    return ClaimResult("S4", "On the pad the IMU is an inclinometer: attitude components more "
-                       "sensible the larger their tangent-plane projection; q_x, q_y grow after "
-                       "lift-off", "order by projection; q_x, q_y rise after 19 s",
-                       f"{ours}; {note}", verdict,
-                       _sens_assumption(analysis, "components in ECEF axes (A4 b)"))
+    return claim("S4", "On the pad the IMU is an inclinometer: attitude components more "
+                 "sensible the larger their tangent-plane projection; q_x, q_y grow after "
+                 "lift-off", "order by projection; q_x, q_y rise after 19 s", ours, checks,
+                 assumption=_sens_assumption(analysis, "components in ECEF axes (A4 b)"))
 
 
 def claim_s5(analysis: RocketAnalysis) -> ClaimResult:
@@ -706,18 +673,19 @@ def claim_s5(analysis: RocketAnalysis) -> ClaimResult:
     not_sensible = [s for s in excited if _s(analysis, s)[pad].mean() < SENSIBLE]
     late_pad = pad[analysis.model.t[pad] > analysis.model.t[0] + TRANSIENT_S]
     gyro = STATE_GROUPS["gyro_bias"]
-    checks = {"heading not sensible at ignition": heading[k_end] < SENSIBLE,
-              "gyro biases not sensible on the pad":
-              all(np.all(_s(analysis, s)[late_pad] < SENSIBLE) for s in gyro),
-              "an excitable-at-rest state stays non-sensible": bool(not_sensible)}
-    verdict, note = _verdict(checks)
+    gyro_max = max(float(_s(analysis, s)[late_pad].max()) for s in gyro) if late_pad.size \
+        else float("nan")
+    checks = [check("s(heading) at ignition", float(heading[k_end]), "<", SENSIBLE, True),
+              check("max s(gyro bias) on the pad", gyro_max, "<", SENSIBLE),
+              check("states excitable at rest but not sensible on the pad",
+                    len(not_sensible), ">=", 1)]
     ours = (f"heading s {heading[k_end]:.2f}, 1sigma {sigma_heading:.1f} deg at "
             f"{analysis.model.t[k_end]:.0f} s; excitable at rest but not sensible: "
             f"{', '.join(not_sensible) or 'none'}")
-    return ClaimResult("S5", "Gyro noise and bias hide the Earth rate: high excitability at "
-                       "rest does not become sensability", "heading not sensible on the pad",
-                       f"{ours}; {note}", verdict,
-                       _sens_assumption(analysis, "ARW, sigma_bg0 >> Earth rate (15 deg/h)"))
+    return claim("S5", "Gyro noise and bias hide the Earth rate: high excitability at rest "
+                 "does not become sensability", "heading not sensible on the pad", ours,
+                 checks, assumption=_sens_assumption(analysis, "ARW, sigma_bg0 >> Earth rate "
+                                                               "(15 deg/h)"))
 
 
 def claim_s6(analysis: RocketAnalysis) -> ClaimResult:
@@ -729,23 +697,26 @@ def claim_s6(analysis: RocketAnalysis) -> ClaimResult:
     i2a, i2b, i3a, i3b = (analysis.at(x) for x in (a2, b2, a3, b3))
     sens = {s: _s(analysis, s) for s in ATTITUDE}
     sig = {s: _sigma(analysis, s) for s in ATTITUDE}
-    checks = {
-        "high through tau2": {s: sens[s][k2].mean() >= SENSIBLE for s in ATTITUDE},
-        "band shrinks in tau2": {s: sig[s][i2b] < sig[s][i2a] for s in ATTITUDE},
-        "declines in tau3": {s: sens[s][i3b] < sens[s][i3a] for s in ATTITUDE},
-        "band grows in tau3": {s: sig[s][i3b] > sig[s][i3a] for s in ATTITUDE},
-    }
-    verdict, note = _verdict(checks)
-    ratio = {s: float(_sigma(analysis, s)[k2].max() / _sigma(analysis, s)[0]) for s in ATTITUDE}
-    ours = ("mean s tau2 " + "/".join(f"{_s(analysis, s)[k2].mean():.2f}" for s in ATTITUDE)
+    checks = [
+        check("min over theta of mean s in tau2", min(sens[s][k2].mean() for s in ATTITUDE),
+              ">=", SENSIBLE, True),
+        check("max over theta of band(tau2 end) / band(tau2 start)",
+              max(sig[s][i2b] / sig[s][i2a] for s in ATTITUDE), "<", 1.0, True),
+        check("max over theta of s(tau3 end) - s(tau3 start)",
+              max(sens[s][i3b] - sens[s][i3a] for s in ATTITUDE), "<", 0.0),
+        check("min over theta of band(tau3 end) / band(tau3 start)",
+              min(sig[s][i3b] / sig[s][i3a] for s in ATTITUDE), ">", 1.0),
+    ]
+    ratio = {s: float(sig[s][k2].max() / sig[s][0]) for s in ATTITUDE}
+    ours = ("mean s tau2 " + "/".join(f"{sens[s][k2].mean():.2f}" for s in ATTITUDE)
             + "; max sigma/sigma0 in tau2 " + "/".join(f"{v:.1f}" for v in ratio.values())
             + "; s at tau3 start->end " + "/".join(
-                f"{_s(analysis, s)[i3a]:.2f}->{_s(analysis, s)[i3b]:.2f}" for s in ATTITUDE))
-    return ClaimResult("S6", "Attitude sensability high through tau2 as its band shrinks; "
-                       "declines in free fall as the band grows",
-                       "high in tau2, band shrinks; declines in tau3", f"{ours}; {note}",
-                       verdict, _sens_assumption(analysis, "spin x sigma_sg drives the roll "
-                                                           "band (the X3 tension)"))
+                f"{sens[s][i3a]:.2f}->{sens[s][i3b]:.2f}" for s in ATTITUDE))
+    return claim("S6", "Attitude sensability high through tau2 as its band shrinks; declines "
+                 "in free fall as the band grows",
+                 "high in tau2, band shrinks; declines in tau3", ours, checks,
+                 assumption=_sens_assumption(analysis, "spin x sigma_sg drives the roll band "
+                                                       "(the X3 tension)"))
 
 
 def claim_s7(analysis: RocketAnalysis) -> ClaimResult:
@@ -760,20 +731,19 @@ def claim_s7(analysis: RocketAnalysis) -> ClaimResult:
     brief = {g: _sensible_time(analysis, g, k2) for g in gyro}
     candidates = [g for g in gyro if 0 < brief[g] <= BRIEF_S]
     ratio = {g: float(_sigma(analysis, g)[-1] / _sigma(analysis, g)[0]) for g in gyro}
-    checks = {
-        "parameters weakly sensible": {p: times[p] <= BRIEF_S for p in PARAMETERS},
-        "a gyro bias briefly sensible in tau2": bool(candidates),
-        "its bound not improved": bool(candidates) and all(ratio[g] >= NOT_IMPROVED
-                                                            for g in candidates),
-    }
-    verdict, note = _verdict(checks)
     longest = max(times, key=times.get)
+    checks = [check(f"longest sensible time of an IMU parameter ({longest}), s",
+                    times[longest], "<=", BRIEF_S, True),
+              check("gyro biases briefly (0-10 s) sensible in tau2", len(candidates), ">=", 1),
+              check("min sigma_end/sigma_0 of those gyro biases",
+                    min((ratio[g] for g in candidates), default=float("nan")), ">=",
+                    NOT_IMPROVED)]
     ours = (f"longest sensible parameter {longest} {times[longest]:.0f} s; gyro-bias sensible "
             f"time in tau2 {_fmt(brief, 0)} s; sigma_end/sigma0 {_fmt(ratio)}")
-    return ClaimResult("S7", "IMU parameters weakly sensible; a gyro bias briefly sensible in "
-                       "tau2 without improving its 2-sigma bound",
-                       "one b_g component briefly sensible (x or y, A18)", f"{ours}; {note}",
-                       verdict, _sens_assumption(analysis, f"'briefly' <= {BRIEF_S:g} s"))
+    return claim("S7", "IMU parameters weakly sensible; a gyro bias briefly sensible in tau2 "
+                 "without improving its 2-sigma bound",
+                 "one b_g component briefly sensible (x or y, A18)", ours, checks,
+                 assumption=_sens_assumption(analysis, f"'briefly' <= {BRIEF_S:g} s"))
 
 
 def claim_s8(analysis: RocketAnalysis) -> ClaimResult:
@@ -794,19 +764,23 @@ def claim_s8(analysis: RocketAnalysis) -> ClaimResult:
                      if all(_e(analysis, s, i) < IN_SO for i in range(3))]
     sensible_unexcited = [s for s in never_excited
                           if _sensible_time(analysis, s, later) > BRIEF_S]
-    checks = {"recalibration futile": {p: ratio[p] >= FUTILE for p in PARAMETERS},
-              "excitation not sufficient": bool(excited_not_sensible),
-              "excitation necessary": not sensible_unexcited}
-    verdict, note = _verdict(checks)
+    best = min(ratio, key=ratio.get)
+    checks = [check(f"smallest sigma_end/sigma_0 of an IMU parameter ({best})", ratio[best],
+                    ">=", FUTILE, True),
+              check("excited but not sensible (state, segment) pairs",
+                    len(excited_not_sensible), ">=", 1),
+              check("states sensible > 10 s without being excited", len(sensible_unexcited),
+                    "==", 0)]
     listed = ", ".join(f"{p} {ratio[p]:.2f}" for p in calibrated) or "none"
     ours = (f"calibrated in flight: {listed}"
             f"; excited but not sensible: {', '.join(excited_not_sensible[:4]) or 'none'}"
             f"{' ...' if len(excited_not_sensible) > 4 else ''}; sensible without excitation: "
             f"{', '.join(sensible_unexcited) or 'none'}")
-    return ClaimResult("S8", "In-flight recalibration is futile; an exciting trajectory is "
-                       "necessary but not sufficient", "no parameter improves; excitation "
-                       "necessary, not sufficient", f"{ours}; {note}", verdict,
-                       _sens_assumption(analysis, f"'calibrated' = sigma_end/sigma0 < {FUTILE}"))
+    return claim("S8", "In-flight recalibration is futile; an exciting trajectory is necessary "
+                 "but not sufficient", "no parameter improves; excitation necessary, not "
+                 "sufficient", ours, checks,
+                 assumption=_sens_assumption(analysis, f"'calibrated' = sigma_end/sigma0 < "
+                                                       f"{FUTILE}"))
 
 
 EXCITABILITY_CLAIMS = (claim_x1, claim_x2, claim_x3, claim_x4, claim_x5, claim_x6, claim_x7)
@@ -1184,3 +1158,92 @@ def measure_disagreements(comparison: pd.DataFrame) -> pd.DataFrame:
             kinds.append(("excited, never sensible", f"max e {e_max:.2f}"))
         rows += [(r.state, kind, numbers, DISAGREEMENT_REASONS[kind]) for kind, numbers in kinds]
     return pd.DataFrame(rows, columns=["state", "disagreement", "numbers", "why"])
+
+
+# --------------------------------------------------------------------------- claims engine
+
+
+def reading_markdown(analysis: RocketAnalysis, which: str = "all", sweep=None,
+                     tension=None) -> str:
+    """The notebook's generated reading: the claims of ``analysis`` by verdict, the sweep's
+    pass rates (``sweep`` from :func:`sensitivity_sweep`) and the tension findings
+    (``tension`` from :func:`tension_table`)."""
+    results = []
+    if which in ("excitability", "all"):
+        results += excitability_claims(analysis)
+    if which in ("sensability", "all"):
+        results += sensability_claims(analysis)
+    if not results:
+        raise NavlibInputError(f"which: expected 'excitability', 'sensability' or 'all', "
+                               f"got {which!r}")
+    ids = [r.claim_id for r in results]
+    rates = sweep_pass_rates(sweep)[ids].to_dict() if sweep is not None else None
+    lines = []
+    proj = tangent_projections(analysis)
+    lines.append("Attitude-error axes projected on the pad's tangent plane: "
+                 + " / ".join(f"{v:.2f}" for v in proj) + " (the pad excites only the tilt "
+                 "plane, so these bound the pad excitability of each component).")
+    if rates is not None:
+        lines.append("The sweep above varies one assumption at a time; the fractions quoted "
+                     "with each claim are its pass rate there.")
+    if tension is not None:
+        lines += tension_findings(tension)
+    return engine.reading_markdown(results, lines, rates)
+
+
+
+
+ROBUSTNESS_GRID = {
+    "eta": (1e-2, 1e-3, 1e-4),
+    "nu": (0.98, 0.985, 0.99),
+    "p0": tuple(P0_SETS),
+    "sigma_sg_ppm": (1000.0, 5000.0),
+    "spin_hz": (1.0, 2.0),
+}
+"""The plausible assumption set of X1-X7 / S1-S8 (full factorial, 108 points): the paper
+gives none of eta, nu, P0, sigma_sg or the spin. 12 discretised analyses (spin x P0 x
+sigma_sg); eta and nu re-threshold the stored SVDs and eigen-decompositions."""
+QUICK_ROBUSTNESS_GRID = {"eta": (1e-2, 1e-3, 1e-4), "nu": (0.98, 0.985, 0.99),
+                         "p0": ("baseline (30 m, 3 m/s)",), "sigma_sg_ppm": (5000.0,),
+                         "spin_hz": (2.0,)}
+"""Quick mode: eta x nu at the baseline P0, sigma_sg and spin (no new discretisation)."""
+
+
+def robustness_variants(grid: dict | None = None, sensors=None) -> list[list[ClaimResult]]:
+    """X1-X7 and S1-S8 at every point of ``grid`` (default :data:`ROBUSTNESS_GRID`; a key
+    left out keeps its :data:`BASELINE` value)."""
+    grid = ROBUSTNESS_GRID if grid is None else dict(grid)
+    reject_unknown(grid, ROBUSTNESS_GRID, "grid")
+    grid = {"eta": (BASELINE["eta"],), "nu": (BASELINE["nu"],),
+            "p0": ("baseline (30 m, 3 m/s)",), "sigma_sg_ppm": (BASELINE["sigma_sg_ppm"],),
+            "spin_hz": (BASELINE["spin_hz"],), **grid}
+    out = []
+    for spin, p0, sg in itertools.product(grid["spin_hz"], grid["p0"], grid["sigma_sg_ppm"]):
+        if p0 not in P0_SETS:
+            raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
+        model = rocket_chain(spin, "ecef", sensors, BASELINE["gnss_sigma_m"],
+                             sigma_sg_ppm=sg, **P0_SETS[p0])
+        se = metrics.sensability_model(model, nu=BASELINE["nu"])
+        ex = excitability_segments(model, SEGMENTS, BASELINE["eta"], "global", se)
+        for eta, nu in itertools.product(grid["eta"], grid["nu"]):
+            settings = {**BASELINE, "spin_hz": spin, "eta": eta, "nu": nu,
+                        "prior_update": False, "sigma_sg_ppm": sg}
+            a = RocketAnalysis(model, rocket_trajectory(spin), se.with_nu(nu),
+                               tuple(e.with_eta(eta) for e in ex), SEGMENTS, settings)
+            out.append(excitability_claims(a) + sensability_claims(a))
+    return out
+
+
+def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
+    a = analyze()
+    return excitability_claims(a) + sensability_claims(a)
+
+
+def _robustness(quick: bool = False) -> dict:
+    return engine.reproduced_fraction(
+        robustness_variants(QUICK_ROBUSTNESS_GRID if quick else ROBUSTNESS_GRID))
+
+
+engine.register(engine.Study(
+    "rocket", "España, Carrizo & Giribet (2019)", _baseline_claims, ROBUSTNESS_GRID,
+    _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions"))

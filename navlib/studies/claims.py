@@ -1,0 +1,458 @@
+"""The one claims engine: every paper claim of every study, one verdict rule, one table.
+
+A claim is an id, the paper's statement and value, our number(s) and a list of explicit
+:class:`Check` s, each a measured value against a tolerance written in the paper's own terms
+("GPS barely improves roll" -> ``roll sigma ratio >= 0.5``). The verdict is never typed: it
+follows from the checks by the single rule of :func:`verdict_of`:
+
+* **reproduced**: every check passes;
+* **partly**: the headline check(s) pass and a secondary one fails;
+* **not reproduced**: a headline check fails.
+
+A claim whose checks could not be evaluated on the given input (e.g. a 30-40 min claim on a
+10 min quick run) is **not evaluated**; that is a status, not a verdict.
+
+Each claim also carries a **basis**:
+
+* ``measured``: our number is computed from the model, the paper's statement is tested;
+* ``by construction``: the claim is an input of ours (e.g. the rocket profile R1-R6, which
+  the trajectory generator takes as parameters): shown, never counted as reproduced;
+* ``fitted``: the claim holds at an assumption chosen to make it hold (e.g. SSAC's 45°
+  eigenvector pairs from a P0 built for them).
+
+Every study registers itself with :func:`register` (a :class:`Study`: a function returning
+its baseline claims, its declared assumption set as data, and a function evaluating the
+claims over that set). :func:`all_claims` runs every registered study and returns the one
+table of the contract (spec api.md, "Claims"), with the **robustness** of each measured or
+fitted claim: the fraction of its study's declared assumption set in which it is reproduced
+(NaN for claims by construction and where the study declares no set).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from navlib.errors import NavlibInputError
+
+VERDICTS = ("reproduced", "partly", "not reproduced")
+"""The verdicts of :func:`verdict_of`."""
+NOT_EVALUATED = "not evaluated"
+"""Status of a claim whose checks could not be evaluated on the given input."""
+STATUSES = (*VERDICTS, NOT_EVALUATED)
+BASES = ("measured", "by construction", "fitted")
+"""How a claim's number relates to our assumptions (module docstring)."""
+OPS = ("<", "<=", ">", ">=", "==", "!=", "in", "out")
+"""Comparisons a :class:`Check` supports (``in``/``out``: inside/outside ``[low, high]``)."""
+
+
+def _fmt(x) -> str:
+    if isinstance(x, (bool, np.bool_)):
+        return "yes" if x else "no"
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    x = float(x)
+    if math.isnan(x):
+        return "nan"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    if x != 0 and (abs(x) >= 1e4 or abs(x) < 1e-3):
+        return f"{x:.3g}"
+    return f"{x:.4g}"
+
+
+@dataclass(frozen=True)
+class Check:
+    """One measured value against a tolerance.
+
+    Attributes
+    ----------
+    name : str
+        What is checked, in the paper's terms (e.g. ``"roll sigma INS/GPS / INS-only"``).
+    value : float or bool
+        Our measured value (a count, a ratio, a time; booleans for yes/no facts).
+    op : str
+        One of :data:`OPS`.
+    target : float, bool or (float, float)
+        The tolerance bound (a pair for ``in``/``out``).
+    headline : bool
+        Whether this check carries the paper's main statement (see :func:`verdict_of`).
+    """
+
+    name: str
+    value: object
+    op: str
+    target: object
+    headline: bool = False
+
+    def __post_init__(self):
+        if self.op not in OPS:
+            raise NavlibInputError(f"op: expected one of {OPS}, got {self.op!r}")
+        if self.op in ("in", "out"):
+            try:
+                low, high = self.target
+            except (TypeError, ValueError) as exc:
+                raise NavlibInputError("target: 'in'/'out' need a (low, high) pair") from exc
+            if not low <= high:
+                raise NavlibInputError(f"target: need low <= high, got {self.target}")
+
+    @property
+    def passed(self) -> bool:
+        v, t = self.value, self.target
+        if isinstance(v, (float, np.floating)) and math.isnan(v):
+            return False
+        if self.op == "in":
+            return bool(t[0] <= v <= t[1])
+        if self.op == "out":
+            return bool(v < t[0] or v > t[1])
+        return bool({"<": v < t, "<=": v <= t, ">": v > t, ">=": v >= t, "==": v == t,
+                     "!=": v != t}[self.op])
+
+    def text(self) -> str:
+        """``name: value op target -> pass/FAIL`` (``*`` marks a headline check)."""
+        if self.op in ("in", "out"):
+            target = f"[{_fmt(self.target[0])}, {_fmt(self.target[1])}]"
+            op = "in" if self.op == "in" else "outside"
+        else:
+            target, op = _fmt(self.target), self.op
+        mark = "*" if self.headline else ""
+        return (f"{mark}{self.name}: {_fmt(self.value)} {op} {target} -> "
+                f"{'pass' if self.passed else 'FAIL'}")
+
+    def failing(self) -> Check:
+        """The same check with a value that violates the tolerance (for tests: every check
+        must be able to fail)."""
+        t = self.target
+        if isinstance(t, (bool, np.bool_)):
+            bad = (not t) if self.op in ("==", ">=", "<=") else t
+        elif self.op in ("in",):
+            bad = t[1] + 1.0 + abs(t[1])
+        elif self.op == "out":
+            bad = 0.5 * (t[0] + t[1])
+        elif self.op in ("<", "<="):
+            bad = t + 1.0 + abs(t)
+        elif self.op in (">", ">="):
+            bad = t - 1.0 - abs(t)
+        elif self.op == "==":
+            bad = t + 1
+        else:  # "!="
+            bad = t
+        return replace(self, value=bad)
+
+
+def check(name: str, value, op: str, target, headline: bool = False) -> Check:
+    """Shorthand for :class:`Check`."""
+    return Check(name, value, op, target, headline)
+
+
+def verdict_of(checks: Sequence[Check]) -> str:
+    """The one verdict rule (module docstring).
+
+    The headline checks are those flagged ``headline``; when none is flagged, the first
+    check is the headline. No checks: :data:`NOT_EVALUATED`.
+    """
+    checks = list(checks)
+    if not checks:
+        return NOT_EVALUATED
+    heads = [c for c in checks if c.headline] or checks[:1]
+    if not all(c.passed for c in heads):
+        return "not reproduced"
+    return "reproduced" if all(c.passed for c in checks) else "partly"
+
+
+@dataclass(frozen=True)
+class ClaimResult:
+    """One paper claim evaluated by code; its verdict follows from its checks.
+
+    Attributes
+    ----------
+    claim_id : str
+        The spec id, e.g. ``"X3"``, ``"S6"``, ``"T1"``, ``"SSAC-rank15"``.
+    claim : str
+        What the paper says, in one line (the *statement*).
+    paper : str
+        The paper's value or wording.
+    ours : str
+        Our number(s), formatted.
+    checks : tuple of Check
+        Explicit checks; empty = not evaluated on this input.
+    basis : str
+        One of :data:`BASES`.
+    assumption : str
+        The assumption(s) the verdict hinges on.
+    note : str
+        Why the claim is not evaluated (when it has no checks).
+    """
+
+    claim_id: str
+    claim: str
+    paper: str
+    ours: str
+    checks: tuple = ()
+    basis: str = "measured"
+    assumption: str = ""
+    note: str = ""
+
+    def __post_init__(self):
+        object.__setattr__(self, "checks", tuple(self.checks))
+        if self.basis not in BASES:
+            raise NavlibInputError(f"basis: expected one of {BASES}, got {self.basis!r}")
+        bad = [c for c in self.checks if not isinstance(c, Check)]
+        if bad:
+            raise NavlibInputError(f"checks: expected Check objects, got {bad[:1]}")
+
+    @property
+    def statement(self) -> str:
+        return self.claim
+
+    @property
+    def verdict(self) -> str:
+        """:func:`verdict_of` the checks."""
+        return verdict_of(self.checks)
+
+    @property
+    def reproduced(self) -> bool:
+        """Reproduced *and* measured: a claim by construction or fitted never counts."""
+        return self.verdict == "reproduced" and self.basis == "measured"
+
+    def checks_text(self) -> str:
+        """Readable checks, ``"; "``-separated (``*`` = headline)."""
+        if not self.checks:
+            return self.note or "not evaluated"
+        return "; ".join(c.text() for c in self.checks)
+
+    def as_dict(self) -> dict:
+        return {"claim_id": self.claim_id, "claim": self.claim, "paper": self.paper,
+                "ours": self.ours, "verdict": self.verdict, "basis": self.basis,
+                "checks": self.checks_text(), "assumption": self.assumption}
+
+
+def claim(claim_id: str, statement: str, paper: str, ours: str, checks: Iterable[Check],
+          *, basis: str = "measured", assumption: str = "") -> ClaimResult:
+    """Build a :class:`ClaimResult` (the verdict follows from ``checks``)."""
+    return ClaimResult(claim_id, statement, paper, ours, tuple(checks), basis, assumption)
+
+
+def not_evaluated(claim_id: str, statement: str, paper: str, why: str, *,
+                  basis: str = "measured", assumption: str = "") -> ClaimResult:
+    """A claim the given input cannot judge (``why`` says what is missing)."""
+    return ClaimResult(claim_id, statement, paper, why, (), basis, assumption, note=why)
+
+
+def with_failed_headline(result: ClaimResult) -> ClaimResult:
+    """``result`` with its headline check(s) replaced by failing values (for tests)."""
+    heads = [c for c in result.checks if c.headline] or list(result.checks[:1])
+    return replace(result, checks=tuple(c.failing() if c in heads else c
+                                        for c in result.checks))
+
+
+def claims_frame(results: Iterable[ClaimResult]) -> pd.DataFrame:
+    """A table of claim results, one row per claim: ``claim_id, claim, paper, ours,
+    verdict, basis, checks, assumption``."""
+    rows = [r.as_dict() for r in results]
+    return pd.DataFrame(rows, columns=["claim_id", "claim", "paper", "ours", "verdict",
+                                       "basis", "checks", "assumption"])
+
+
+def reproduced_fraction(variants: Sequence[Sequence[ClaimResult]]) -> dict[str, float]:
+    """Per claim id, the fraction of ``variants`` (each a list of results over the same
+    claims) in which it is reproduced; claims not evaluated in a variant do not count in
+    that variant's denominator (NaN when never evaluated)."""
+    hits: dict[str, list[bool]] = {}
+    for results in variants:
+        for r in results:
+            if r.verdict != NOT_EVALUATED:
+                hits.setdefault(r.claim_id, []).append(r.verdict == "reproduced")
+            else:
+                hits.setdefault(r.claim_id, [])
+    return {k: (float(np.mean(v)) if v else float("nan")) for k, v in hits.items()}
+
+
+# --------------------------------------------------------------------------------------------
+# the registry
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Study:
+    """A study registered with the engine.
+
+    Attributes
+    ----------
+    name : str
+        Short name (``"rocket"``, ``"table2"``, ...).
+    paper : str
+        Citation of the paper.
+    baseline : callable
+        ``baseline(quick) -> list[ClaimResult]`` at the study's baseline assumptions.
+    grid : mapping
+        The declared assumption set (data): name -> values. Empty when none applies.
+    robustness : callable, optional
+        ``robustness(quick) -> dict[claim_id, fraction]`` over :attr:`grid`.
+    grid_note : str
+        How the grid is evaluated (factorial, one at a time, what is reused).
+    order : int
+        Position among the studies of the same module.
+    """
+
+    name: str
+    paper: str
+    baseline: Callable
+    grid: Mapping = field(default_factory=dict)
+    robustness: Callable | None = None
+    grid_note: str = ""
+    order: int = 0
+
+    @property
+    def module(self) -> str:
+        return getattr(self.baseline, "__module__", "").rsplit(".", 1)[-1]
+
+
+_REGISTRY: dict[str, Study] = {}
+
+
+def register(study: Study) -> Study:
+    """Add (or replace) a study in the registry."""
+    if not isinstance(study, Study):
+        raise NavlibInputError("study: expected a navlib.studies.claims.Study")
+    _REGISTRY[study.name] = study
+    return study
+
+
+STUDY_MODULES = ("rocket_profile", "rocket", "launcher", "outliers", "ssac")
+"""The modules under :mod:`navlib.studies` that register claims, in table order."""
+
+
+def studies() -> dict[str, Study]:
+    """The registered studies (imports the :data:`STUDY_MODULES`, which register
+    themselves)."""
+    import importlib
+
+    for name in STUDY_MODULES:
+        importlib.import_module(f"navlib.studies.{name}")
+    order = {name: i for i, name in enumerate(STUDY_MODULES)}
+    return dict(sorted(_REGISTRY.items(),
+                       key=lambda kv: (order.get(kv[1].module, len(order)), kv[1].order)))
+
+
+COLUMNS = ["study", "paper_ref", "claim_id", "statement", "paper", "ours", "verdict", "basis",
+           "robustness", "checks", "assumption"]
+
+
+def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> pd.DataFrame:
+    """One study's claims in the :func:`all_claims` layout."""
+    results = study.baseline(quick)
+    fractions = study.robustness(quick) if (robustness and study.robustness) else {}
+    rows = []
+    for r in results:
+        frac = fractions.get(r.claim_id, float("nan")) if r.basis != "by construction" \
+            else float("nan")
+        rows.append({"study": study.name, "paper_ref": study.paper, "claim_id": r.claim_id,
+                     "statement": r.claim, "paper": r.paper, "ours": r.ours,
+                     "verdict": r.verdict, "basis": r.basis, "robustness": frac,
+                     "checks": r.checks_text(), "assumption": r.assumption})
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def all_claims(quick: bool = False, only: Sequence[str] | None = None,
+               robustness: bool = True) -> pd.DataFrame:
+    """Every claim of every registered study, one row each (spec api.md, "Claims").
+
+    Parameters
+    ----------
+    quick : bool
+        Smoke-test mode: each study runs its quick settings (shorter runs, smaller grids);
+        claims a quick run cannot judge are "not evaluated".
+    only : sequence of str, optional
+        Study names (default all, see :func:`studies`).
+    robustness : bool
+        Evaluate each study's declared assumption set (the ``robustness`` column).
+
+    Returns
+    -------
+    DataFrame
+        ``study, paper_ref, claim_id, statement, paper, ours, verdict, basis, robustness,
+        checks, assumption``; ``claim_id`` unique.
+    """
+    registry = studies()
+    names = list(registry) if only is None else list(only)
+    unknown = [n for n in names if n not in registry]
+    if unknown:
+        raise NavlibInputError(f"only: unknown studies {unknown}; expected some of "
+                               f"{list(registry)}")
+    frame = pd.concat([study_frame(registry[n], quick, robustness) for n in names],
+                      ignore_index=True)
+    dup = frame["claim_id"][frame["claim_id"].duplicated()].tolist()
+    if dup:  # pragma: no cover - registry integrity
+        raise NavlibInputError(f"claims: duplicate claim ids {dup}")
+    return frame
+
+
+def counts(table: pd.DataFrame) -> pd.DataFrame:
+    """Claims per paper by verdict and basis (for the summary page)."""
+    return table.pivot_table(index=["paper_ref", "basis"], columns="verdict",
+                             values="claim_id", aggfunc="count", fill_value=0)
+
+
+def summary_markdown(table: pd.DataFrame) -> str:
+    """A short generated reading of :func:`all_claims` (no typed numbers)."""
+    lines = []
+    measured = table[table.basis == "measured"]
+    n = len(table)
+    by_v = measured.verdict.value_counts()
+    lines.append(f"**{n} claims** from {table.paper_ref.nunique()} papers; "
+                 f"{len(measured)} measured, "
+                 f"{int((table.basis == 'by construction').sum())} by construction, "
+                 f"{int((table.basis == 'fitted').sum())} fitted.")
+    lines.append("Measured claims: " + ", ".join(
+        f"{int(by_v.get(v, 0))} {v}" for v in STATUSES if by_v.get(v, 0)) + ".")
+    rob = measured.robustness.dropna()
+    if len(rob):
+        lines.append(
+            f"Robustness over the declared assumption sets ({len(rob)} measured claims with "
+            f"a set): median {rob.median():.2f}; {int((rob >= 0.9).sum())} reproduce in at "
+            f"least 90 % of their set, {int((rob == 0).sum())} in none.")
+        fragile = measured[(measured.verdict == "reproduced") & (measured.robustness < 0.5)]
+        if len(fragile):
+            lines.append("Reproduced at the baseline but in less than half of the set: "
+                         + ", ".join(f"{r.claim_id} ({r.robustness:.2f})"
+                                     for r in fragile.itertuples()) + ".")
+    return "\n\n".join(lines)
+
+
+_READING_ORDER = (("reproduced", "Reproduced"), ("partly", "Partly"),
+                  ("not reproduced", "Not reproduced"), (NOT_EVALUATED, "Not evaluated"))
+
+
+def reading_markdown(results: Iterable[ClaimResult], lines: Sequence[str] = (),
+                     robustness: Mapping[str, float] | None = None) -> str:
+    """A generated "Reading" for a notebook: the claims grouped by verdict, each
+    partly / not reproduced one with the checks that failed, then ``lines`` (further
+    sentences the study computed). No number in it is typed, so a ``-p`` override never
+    leaves a stale sentence.
+
+    ``robustness``: claim id -> fraction of its assumption set where it reproduces.
+    """
+    results = list(results)
+    out = []
+    for verdict, label in _READING_ORDER:
+        group = [r for r in results if r.verdict == verdict]
+        if not group:
+            continue
+        out.append(f"**{label}** ({len(group)}):")
+        for r in group:
+            tag = "" if r.basis == "measured" else f" *({r.basis})*"
+            rob = ""
+            if robustness and not math.isnan(robustness.get(r.claim_id, float("nan"))):
+                rob = f" — reproduces in {robustness[r.claim_id]:.0%} of its assumption set"
+            failed = [c.text().replace("*", "\\*") for c in r.checks if not c.passed]
+            why = f": {'; '.join(failed)}" if failed and verdict != "reproduced" else ""
+            if verdict == NOT_EVALUATED:
+                why = f": {r.note}"
+            out.append(f"* **{r.claim_id}**{tag} — {r.claim}{why}{rob}")
+        out.append("")
+    if lines:
+        out += [f"* {line}" for line in lines]
+    return "\n".join(out).strip()
