@@ -28,6 +28,7 @@ from __future__ import annotations
 import functools
 import html
 import io
+import re
 import time
 from collections.abc import Iterable, Mapping
 
@@ -127,6 +128,9 @@ def table_html(frame: pd.DataFrame, index: bool = False) -> str:
             + "</div>")
 
 
+_MARK = re.compile(r'<span class="navlib-update"[^>]*></span>$')
+
+
 def error_html(prefix: str, exc: BaseException) -> str:
     """The status line of a refused input: ``prefix`` in red, then the message."""
     return f'<b style="color:#b00">{html.escape(prefix)}:</b> {html.escape(str(exc))}'
@@ -150,7 +154,10 @@ class Panel(widgets.VBox):
     ----------
     controls : dict
     status : ipywidgets.HTML
-        Summary of the last update, or the message of the refused input.
+        Summary of the last update, or the message of the refused input; it ends with a
+        hidden ``<span class="navlib-update" data-count="N">``, N counting the updates
+        handled (applied or refused), which tells a page (and the browser tests) that an
+        update is complete.
     view : ipywidgets.VBox
         The parts, in the order they were first shown.
     parts : dict
@@ -171,6 +178,7 @@ class Panel(widgets.VBox):
         self.view = widgets.VBox()
         self.parts: dict = {}
         self.last_timing: dict = {}
+        self.updates = 0
         for name, control in self.controls.items():
             control.observe(functools.partial(self._changed, name), names="value")
         header = widgets.VBox([*self.controls.values(), *extras])
@@ -197,15 +205,20 @@ class Panel(widgets.VBox):
             with detached():
                 self.refresh(names)
         except NavlibInputError as exc:
-            self.status.value = error_html(self.error_prefix, exc)
+            self._done(error_html(self.error_prefix, exc))
             return False
         except Exception as exc:
-            self.status.value = (f'<b class="navlib-panel-error" style="color:#b00">'
-                                 f'{html.escape(type(exc).__name__)}:</b> '
-                                 f'{html.escape(str(exc))}')
+            self._done(f'<b class="navlib-panel-error" style="color:#b00">'
+                       f'{html.escape(type(exc).__name__)}:</b> {html.escape(str(exc))}')
             raise
         self.last_timing["total_ms"] = 1e3 * (time.perf_counter() - start)
+        self._done(self.status.value)
         return True
+
+    def _done(self, status: str) -> None:
+        self.updates += 1
+        self.status.value = (_MARK.sub("", status) + f'<span class="navlib-update" '
+                             f'data-count="{self.updates}" hidden></span>')
 
     def refresh(self, changed: set) -> None:
         """Recompute what the controls in ``changed`` touch and :meth:`show` it."""

@@ -39,7 +39,7 @@ class OutlierPanel(Panel):
     ----------
     controls : dict
         ``solution``, ``channel``, ``watch``, ``time``, ``magnitude``, ``shape``,
-        ``duration``, ``window`` widgets.
+        ``duration``, ``window`` widgets (``duration`` enabled for a pulse only).
     parts : dict
         ``response`` and ``induced`` images (the latter hidden when the channel is absent
         from the solution) and the ``scores`` table.
@@ -90,6 +90,7 @@ class OutlierPanel(Panel):
     def refresh(self, changed: set) -> None:
         """Recompute the response for the current controls and redraw."""
         c = self.controls
+        c["duration"].disabled = c["shape"].value != "pulse"
         outlier = self.outlier()
         resp = outlier_response(c["solution"].value, outlier, c["watch"].value,
                                 window=c["window"].value, cache=self.cache,
