@@ -116,7 +116,9 @@ class ObservabilityPanel(Panel):
             f"{self.model.name}: n = {r.n}, rank {r.rank.min()}–{r.rank.max()} "
             f"({r.n_unobservable} unobservable), max log10 cond {r.log10_max_cond:.1f}, "
             f"{r.step.size} evaluations")
-        self.show("curve", mission_figure(r, self.trajectory.events, title=self.model.name))
+        self.show("curve", mission_figure(
+            r, self.trajectory.events,
+            title=f"{self.model.name}; eq. (6) {self.controls['variant'].value}"))
 
     def inspect(self) -> None:
         """Analyse O(k) at the inspected time: singular values, groups, weakest direction."""
@@ -128,8 +130,8 @@ class ObservabilityPanel(Panel):
         weakest = describe_direction(a.weakest_direction, self.model.state_names,
                                      self.trajectory.attitude[k].as_matrix())
         self.show("step", singular_values_figure(
-            a, title=f"t = {self.trajectory.t[k]:.2f} s: rank {a.rank}/{a.n}, "
-                     f"cond {a.cond:.2e}"))
+            a, title=f"t = {self.trajectory.t[k]:.2f} s ({self.controls['variant'].value}): "
+                     f"rank {a.rank}/{a.n}, cond {a.cond:.2e}"))
         groups = "; ".join("{" + ", ".join(g) + "}" for g in a.unobservable_groups)
         self.show("step_notes", f"<b>unobservable groups:</b> {html.escape(groups or 'none')}"
                                 f"<br><b>least observable direction:</b> "

@@ -119,7 +119,7 @@ CONTROLS_JS = """
       else if (el.querySelector("select[multiple]")) kind = "multiselect";
       else if (el.querySelector("select")) kind = "dropdown";
       else if (el.querySelector("input")) kind = "text";
-      else if (el.querySelector("button")) kind = "button";
+      else if (el.matches("button") || el.querySelector("button")) kind = "button";
       if (kind) out.push({k, kind, description,
                           handles: el.querySelectorAll(".noUi-handle").length});
     });
@@ -368,7 +368,7 @@ class NotebookPage:
         el.scroll_into_view_if_needed()
         kind = control["kind"]
         if kind == "button":
-            el.locator("button").click()
+            el.click()  # the Button widget's element is the <button> itself
             return "click"
         if kind == "slider":
             handle = el.locator(".noUi-handle").last if how == "keyboard" else \

@@ -76,18 +76,20 @@ def test_panels_move_in_jupyterlab(lab, browser, name):
 
 
 def _move_manual_panel(nb: NotebookPage, index: int, controls: list) -> list[str]:
-    """A panel that computes on a button (the Monte Carlo run): move each slider, then
-    press the button; the figure must appear, then change."""
+    """A panel that computes on a button (the Monte Carlo run): move each slider (by
+    keyboard, then by mouse) and press the button after each move; the figure must
+    appear, then change."""
     failures = []
     button = next(c for c in controls if c["kind"] == "button")
-    for control in [c for c in controls if c["kind"] == "slider"] + [None]:
-        if control is not None:
-            nb._act(index, control, "keyboard")
-        move = nb.move(index, button, "mouse")
-        MOVES.append(move)
-        if move.failed():
-            failures.append(f"panel {index} (button after moving "
-                            f"{control and control['description']!r}): {move.outcome}")
+    for control in [c for c in controls if c["kind"] == "slider"]:
+        for how in ("keyboard", "mouse"):
+            nb._act(index, control, how)
+            move = nb.move(index, button, "mouse")
+            move.control = f"{control['description']} + run"
+            MOVES.append(move)
+            if move.failed():
+                failures.append(f"panel {index} (button after moving "
+                                f"{control['description']!r} by {how}): {move.outcome}")
     return failures
 
 
