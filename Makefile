@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.navlib-installed
 
-.PHONY: report test lint bench clean
+.PHONY: report test test-browser lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,6 +18,19 @@ report: $(STAMP)
 test: $(STAMP)
 	$(PY) -m ruff check navlib tests benchmarks
 	$(PY) -m pytest -n 2 -q
+
+# Browser tests: JupyterLab + Debian's chromium (installed with apt-get when missing: CI runs
+# as root), Playwright from the [browser] extra. Not part of `make test`.
+CHROMIUM ?= /usr/bin/chromium
+BROWSER_STAMP := $(VENV)/.navlib-browser-installed
+
+$(BROWSER_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e ".[dev,browser]"
+	touch $(BROWSER_STAMP)
+
+test-browser: $(BROWSER_STAMP)
+	@test -x $(CHROMIUM) || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; }
+	$(PY) -m pytest -m browser -v tests/browser
 
 bench: $(STAMP)
 	$(PY) benchmarks/run.py

@@ -372,10 +372,17 @@ def _failure_from(exc: BaseException, executed_path: Path, source_nb) -> CellFai
 
 
 def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
+    """The executed notebook as a static page; widget outputs (the panels) are replaced by
+    the HTML of their final state (:func:`navlib.widgets.static.freeze_widgets`: last
+    figures as inline PNG, settings as text), so the page needs no kernel, no widget
+    script and no network to show them."""
     import nbformat
     from nbconvert import HTMLExporter
 
+    from navlib.widgets.static import freeze_widgets
+
     nb = nbformat.read(executed_path, as_version=4)
+    freeze_widgets(nb)
     exporter = HTMLExporter(template_name="lab", exclude_input=False)
     body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
     html_path.write_text(body, encoding="utf-8")

@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Patch
 
+from navlib.plots.figure import subplots
 from navlib.units import DEG
 
 PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
@@ -35,18 +36,38 @@ def _phase_colour(phase: str, others: dict) -> str:
     return others.setdefault(phase, OTHER_COLOURS[len(others) % len(OTHER_COLOURS)])
 
 
-def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12) -> None:
+def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
+                 gid: str | None = None) -> list:
     """Shade each segment of ``segment_table`` (``phase, t_start, t_end``) in its phase
-    colour; with ``label`` write ``"<segment> <phase>"`` along the top of the axes."""
+    colour; with ``label`` write ``"<segment> <phase>"`` along the top of the axes.
+
+    Returns the artists added (their ``gid`` set to ``gid``), for :func:`reshade_phases`.
+    """
     others: dict = {}
+    artists = []
     for k, row in enumerate(segment_table.itertuples(index=False)):
         colour = _phase_colour(row.phase, others)
-        ax.axvspan(row.t_start, row.t_end, color=colour, alpha=alpha, linewidth=0)
+        artists.append(ax.axvspan(row.t_start, row.t_end, color=colour, alpha=alpha,
+                                  linewidth=0, gid=gid))
         if label:
             number = getattr(row, "segment", k + 1)
-            ax.annotate(f"{number} {row.phase}", ((row.t_start + row.t_end) / 2, 1.0),
-                        xycoords=("data", "axes fraction"), ha="center", va="bottom",
-                        fontsize=7, color="0.25")
+            artists.append(ax.annotate(f"{number} {row.phase}",
+                                       ((row.t_start + row.t_end) / 2, 1.0),
+                                       xycoords=("data", "axes fraction"), ha="center",
+                                       va="bottom", fontsize=7, color="0.25", gid=gid))
+    return artists
+
+
+def reshade_phases(fig, assessment) -> list:
+    """Replace the assessed-segment shading of a :func:`phases_figure` by that of
+    ``assessment`` (same flight, other segments) in place; returns the new artists."""
+    for ax in fig.axes[:2]:
+        for artist in [*ax.patches, *ax.texts]:
+            if artist.get_gid() == "assessed":
+                artist.remove()
+    return [artist for ax in fig.axes[:2] for artist in
+            shade_phases(ax, assessment.segment_table, label=ax is fig.axes[0],
+                         gid="assessed")]
 
 
 def phases_figure(assessment):
@@ -57,15 +78,15 @@ def phases_figure(assessment):
     t = traj.t[sl]
     f_b = traj.specific_force[sl]
     w_b = traj.angular_rate[sl] / DEG
-    fig, axes = plt.subplots(3, 1, figsize=(11, 6.2), sharex=True, layout="constrained",
-                             gridspec_kw={"height_ratios": [3, 3, 0.6]})
+    fig, axes = subplots(3, 1, figsize=(11, 6.2), sharex=True, layout="constrained",
+                         gridspec_kw={"height_ratios": [3, 3, 0.6]})
     for ax, data, name, unit in ((axes[0], f_b, "f", "m/s²"), (axes[1], w_b, "ω_ib", "deg/s")):
         for i, axis in enumerate("xyz"):
             ax.plot(t, data[:, i], linewidth=0.9, label=f"{name}_{axis}")
         ax.plot(t, np.linalg.norm(data, axis=1), color="k", linewidth=0.8, label=f"|{name}|")
         ax.set_ylabel(f"{name} [{unit}]")
         ax.legend(fontsize=7, ncol=4, loc="upper right")
-        shade_phases(ax, assessment.segment_table, label=ax is axes[0])
+        shade_phases(ax, assessment.segment_table, label=ax is axes[0], gid="assessed")
     auto = assessment.automatic.segments
     shade_phases(axes[2], auto, label=False, alpha=1.0)
     axes[2].set_yticks([])
@@ -87,7 +108,7 @@ def fit_residuals_figure(assessment):
     imu = assessment.imu_residuals
     sl = _thin(len(imu))
     sigma = assessment.options.get("gnss_sigma_m")
-    fig, axes = plt.subplots(3, 1, figsize=(11, 6.4), sharex=True, layout="constrained")
+    fig, axes = subplots(3, 1, figsize=(11, 6.4), sharex=True, layout="constrained")
     for axis in "xyz":
         axes[0].plot(gnss["t"], gnss[f"d{axis}"], "o-", markersize=2.5, linewidth=0.7,
                      label=f"Δ{axis}")
@@ -122,7 +143,7 @@ def estimable_figure(assessment):
     labels = [f"{r.segment} {r.phase}\n{r.t_start:.4g}–{r.t_end:.4g} s"
               for r in segs.itertuples(index=False)]
     width = 3.2 + 1.3 * len(segs)
-    fig, axes = plt.subplots(1, 2, figsize=(2 * width, 7.2), layout="constrained")
+    fig, axes = subplots(1, 2, figsize=(2 * width, 7.2), layout="constrained")
     panels = ((axes[0], e.to_numpy(), th["e_threshold"], "excitability e"),
               (axes[1], frac.to_numpy(), th["min_fraction"],
                f"share of epochs with s ≥ {th['s_threshold']:.3g}"))

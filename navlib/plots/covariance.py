@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from navlib.errors import NavlibInputError
+from navlib.plots.figure import subplots
 
 TIME_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0}
 
@@ -56,8 +57,8 @@ def sigma_figure(result, groups: Mapping[str, Sequence[str]], units: Mapping | N
     """
     n = len(groups)
     nrows = int(np.ceil(n / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.0 * nrows), squeeze=False,
-                             constrained_layout=True)
+    fig, axes = subplots(nrows, ncols, figsize=(4.2 * ncols, 3.0 * nrows), squeeze=False,
+                         constrained_layout=True)
     for ax, (name, states) in zip(axes.flat, groups.items(), strict=False):
         sigma_axes(ax, result, states, units, time_unit, log=name in log_groups)
         ax.set_title(name)
@@ -74,7 +75,7 @@ def eigenvalues_figure(eig, modes: Sequence[int] | None = None, time_unit: str =
     values = eig.tracked_values if tracked else eig.eigenvalues
     modes = list(range(1, eig.n + 1)) if modes is None else list(modes)
     t = _time(eig.t, time_unit)
-    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    fig, ax = subplots(figsize=(8, 4), constrained_layout=True)
     for m in modes:
         ax.plot(t, np.clip(values[:, m - 1], 1e-12, None), label=f"λ{m}",
                 linewidth=1.6 if m <= 6 else 0.9)
@@ -100,8 +101,8 @@ def eigenvectors_figure(eig, modes: Sequence[int] = (1, 2, 3, 4, 5, 6), min_comp
     vectors = eig.tracked_vectors if tracked else eig.eigenvectors
     modes = list(modes)
     nrows = int(np.ceil(len(modes) / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 2.8 * nrows), squeeze=False,
-                             sharex=True, constrained_layout=True)
+    fig, axes = subplots(nrows, ncols, figsize=(4.2 * ncols, 2.8 * nrows), squeeze=False,
+                         sharex=True, constrained_layout=True)
     t = _time(eig.t, time_unit)
     start = int(np.searchsorted(eig.t, t_from))
     colors = plt.get_cmap("tab20").colors  # one colour per state, stable across panels
@@ -130,7 +131,7 @@ def ratio_figure(t, ratio, state_names: Sequence[str], states: Sequence[str] | N
     :func:`navlib.covariance.covariance_ratio`."""
     names = list(state_names)
     states = names if states is None else list(states)
-    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    fig, ax = subplots(figsize=(8, 4), constrained_layout=True)
     tt = _time(t, time_unit)
     for s in states:
         ax.plot(tt, ratio[:, names.index(s)], label=s)

@@ -17,11 +17,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from navlib.covariance import covariance_ratio
 from navlib.models.ecef import PAPER_IDS
+from navlib.plots.figure import figure, subplots
 from navlib.studies.rocket import IN_SO, LOW, SENSIBLE
 from navlib.units import DEG, PPM
 
@@ -51,7 +51,7 @@ def excitability_bars(analysis, ax=None):
 
     Dashed lines at 1/sqrt(2) ("lies in S_O") and at the "very low" threshold.
     """
-    fig, ax = (plt.subplots(figsize=(11, 3.6)) if ax is None else (ax.figure, ax))
+    fig, ax = (subplots(figsize=(11, 3.6)) if ax is None else (ax.figure, ax))
     names = analysis.state_names
     k = len(analysis.segments)
     width = 0.8 / k
@@ -79,7 +79,7 @@ def _bars_title(analysis) -> str:
 
 def energy_spectrum(analysis, ax=None):
     """``S_tau(u^i)`` (Eq. 19) on a log axis per segment, the eta line and each ``ne``."""
-    fig, ax = (plt.subplots(figsize=(6, 3.6)) if ax is None else (ax.figure, ax))
+    fig, ax = (subplots(figsize=(6, 3.6)) if ax is None else (ax.figure, ax))
     n = len(analysis.state_names)
     i_dir = np.arange(1, n + 1)
     for i, ex in enumerate(analysis.excitability):
@@ -115,7 +115,7 @@ def excitability_figure(analysis, fig=None):
     if fig is not None and _update_in_place(fig, analysis):
         return fig
     if fig is None:
-        fig = plt.figure(figsize=(14, 3.8), layout="constrained")
+        fig = figure(figsize=(14, 3.8), layout="constrained")
         grid = fig.add_gridspec(1, 3)
         bars, spectrum = fig.add_subplot(grid[0, :2]), fig.add_subplot(grid[0, 2])
     else:
@@ -156,12 +156,26 @@ def excitability_dynamic_artists(fig) -> list:
     return [*bars.patches, bars.title, *spectrum.get_lines(), spectrum.title]
 
 
-def _shade_segments(ax, segments) -> None:
+def _shade_segments(ax, segments) -> list:
+    artists = []
     for i, (a, b) in enumerate(segments):
-        ax.axvspan(a, b, color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)], alpha=0.06,
-                   linewidth=0)
-        ax.annotate(f"τ{i + 1}", ((a + b) / 2, 1.0), xycoords=("data", "axes fraction"),
-                    ha="center", va="bottom", fontsize=7, color="0.35")
+        artists.append(ax.axvspan(a, b, color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)],
+                                  alpha=0.06, linewidth=0, gid="segment"))
+        artists.append(ax.annotate(f"τ{i + 1}", ((a + b) / 2, 1.0),
+                                   xycoords=("data", "axes fraction"), ha="center",
+                                   va="bottom", fontsize=7, color="0.35", gid="segment"))
+    return artists
+
+
+def reshade_segments(fig, segments) -> list:
+    """Replace the segment shading of a :func:`sensability_figure` by that of
+    ``segments`` in place; returns the new artists (for blitting renderers)."""
+    axes = [ax for ax in fig.axes if any(a.get_gid() == "segment" for a in ax.patches)]
+    for ax in axes:
+        for artist in [*ax.patches, *ax.texts]:
+            if artist.get_gid() == "segment":
+                artist.remove()
+    return [artist for ax in axes for artist in _shade_segments(ax, segments)]
 
 
 def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: str = ""):
@@ -180,8 +194,8 @@ def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: s
     states = list(states)
     se = analysis.sensability
     idx = [analysis.state_names.index(s) for s in states]
-    fig, axes = plt.subplots(len(states), 1, figsize=(9, 2.1 * len(states) + 0.4),
-                             sharex=True, squeeze=False, layout="constrained")
+    fig, axes = subplots(len(states), 1, figsize=(9, 2.1 * len(states) + 0.4),
+                         sharex=True, squeeze=False, layout="constrained")
     for ax, state, j in zip(axes[:, 0], states, idx, strict=True):
         ax.plot(se.t, se.s[:, j], color="tab:blue", linewidth=1.5, label="sensability")
         ax.axhline(SENSIBLE, color="tab:blue", linestyle=":", linewidth=0.8)
@@ -206,7 +220,7 @@ def measures_figure(analysis, states: Sequence[str]):
     states = list(states)
     se = analysis.sensability
     ratio = covariance_ratio(se.sigma)
-    fig, (ax_s, ax_r) = plt.subplots(1, 2, figsize=(12, 3.4), layout="constrained")
+    fig, (ax_s, ax_r) = subplots(1, 2, figsize=(12, 3.4), layout="constrained")
     for state in states:
         j = analysis.state_names.index(state)
         line, = ax_s.plot(se.t, se.s[:, j], label=state)
@@ -228,7 +242,7 @@ _VERDICT_MARKERS = {"reproduced": "o", "partly": "s", "not reproduced": "x"}
 
 def tension_figure(table):
     """X3 versus S6/S7: ``e16`` in tau2 against the attitude band growth, per variant."""
-    fig, ax = plt.subplots(figsize=(8, 4), layout="constrained")
+    fig, ax = subplots(figsize=(8, 4), layout="constrained")
     for r in table.itertuples():
         ax.scatter(r.max_theta_growth, r.e16_tau2, marker=_VERDICT_MARKERS.get(r.X3, "o"),
                    s=50, color="tab:green" if r.all_three else "tab:red")
@@ -258,7 +272,7 @@ def sweep_figure(sweep, claim_ids: Sequence[str] | None = None):
         else:
             labels.append(f"{r.factor} = {getattr(r, r.factor)}")
     height = 0.28 * len(labels) + 1.2
-    fig, ax = plt.subplots(figsize=(9, height), layout="constrained")
+    fig, ax = subplots(figsize=(9, height), layout="constrained")
     ax.imshow(matrix, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto")
     ax.set_xticks(np.arange(len(claim_ids)), claim_ids, fontsize=8)
     ax.set_yticks(np.arange(len(labels)), labels, fontsize=7)

@@ -7,10 +7,10 @@ or the :func:`navlib.studies.launcher.fig1_data` frame) and returns a new Figure
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
+from navlib.plots.figure import subplots
 from navlib.plots.trajectory import LAUNCHER_MARKERS, _mark_events
 from navlib.studies.launcher import SINGULAR_LOG10, SOLUTION_LABELS
 
@@ -29,7 +29,7 @@ def fig1_figure(data, s_t: float = 0.005):
         Sampling time used, s (for the ``1.171 c_p / s_t`` guide line).
     """
     finite = data[np.isfinite(data.c_p)]
-    fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
+    fig, ax = subplots(figsize=(7, 4.5), layout="constrained")
     ax.loglog(finite.c_p, finite.cond, "o-", color="C0", label="cond(O), rank 6")
     guide = np.logspace(np.log10(finite.c_p.min()), np.log10(finite.c_p.max()), 50)
     ax.loglog(guide, 1.171 * guide / s_t, "--", color="0.5",
@@ -58,7 +58,7 @@ def mission_figure(res, events: dict | None = None, title: str = ""):
         Trajectory events (name -> s) to mark, e.g. ``traj.events``.
     """
     frame = res.to_frame()
-    fig, (ax_r, ax_c) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5), layout="constrained")
+    fig, (ax_r, ax_c) = subplots(2, 1, sharex=True, figsize=(8, 5.5), layout="constrained")
     ax_r.step(frame.t, frame["rank"], where="post", color="C0", label="rank O(k)")
     ax_r.axhline(res.n, color="0.5", linestyle="--", linewidth=1, label=f"n = {res.n}")
     ax_r.set_ylabel("rank")
@@ -87,7 +87,7 @@ def table2_figure(result):
     grey band is the match tolerance; the shaded corner is "numerically singular" (>= 1e16).
     """
     frame = result.frame
-    fig, ax = plt.subplots(figsize=(7, 6), layout="constrained")
+    fig, ax = subplots(figsize=(7, 6), layout="constrained")
     lo, hi = -0.5, max(21.0, frame.log10_cond.max() + 0.5)
     diag = np.array([lo, hi])
     ax.fill_between(diag, diag - result.cond_tol, diag + result.cond_tol, color="0.9",
@@ -122,7 +122,7 @@ def table2_figure(result):
 def singular_values_figure(analysis, title: str = ""):
     """Singular values of one local O(k) with the rank threshold ``rtol * sigma_1``."""
     s = analysis.singular_values
-    fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
+    fig, ax = subplots(figsize=(7, 3.5), layout="constrained")
     keep = np.arange(s.size) < analysis.rank
     with np.errstate(divide="ignore"):
         log_s = np.log10(np.where(s > 0, s, np.nan))

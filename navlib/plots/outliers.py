@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from navlib.errors import NavlibInputError
+from navlib.plots.figure import subplots
 from navlib.studies.outliers import SOLUTION_LABELS
 from navlib.units import DEG
 
@@ -41,8 +41,8 @@ def response_figure(responses: Sequence, title: str | None = None, before: float
     responses = list(responses)
     if not responses:
         raise NavlibInputError("responses: need at least one OutlierResponse")
-    fig, axes = plt.subplots(1, len(responses), figsize=(5.2 * len(responses), 3.4),
-                             squeeze=False, constrained_layout=True, sharey=False)
+    fig, axes = subplots(1, len(responses), figsize=(5.2 * len(responses), 3.4),
+                         squeeze=False, constrained_layout=True, sharey=False)
     for ax, r in zip(axes[0], responses, strict=True):
         label, f = _unit(r.watch)
         t_o = r.outlier.time
@@ -75,7 +75,7 @@ def induced_figure(responses: Sequence, title: str | None = None, log: bool = Tr
     """Outlier-induced error ``|d(t)|`` of several solutions on one axis, with the recovery
     window's end marked (the quantity the verdict scores)."""
     responses = list(responses)
-    fig, ax = plt.subplots(figsize=(7.5, 3.6), constrained_layout=True)
+    fig, ax = subplots(figsize=(7.5, 3.6), constrained_layout=True)
     for i, r in enumerate(responses):
         f = _unit(r.watch)[1]
         d = np.linalg.norm(r.induced, axis=1) * f
@@ -97,7 +97,7 @@ def induced_figure(responses: Sequence, title: str | None = None, log: bool = Tr
 
 def correlation_figure(frame, title: str | None = None):
     """Correlation coefficients of ``T_E^B psi`` and ``psi_ref`` per axis (Fig. 10)."""
-    fig, ax = plt.subplots(figsize=(6.5, 3.4), constrained_layout=True)
+    fig, ax = subplots(figsize=(6.5, 3.4), constrained_layout=True)
     for axis, sel in frame.groupby("axis", sort=False):
         ax.plot(sel.t, sel.rho, label=axis)
     ax.axhline(-0.9, color="0.5", ls=":", lw=1, label="|rho| = 0.9")
@@ -113,8 +113,8 @@ def correlation_figure(frame, title: str | None = None):
 def roll_sigma_figure(frame, pairs=(("ins_gps", "ins_gps_rt"), ("ins_gps_att", "ins_gps_att_rt")),
                       axis: str = "roll"):
     """Roll-error sigma with and without the reference trajectory (Figs. 7, 11), deg, log."""
-    fig, axes = plt.subplots(1, len(pairs), figsize=(5.4 * len(pairs), 3.4), squeeze=False,
-                             constrained_layout=True)
+    fig, axes = subplots(1, len(pairs), figsize=(5.4 * len(pairs), 3.4), squeeze=False,
+                         constrained_layout=True)
     for ax, pair in zip(axes[0], pairs, strict=True):
         for sol in pair:
             sel = frame[(frame.solution == sol) & (frame.axis == axis)]
@@ -135,7 +135,7 @@ def monte_carlo_figure(mc, watch: str = "roll", title: str | None = None):
     filter's sigma (the noise band a static error hides in)."""
     label, f = _unit(watch)
     fr = mc.to_frame()
-    fig, ax = plt.subplots(figsize=(7.5, 3.6), constrained_layout=True)
+    fig, ax = subplots(figsize=(7.5, 3.6), constrained_layout=True)
     runs = mc.error.shape[1]
     for r in range(min(runs, 20)):
         ax.plot(mc.t, mc.error[:, r, 0] * f, color="0.8", lw=0.5)
@@ -157,7 +157,7 @@ def monte_carlo_figure(mc, watch: str = "roll", title: str | None = None):
 def consistency_figure(sim, title: str | None = None):
     """Run-averaged NEES and NIS of a :class:`navlib.filters.LinearSimulation` with their
     95 % chi-square bounds."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.4), constrained_layout=True)
+    fig, axes = subplots(1, 2, figsize=(11, 3.4), constrained_layout=True)
     for ax, frame, key in ((axes[0], sim.nees_frame(), "nees"), (axes[1], sim.nis_frame(), "nis")):
         ax.plot(frame.t, frame[key], lw=0.8, label=f"mean {key.upper()}")
         ax.plot(frame.t, frame.lower, color="k", ls="--", lw=0.8, label="95 % bounds")
@@ -175,7 +175,7 @@ def consistency_figure(sim, title: str | None = None):
 def ekf_crosscheck_figure(check, title: str | None = None):
     """Outlier-induced roll error through the closed-loop EKF and the linear filter."""
     fr = check.to_frame()
-    fig, ax = plt.subplots(figsize=(7.5, 3.4), constrained_layout=True)
+    fig, ax = subplots(figsize=(7.5, 3.4), constrained_layout=True)
     ax.plot(fr.t, fr.ekf * 1e6, label=f"EKF ({check.score_ekf.verdict})")
     ax.plot(fr.t, fr.linear * 1e6, ls="--", label=f"linear KF ({check.linear.score.verdict})")
     ax.set_xlim(check.linear.outlier.time - 2.0, fr.t.iloc[-1])
@@ -191,8 +191,8 @@ def ekf_crosscheck_figure(check, title: str | None = None):
 def ekf_sigma_figure(frame, axes_names=("roll", "pitch", "yaw", "pos_x")):
     """EKF sigma against the covariance analysis, with the EKF's actual error
     (:func:`navlib.studies.outliers.ekf_vs_covariance`); attitude in deg, position in m."""
-    fig, axes = plt.subplots(1, len(axes_names), figsize=(4.2 * len(axes_names), 3.2),
-                             squeeze=False, constrained_layout=True)
+    fig, axes = subplots(1, len(axes_names), figsize=(4.2 * len(axes_names), 3.2),
+                         squeeze=False, constrained_layout=True)
     for ax, name in zip(axes[0], axes_names, strict=True):
         sel = frame[frame.axis == name]
         f, unit = (1.0, "m") if name.startswith("pos") else (1.0 / DEG, "deg")

@@ -6,10 +6,10 @@ units, plus the P0-sensitivity bar chart. Every builder returns a new Figure.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from navlib.plots.covariance import eigenvalues_figure, eigenvectors_figure, sigma_figure
+from navlib.plots.figure import subplots
 from navlib.studies.ssac import STATE_GROUPS, SSACStudy
 
 SIGMA_PANELS = {
@@ -72,7 +72,7 @@ def p0_sensitivity_figure(table):
     """
     variants = list(dict.fromkeys(table["P0"]))
     pairs = list(dict.fromkeys(table["pair"]))
-    fig, ax = plt.subplots(figsize=(7, 3.5), constrained_layout=True)
+    fig, ax = subplots(figsize=(7, 3.5), constrained_layout=True)
     width = 0.8 / len(variants)
     x = np.arange(len(pairs))
     for i, variant in enumerate(variants):

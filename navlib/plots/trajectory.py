@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from navlib import earth
+from navlib.plots.figure import subplots
 from navlib.units import DEG, DEG_PER_HOUR
 
 ROCKET_MARKERS = ("ignition", "burnout", "free_flight", "despin")
@@ -58,7 +58,7 @@ def axial_imu_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
     markers : iterable of str or None
         Event names to mark (None: every event of ``traj``).
     """
-    fig, (ax_f, ax_w) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5), layout="constrained")
+    fig, (ax_f, ax_w) = subplots(2, 1, sharex=True, figsize=(8, 5.5), layout="constrained")
     ax_f.plot(traj.t, traj.specific_force[:, 0], color="C0")
     ax_f.axhline(0.0, color="0.7", linewidth=0.8)
     ax_f.set_ylabel("axial specific force $f_x$ [m/s²]")
@@ -77,7 +77,7 @@ def altitude_speed_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
     """Ellipsoidal height (km) and ECEF speed (m/s) vs time with event markers."""
     _, _, alt = traj.geodetic
     speed = np.linalg.norm(traj.velocity, axis=1)
-    fig, (ax_h, ax_v) = plt.subplots(2, 1, sharex=True, figsize=(8, 5), layout="constrained")
+    fig, (ax_h, ax_v) = subplots(2, 1, sharex=True, figsize=(8, 5), layout="constrained")
     ax_h.plot(traj.t, alt / 1e3, color="C2")
     ax_h.set_ylabel("height [km]")
     ax_v.plot(traj.t, speed, color="C3")
@@ -104,7 +104,7 @@ def body_x_elevation(traj) -> np.ndarray:
 def launcher_figure(traj, markers: Iterable[str] | None = LAUNCHER_MARKERS):
     """Launcher ascent: body specific force, body-x elevation (pitch) and height vs time."""
     _, _, alt = traj.geodetic
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), layout="constrained")
+    fig, axes = subplots(3, 1, sharex=True, figsize=(8, 7), layout="constrained")
     for i, axis in enumerate("xyz"):
         axes[0].plot(traj.t, traj.specific_force[:, i], label=f"$f_{axis}$")
     axes[0].plot(traj.t, np.linalg.norm(traj.specific_force, axis=1), "k--", lw=0.8,
@@ -130,7 +130,7 @@ def stationary_figure(traj):
     g_ref = np.linalg.norm(earth.normal_gravity_ecef(traj.position), axis=1)
     f_mag = np.linalg.norm(traj.specific_force, axis=1)
     w_mag = np.linalg.norm(traj.angular_rate, axis=1)
-    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(9, 5), layout="constrained")
+    fig, axes = subplots(2, 2, sharex=True, figsize=(9, 5), layout="constrained")
     axes[0, 0].plot(traj.t, f_mag, label="|f| (accelerometers)")
     axes[0, 0].plot(traj.t, g_ref, "k--", lw=0.8, label="|γ| normal gravity")
     axes[0, 0].set_ylabel("[m/s²]")
@@ -158,7 +158,7 @@ def closure_error_figure(closure, position_tol_m: float | None = 1.0,
     Logarithmic axes (exact zeros, e.g. on the pad, are left out); dashed lines show the
     tolerances (issue 2: 1 m and 0.1 mrad at the end of the flight).
     """
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
+    fig, axes = subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
     series = [(closure.position_error, "position [m]", "C0", position_tol_m),
               (closure.velocity_error, "velocity [m/s]", "C3", None),
               (closure.attitude_error * 1e3, "attitude [mrad]", "C1",

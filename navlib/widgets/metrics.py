@@ -7,7 +7,9 @@ Both panels call :mod:`navlib.studies.rocket` and the figure builders of
   (:func:`navlib.studies.rocket.rocket_chain`);
 * a new eta reuses the segment SVDs (``with_eta``), new segment limits or D0 redo only the
   three small SVDs, a new nu reuses the eigen-decompositions (``with_nu``);
-* the figure is kept and redrawn in place, rendered once to PNG per update.
+* the figure is kept and redrawn in place by Agg blitting (:class:`navlib.widgets.base.
+  Blitter`), rendered once to PNG per update (the render path of
+  :mod:`navlib.widgets.base`).
 
 ``last_timing`` holds the milliseconds of the last update: ``compute_ms``, ``render_ms``,
 ``table_ms`` (claims table) and ``total_ms``.
@@ -15,14 +17,11 @@ Both panels call :mod:`navlib.studies.rocket` and the figure builders of
 
 from __future__ import annotations
 
-import io
 import time
 from dataclasses import replace
 
 import ipywidgets as widgets
-import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from navlib import metrics
 from navlib.errors import NavlibInputError
@@ -33,42 +32,7 @@ from navlib.plots.metrics import (
     sensability_figure,
 )
 from navlib.studies import rocket
-
-_LOOK = dict(style={"description_width": "9em"}, layout=widgets.Layout(width="34em"))
-
-
-class _Blitter:
-    """Render a figure to PNG, redrawing only its changing artists after the first time.
-
-    The first render draws everything except ``dynamic`` (marked animated) and keeps that
-    background; later renders restore it and draw the dynamic artists on top (Agg
-    blitting), so an update costs a few milliseconds of drawing plus the PNG encoding
-    instead of re-rasterising every tick label.
-    """
-
-    def __init__(self, fig, dynamic, dpi: float):
-        self.fig = fig
-        self.dynamic = list(dynamic)
-        fig.set_dpi(dpi)
-        self.canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) \
-            else FigureCanvasAgg(fig)
-        for artist in self.dynamic:
-            artist.set_animated(True)
-        self.canvas.draw()  # runs the layout once, then it is frozen
-        if fig.get_layout_engine() is not None:
-            fig.set_layout_engine("none")
-        self.background = self.canvas.copy_from_bbox(fig.bbox)
-
-    def png(self) -> bytes:
-        from PIL import Image
-
-        self.canvas.restore_region(self.background)
-        for artist in self.dynamic:
-            self.fig.draw_artist(artist)
-        buffer = io.BytesIO()
-        Image.fromarray(np.asarray(self.canvas.buffer_rgba())).save(buffer, format="png",
-                                                                    compress_level=1)
-        return buffer.getvalue()
+from navlib.widgets.base import Blitter, Panel, look
 
 
 def _timing(start: float, computed: float, rendered: float) -> dict:
@@ -92,7 +56,7 @@ def _claims_html(table) -> str:
             f"<th>ours</th></tr>{rows}</table>")
 
 
-class ExcitabilityPanel(widgets.VBox):
+class ExcitabilityPanel(Panel):
     """eta (log slider), the three segment limits (range sliders), attitude-error frame and
     D0 dropdowns; redraws the Fig. 2 analogue, the energy spectrum and the X1-X7 table.
 
@@ -102,15 +66,17 @@ class ExcitabilityPanel(widgets.VBox):
         ``eta``, ``tau1``, ``tau2``, ``tau3``, ``attitude_error``, ``d0``.
     analysis : RocketAnalysis
         The analysis shown.
+    image, table : ipywidgets.Image, ipywidgets.HTML
+        The figure and the claims table (parts ``figure`` and ``claims`` of the view).
     last_timing : dict
-        ``compute_ms`` and ``render_ms`` of the last update.
+        ``compute_ms``, ``render_ms``, ``table_ms`` and ``total_ms`` of the last update.
     """
 
     def __init__(self, eta: float = 1e-3, segments=rocket.SEGMENTS, dpi: float = 72.0,
                  **analyze_options):
         end = float(rocket.rocket_trajectory(analyze_options.get("spin_hz", 2.0)).t[-1])
-        slider = dict(continuous_update=False, **_LOOK)
-        self.controls = {
+        slider = dict(continuous_update=False, **look())
+        controls = {
             "eta": widgets.FloatLogSlider(value=eta, base=10, min=-8, max=-0.5, step=0.1,
                                           description="η", readout_format=".1e", **slider),
             **{f"tau{i + 1}": widgets.FloatRangeSlider(
@@ -119,27 +85,26 @@ class ExcitabilityPanel(widgets.VBox):
             "attitude_error": widgets.Dropdown(options=list(ATTITUDE_ERRORS),
                                                value=analyze_options.pop("attitude_error",
                                                                          "ecef"),
-                                               description="attitude error", **_LOOK),
+                                               description="attitude error", **look()),
             "d0": widgets.Dropdown(options=list(metrics.D0_CHOICES),
                                    value=analyze_options.pop("d0", "global"),
-                                   description="D0 (A19)", **_LOOK),
+                                   description="D0 (A19)", **look()),
         }
         self.options = analyze_options
-        self.dpi = float(dpi)
-        self.status = widgets.HTML()
-        self.image = widgets.Image(format="png")
-        self.table = widgets.HTML()
-        self.last_timing: dict = {}
         self._bases: dict = {}
         self._excitations: dict = {}
         self._figure = None
         self._blitter = None
         self.analysis = None
-        for control in self.controls.values():
-            control.observe(lambda _change: self.update(), names="value")
-        super().__init__([widgets.VBox(list(self.controls.values())), self.status,
-                          self.image, self.table])
-        self.update()
+        super().__init__(controls, dpi=dpi)
+
+    @property
+    def image(self) -> widgets.Image:
+        return self.parts["figure"]
+
+    @property
+    def table(self) -> widgets.HTML:
+        return self.parts["claims"]
 
     def segments(self) -> tuple:
         return tuple(tuple(self.controls[f"tau{i + 1}"].value)
@@ -166,34 +131,29 @@ class ExcitabilityPanel(widgets.VBox):
                        settings={**base.settings, "eta": excitation[0].eta,
                                  "d0": c["d0"].value})
 
-    def update(self) -> None:
-        """Recompute what changed and redraw (errors go to ``status``)."""
+    def refresh(self, changed: set) -> None:
+        """Recompute what changed and redraw the kept figure in place."""
         start = time.perf_counter()
-        try:
-            analysis = self.compute()
-        except NavlibInputError as exc:
-            self.status.value = f'<b style="color:#b00">Invalid input:</b> {exc}'
-            return
+        analysis = self.compute()
         self.analysis = analysis
         computed = time.perf_counter()
         dynamic = None if self._figure is None else excitability_dynamic_artists(self._figure)
         figure = excitability_figure(analysis, self._figure)
         if figure is not self._figure or excitability_dynamic_artists(figure) != dynamic:
-            plt.close(figure)  # new figure or rebuilt axes: new background
-            self._figure = figure
-            self._blitter = _Blitter(figure, excitability_dynamic_artists(figure), self.dpi)
-        self.image.value = self._blitter.png()
+            self._figure = figure  # new figure or rebuilt axes: new background
+            self._blitter = Blitter(figure, excitability_dynamic_artists(figure), self.dpi)
+        self.show("figure", self._blitter)
         rendered = time.perf_counter()
         try:
-            self.table.value = _claims_html(rocket.claims_table(analysis, "excitability"))
+            self.show("claims", _claims_html(rocket.claims_table(analysis, "excitability")))
         except NavlibInputError as exc:  # not three segments
-            self.table.value = f"<i>{exc}</i>"
+            self.show("claims", f"<i>{exc}</i>")
         self.last_timing = _timing(start, computed, rendered)
         ne = ", ".join(f"τ{i + 1}: {e.ne}" for i, e in enumerate(analysis.excitability))
         self.status.value = f"ne {ne}; {_timing_text(self.last_timing)}"
 
 
-class SensabilityPanel(widgets.VBox):
+class SensabilityPanel(Panel):
     """nu slider (admissible range shown) and a state selector; redraws the sensability of
     the chosen states with their 2-sigma bands and the S1-S8 table.
 
@@ -202,6 +162,7 @@ class SensabilityPanel(widgets.VBox):
     controls : dict
         ``nu`` slider and ``states`` multi-selector.
     analysis : RocketAnalysis
+    image, table : ipywidgets.Image, ipywidgets.HTML
     last_timing : dict
     """
 
@@ -209,61 +170,52 @@ class SensabilityPanel(widgets.VBox):
                  **analyze_options):
         self.base = rocket.analyze(nu=nu, **analyze_options)
         low, high = metrics.nu_range(len(STATE_NAMES))
-        slider = dict(continuous_update=False, **_LOOK)
-        self.controls = {
+        controls = {
             "nu": widgets.FloatSlider(value=nu, min=round(low + 5e-4, 4), max=0.9995,
                                       step=0.0005, description="ν", readout_format=".4f",
-                                      **slider),
+                                      continuous_update=False, **look()),
             "states": widgets.SelectMultiple(options=list(STATE_NAMES), value=tuple(states),
-                                             rows=7, description="states", **_LOOK),
+                                             rows=7, description="states", **look()),
         }
         self.range_note = widgets.HTML(
             f"admissible ν ∈ (√(1 − 1/n), 1) = ({low:.4f}, {high:g}) for n = "
             f"{len(STATE_NAMES)} (spec A11); paper: 0.985")
-        self.dpi = float(dpi)
-        self.status = widgets.HTML()
-        self.image = widgets.Image(format="png")
-        self.table = widgets.HTML()
-        self.last_timing: dict = {}
-        self._figure = None
         self._figure_states: tuple = ()
         self._lines: list = []
         self._blitter = None
         self.analysis = None
-        for control in self.controls.values():
-            control.observe(lambda _change: self.update(), names="value")
-        super().__init__([widgets.VBox([*self.controls.values(), self.range_note]),
-                          self.status, self.image, self.table])
-        self.update()
+        super().__init__(controls, extras=[self.range_note], dpi=dpi)
 
-    def update(self) -> None:
+    @property
+    def image(self) -> widgets.Image:
+        return self.parts["figure"]
+
+    @property
+    def table(self) -> widgets.HTML:
+        return self.parts["claims"]
+
+    def refresh(self, changed: set) -> None:
         """Re-threshold at the new nu (no new eigen-decomposition) and redraw."""
         start = time.perf_counter()
         states = tuple(self.controls["states"].value)
         if not states:
-            self.status.value = "<i>select at least one state</i>"
-            return
-        try:
-            analysis = self.base.with_nu(self.controls["nu"].value)
-        except NavlibInputError as exc:
-            self.status.value = f'<b style="color:#b00">Invalid input:</b> {exc}'
-            return
+            raise NavlibInputError("states: select at least one state")
+        analysis = self.base.with_nu(self.controls["nu"].value)
         self.analysis = analysis
         computed = time.perf_counter()
         if states != self._figure_states:
-            self._figure = sensability_figure(analysis, states,
-                                              title="Sensability (ν on the slider) and ±2σ bands")
-            plt.close(self._figure)
+            figure = sensability_figure(analysis, states,
+                                        title="Sensability (ν on the slider) and ±2σ bands")
             self._figure_states = states
-            self._lines = [ln for ax in self._figure.axes for ln in ax.get_lines()
+            self._lines = [ln for ax in figure.axes for ln in ax.get_lines()
                            if ln.get_label() == "sensability"]
-            self._blitter = _Blitter(self._figure, self._lines, self.dpi)
+            self._blitter = Blitter(figure, self._lines, self.dpi)
         se = analysis.sensability
         for line, state in zip(self._lines, states, strict=True):
             line.set_ydata(se.s[:, STATE_NAMES.index(state)])
-        self.image.value = self._blitter.png()
+        self.show("figure", self._blitter)
         rendered = time.perf_counter()
-        self.table.value = _claims_html(rocket.claims_table(analysis, "sensability"))
+        self.show("claims", _claims_html(rocket.claims_table(analysis, "sensability")))
         self.last_timing = _timing(start, computed, rendered)
         nr = analysis.sensability.nr
         self.status.value = (f"ν = {analysis.sensability.nu:.4f}; sensible subspace dimension "

@@ -6,25 +6,33 @@ Dropdowns for the solution, the bias set and the bias model rebuild the model
 stored singular values (:meth:`LocalObservability.with_rtol`, no new SVDs); the time slider
 analyses the local matrix at that step (:func:`navlib.observability.analyze`: singular values,
 unobservable groups, least observable direction). Invalid combinations (a bias model without
-biases, ...) show the NavlibInputError message instead of a figure.
+biases, ...) show the NavlibInputError message instead of a figure. Figures go through the
+render path of :mod:`navlib.widgets.base` (detached, PNG images).
 """
 
 from __future__ import annotations
 
+import html
+
 import ipywidgets as widgets
-import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import display
 
 from navlib.errors import NavlibInputError
 from navlib.models.launcher import BIAS_MODELS, BIAS_SETS, SOLUTIONS, launcher
 from navlib.observability import analyze, local_matrix, local_observability
 from navlib.plots.observability import mission_figure, singular_values_figure
 from navlib.studies.launcher import SOLUTION_LABELS, describe_direction
+from navlib.widgets.base import Panel, look
+
+_MODEL = ("solution", "biases", "bias_model", "variant")
 
 
-class ObservabilityPanel(widgets.VBox):
-    """Controls + status line + two output areas (mission curve, inspected step).
+class ObservabilityPanel(Panel):
+    """Controls + status line + the mission curve and the inspected step.
+
+    A change of ``solution``, ``biases``, ``bias_model`` or ``variant`` rebuilds the model
+    and the curve, ``log10_rtol`` re-ranks the stored singular values, ``t`` only
+    re-inspects.
 
     Attributes
     ----------
@@ -32,92 +40,88 @@ class ObservabilityPanel(widgets.VBox):
         ``solution``, ``biases``, ``bias_model``, ``variant`` dropdowns; ``log10_rtol`` and
         ``t`` sliders.
     status : ipywidgets.HTML
-    curve_output, step_output : ipywidgets.Output
+    parts : dict
+        ``curve`` and ``step`` images, ``step_notes`` (unobservable groups, weakest
+        direction).
     model : LinearModel or None
-        The model of the current configuration.
+        The model of the current configuration (None after a refused one).
     result : LocalObservability or None
         The curve at the current tolerance.
     """
 
-    def __init__(self, trajectory, stride: int = 200):
+    error_prefix = "Not a valid configuration"
+
+    def __init__(self, trajectory, stride: int = 200, dpi: float = 72.0):
         self.trajectory = trajectory
         self.stride = int(stride)
-        look = dict(style={"description_width": "9em"}, layout=widgets.Layout(width="30em"))
         duration = float(trajectory.t[-1] - trajectory.t[0])
-        self.controls = {
+        controls = {
             "solution": widgets.Dropdown(options=[(SOLUTION_LABELS[s], s) for s in SOLUTIONS],
                                          value="ins_gps_att_rt", description="solution",
-                                         **look),
+                                         **look("30em")),
             "biases": widgets.Dropdown(options=[(b or "none", b) for b in BIAS_SETS],
-                                       value="GAP", description="biases", **look),
+                                       value="GAP", description="biases", **look("30em")),
             "bias_model": widgets.Dropdown(options=list(BIAS_MODELS), value="random_walk",
-                                           description="bias model", **look),
+                                           description="bias model", **look("30em")),
             "variant": widgets.Dropdown(options=["time_varying", "frozen"],
-                                        description="eq. (6) reading", **look),
+                                        description="eq. (6) reading", **look("30em")),
             "log10_rtol": widgets.FloatSlider(value=np.log10(28 * 12 * np.finfo(float).eps),
                                               min=-18.0, max=-2.0, step=0.25,
                                               description="log10 rank rtol",
-                                              continuous_update=False, **look),
+                                              continuous_update=False, **look("30em")),
             "t": widgets.FloatSlider(value=round(duration / 2), min=0.0,
                                      max=max(duration - 1.0, 0.0), step=1.0,
                                      description="inspected time [s]",
-                                     continuous_update=False, **look),
+                                     continuous_update=False, **look("30em")),
         }
-        self.status = widgets.HTML()
-        self.curve_output = widgets.Output()
-        self.step_output = widgets.Output()
         self.model = None
         self._raw = None
         self.result = None
-        for name in ("solution", "biases", "bias_model", "variant"):
-            self.controls[name].observe(lambda _c: self.rebuild(), names="value")
-        self.controls["log10_rtol"].observe(lambda _c: self.rerank(), names="value")
-        self.controls["t"].observe(lambda _c: self.inspect(), names="value")
-        super().__init__([widgets.VBox(list(self.controls.values())), self.status,
-                          self.curve_output, self.step_output])
-        self.rebuild()
+        super().__init__(controls, dpi=dpi)
 
     @property
     def rtol(self) -> float:
         return float(10.0 ** self.controls["log10_rtol"].value)
 
+    def refresh(self, changed: set) -> None:
+        """Rebuild, re-rank and/or re-inspect, as the changed controls require."""
+        if changed & set(_MODEL):
+            self.rebuild()
+        if self.model is None:
+            return  # a refused configuration stays on show until a model control changes
+        if changed & {*_MODEL, "log10_rtol"}:
+            self.rerank()
+        self.inspect()
+
     def rebuild(self) -> None:
-        """New configuration: build the model and the 1 Hz curve (errors go to ``status``)."""
+        """New configuration: build the model and the 1 Hz curve (a refused one clears the
+        figures and raises its NavlibInputError)."""
         c = self.controls
         try:
             self.model = launcher(c["solution"].value, c["biases"].value,
                                   c["bias_model"].value, trajectory=self.trajectory)
             self._raw = local_observability(self.model, variant=c["variant"].value,
                                             stride=self.stride)
-        except NavlibInputError as exc:
+        except NavlibInputError:
             self.model = self._raw = self.result = None
-            self.status.value = f'<b style="color:#b00">Not a valid configuration:</b> {exc}'
-            for out in (self.curve_output, self.step_output):
-                out.clear_output()
-            return
-        self.rerank()
+            for name in ("curve", "step", "step_notes"):
+                self.show(name, None)
+            raise
 
     def rerank(self) -> None:
         """Apply the rank tolerance to the stored singular values and redraw the curve."""
-        if self._raw is None:
-            return
         self.result = self._raw.with_rtol(self.rtol)
         r = self.result
         self.status.value = (
             f"{self.model.name}: n = {r.n}, rank {r.rank.min()}–{r.rank.max()} "
             f"({r.n_unobservable} unobservable), max log10 cond {r.log10_max_cond:.1f}, "
             f"{r.step.size} evaluations")
-        with self.curve_output:
-            self.curve_output.clear_output(wait=True)
-            fig = mission_figure(r, self.trajectory.events, title=self.model.name)
-            display(fig)
-            plt.close(fig)
-        self.inspect()
+        self.show("curve", mission_figure(
+            r, self.trajectory.events,
+            title=f"{self.model.name}; eq. (6) {self.controls['variant'].value}"))
 
     def inspect(self) -> None:
         """Analyse O(k) at the inspected time: singular values, groups, weakest direction."""
-        if self.model is None:
-            return
         k = int(np.searchsorted(self.trajectory.t, self.controls["t"].value))
         k = min(k, int(self._raw.step[-1]))
         O = local_matrix(self.model, k, variant=self.controls["variant"].value)
@@ -125,15 +129,13 @@ class ObservabilityPanel(widgets.VBox):
                     coupling_threshold="auto")
         weakest = describe_direction(a.weakest_direction, self.model.state_names,
                                      self.trajectory.attitude[k].as_matrix())
-        with self.step_output:
-            self.step_output.clear_output(wait=True)
-            fig = singular_values_figure(a, title=f"t = {self.trajectory.t[k]:.2f} s: rank "
-                                         f"{a.rank}/{a.n}, cond {a.cond:.2e}")
-            display(fig)
-            plt.close(fig)
-            groups = "; ".join("{" + ", ".join(g) + "}" for g in a.unobservable_groups)
-            display(widgets.HTML(f"<b>unobservable groups:</b> {groups or 'none'}<br>"
-                                 f"<b>least observable direction:</b> {weakest}"))
+        self.show("step", singular_values_figure(
+            a, title=f"t = {self.trajectory.t[k]:.2f} s ({self.controls['variant'].value}): "
+                     f"rank {a.rank}/{a.n}, cond {a.cond:.2e}"))
+        groups = "; ".join("{" + ", ".join(g) + "}" for g in a.unobservable_groups)
+        self.show("step_notes", f"<b>unobservable groups:</b> {html.escape(groups or 'none')}"
+                                f"<br><b>least observable direction:</b> "
+                                f"{html.escape(weakest)}")
 
 
 def observability_panel(trajectory, stride: int = 200) -> ObservabilityPanel:

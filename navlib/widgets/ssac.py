@@ -2,38 +2,37 @@
 
 Sliders for the site latitude, the run duration and the P0 attitude scaling (1 = matched
 P0, ssac.md §4.4) plus a P0-variant dropdown call :func:`navlib.studies.ssac.run` and redraw
-the sigma panels, the normalised eigenvalues, the pair structure and the closed-form limits.
+the sigma panels, the normalised eigenvalues, the pair structure and the closed-form limits
+(render path of :mod:`navlib.widgets.base`: detached figures shown as PNG images).
 """
 
 from __future__ import annotations
 
 import ipywidgets as widgets
-import matplotlib.pyplot as plt
-from IPython.display import display
 
-from navlib.errors import NavlibInputError
 from navlib.models.ssac import SITE_LAT_DEG
 from navlib.plots.ssac import ssac_eigenvalues_figure, ssac_sigma_figure
 from navlib.studies.ssac import closed_form_limits, pair_structure, run
+from navlib.widgets.base import Panel, look, table_html
 
 
-class SSACPanel(widgets.VBox):
-    """Controls + status line + output area; ``update()`` reruns the study and redraws.
+class SSACPanel(Panel):
+    """Controls + status line + figures and tables; ``update()`` reruns the study and redraws.
 
     Attributes
     ----------
     controls : dict
         ``lat_deg``, ``duration_min``, ``attitude_scale`` sliders and ``P0`` dropdown.
     status : ipywidgets.HTML
-    output : ipywidgets.Output
+    parts : dict
+        ``sigma`` and ``eigenvalues`` images, ``pairs`` and ``limits`` tables.
     study : SSACStudy or None
         The last study computed.
     """
 
-    def __init__(self, duration_min: float = 60.0, **fixed):
-        look = dict(style={"description_width": "10em"}, layout=widgets.Layout(width="30em"))
-        slider = dict(continuous_update=False, **look)
-        self.controls = {
+    def __init__(self, duration_min: float = 60.0, dpi: float = 72.0, **fixed):
+        slider = dict(continuous_update=False, **look("30em"))
+        controls = {
             "lat_deg": widgets.FloatSlider(value=round(SITE_LAT_DEG, 3), min=-85.0, max=85.0,
                                            step=0.5, description="latitude [deg]", **slider),
             "duration_min": widgets.FloatSlider(value=duration_min, min=2.0, max=120.0,
@@ -43,17 +42,11 @@ class SSACPanel(widgets.VBox):
                                                      step=0.1, description="P0 attitude x",
                                                      **slider),
             "P0": widgets.Dropdown(options=["matched", "generic"], value="matched",
-                                   description="P0 variant", **look),
+                                   description="P0 variant", **look("30em")),
         }
         self.fixed = dict(fixed)
-        self.status = widgets.HTML()
-        self.output = widgets.Output()
         self.study = None
-        for control in self.controls.values():
-            control.observe(lambda _change: self.update(), names="value")
-        super().__init__([widgets.VBox(list(self.controls.values())), self.status,
-                          self.output])
-        self.update()
+        super().__init__(controls, dpi=dpi)
 
     def keywords(self) -> dict:
         """Keyword arguments of :func:`navlib.studies.ssac.run` from the controls."""
@@ -64,25 +57,18 @@ class SSACPanel(widgets.VBox):
         kw.update(self.fixed)
         return kw
 
-    def update(self) -> None:
-        """Rerun the study with the current controls and redraw (errors go to ``status``)."""
-        try:
-            study = run(**self.keywords())
-        except NavlibInputError as exc:
-            self.status.value = f'<b style="color:#b00">Invalid input:</b> {exc}'
-            return
+    def refresh(self, changed: set) -> None:
+        """Rerun the study with the current controls and redraw."""
+        study = run(**self.keywords())
         self.study = study
         lam = study.eigen.eigenvalues[-1]
         self.status.value = (f"ok: {study.t.size} epochs; six largest normalised eigenvalues "
                              f"sum to {lam[:6].sum():.3f}, 7th = {lam[6]:.1e}")
         limits = closed_form_limits(study)
-        with self.output:
-            self.output.clear_output(wait=True)
-            for fig in (ssac_sigma_figure(study, limits), ssac_eigenvalues_figure(study)):
-                display(fig)
-                plt.close(fig)
-            display(pair_structure(study.eigen).round(4))
-            display(limits.round(5))
+        self.show("sigma", ssac_sigma_figure(study, limits))
+        self.show("eigenvalues", ssac_eigenvalues_figure(study))
+        self.show("pairs", table_html(pair_structure(study.eigen).round(4), index=True))
+        self.show("limits", table_html(limits.round(5), index=True))
 
 
 def ssac_panel(duration_min: float = 60.0, **fixed) -> SSACPanel:

@@ -4,19 +4,18 @@ Sliders for the spin rate and the ignition, burnout and de-spin times plus a lau
 dropdown call :func:`navlib.trajectory.sounding_rocket` and redraw the Fig. 1 analogue,
 height/speed and the profile-claim table. Impossible combinations (burnout before
 ignition, de-spin outside the coast, ...) show the NavlibInputError message in the panel.
+Figures go through the render path of :mod:`navlib.widgets.base` (detached, PNG images).
 """
 
 from __future__ import annotations
 
 import ipywidgets as widgets
-import matplotlib.pyplot as plt
-from IPython.display import display
 
-from navlib.errors import NavlibInputError
 from navlib.plots.trajectory import altitude_speed_figure, axial_imu_figure
 from navlib.studies.rocket_profile import rocket_profile_claims
 from navlib.studies.verdict import claims_frame
 from navlib.trajectory import sounding_rocket
+from navlib.widgets.base import Panel, look
 
 SITES = {
     "Barreira do Inferno, Natal (default)": {"lat_deg": -5.92, "lon_deg": -35.16, "alt_m": 30.0},
@@ -28,8 +27,8 @@ SITES = {
 """Launch sites offered by the dropdown (approximate coordinates, degrees and metres)."""
 
 
-class RocketPanel(widgets.VBox):
-    """Controls + status line + output area; ``update()`` re-synthesises and redraws.
+class RocketPanel(Panel):
+    """Controls + status line + figures; ``update()`` re-synthesises and redraws.
 
     Attributes
     ----------
@@ -37,16 +36,18 @@ class RocketPanel(widgets.VBox):
         ``spin_hz``, ``ignition_s``, ``burnout_s``, ``despin_s`` sliders and ``site`` dropdown.
     status : ipywidgets.HTML
         "ok" summary or the NavlibInputError message of the last update.
-    output : ipywidgets.Output
-        The figures and the claim table of the last successful update.
+    parts : dict
+        ``axial_imu`` and ``altitude_speed`` images and the ``claims`` table of the last
+        successful update.
     trajectory : Trajectory or None
         The last trajectory synthesised.
     """
 
-    def __init__(self, **fixed):
-        look = dict(style={"description_width": "8em"}, layout=widgets.Layout(width="28em"))
-        slider = dict(continuous_update=False, **look)
-        self.controls = {
+    error_prefix = "Not a valid flight"
+
+    def __init__(self, dpi: float = 72.0, **fixed):
+        slider = dict(continuous_update=False, **look("28em"))
+        controls = {
             "spin_hz": widgets.FloatSlider(value=2.0, min=0.0, max=4.0, step=0.1,
                                            description="spin [Hz]", **slider),
             "ignition_s": widgets.FloatSlider(value=18.0, min=0.0, max=40.0, step=0.5,
@@ -55,17 +56,11 @@ class RocketPanel(widgets.VBox):
                                              description="burnout [s]", **slider),
             "despin_s": widgets.FloatSlider(value=73.0, min=20.0, max=86.0, step=0.5,
                                             description="de-spin [s]", **slider),
-            "site": widgets.Dropdown(options=list(SITES), description="site", **look),
+            "site": widgets.Dropdown(options=list(SITES), description="site", **look("28em")),
         }
         self.fixed = dict(fixed)
-        self.status = widgets.HTML()
-        self.output = widgets.Output()
         self.trajectory = None
-        for control in self.controls.values():
-            control.observe(lambda _change: self.update(), names="value")
-        super().__init__([widgets.HBox([widgets.VBox(list(self.controls.values()))]),
-                          self.status, self.output])
-        self.update()
+        super().__init__(controls, dpi=dpi)
 
     def keywords(self) -> dict:
         """The keyword arguments the controls (and ``fixed``) give to ``sounding_rocket``."""
@@ -74,24 +69,17 @@ class RocketPanel(widgets.VBox):
         kw.update(self.fixed)
         return kw
 
-    def update(self) -> None:
-        """Re-synthesise with the current controls and redraw (errors go to ``status``)."""
-        try:
-            traj = sounding_rocket(**self.keywords())
-        except NavlibInputError as exc:
-            self.status.value = f'<b style="color:#b00">Not a valid flight:</b> {exc}'
-            return
+    def refresh(self, changed: set) -> None:
+        """Re-synthesise with the current controls and redraw."""
+        traj = sounding_rocket(**self.keywords())
         self.trajectory = traj
         claims = claims_frame(rocket_profile_claims(traj))
         n_ok = int((claims["verdict"] == "reproduced").sum())
         self.status.value = (f"ok: {len(traj)} samples; paper profile claims reproduced: "
                              f"{n_ok}/{len(claims)}")
-        with self.output:
-            self.output.clear_output(wait=True)
-            for fig in (axial_imu_figure(traj), altitude_speed_figure(traj)):
-                display(fig)
-                plt.close(fig)
-            display(claims[["claim_id", "claim", "paper", "ours", "verdict"]])
+        self.show("axial_imu", axial_imu_figure(traj))
+        self.show("altitude_speed", altitude_speed_figure(traj))
+        self.show("claims", claims[["claim_id", "claim", "paper", "ours", "verdict"]])
 
 
 def rocket_panel(**fixed) -> RocketPanel:

@@ -1,0 +1,255 @@
+"""The base of every widget panel: controls, status line, error display, observe wiring and
+the one render path.
+
+Why one render path. JupyterLab 4.6 hands widget messages to kernel subshells by default
+("kernel comms over subshells", ``perCommTarget``): a panel's update runs on one thread
+while the end-of-cell hook of the inline backend (``flush_figures``) runs on another and
+draws every figure pyplot holds. A panel figure open in pyplot at that moment is drawn by
+both threads at once and reaches the page blank or partly drawn. So a panel never shows a
+live figure:
+
+* its figures are built inside :func:`navlib.plots.figure.detached`, so pyplot never holds
+  them and no hook can find them;
+* each figure is rasterised by Agg to PNG bytes shown in an :class:`ipywidgets.Image`
+  (:func:`render_png`); a figure a panel keeps for in-place updates is redrawn by Agg
+  blitting (:class:`Blitter`: the static background once, the changing artists on top);
+* tables and notes are HTML widgets. No ``Output`` widget, no ``display`` of a figure.
+
+A panel subclass names its controls and implements :meth:`Panel.refresh`, which gets the
+names of the controls that changed (all of them on the first call), recomputes what they
+touch and puts the results on show with :meth:`Panel.show`. A
+:class:`~navlib.errors.NavlibInputError` raised there leaves the last good view in place
+and shows its message in the status line; any other exception is shown there too (class
+``navlib-panel-error``) and re-raised, so a bug is never silent.
+"""
+
+from __future__ import annotations
+
+import functools
+import html
+import io
+import re
+import time
+from collections.abc import Iterable, Mapping
+
+import ipywidgets as widgets
+import numpy as np
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from navlib.errors import NavlibInputError
+from navlib.plots.figure import detached
+
+LOOK = {"style": {"description_width": "9em"}}
+"""Common look of the controls (label width); panels add their own ``layout`` width."""
+
+
+def look(width: str = "34em") -> dict:
+    """Keyword arguments giving a control the common label width and ``width``."""
+    return {**LOOK, "layout": widgets.Layout(width=width)}
+
+
+def _encode(rgba) -> bytes:
+    """PNG bytes of an Agg RGBA buffer: RGB only (figures are opaque) and light zlib
+    compression, which halves the encoding time of the default settings."""
+    from PIL import Image  # pillow ships with matplotlib
+
+    buffer = io.BytesIO()
+    rgb = np.ascontiguousarray(np.asarray(rgba)[..., :3])
+    Image.fromarray(rgb).save(buffer, format="png", compress_level=1)
+    return buffer.getvalue()
+
+
+def _agg_canvas(fig: Figure) -> FigureCanvasAgg:
+    return fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+
+
+def render_png(fig: Figure, dpi: float = 72.0) -> bytes:
+    """Draw ``fig`` with Agg at ``dpi`` and return it as PNG bytes (fast, light compression).
+
+    The figure should be detached (:func:`navlib.plots.figure.detached`): nothing else may
+    draw it meanwhile.
+    """
+    fig.set_dpi(dpi)
+    canvas = _agg_canvas(fig)
+    canvas.draw()
+    return _encode(canvas.buffer_rgba())
+
+
+class Blitter:
+    """Render a kept figure to PNG, redrawing only its changing artists after the first time.
+
+    The first render draws everything except ``dynamic`` (marked animated) and keeps that
+    background; :meth:`png` restores it and draws the dynamic artists on top (Agg
+    blitting), so an update costs a few milliseconds of drawing plus the PNG encoding
+    instead of re-rasterising every tick label. The layout is frozen after the first draw.
+
+    Parameters
+    ----------
+    fig : Figure
+        A detached figure.
+    dynamic : iterable of Artist
+        The artists later updates change (lines, bars, titles, shading).
+    dpi : float
+    """
+
+    def __init__(self, fig: Figure, dynamic: Iterable, dpi: float = 72.0):
+        self.fig = fig
+        self.dynamic: list = []
+        fig.set_dpi(dpi)
+        self.canvas = _agg_canvas(fig)
+        self.set_dynamic(dynamic, redraw_background=False)
+        self.canvas.draw()  # runs the layout once, then it is frozen
+        if fig.get_layout_engine() is not None:
+            fig.set_layout_engine("none")
+        self.background = self.canvas.copy_from_bbox(fig.bbox)
+
+    def set_dynamic(self, dynamic: Iterable, redraw_background: bool = True) -> None:
+        """Replace the dynamic artists (e.g. new segment shading); with
+        ``redraw_background`` the background is drawn again without them."""
+        self.dynamic = list(dynamic)
+        for artist in self.dynamic:
+            artist.set_animated(True)
+        if redraw_background:
+            self.canvas.draw()
+            self.background = self.canvas.copy_from_bbox(self.fig.bbox)
+
+    def png(self) -> bytes:
+        """The figure with the dynamic artists' current state, as PNG bytes."""
+        self.canvas.restore_region(self.background)
+        for artist in self.dynamic:
+            if artist.figure is not None:  # removed artists are skipped
+                self.fig.draw_artist(artist)
+        return _encode(self.canvas.buffer_rgba())
+
+
+def table_html(frame: pd.DataFrame, index: bool = False) -> str:
+    """A DataFrame as a compact HTML table for a panel."""
+    return ("<div style='font-size:11px;overflow-x:auto'>"
+            + frame.to_html(index=index, border=0, float_format=lambda v: f"{v:.4g}")
+            + "</div>")
+
+
+_MARK = re.compile(r'<span class="navlib-update"[^>]*></span>$')
+
+
+def error_html(prefix: str, exc: BaseException) -> str:
+    """The status line of a refused input: ``prefix`` in red, then the message."""
+    return f'<b style="color:#b00">{html.escape(prefix)}:</b> {html.escape(str(exc))}'
+
+
+class Panel(widgets.VBox):
+    """Controls, a status line and a view of named parts (PNG images and HTML).
+
+    Parameters
+    ----------
+    controls : mapping of str to ipywidgets.ValueWidget
+        Observed on ``value``; a change calls :meth:`update` with its name.
+    extras : sequence of Widget
+        Shown under the controls (notes, buttons) and not observed.
+    dpi : float
+        Resolution the figures are rendered at (72: the inline backend's).
+    update_now : bool
+        Run the first :meth:`update` (all controls) at the end of construction.
+
+    Attributes
+    ----------
+    controls : dict
+    status : ipywidgets.HTML
+        Summary of the last update, or the message of the refused input; it ends with a
+        hidden ``<span class="navlib-update" data-count="N">``, N counting the updates
+        handled (applied or refused), which tells a page (and the browser tests) that an
+        update is complete.
+    view : ipywidgets.VBox
+        The parts, in the order they were first shown.
+    parts : dict
+        Name -> the Image or HTML widget of that part.
+    last_timing : dict
+        ``total_ms`` of the last applied update (subclasses may add their own keys).
+    error_prefix : str
+        Class attribute: the status prefix of a refused input.
+    """
+
+    error_prefix = "Invalid input"
+
+    def __init__(self, controls: Mapping, *, extras: Iterable = (), dpi: float = 72.0,
+                 update_now: bool = True):
+        self.controls = dict(controls)
+        self.dpi = float(dpi)
+        self.status = widgets.HTML()
+        self.view = widgets.VBox()
+        self.parts: dict = {}
+        self.last_timing: dict = {}
+        self.updates = 0
+        for name, control in self.controls.items():
+            control.observe(functools.partial(self._changed, name), names="value")
+        header = widgets.VBox([*self.controls.values(), *extras])
+        header.add_class("navlib-controls")
+        self.status.add_class("navlib-status")
+        self.view.add_class("navlib-view")
+        super().__init__([header, self.status, self.view])
+        self.add_class("navlib-panel")
+        if update_now:
+            self.update()
+
+    def _changed(self, name: str, _change) -> None:
+        self.update((name,))
+
+    def update(self, changed: Iterable[str] | None = None) -> bool:
+        """Recompute and redraw for the controls named in ``changed`` (None: all).
+
+        Returns True when applied; a NavlibInputError is shown in ``status`` (False
+        returned, the last good view kept).
+        """
+        names = set(self.controls) if changed is None else set(changed)
+        start = time.perf_counter()
+        try:
+            with detached():
+                self.refresh(names)
+        except NavlibInputError as exc:
+            self._done(error_html(self.error_prefix, exc))
+            return False
+        except Exception as exc:
+            self._done(f'<b class="navlib-panel-error" style="color:#b00">'
+                       f'{html.escape(type(exc).__name__)}:</b> {html.escape(str(exc))}')
+            raise
+        self.last_timing["total_ms"] = 1e3 * (time.perf_counter() - start)
+        self._done(self.status.value)
+        return True
+
+    def _done(self, status: str) -> None:
+        self.updates += 1
+        self.status.value = (_MARK.sub("", status) + f'<span class="navlib-update" '
+                             f'data-count="{self.updates}" hidden></span>')
+
+    def refresh(self, changed: set) -> None:
+        """Recompute what the controls in ``changed`` touch and :meth:`show` it."""
+        raise NotImplementedError
+
+    def show(self, name: str, content) -> None:
+        """Put ``content`` on show as part ``name``.
+
+        ``content``: a detached Figure (rendered to PNG at ``dpi``), a :class:`Blitter`
+        (its current PNG), PNG bytes, a DataFrame (HTML table), an HTML string, or None
+        (the part is hidden).
+        """
+        if content is None:
+            if name in self.parts:
+                self.parts[name].layout.display = "none"
+            return
+        if isinstance(content, Figure):
+            content = render_png(content, self.dpi)
+        elif isinstance(content, Blitter):
+            content = content.png()
+        elif isinstance(content, pd.DataFrame):
+            content = table_html(content)
+        kind = widgets.Image if isinstance(content, bytes) else widgets.HTML
+        part = self.parts.get(name)
+        if part is None or not isinstance(part, kind):
+            part = kind(format="png") if kind is widgets.Image else kind()
+            part.add_class(f"navlib-part-{name}")
+            self.parts[name] = part
+            self.view.children = tuple(self.parts.values())
+        part.value = content
+        part.layout.display = None
