@@ -1,5 +1,6 @@
 """Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]``
-and ``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``.
+``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``
+and ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
 2 for bad command-line input, 128 + signal number when interrupted (130 Ctrl-C, 143 SIGTERM).
@@ -52,6 +53,7 @@ def _parser() -> argparse.ArgumentParser:
                           "A kernel that stops answering is restarted once whatever the "
                           "limit")
     _add_assess(sub)
+    _add_sweep(sub)
     return parser
 
 
@@ -90,6 +92,56 @@ def _assess(args) -> int:
     print(f"{len(table) - len(failed)} of {len(table)} flight(s) assessed; summary: "
           f"{path.resolve()}", file=sys.stderr)
     return 1 if len(failed) else 0
+
+
+def _add_sweep(sub) -> None:
+    swp = sub.add_parser(
+        "sweep", help="sweep a named evaluation over a grid of parameters (Dask tasks)",
+        description="Map a named evaluation of navlib.sweep over the product of the given "
+                    "parameter values and print the table; with --output it is saved as "
+                    "Parquet as it runs and a rerun resumes. --list shows the evaluations "
+                    "and their parameters.")
+    swp.add_argument("evaluation", nargs="?", help="a name of navlib.sweep.EVALUATIONS")
+    swp.add_argument("-g", "--grid", nargs="+", action="append", default=[],
+                     metavar=("NAME", "VALUE"),
+                     help="a parameter and its values, e.g. -g spin_hz 0.5 1 2; each VALUE "
+                          "parsed as JSON or a Python literal, else a string")
+    swp.add_argument("--output", type=Path, default=None, metavar="FILE.parquet",
+                     help="save the results (resumable)")
+    swp.add_argument("--scheduler", default=None, metavar="ADDR",
+                     help="Dask scheduler address (tcp://host:8786) or processes, threads, "
+                          "synchronous (default: $NAVLIB_SCHEDULER, else a local cluster)")
+    swp.add_argument("--list", action="store_true", help="list the evaluations, run nothing")
+
+
+def _sweep(args) -> int:
+    import pandas as pd
+
+    from navlib import sweep
+
+    if args.list:
+        with pd.option_context("display.width", 200, "display.max_colwidth", 90):
+            print(sweep.evaluations_frame().to_string(index=False))
+        return 0
+    if not args.evaluation:
+        raise NavlibInputError("evaluation: name one (python -m navlib sweep --list)")
+    grid = {}
+    for name, *values in args.grid:
+        if not values:
+            raise NavlibInputError(f"grid: {name} has no values (write: -g {name} V1 V2 ...)")
+        if name in grid:
+            raise NavlibInputError(f"grid: {name} given twice")
+        grid[name] = [reports.parse_parameter_value(v) for v in values]
+    if not grid:
+        raise NavlibInputError("grid: give at least one parameter, e.g. -g eta 1e-2 1e-3")
+    table = sweep.sweep(grid, args.evaluation, scheduler=args.scheduler, output=args.output)
+    with pd.option_context("display.width", 200, "display.max_columns", 30):
+        print(table.to_string(index=False))
+    stats = table.attrs.get("sweep", {})
+    where = f"; saved: {Path(args.output).resolve()}" if args.output else ""
+    print(f"{stats.get('n_points', len(table))} point(s), {stats.get('n_computed', '?')} "
+          f"computed in {stats.get('wall_s', float('nan')):.1f} s{where}", file=sys.stderr)
+    return 0
 
 
 def _print_progress(position: int, total: int, name: str, run) -> None:
@@ -144,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "report":
             return _report(args)
+        if args.command == "sweep":
+            return _sweep(args)
         if args.command == "assess":
             return _assess(args)
     except NavlibInputError as exc:
