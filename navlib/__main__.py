@@ -120,8 +120,9 @@ def _sweep(args) -> int:
     from navlib import sweep
 
     if args.list:
-        with pd.option_context("display.width", 200, "display.max_colwidth", 90):
-            print(sweep.evaluations_frame().to_string(index=False))
+        for row in sweep.evaluations_frame().itertuples(index=False):
+            print(f"{row.name}\n    {row.description}\n    parameters: {row.parameters}\n"
+                  f"    shared input built once per value of: {row.shared}")
         return 0
     if not args.evaluation:
         raise NavlibInputError("evaluation: name one (python -m navlib sweep --list)")
