@@ -285,6 +285,7 @@ def test_pivot_selects_and_combines():
 def test_heatmap_annotates_the_pivot_values():
     import matplotlib.pyplot as plt
 
+    from navlib.plots.figure import detached
     from navlib.plots.sweep import heatmap, heatmaps_figure
 
     frame = _study()
@@ -299,6 +300,11 @@ def test_heatmap_annotates_the_pivot_values():
     fig = heatmaps_figure(frame, "a", "b", ["y", "n"])
     assert len(fig.axes) == 4  # two maps, two colour bars
     plt.close(fig)
+    held = plt.get_fignums()
+    with detached():
+        heatmap(frame, "a", "b", "y")
+        heatmaps_figure(frame, "a", "b", ["y", "n"])
+    assert plt.get_fignums() == held  # detached figures stay out of pyplot
 
 
 def test_sweep_panel_fixes_and_reports_bad_choices():
@@ -307,10 +313,18 @@ def test_sweep_panel_fixes_and_reports_bad_choices():
     frame = _study()
     panel = sweep_panel(frame, x="a", y="b", value="y")
     assert set(panel.values) == {"y", "n", "big"}
+    assert list(panel.parts) == ["heatmap"]
+    first = panel.parts["heatmap"].value
+    assert bytes(first[:4]) == b"\x89PNG"
+    assert [panel.controls[f"fix:{p}"].disabled for p in ("a", "b", "tag")] == \
+        [True, True, False]
     panel.controls["fix:tag"].value = "y"
     assert panel.fixed() == {"tag": "y"}
+    shown = panel.parts["heatmap"].value
+    assert shown != first
     panel.controls["y"].value = "a"
     assert "must differ" in panel.status.value
+    assert panel.parts["heatmap"].value == shown  # the last good map stays
     with pytest.raises(NavlibInputError, match="parameter"):
         sweep_panel(frame.drop(columns="tag").assign(), parameters=["a"])
     frame.attrs = {}

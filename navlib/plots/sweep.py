@@ -2,17 +2,19 @@
 
 Each builder takes the DataFrame :func:`navlib.sweep.sweep` returns and the columns to put on
 the axes; the table behind each map is :func:`navlib.sweep.pivot` (points sharing a cell
-combined with ``agg``). Every builder returns a new Figure.
+combined with ``agg``). Every builder returns a new Figure (from :mod:`navlib.plots.figure`:
+detached inside :func:`~navlib.plots.figure.detached`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.patches import Rectangle
 
 from navlib.errors import NavlibInputError
+from navlib.plots.figure import subplots
 from navlib.sweep import pivot
 
 
@@ -32,8 +34,8 @@ def heatmap(frame, x: str, y: str, value: str, *, fixed: Mapping | None = None,
     """
     table = pivot(frame, x, y, value, fixed, agg)
     if ax is None:
-        fig, ax = plt.subplots(figsize=(1.2 + 0.9 * table.shape[1], 1.2 + 0.55 * table.shape[0]),
-                               layout="constrained")
+        fig, ax = subplots(figsize=(1.2 + 0.9 * table.shape[1], 1.2 + 0.55 * table.shape[0]),
+                           layout="constrained")
     else:
         fig = ax.figure
     data = table.to_numpy(dtype=float)
@@ -52,8 +54,8 @@ def heatmap(frame, x: str, y: str, value: str, *, fixed: Mapping | None = None,
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=8,
                     color="white" if v < mid else "black")
             if threshold is not None and v >= threshold:
-                ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
-                                           edgecolor="red", linewidth=2))
+                ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
+                                       edgecolor="red", linewidth=2))
     fig.colorbar(image, ax=ax, label=value)
     where = ", ".join(f"{k}={_label(v)}" for k, v in (fixed or {}).items())
     ax.set_title(title or f"{value}" + (f" ({where})" if where else "")
@@ -73,9 +75,9 @@ def heatmaps_figure(frame, x: str, y: str, values: Sequence[str], *,
     titles = dict(titles or {})
     n_x = frame[x].nunique() if x in frame.columns else 1
     n_y = frame[y].nunique() if y in frame.columns else 1
-    fig, axes = plt.subplots(1, len(values), figsize=(len(values) * (1.6 + 0.8 * n_x),
-                                                      2.4 + 0.5 * n_y),
-                             layout="constrained", squeeze=False)
+    fig, axes = subplots(1, len(values), figsize=(len(values) * (1.6 + 0.8 * n_x),
+                                                  2.4 + 0.5 * n_y),
+                         layout="constrained", squeeze=False)
     for ax, value in zip(axes[0], values, strict=True):
         heatmap(frame, x, y, value, fixed=fixed, agg=agg, threshold=thresholds.get(value),
                 ax=ax, title=titles.get(value))

@@ -2,8 +2,9 @@
 
 Dropdowns choose the x and y parameters, the result column and how the points sharing a
 cell are combined; one dropdown per other parameter fixes it to a value or leaves it
-combined ("all"). Every redraw is :func:`navlib.plots.sweep.heatmap` on the stored result:
-nothing is recomputed.
+combined ("all"); the dropdown of a parameter on an axis is disabled. Every redraw is
+:func:`navlib.plots.sweep.heatmap` on the stored result (nothing is recomputed), shown by
+the render path of :mod:`navlib.widgets.base` (a detached figure as a PNG image).
 """
 
 from __future__ import annotations
@@ -11,20 +12,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import ipywidgets as widgets
-import matplotlib.pyplot as plt
 import pandas as pd
-from IPython.display import display
 
 from navlib.errors import NavlibInputError
 from navlib.plots.sweep import heatmap
 from navlib.sweep import AGGREGATES, parameter_columns
+from navlib.widgets.base import Panel, look
 
 ALL = "all"
 """Choice of a parameter dropdown that leaves the parameter combined over its values."""
 
 
-class SweepPanel(widgets.VBox):
-    """Controls + status line + output area; ``update()`` redraws the heat map.
+class SweepPanel(Panel):
+    """Controls + status line + heat map; ``update()`` redraws it from the stored result.
 
     Attributes
     ----------
@@ -35,12 +35,15 @@ class SweepPanel(widgets.VBox):
     controls : dict
         ``x``, ``y``, ``value``, ``agg`` and one dropdown per parameter (``fix:<name>``).
     status : ipywidgets.HTML
-    output : ipywidgets.Output
+    parts : dict
+        ``heatmap``: the image of the current map.
     """
+
+    error_prefix = "Invalid choice"
 
     def __init__(self, frame: pd.DataFrame, parameters: Sequence[str] | None = None,
                  x: str | None = None, y: str | None = None, value: str | None = None,
-                 threshold: float | None = None):
+                 threshold: float | None = None, dpi: float = 72.0):
         if not isinstance(frame, pd.DataFrame) or frame.empty:
             raise NavlibInputError("frame: expected a non-empty sweep result DataFrame")
         self.frame = frame
@@ -55,28 +58,23 @@ class SweepPanel(widgets.VBox):
         if not self.values:
             raise NavlibInputError("frame: no numeric result column to map")
         self.threshold = threshold
-        look = dict(style={"description_width": "8em"}, layout=widgets.Layout(width="26em"))
-        self.controls = {
+        controls = {
             "x": widgets.Dropdown(options=self.parameters, value=x or self.parameters[0],
-                                  description="x axis", **look),
+                                  description="x axis", **look("26em")),
             "y": widgets.Dropdown(options=self.parameters, value=y or self.parameters[1],
-                                  description="y axis", **look),
+                                  description="y axis", **look("26em")),
             "value": widgets.Dropdown(options=self.values, value=value or self.values[0],
-                                      description="value", **look),
+                                      description="value", **look("26em")),
             "agg": widgets.Dropdown(options=AGGREGATES, value="mean",
-                                    description="combine", **look),
+                                    description="combine", **look("26em")),
         }
         for name in self.parameters:
             options = [ALL, *[str(v) for v in pd.unique(frame[name])]]
-            self.controls[f"fix:{name}"] = widgets.Dropdown(options=options, value=ALL,
-                                                            description=name, **look)
-        self.status = widgets.HTML()
-        self.output = widgets.Output()
-        for control in self.controls.values():
-            control.observe(lambda _change: self.update(), names="value")
-        main = widgets.VBox([self.controls[k] for k in ("x", "y", "value", "agg")])
-        fixes = widgets.VBox([c for k, c in self.controls.items() if k.startswith("fix:")])
-        super().__init__([widgets.HBox([main, fixes]), self.status, self.output])
+            controls[f"fix:{name}"] = widgets.Dropdown(options=options, value=ALL,
+                                                       description=name, **look("26em"))
+        super().__init__(controls, dpi=dpi, update_now=False)
+        self.children[0].layout = widgets.Layout(display="grid",
+                                                 grid_template_columns="repeat(2, 27em)")
         self.update()
 
     def fixed(self) -> dict:
@@ -92,23 +90,21 @@ class SweepPanel(widgets.VBox):
         return out
 
     def figure(self):
-        """The heat map of the current choices (a new Figure)."""
+        """The heat map of the current choices (a new Figure; detached inside
+        :func:`navlib.plots.figure.detached`)."""
         c = self.controls
         return heatmap(self.frame, c["x"].value, c["y"].value, c["value"].value,
                        fixed=self.fixed(), agg=c["agg"].value, threshold=self.threshold)
 
-    def update(self) -> None:
-        """Redraw with the current choices (invalid choices are reported in ``status``)."""
-        try:
-            fig = self.figure()
-        except NavlibInputError as exc:
-            self.status.value = f'<b style="color:#b00">Invalid choice:</b> {exc}'
-            return
+    def refresh(self, changed: set) -> None:
+        """Redraw with the current choices; the dropdowns of the axis parameters are
+        disabled (fixing them would change nothing)."""
+        axes = (self.controls["x"].value, self.controls["y"].value)
+        for name in self.parameters:
+            self.controls[f"fix:{name}"].disabled = name in axes
+        fig = self.figure()
         self.status.value = f"{len(self.frame)} points; fixed: {self.fixed() or 'none'}"
-        with self.output:
-            self.output.clear_output(wait=True)
-            display(fig)
-            plt.close(fig)
+        self.show("heatmap", fig)
 
 
 def sweep_panel(frame: pd.DataFrame, parameters: Sequence[str] | None = None, **choices

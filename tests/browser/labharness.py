@@ -42,7 +42,7 @@ CHROMIUM_ARGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-d
                  "--disable-extensions", "--mute-audio"]
 PANEL_NOTEBOOKS = ("01_trajectory_synthesis", "02_observability_matrix", "03_excitability",
                    "04_sensability", "05_outlier_sensitivity", "06_stationary_alignment",
-                   "07_assess_flight")
+                   "07_assess_flight", "08_design_study")
 """The notebooks that show a navlib panel (each is opened, run and moved)."""
 MOVES: list = []
 """Every move of the test session (:class:`Move`), for the latency table."""

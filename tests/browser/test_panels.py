@@ -1,4 +1,4 @@
-"""Every navlib panel of notebooks 01-07, in JupyterLab (default settings: kernel comms over
+"""Every navlib panel of notebooks 01-08, in JupyterLab (default settings: kernel comms over
 subshells) in headless Chromium: Run All in quick mode, then each slider, dropdown and
 text box moved by keyboard and by mouse (issue 13).
 
