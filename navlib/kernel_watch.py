@@ -51,6 +51,8 @@ LOST_WAKEUP_WAIT_S = 0.05
 this, counts as a lost wake-up (ZeroMQ never woke the poll; the slicing recovered it), s."""
 
 ENGINE_NAME = "navlib-bounded"
+KERNEL_NAME = "python3"
+"""The kernel spec name given to papermill (always started with ``sys.executable``)."""
 
 _LIVE_WATCHES: weakref.WeakSet[KernelWatch] = weakref.WeakSet()
 
@@ -389,7 +391,7 @@ def execute_notebook(input_path, output_path, *, parameters: dict, cwd,
     try:
         papermill.execute_notebook(
             str(input_path), str(output_path), parameters=parameters,
-            kernel_name="python3", engine_name=ENGINE_NAME, cwd=str(cwd),
+            kernel_name=KERNEL_NAME, engine_name=ENGINE_NAME, cwd=str(cwd),
             progress_bar=False, log_output=False, execution_timeout=timeout_s,
             kernel_manager_class=kernel_manager_class(watch))
     finally:

@@ -55,7 +55,6 @@ from navlib.kernel_watch import KernelWatch, NotebookAborted, execute_notebook, 
 NOTEBOOK_PATTERN = re.compile(r"^(\d{2})_\w+\.ipynb$")
 """Notebooks taking part in the report: ``NN_name.ipynb`` (two digits, underscore)."""
 
-KERNEL_NAME = "python3"
 MANIFEST = "manifest.json"
 INDEX = "index.html"
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
@@ -128,7 +127,8 @@ class NotebookRun:
     name : str
         Notebook stem.
     status : str
-        ``"ok"`` or ``"failed"``.
+        ``"ok"`` or ``"failed"`` (``"restarting"`` only in the progress call announcing a
+        restart after a stall).
     seconds : float
         Wall time of the papermill execution (kernel start included), s.
     parameters : dict
@@ -143,8 +143,8 @@ class NotebookRun:
         Stalls met on the way (each ended by killing the kernel); a run that stalled once
         and then succeeded is ``ok`` with one entry here.
     lost_wakeups : int
-        Kernel messages found only by a re-poll (lost wake-ups recovered, see
-        :mod:`navlib.kernel_watch`).
+        Kernel messages whose ZeroMQ wake-up never came, found when a 0.25 s poll slice
+        expired (recovered, not stalls; see :mod:`navlib.kernel_watch`).
     """
 
     name: str
@@ -396,7 +396,7 @@ def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float |
     start = time.perf_counter()
     stalls: list[str] = []
     lost = 0
-    while True:
+    for attempt in (1, 2):
         watch = KernelWatch()
         try:
             execute_notebook(info.path, executed, parameters=params, cwd=info.path.parent,
@@ -404,16 +404,15 @@ def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float |
         except Exception as exc:  # any failure of the run is reported, not raised
             lost += watch.lost_wakeups
             failure = _failure_from(exc, executed, source_nb)
-            if isinstance(exc, NotebookAborted) and exc.kind == "stall" and not stalls:
+            stalled = isinstance(exc, NotebookAborted) and exc.kind == "stall"
+            if stalled and attempt == 1:
                 stalls.append(failure.describe())
                 if on_restart:
                     on_restart(failure)
                 continue
-            if stalls:
-                failure = dataclasses.replace(
-                    failure, evalue=f"{failure.evalue} (also on the first run, before the "
-                    "kernel was restarted)" if failure.ename == "KernelStalled"
-                    else failure.evalue)
+            if stalled:
+                failure = dataclasses.replace(failure, evalue=f"{failure.evalue} (also on the "
+                                              "first run, before the kernel was restarted)")
             return NotebookRun(info.name, "failed", time.perf_counter() - start, params,
                                failure=failure, title=info.title, stalls=tuple(stalls),
                                lost_wakeups=lost)
