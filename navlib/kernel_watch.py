@@ -100,8 +100,6 @@ class KernelWatch:
     lost_wakeups : int
         Messages found only when a poll slice expired though they had been waiting longer
         than :data:`LOST_WAKEUP_WAIT_S` (wake-ups ZeroMQ never delivered, recovered).
-    max_delivery_lag_s : float
-        Largest delay between a message's send time and its receipt, s.
     """
 
     def __init__(self, idle_without_reply_s: float | None = None,
@@ -111,7 +109,6 @@ class KernelWatch:
         self.not_started_s = float(NOT_STARTED_S if not_started_s is None else not_started_s)
         self.stall: str | None = None
         self.lost_wakeups = 0
-        self.max_delivery_lag_s = 0.0
         self.pid: int | None = None
         self._requests: dict[str, _Request] = {}
         self._lock = threading.Lock()
@@ -131,10 +128,9 @@ class KernelWatch:
         it was not woken, it returned when its slice expired)."""
         now = time.monotonic()
         sent_at = msg.get("header", {}).get("date")
-        if isinstance(sent_at, _dt.datetime) and sent_at.tzinfo is not None:
-            lag = (_dt.datetime.now(_dt.UTC) - sent_at).total_seconds()
-            self.max_delivery_lag_s = max(self.max_delivery_lag_s, lag)
-            if at_slice_end and lag > LOST_WAKEUP_WAIT_S:
+        if at_slice_end and isinstance(sent_at, _dt.datetime) and sent_at.tzinfo is not None:
+            waited_s = (_dt.datetime.now(_dt.UTC) - sent_at).total_seconds()
+            if waited_s > LOST_WAKEUP_WAIT_S:
                 self.lost_wakeups += 1
         parent = msg.get("parent_header", {}).get("msg_id")
         msg_type = msg.get("header", {}).get("msg_type")
