@@ -51,6 +51,7 @@ from pathlib import Path
 
 from navlib.errors import NavlibInputError
 from navlib.kernel_watch import KernelWatch, NotebookAborted, execute_notebook, kill_all_kernels
+from navlib.resources import notebooks_dir, source_checkout
 
 NOTEBOOK_PATTERN = re.compile(r"^(\d{2})_\w+\.ipynb$")
 """Notebooks taking part in the report: ``NN_name.ipynb`` (two digits, underscore)."""
@@ -698,10 +699,12 @@ def _signals_interrupt():
 
 
 def default_notebooks_dir() -> Path:
-    """``notebooks/`` of the source checkout navlib is imported from."""
-    return Path(__file__).resolve().parent.parent / "notebooks"
+    """The shipped notebooks (``notebooks/`` of a source checkout, or the installed copy)."""
+    return notebooks_dir()
 
 
 def default_output_dir() -> Path:
-    """``reports/`` of the source checkout navlib is imported from."""
-    return Path(__file__).resolve().parent.parent / "reports"
+    """``reports/`` of the source checkout; for an installed wheel, ``reports/`` in the
+    current folder (never inside the installed package)."""
+    checkout = source_checkout()
+    return (checkout if checkout is not None else Path.cwd()) / "reports"

@@ -39,8 +39,9 @@ from scipy.signal import lfilter
 from navlib import units
 from navlib._validation import finite_array, finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
+from navlib.resources import data_dir
 
-PRESET_DIR = Path(__file__).resolve().parent.parent / "data" / "sensors"
+PRESET_DIR = data_dir() / "sensors"
 """Folder holding the ``*.toml`` sensor presets."""
 
 # --- accepted keys and units ---------------------------------------------------------------

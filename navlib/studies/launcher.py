@@ -27,10 +27,11 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.models.launcher import BIAS_SETS, SOLUTIONS, launcher, simplified_gps_bias
 from navlib.observability import analyze, local_matrix, local_observability, observability_matrix
+from navlib.resources import data_dir
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim
 
-DATA_DIR = Path(__file__).resolve().parents[2] / "data"
+DATA_DIR = data_dir()
 TABLE2_CSV = DATA_DIR / "beaudoin2018_table2.csv"
 
 SOLUTION_LABELS = {"ins_gps": "INS/GPS", "ins_gps_att": "INS/GPS + att.",

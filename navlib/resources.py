@@ -1,0 +1,41 @@
+"""Where the shipped data and notebooks are: the top-level ``data/`` and ``notebooks/``.
+
+The repository keeps them at the top level; the wheel ships them inside the package as
+``navlib.data`` and ``navlib.notebooks`` (``pyproject.toml`` maps the folders with
+``package-dir``), so a non-editable install has the sensor presets, the Table 2 reference,
+the sample flight and the notebooks too. In an editable install the same names resolve to
+the top-level folders. Notebooks refer to ``../data/...``, which holds in both layouts.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+
+def _package_folder(name: str, checkout_folder: str) -> Path:
+    """Folder of the (namespace) package ``name``; the checkout's folder when navlib is
+    imported from a source tree that is not installed."""
+    try:
+        spec = importlib.util.find_spec(name)
+    except ModuleNotFoundError:
+        spec = None
+    if spec is not None and spec.submodule_search_locations:
+        return Path(next(iter(spec.submodule_search_locations))).resolve()
+    return Path(__file__).resolve().parent.parent / checkout_folder
+
+
+def data_dir() -> Path:
+    """The shipped data folder (sensor presets, paper tables, sample flight)."""
+    return _package_folder("navlib.data", "data")
+
+
+def notebooks_dir() -> Path:
+    """The shipped report notebooks folder."""
+    return _package_folder("navlib.notebooks", "notebooks")
+
+
+def source_checkout() -> Path | None:
+    """Root of the source checkout the notebooks come from, or None for an installed wheel."""
+    root = notebooks_dir().parent
+    return root if (root / "pyproject.toml").is_file() else None
