@@ -1,4 +1,5 @@
-"""What :class:`scipy.spatial.transform.Rotation` lacks: skew matrices and Bortz helpers.
+"""What :class:`scipy.spatial.transform.Rotation` lacks: skew matrices, batched SO(3)
+exp/log maps on plain arrays and Bortz helpers.
 
 Attitude is carried as ``scipy.spatial.transform.Rotation`` objects (body -> ECEF). Small
 rotation-vector error states use the skew-symmetric (cross-product) matrix ``S(v)``.
@@ -75,3 +76,41 @@ def bortz_rate(theta, w_b):
     c = bortz_coefficient(np.linalg.norm(theta, axis=-1))[..., None]
     txw = cross(theta, w_b)
     return w_b + 0.5 * txw + c * cross(theta, txw)
+
+
+def log_so3(C) -> np.ndarray:
+    """Rotation vectors ``phi`` with ``C = exp(S(phi))`` of rotation matrices (..., 3, 3).
+
+    The SO(3) log map: closed form ``theta / sin(theta) * unskew(C)``, with the scipy
+    conversion near pi where the closed form loses accuracy. Inverse of :func:`exp_so3`.
+    """
+    C = np.asarray(C, dtype=float)
+    cos = np.clip(0.5 * (np.trace(C, axis1=-2, axis2=-1) - 1.0), -1.0, 1.0)
+    theta = np.arccos(cos)
+    v = unskew(C)                                   # sin(theta) * axis
+    small = theta < 1e-4
+    factor = np.where(small, 1.0 + theta**2 / 6.0, theta / np.where(small, 1.0, np.sin(theta)))
+    out = factor[..., None] * v
+    near_pi = theta > 3.0
+    if np.any(near_pi):
+        from scipy.spatial.transform import Rotation
+
+        out[near_pi] = Rotation.from_matrix(C[near_pi]).as_rotvec()
+    return out
+
+
+def exp_so3(phi) -> np.ndarray:
+    """Rotation matrices ``exp(S(phi))`` of rotation vectors (..., 3).
+
+    The SO(3) exponential map by Rodrigues' formula (series below 1e-4 rad); the
+    small-angle error-state convention ``C_true = exp(S(psi)) C_hat`` of the filters.
+    """
+    phi = np.asarray(phi, dtype=float)
+    theta2 = np.sum(phi * phi, axis=-1)
+    theta = np.sqrt(theta2)
+    small = theta < 1e-4
+    safe = np.where(small, 1.0, theta)
+    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    K = skew(phi)
+    return np.eye(3) + a[..., None, None] * K + b[..., None, None] * (K @ K)

@@ -235,7 +235,7 @@ def monte_carlo_linear(model, *, runs: int, seed=None, runs_per_task: int = 25,
     ``simulate_linear`` picks for all ``runs`` at once.
     """
     from navlib._validation import finite_scalar
-    from navlib.filters import _MEMORY_BUDGET
+    from navlib.filters.linear import _MEMORY_BUDGET
 
     runs = int(finite_scalar(runs, "runs", low=1))
     per_task = int(finite_scalar(runs_per_task, "runs_per_task", low=1))

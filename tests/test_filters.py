@@ -9,9 +9,11 @@ from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, filters
 from navlib.covariance import kalman_covariance
+from navlib.filters.ekf import _BlockTrajectory, _family
 from navlib.models import ecef21, launcher
 from navlib.models.base import DiscreteModel
 from navlib.outliers import Outlier, channel_profile, linear_mapping
+from navlib.rotations import exp_so3, log_so3
 from navlib.trajectory import launcher_ascent, sounding_rocket
 
 
@@ -157,9 +159,9 @@ def test_rotation_helpers_match_scipy():
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
     angles = np.repeat([1e-7, 1e-5, 1e-3, 0.5, 2.0, 2.9, 3.05, 3.13, 0.0, 1.0], 5)
     phi = axes * angles[:, None]
-    C = filters._exp(phi)
+    C = exp_so3(phi)
     np.testing.assert_allclose(C, Rotation.from_rotvec(phi).as_matrix(), atol=1e-13)
-    np.testing.assert_allclose(filters._rotvec(C), phi, atol=1e-9)
+    np.testing.assert_allclose(log_so3(C), phi, atol=1e-9)
 
 
 # --- EKF --------------------------------------------------------------------------------------
@@ -249,9 +251,9 @@ def test_ekf_input_errors(short_launcher):
 def test_ecef21_model_builds_at_block(rocket):
     """The EKF's block adapter gives the builder's own Jacobians on the reference."""
     model = ecef21(rocket)
-    block = filters._BlockTrajectory(rocket.t[:5], rocket.position[:5], rocket.C_b_e()[:5],
+    block = _BlockTrajectory(rocket.t[:5], rocket.position[:5], rocket.C_b_e()[:5],
                                      rocket.specific_force[:5], rocket.angular_rate[:5])
-    fam = filters._family("ecef21", block, {})
+    fam = _family("ecef21", block, {})
     A, G, H = fam.jacobians(block.t, block.position, block.C_b_e(), block.specific_force,
                             block.angular_rate)
     np.testing.assert_allclose(A, model.A[:5])

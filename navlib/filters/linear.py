@@ -1,0 +1,578 @@
+"""Linear error-state Monte-Carlo simulator (spec launcher.md §6.2-6.4; issue 5).
+
+:func:`simulate_linear` (:func:`prepare_linear` caches the covariance).
+
+Truth error ``x_{k+1} = F_k x_k + w_k`` with ``w_k ~ N(0, Q_k)`` sampled, measured as
+``z_k = H_k x_k + v_k`` with ``v_k ~ N(0, R_k)``, filtered by the Kalman filter of the
+same model. The covariance recursion is data independent, so it is computed once
+(:func:`navlib.covariance.kalman_covariance`, Joseph form) and shared by every run; the
+gains follow from the priors in one batched pass; the runs sit on a batch axis, so a
+step is a handful of ``(R, n) @ (n, n)`` products whatever the number of runs. Because
+everything is linear, the estimation error of a run with an outlier is the error of the
+same run without it plus the noise-free outlier response (``noise=False``), exactly —
+:mod:`navlib.outliers` uses this. Outliers on measurement channels are added to ``z``;
+IMU outliers enter as a known input on the matching noise channel,
+``x_{k+1} += Gamma_k e_j u_k`` with ``Gamma_k = G_k dt`` (Euler, the paper's
+``B = s_t G``) or ``int_0^dt expm(A s) ds G`` (``method="expm"``); see
+:mod:`navlib.outliers` for the signs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from navlib._validation import finite_array
+from navlib.covariance import kalman_covariance
+from navlib.discretize import discretize_steps
+from navlib.errors import NavlibInputError
+from navlib.filters.kalman import (
+    Gains,
+    _psd_sqrt,
+    _sym,
+    chi2_bounds,
+    kalman_gains,
+    nees_basis,
+    nees_values,
+)
+from navlib.models.base import DiscreteModel, LinearModel
+from navlib.outliers import as_outliers, channel_profile, linear_mapping
+
+METHODS = ("euler", "expm")
+
+_MEMORY_BUDGET = 100e6
+"""Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
+chooses ``record_every`` itself."""
+
+
+def _phi1_series(A, dt, order: int = 6) -> np.ndarray:
+    """``int_0^dt expm(A s) ds = dt sum_j (A dt)^j / (j+1)!`` by its series, (K, n, n)."""
+    step = np.asarray(dt, dtype=float)[:, None, None]
+    X = A * step
+    term = np.broadcast_to(np.eye(A.shape[-1]), A.shape).copy()
+    total = term.copy()
+    for j in range(1, order + 1):
+        term = X @ term / (j + 1)
+        total = total + term
+    return total * step
+
+
+@dataclass(frozen=True, eq=False)
+class LinearSteps:
+    """A linear error model at its steps, ready for simulation.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+    F, Q : ndarray (N-1, n, n)
+    L : ndarray (N-1, n, q)
+        Process-noise factor, ``Q_k = L_k L_k'``.
+    Gamma : ndarray (N-1, n, q_in) or None
+        Noise input matrices (deterministic input ``u`` on the noise channels adds
+        ``Gamma_k u_k`` over step k); None when the model has no ``G``.
+    H : ndarray (N, m, n)
+    R : ndarray (N, m, m)
+    P0 : ndarray (n, n)
+    state_names, measurement_names, noise_names : tuple of str
+    """
+
+    t: np.ndarray
+    F: np.ndarray
+    Q: np.ndarray
+    L: np.ndarray
+    Gamma: np.ndarray | None
+    H: np.ndarray
+    R: np.ndarray
+    P0: np.ndarray
+    state_names: tuple[str, ...]
+    measurement_names: tuple[str, ...]
+    noise_names: tuple[str, ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+
+def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
+                 noise_names: Sequence[str] = ()) -> LinearSteps:
+    """Per-step ``F, Q`` (and the noise factor / input) of a model for :func:`simulate_linear`.
+
+    Parameters
+    ----------
+    model : LinearModel (trajectory model) or DiscreteModel
+    method : {"euler", "expm"}
+        For a LinearModel: the papers' ``F = I + A dt``, ``Q = G Qc G' dt`` (Beaudoin eq. 1,
+        ``A_lc = I + s_t F``; default), or the zero-order-hold exponential with the Van
+        Loan ``Q`` (batched series, :func:`navlib.discretize.discretize_steps`). The
+        matrices over step k are those of sample k.
+    P0 : ndarray (n, n), optional
+        Initial covariance (default the model's).
+    noise_input, noise_names
+        For a DiscreteModel: ``Gamma`` (N-1, n, q) and its channel names, needed only for
+        IMU outliers.
+    """
+    if method not in METHODS:
+        raise NavlibInputError(f"method: expected one of {METHODS}, got {method!r}")
+    if isinstance(model, LinearModel):
+        if model.t is None:
+            raise NavlibInputError(
+                "model: a constant LinearModel has no time axis; call model.discretize(dt=..., "
+                "n_epochs=...) and pass the DiscreteModel"
+            )
+        t = np.asarray(model.t, dtype=float)
+        N, n = t.size, model.n
+        A = np.broadcast_to(model.A, (N, n, n))[:-1]
+        G = np.broadcast_to(model.G, (N, *model.G.shape[-2:]))[:-1]
+        dt = np.diff(t)
+        Qc = np.asarray(model.Qc, dtype=float)
+        if method == "euler":
+            F = np.eye(n) + A * dt[:, None, None]
+            Gamma = G * dt[:, None, None]
+            L = (G @ _psd_sqrt(Qc)) * np.sqrt(dt)[:, None, None]
+            Q = L @ np.swapaxes(L, 1, 2)
+        else:
+            F, Q = discretize_steps(A, G, Qc, dt, method="series")
+            Gamma = _phi1_series(A, dt) @ G
+            L = _psd_sqrt(Q)
+        H = np.broadcast_to(model.H, (N, *model.H.shape[-2:]))
+        R = np.broadcast_to(model.R, (N, *model.R.shape[-2:]))
+        P0 = model.P0 if P0 is None else P0
+        names = (model.state_names, tuple(model.measurement_names), tuple(model.noise_names))
+    elif isinstance(model, DiscreteModel):
+        t, F, Q, H, R = model.t, model.F, model.Q, model.H, model.R
+        L = _psd_sqrt(Q)
+        Gamma = None
+        if noise_input is not None:
+            Gamma = finite_array(noise_input, "noise_input")
+            if Gamma.ndim != 3 or Gamma.shape[:2] != F.shape[:2]:
+                raise NavlibInputError(
+                    f"noise_input: expected shape ({F.shape[0]}, {F.shape[1]}, q), got "
+                    f"{Gamma.shape}"
+                )
+            if len(noise_names) != Gamma.shape[2]:
+                raise NavlibInputError("noise_names: one name per noise_input column needed")
+        P0 = model.P0 if P0 is None else P0
+        names = (model.state_names, tuple(model.measurement_names), tuple(noise_names))
+    else:
+        raise NavlibInputError(
+            f"model: expected a navlib LinearModel or DiscreteModel, got {type(model).__name__}"
+        )
+    if P0 is None:
+        raise NavlibInputError("P0: the model has no default initial covariance; pass P0")
+    n = F.shape[-1]
+    P0 = finite_array(P0, "P0", (n, n))
+    return LinearSteps(np.asarray(t, dtype=float), F, Q, L, Gamma, H, R, _sym(P0), *names)
+
+
+@dataclass(frozen=True, eq=False)
+class LinearSimulation:
+    """Monte-Carlo runs of the linear error-state filter (:func:`simulate_linear`).
+
+    Attributes
+    ----------
+    t : ndarray (K,)
+        Recorded epochs, s.
+    truth, estimate : ndarray (K, R, n)
+        True error state and its posterior estimate per run.
+    P : ndarray (K, n, n)
+        Posterior covariance (shared by all runs).
+    nees : ndarray (K, R)
+        ``(x_hat - x)' P^+ (x_hat - x)`` per run, with ``nees_dof`` (K,) degrees of freedom.
+    nis_t : ndarray (M,)
+        Update epochs.
+    nis : ndarray (M, R)
+        Normalised innovation squared per run, with ``nis_dof`` (M,).
+    innovation : ndarray (K, R, m)
+        Innovations at recorded epochs (NaN where no update).
+    state_names, measurement_names : tuple of str
+    outliers : tuple of Outlier
+    applied : tuple of bool
+        Whether each outlier's channels exist in the model (False: it had no effect).
+    index : ndarray (K,)
+        Model step index of each recorded epoch.
+    """
+
+    t: np.ndarray
+    truth: np.ndarray
+    estimate: np.ndarray
+    P: np.ndarray
+    nees: np.ndarray
+    nees_dof: np.ndarray
+    nis_t: np.ndarray
+    nis: np.ndarray
+    nis_dof: np.ndarray
+    innovation: np.ndarray
+    state_names: tuple[str, ...]
+    measurement_names: tuple[str, ...]
+    outliers: tuple
+    applied: tuple
+    index: np.ndarray
+
+    @property
+    def runs(self) -> int:
+        return self.truth.shape[1]
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def error(self) -> np.ndarray:
+        """Estimation error ``x_hat - x`` (K, R, n); with feedback it is minus the residual
+        navigation error left after the correction."""
+        return self.estimate - self.truth
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """Posterior standard deviations (K, n)."""
+        return np.sqrt(np.clip(np.diagonal(self.P, axis1=1, axis2=2), 0.0, None))
+
+    def state_index(self, names: Sequence[str]) -> np.ndarray:
+        lookup = {s: i for i, s in enumerate(self.state_names)}
+        missing = [s for s in names if s not in lookup]
+        if missing:
+            raise NavlibInputError(f"unknown state(s) {missing}; have {list(self.state_names)}")
+        return np.array([lookup[s] for s in names], dtype=int)
+
+    def project(self, rows):
+        """Linear combinations ``c' x`` of the state, e.g. a body-axis attitude error.
+
+        Parameters
+        ----------
+        rows : ndarray (p, n) or (K, p, n)
+            One row per watched quantity, constant or per recorded epoch.
+
+        Returns
+        -------
+        truth, estimate : ndarray (K, R, p)
+        sigma : ndarray (K, p)
+        """
+        rows = np.asarray(rows, dtype=float)
+        if rows.ndim == 2:
+            rows = np.broadcast_to(rows, (self.t.size, *rows.shape))
+        if rows.shape[0] != self.t.size or rows.shape[-1] != self.n:
+            raise NavlibInputError(
+                f"rows: expected (p, {self.n}) or ({self.t.size}, p, {self.n}), got {rows.shape}"
+            )
+        truth = np.einsum("kpn,krn->krp", rows, self.truth)
+        est = np.einsum("kpn,krn->krp", rows, self.estimate)
+        var = np.einsum("kpn,knm,kpm->kp", rows, self.P, rows)
+        return truth, est, np.sqrt(np.clip(var, 0.0, None))
+
+    def consistency(self, alpha: float = 0.05) -> dict:
+        """Fraction of epochs whose run-averaged NEES / NIS lie inside the chi-square bounds."""
+        out = {}
+        for key, values, dof in (("nees", self.nees, self.nees_dof),
+                                 ("nis", self.nis, self.nis_dof)):
+            valid = dof > 0
+            if not valid.any():
+                out[key] = np.nan
+                continue
+            lo, hi = chi2_bounds(dof[valid], self.runs, alpha)
+            mean = values[valid].mean(axis=1)
+            out[key] = float(np.mean((mean >= lo) & (mean <= hi)))
+            out[f"{key}_mean_over_dof"] = float(np.mean(mean / dof[valid]))
+        return out
+
+    def to_frame(self, states: Sequence[str] | None = None, runs=None) -> pd.DataFrame:
+        """Tidy table ``t, run, state, truth, estimate, error, sigma``."""
+        idx = self.state_index(states) if states is not None else np.arange(self.n)
+        r = np.arange(self.runs) if runs is None else np.atleast_1d(np.asarray(runs, int))
+        K, R, S = self.t.size, r.size, idx.size
+        tr = self.truth[:, r][:, :, idx]
+        es = self.estimate[:, r][:, :, idx]
+        sg = np.broadcast_to(self.sigma[:, None, idx], (K, R, S))
+        return pd.DataFrame({
+            "t": np.repeat(self.t, R * S),
+            "run": np.tile(np.repeat(r, S), K),
+            "state": np.tile(np.array(self.state_names, dtype=object)[idx], K * R),
+            "truth": tr.ravel(), "estimate": es.ravel(), "error": (es - tr).ravel(),
+            "sigma": sg.ravel(),
+        })
+
+    def nees_frame(self) -> pd.DataFrame:
+        """Run-averaged NEES per recorded epoch with its degrees of freedom and 95 % bounds."""
+        lo, hi = chi2_bounds(self.nees_dof, self.runs)
+        return pd.DataFrame({"t": self.t, "nees": self.nees.mean(axis=1),
+                             "dof": self.nees_dof, "lower": lo, "upper": hi})
+
+    def nis_frame(self) -> pd.DataFrame:
+        """Run-averaged NIS per update epoch with its degrees of freedom and 95 % bounds."""
+        lo, hi = chi2_bounds(self.nis_dof, self.runs)
+        return pd.DataFrame({"t": self.nis_t, "nis": self.nis.mean(axis=1),
+                             "dof": self.nis_dof, "lower": lo, "upper": hi})
+
+
+def _measured_mask(N: int, update_every, measured) -> np.ndarray:
+    if measured is not None:
+        mask = np.asarray(measured, dtype=bool)
+        if mask.shape != (N,):
+            raise NavlibInputError(f"measured: expected {N} booleans, got shape {mask.shape}")
+        return mask.copy()
+    every = int(update_every)
+    if every < 1:
+        raise NavlibInputError(f"update_every: expected an integer >= 1, got {update_every}")
+    mask = np.zeros(N, dtype=bool)
+    mask[::every] = True
+    return mask
+
+
+@dataclass(frozen=True, eq=False)
+class LinearFilter:
+    """A linear model with its (data-independent) Kalman covariance and gains.
+
+    Built by :func:`prepare_linear`; :func:`simulate_linear` reuses it across calls (the
+    covariance recursion dominates the cost of a short Monte-Carlo batch).
+
+    Attributes
+    ----------
+    steps : LinearSteps
+    measured : ndarray (N,) of bool
+        Update epochs.
+    gains : Gains
+    covariance : navlib.covariance.CovarianceResult
+        Prior and posterior covariances at every epoch.
+    """
+
+    steps: LinearSteps
+    measured: np.ndarray
+    gains: Gains
+    covariance: object
+    _nees_bases: dict = field(default_factory=dict, init=False, repr=False)
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.steps.t
+
+    def nees_basis(self, index) -> tuple:
+        """:func:`nees_basis` of the posterior covariances at the epochs ``index``, cached
+        (it does not depend on the data, so every simulation recorded at the same epochs
+        shares it)."""
+        index = np.asarray(index)
+        key = index.tobytes()
+        if key not in self._nees_bases:
+            self._nees_bases.clear()          # keep one: (K, n, n) eigenvectors are large
+            self._nees_bases[key] = nees_basis(self.covariance.P_post[index])
+        return self._nees_bases[key]
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(self.steps.state_names)
+
+
+def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measured=None,
+                   P0=None, noise_input=None, noise_names: Sequence[str] = ()
+                   ) -> LinearFilter:
+    """Discretise a model and run its Kalman covariance recursion once.
+
+    Parameters as in :func:`simulate_linear`. The covariance is
+    :func:`navlib.covariance.kalman_covariance` (Joseph form), the gains
+    :func:`kalman_gains` from its priors.
+    """
+    if isinstance(model, LinearFilter):
+        return model
+    steps = linear_steps(model, method=method, P0=P0, noise_input=noise_input,
+                         noise_names=noise_names)
+    mask = _measured_mask(steps.t.size, update_every, measured)
+    cov = kalman_covariance(steps.F, steps.Q, steps.H, steps.R, steps.P0, measured=mask,
+                            t=steps.t, state_names=steps.state_names)
+    return LinearFilter(steps, mask, kalman_gains(cov.P_prior, steps.H, steps.R, mask), cov)
+
+
+def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
+                    noise: bool = True, initial_error: bool = True, method: str = "euler",
+                    update_every: int = 1, measured=None, record_every: int | None = None,
+                    P0=None, noise_input=None, noise_names: Sequence[str] = (),
+                    progress: Callable[[int, int], None] | None = None, scheduler=None,
+                    runs_per_task: int = 25) -> LinearSimulation:
+    """Monte-Carlo simulation of the linear error-state Kalman filter, runs vectorised.
+
+    Parameters
+    ----------
+    model : LinearModel (trajectory model), DiscreteModel or LinearFilter
+        E.g. ``navlib.models.launcher(...)`` or ``navlib.models.ecef21(traj)``; a
+        :class:`LinearFilter` from :func:`prepare_linear` reuses its covariance and gains
+        (``method``, ``update_every``, ``measured``, ``P0``, ``noise_input`` are then
+        ignored).
+    runs : int
+        Number of Monte-Carlo runs (batch axis).
+    seed, rng
+        Randomness: a seed for a fresh ``numpy.random.default_rng`` or a Generator.
+    outliers : Outlier or sequence of Outlier, optional
+        Injected as described in the module docstring; channels the model lacks are
+        reported in ``applied`` and have no effect.
+    noise : bool
+        Sample process and measurement noise (False: deterministic response).
+    initial_error : bool
+        Draw the initial true error from ``N(0, P0)`` (False: start at zero).
+    method : {"euler", "expm"}
+        Discretisation of a LinearModel (see :func:`linear_steps`).
+    update_every : int
+        Measurement update at every ``update_every``-th step (ignored with ``measured``).
+    measured : array of bool (N,), optional
+        Update epochs explicitly.
+    record_every : int, optional
+        Keep every ``record_every``-th epoch in the result (the last is always kept).
+        Default: 1 when the histories fit in about 100 MB, else the smallest step that does.
+    P0 : ndarray (n, n), optional
+        Initial covariance (default the model's).
+    noise_input, noise_names
+        Noise input matrices for a DiscreteModel (IMU outliers only).
+    progress : callable(done, total), optional
+        Called every few hundred steps (e.g. to advance a progress bar).
+    scheduler : optional
+        Split the runs into Dask tasks of ``runs_per_task`` runs
+        (:func:`navlib.sweep.monte_carlo_linear`: seeds from ``SeedSequence(seed)``, results
+        independent of the scheduler; ``progress`` is then a progress bar of the tasks);
+        default None: one vectorised batch here.
+
+    Returns
+    -------
+    LinearSimulation
+
+    Notes
+    -----
+    Epoch 0 is updated when ``measured[0]``: the prior there is ``x_hat = 0``, ``P0``.
+    Propagation over step k uses ``F_k``, the noise ``L_k xi_k`` and the IMU outlier input
+    ``Gamma_k u(t_k)``. The covariance and gains are the same for every run.
+    """
+    if scheduler is not None:
+        from navlib.sweep import monte_carlo_linear
+
+        return monte_carlo_linear(model, runs=runs, seed=seed, runs_per_task=runs_per_task,
+                                  scheduler=scheduler, record_every=record_every,
+                                  **({"rng": rng} if rng is not None else {}),
+                                  outliers=outliers, noise=noise, initial_error=initial_error,
+                                  method=method, update_every=update_every, measured=measured,
+                                  P0=P0, noise_input=noise_input, noise_names=noise_names)
+    outliers = as_outliers(outliers)
+    prepared = prepare_linear(model, method=method, update_every=update_every,
+                              measured=measured, P0=P0, noise_input=noise_input,
+                              noise_names=noise_names)
+    steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
+    runs = int(runs)
+    if runs < 1:
+        raise NavlibInputError(f"runs: expected >= 1, got {runs}")
+    if rng is not None and seed is not None:
+        raise NavlibInputError("seed, rng: give one of them, not both")
+    rng = rng if rng is not None else np.random.default_rng(seed)
+    t, F, L, H, R = steps.t, steps.F, steps.L, steps.H, steps.R
+    N, n = t.size, steps.n
+    m = H.shape[-2]
+
+    # outliers -> measurement additions (N, m) and noise-channel inputs (N-1, q_in)
+    z_add = np.zeros((N, m))
+    u_cols, u_vals = [], []
+    applied = []
+    for o in outliers:
+        ok = False
+        for ch in o.channels:
+            mp = linear_mapping(ch, steps.measurement_names, steps.noise_names)
+            if mp.target == "noise" and steps.Gamma is None:
+                raise NavlibInputError(
+                    f"outliers: IMU channel {ch!r} needs the model's noise input; pass a "
+                    "LinearModel or noise_input= with noise_names="
+                )
+            if mp.index is None:
+                continue
+            values = mp.sign * channel_profile((o,), ch, t)
+            if mp.target == "measurement":
+                ok = True
+                z_add[:, mp.index] += values
+            else:
+                ok = True
+                u_cols.append(mp.index)
+                u_vals.append(values[:-1])
+        applied.append(ok)
+    if u_cols:
+        cols = np.array(u_cols)
+        B = steps.Gamma[:, :, cols]                       # (N-1, n, c)
+        x_input = np.einsum("knc,ck->kn", B, np.array(u_vals))
+    else:
+        x_input = None
+
+    if record_every is None:
+        per_epoch = 2 * 8 * runs * n
+        record_every = max(1, int(np.ceil(N * per_epoch / _MEMORY_BUDGET)))
+    record_every = int(record_every)
+    if record_every < 1:
+        raise NavlibInputError(f"record_every: expected >= 1, got {record_every}")
+    rec = np.arange(0, N, record_every)
+    if rec[-1] != N - 1:
+        rec = np.append(rec, N - 1)
+    slot = np.full(N, -1)
+    slot[rec] = np.arange(rec.size)
+
+    R_sqrt = _psd_sqrt(R[:1]) if np.all(R == R[:1]) else _psd_sqrt(R)
+    const_R = R_sqrt.shape[0] == 1
+    q = L.shape[-1]
+
+    truth_rec = np.empty((rec.size, runs, n))
+    est_rec = np.empty((rec.size, runs, n))
+    innov_rec = np.full((rec.size, runs, m), np.nan)
+    upd = np.flatnonzero(mask)
+    nis = np.empty((upd.size, runs))
+    upd_slot = np.full(N, -1)
+    upd_slot[upd] = np.arange(upd.size)
+
+    if initial_error:
+        x = rng.standard_normal((runs, n)) @ _psd_sqrt(steps.P0).T
+    else:
+        x = np.zeros((runs, n))
+    x_hat = np.zeros((runs, n))
+    # a deterministic response from zero stays exactly zero until the first outlier input:
+    # start the recursion there and write the zero histories directly
+    k0 = 0
+    if not noise and not initial_error:
+        active = np.flatnonzero(np.any(z_add != 0, axis=1) & mask)
+        if x_input is not None:
+            active = np.concatenate([active, np.flatnonzero(np.any(x_input != 0, axis=1))])
+        k0 = int(active.min()) if active.size else N
+        before = rec[rec < k0]
+        truth_rec[slot[before]] = 0.0
+        est_rec[slot[before]] = 0.0
+        upd_before = upd[upd < k0]
+        nis[upd_slot[upd_before]] = 0.0
+        innov_rec[slot[upd_before[slot[upd_before] >= 0]]] = 0.0
+    chunk = 256
+    K_all, S_pinv = gains.K, gains.S_pinv
+    for c0 in range(0, N, chunk):
+        c1 = min(N, c0 + chunk)
+        if noise:
+            xi = rng.standard_normal((c1 - c0, runs, q))
+            nu_noise = rng.standard_normal((c1 - c0, runs, m))
+        for k in range(max(c0, k0), c1):
+            if mask[k]:
+                Hk = H[k]
+                z = x @ Hk.T + z_add[k]
+                if noise:
+                    z += nu_noise[k - c0] @ (R_sqrt[0] if const_R else R_sqrt[k]).T
+                innov = z - x_hat @ Hk.T
+                x_hat = x_hat + innov @ K_all[k].T
+                nis[upd_slot[k]] = np.sum((innov @ S_pinv[k]) * innov, axis=1)
+                if slot[k] >= 0:
+                    innov_rec[slot[k]] = innov
+            if slot[k] >= 0:
+                truth_rec[slot[k]] = x
+                est_rec[slot[k]] = x_hat
+            if k < N - 1:
+                Fk = F[k].T
+                x = x @ Fk
+                if noise:
+                    x += xi[k - c0] @ L[k].T
+                if x_input is not None:
+                    x += x_input[k]
+                x_hat = x_hat @ Fk
+        if progress is not None:
+            progress(c1, N)
+    P_rec = prepared.covariance.P_post[rec]
+    nees, nees_dof = nees_values(est_rec - truth_rec, P_rec, basis=prepared.nees_basis(rec))
+    return LinearSimulation(
+        t=t[rec], truth=truth_rec, estimate=est_rec, P=P_rec, nees=nees, nees_dof=nees_dof,
+        nis_t=t[upd], nis=nis, nis_dof=gains.dof[upd], innovation=innov_rec,
+        state_names=tuple(steps.state_names), measurement_names=tuple(steps.measurement_names),
+        outliers=outliers, applied=tuple(applied), index=rec,
+    )
