@@ -206,9 +206,10 @@ def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool 
     Notes
     -----
     The gain ``K = P- H' S^+`` with ``S = H P- H' + R``. When ``R`` is positive definite,
-    ``S^+ = S^-1`` (Cholesky solve); otherwise ``S^+`` is the eigen-decomposition
-    pseudo-inverse, which gives the optimal update in the measured subspace and leaves
-    directions with ``S`` = 0 unchanged. The Joseph form holds for any gain, so the result
+    ``S^+ = S^-1``; otherwise ``S^+`` is the eigen-decomposition pseudo-inverse, which
+    gives the optimal update in the measured subspace and leaves directions with ``S`` = 0
+    unchanged (:func:`navlib.filters.kalman.joseph_update`, the one implementation of
+    this rule). The Joseph form holds for any gain, so the result
     stays symmetric positive semi-definite with ``R = 0`` (ideal measurements drive
     ``H P+ H'`` to zero exactly).
     """
@@ -228,12 +229,11 @@ def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool 
     if H is None:
         measured[:] = False
     else:
-        r_min = np.linalg.eigvalsh(R).min(axis=-1) if count else np.zeros(0)
-        r_scale = np.maximum(np.abs(R).max(axis=(-1, -2)), 1e-300)
-        r_definite = r_min > 1e-12 * r_scale
+        from navlib.filters.kalman import definite_noise, joseph_update
+
+        r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
     P_prior = np.empty((count, n, n))
     P_post = np.empty((count, n, n))
-    eye = np.eye(n)
     P = P0
     for k in range(count):
         if k:
@@ -241,23 +241,7 @@ def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool 
             P = 0.5 * (P + P.T)
         P_prior[k] = P
         if measured[k]:
-            Hk, Rk = H[k], R[k]
-            PHt = P @ Hk.T
-            S = Hk @ PHt + Rk
-            S = 0.5 * (S + S.T)
-            if r_definite[k]:
-                K = np.linalg.solve(S, PHt.T).T
-            else:
-                w, V = np.linalg.eigh(S)
-                keep = w > pinv_rtol * max(w[-1], 0.0)
-                if not np.any(keep):
-                    P_post[k] = P
-                    continue
-                Vk = V[:, keep]
-                K = (PHt @ Vk / w[keep]) @ Vk.T
-            IKH = eye - K @ Hk
-            P = IKH @ P @ IKH.T + K @ Rk @ K.T
-            P = 0.5 * (P + P.T)
+            P, _ = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol, definite=r_definite[k])
         P_post[k] = P
     return CovarianceResult(t, P_prior, P_post, measured, names)
 

@@ -31,7 +31,16 @@ Modules: :mod:`~navlib.filters.kalman` (gains, Joseph update, NEES), :mod:`~navl
 """
 
 from navlib.filters.ekf import EKFResult, EKFRun, ekf, simulate_ekf
-from navlib.filters.kalman import Gains, chi2_bounds, kalman_gains, nees_basis, nees_values
+from navlib.filters.kalman import (
+    Gains,
+    chi2_bounds,
+    definite_noise,
+    joseph_update,
+    kalman_gain,
+    kalman_gains,
+    nees_basis,
+    nees_values,
+)
 from navlib.filters.linear import (
     LinearFilter,
     LinearSimulation,
@@ -49,7 +58,10 @@ __all__ = [
     "LinearSimulation",
     "LinearSteps",
     "chi2_bounds",
+    "definite_noise",
     "ekf",
+    "joseph_update",
+    "kalman_gain",
     "kalman_gains",
     "linear_steps",
     "nees_basis",

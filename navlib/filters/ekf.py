@@ -18,7 +18,7 @@ import pandas as pd
 from navlib._validation import finite_array, finite_scalar
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import _joseph_update, _psd_sqrt, _sym
+from navlib.filters.kalman import _psd_sqrt, _sym, joseph_update
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import _MEAS_KINDS, _epoch_index, _imu_arrays, _rotations
 from navlib.models.base import LinearModel
@@ -499,7 +499,8 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
                     Hk = Hw[j][sel]
                     Rk = R_model[np.ix_(sel, sel)]
                     innov = z - Hk @ x
-                    P, K, S_pinv, dof = _joseph_update(P, Hk, Rk, innov)
+                    P, gain = joseph_update(P, Hk, Rk)
+                    K, S_pinv, dof = gain.K, gain.S_pinv, int(gain.dof)
                     x = x + K @ innov
                     full = np.full(m_all, np.nan)
                     full[sel] = innov

@@ -28,44 +28,97 @@ def _psd_sqrt(M) -> np.ndarray:
     w, V = np.linalg.eigh(_sym(M))
     return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
 
+def definite_noise(R) -> np.ndarray:
+    """Whether each measurement-noise covariance ``R`` (..., m, m) is positive definite
+    (smallest eigenvalue above ``1e-12`` of its largest entry): the switch between the
+    inverse and the pseudo-inverse of the innovation covariance in :func:`kalman_gain`."""
+    R = np.asarray(R, dtype=float)
+    if R.shape[-1] == 0:
+        return np.zeros(R.shape[:-2], dtype=bool)
+    r_min = np.linalg.eigvalsh(R).min(axis=-1)
+    return r_min > 1e-12 * np.maximum(np.abs(R).max(axis=(-1, -2)), 1e-300)
+
+
 @dataclass(frozen=True, eq=False)
 class Gains:
-    """Kalman gains and innovation-covariance pseudo-inverses at every epoch."""
+    """Kalman gains and innovation-covariance pseudo-inverses (one epoch or a batch)."""
 
-    K: np.ndarray          # (N, n, m)
-    S_pinv: np.ndarray     # (N, m, m)
-    dof: np.ndarray        # (N,) rank of S used (0 at epochs without update)
+    K: np.ndarray          # (..., n, m)
+    S_pinv: np.ndarray     # (..., m, m)
+    dof: np.ndarray        # (...,) rank of S used (0 at epochs without update)
+
+
+def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) -> Gains:
+    """Gain ``K = P- H' S^+`` with ``S = H P- H' + R``, for one epoch or a batch.
+
+    ``S^+`` is the inverse when ``R`` is positive definite (:func:`definite_noise`) and the
+    eigen-decomposition pseudo-inverse otherwise (eigenvalues below ``pinv_rtol * max``
+    dropped), which gives the optimal update in the measured subspace and no update in the
+    directions with ``S = 0`` (ideal measurements, ``R = 0``). The one implementation of
+    this rule: :func:`joseph_update`, :func:`kalman_gains`, the EKF
+    (:func:`navlib.filters.ekf`) and :func:`navlib.covariance.kalman_covariance` use it.
+
+    Parameters
+    ----------
+    P_prior : ndarray (..., n, n)
+    H : ndarray (..., m, n)
+    R : ndarray (..., m, m)
+    pinv_rtol : float
+    definite : bool or ndarray (...,) of bool, optional
+        :func:`definite_noise` of ``R`` when already known (computed otherwise).
+    """
+    P_prior = np.asarray(P_prior, dtype=float)
+    PHt = P_prior @ np.swapaxes(H, -1, -2)
+    S = _sym(H @ PHt + R)
+    batch, m = S.shape[:-2], S.shape[-1]
+    if m == 0:
+        return Gains(PHt, S, np.zeros(batch, dtype=int))
+    definite = np.asarray(definite_noise(R) if definite is None else definite, dtype=bool)
+    if definite.all():
+        S_pinv, dof = np.linalg.inv(S), np.full(batch, m)
+    elif not definite.any():
+        S_pinv, dof = _eigen_pinv(S, pinv_rtol)
+    else:
+        definite = np.broadcast_to(definite, batch)
+        S_pinv, dof = np.empty_like(S), np.full(batch, m)
+        S_pinv[definite] = np.linalg.inv(S[definite])
+        S_pinv[~definite], dof[~definite] = _eigen_pinv(S[~definite], pinv_rtol)
+    return Gains(PHt @ S_pinv, S_pinv, dof)
+
+
+def _eigen_pinv(S, rtol: float):
+    """Eigen-decomposition pseudo-inverse of symmetric ``S`` (..., m, m) and its kept rank."""
+    w, V = np.linalg.eigh(S)
+    keep = w > rtol * np.maximum(w[..., -1:], 0.0)
+    inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
+    return (V * inv_w[..., None, :]) @ np.swapaxes(V, -1, -2), keep.sum(axis=-1)
+
+
+def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None):
+    """Joseph-form measurement update ``P+ = (I - K H) P- (I - K H)' + K R K'`` with the
+    gain of :func:`kalman_gain` (one epoch or a batch); returns ``(P_post, Gains)``.
+
+    The Joseph form holds for any gain, so ``P+`` stays symmetric positive semi-definite
+    with a singular or zero ``R`` (spec launcher.md §6.2).
+    """
+    P_prior = np.asarray(P_prior, dtype=float)
+    gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol, definite=definite)
+    IKH = np.eye(P_prior.shape[-1]) - gains.K @ H
+    P_post = IKH @ P_prior @ np.swapaxes(IKH, -1, -2) \
+        + gains.K @ R @ np.swapaxes(gains.K, -1, -2)
+    return _sym(P_post), gains
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = _PINV_RTOL) -> Gains:
-    """Batched gains ``K = P- H' S^+`` with ``S = H P- H' + R`` (all epochs at once).
+    """Batched gains of :func:`kalman_gain` at all epochs at once (P_prior (N, n, n)).
 
-    ``S^+`` is the inverse when ``R`` is positive definite and the eigen-decomposition
-    pseudo-inverse (eigenvalues below ``pinv_rtol * max`` dropped) otherwise — the rule of
-    :func:`navlib.covariance.kalman_covariance`, so the Joseph update with these gains
-    reproduces its posteriors. Epochs with ``measured`` False get zero gain.
+    The rule of :func:`navlib.covariance.kalman_covariance`, so the Joseph update with these
+    gains reproduces its posteriors. Epochs with ``measured`` False get zero gain and dof.
     """
-    P_prior = np.asarray(P_prior)
-    N = P_prior.shape[0]
-    m = H.shape[-2]
-    PHt = P_prior @ np.swapaxes(H, 1, 2)
-    S = _sym(H @ PHt + R)
-    w, V = np.linalg.eigh(S)
-    keep = w > pinv_rtol * np.maximum(w[:, -1:], 0.0)
-    inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
-    S_pinv = (V * inv_w[:, None, :]) @ np.swapaxes(V, 1, 2)
-    r_min = np.linalg.eigvalsh(R).min(axis=-1)
-    definite = r_min > 1e-12 * np.maximum(np.abs(R).max(axis=(-1, -2)), 1e-300)
-    if definite.any():
-        S_pinv[definite] = np.linalg.inv(S[definite])
-        keep[definite] = True
-    K = PHt @ S_pinv
+    gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol)
     measured = np.asarray(measured, dtype=bool)
-    K[~measured] = 0.0
-    dof = np.where(measured, keep.sum(axis=1), 0)
-    if m == 0:
-        dof = np.zeros(N, dtype=int)
-    return Gains(K, S_pinv, dof)
+    gains.K[~measured] = 0.0
+    return Gains(gains.K, gains.S_pinv, np.where(measured, gains.dof, 0))
 
 
 def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
@@ -119,22 +172,3 @@ def nees_values(err, P, rtol: float = 1e-10, basis=None):
     en = np.where(active[:, None, :], err / safe[:, None, :], 0.0)
     proj = en @ V
     return (proj**2 @ inv_w[:, :, None])[..., 0], dof
-
-
-def _joseph_update(P, H, R, innov):
-    """Joseph-form update with the pseudo-inverse rule of kalman_covariance; returns
-    ``(P_post, K, S_pinv, dof)``."""
-    PHt = P @ H.T
-    S = _sym(H @ PHt + R)
-    r_min = np.linalg.eigvalsh(R).min() if R.size else 0.0
-    if R.size and r_min > 1e-12 * max(np.abs(R).max(), 1e-300):
-        S_pinv = np.linalg.inv(S)
-        dof = S.shape[0]
-    else:
-        w, V = np.linalg.eigh(S)
-        keep = w > _PINV_RTOL * max(w[-1], 0.0)
-        S_pinv = (V[:, keep] / w[keep]) @ V[:, keep].T
-        dof = int(keep.sum())
-    K = PHt @ S_pinv
-    IKH = np.eye(P.shape[0]) - K @ H
-    return _sym(IKH @ P @ IKH.T + K @ R @ K.T), K, S_pinv, dof
