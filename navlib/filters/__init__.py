@@ -2,19 +2,9 @@
 Monte-Carlo simulator (spec launcher.md §6.2-6.4; issue 5).
 
 Linear mode — :func:`simulate_linear` (:func:`prepare_linear` caches the covariance)
-    Truth error ``x_{k+1} = F_k x_k + w_k`` with ``w_k ~ N(0, Q_k)`` sampled, measured as
-    ``z_k = H_k x_k + v_k`` with ``v_k ~ N(0, R_k)``, filtered by the Kalman filter of the
-    same model. The covariance recursion is data independent, so it is computed once
-    (:func:`navlib.covariance.kalman_covariance`, Joseph form) and shared by every run; the
-    gains follow from the priors in one batched pass; the runs sit on a batch axis, so a
-    step is a handful of ``(R, n) @ (n, n)`` products whatever the number of runs. Because
-    everything is linear, the estimation error of a run with an outlier is the error of the
-    same run without it plus the noise-free outlier response (``noise=False``), exactly —
-    :mod:`navlib.outliers` uses this. Outliers on measurement channels are added to ``z``;
-    IMU outliers enter as a known input on the matching noise channel,
-    ``x_{k+1} += Gamma_k e_j u_k`` with ``Gamma_k = G_k dt`` (Euler, the paper's
-    ``B = s_t G``) or ``int_0^dt expm(A s) ds G`` (``method="expm"``); see
-    :mod:`navlib.outliers` for the signs.
+    Monte-Carlo runs of the Kalman filter of a linear error model on sampled truth errors,
+    runs vectorised, with exact outlier responses by linearity; described in
+    :mod:`navlib.filters.linear`.
 
 EKF mode — :func:`ekf`
     Described in its docstring (ECEF strapdown nominal state, error-state covariance from
