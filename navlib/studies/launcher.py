@@ -610,7 +610,13 @@ def covariance_evolution(trajectory=None, cases=None, *, quick: bool = False,
         (body axes, rad), ``gyro_bias`` (rad/s), ``accel_bias`` (m/s^2), ``gps_bias`` (m)
         (NaN where the model has no such state), and their initial values ``*_0``.
     """
-    from navlib.covariance import ins_only_covariance, kalman_covariance, sigma_in_frame
+    return _evolution_tables(trajectory, cases, quick, [model_kw])[0]
+
+
+def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.DataFrame]:
+    """:func:`covariance_evolution` for several ``model_kw`` that differ only in the initial
+    sigmas (``sigma0_*``, which enter P0 alone): the per-step F, Q, H, R of each case are
+    built once and shared by every variant."""
     from navlib.filters import linear_steps
     from navlib.models.launcher import sensor_values
     from navlib.trajectory import launcher_ascent
@@ -619,42 +625,61 @@ def covariance_evolution(trajectory=None, cases=None, *, quick: bool = False,
         trajectory = launcher_ascent(duration_s=80.0, rate_hz=20.0) if quick \
             else launcher_ascent()
     cases = EVOLUTION_CASES if cases is None else dict(cases)
+    shared = {k: v for k, v in model_kws[0].items() if not k.startswith("sigma0_")}
+    if any({k: v for k, v in kw.items() if not k.startswith("sigma0_")} != shared
+           for kw in model_kws):  # pragma: no cover - internal use only
+        raise NavlibInputError("model_kws: variants may differ only in sigma0_*")
     gyro_bias = sensor_values()["gyro_bias"]
     C_e_b = np.swapaxes(trajectory.attitude.as_matrix(), 1, 2)
-    rows, steps_cache = [], {}
+    rows, steps_cache = [[] for _ in model_kws], {}
     for name, (solution, biases, bias_model, aiding, factor) in cases.items():
         if aiding not in ("kf", "ins_only", "ideal"):
             raise NavlibInputError(f"cases[{name!r}]: aiding must be 'kf', 'ins_only' or "
                                    f"'ideal', got {aiding!r}")
         key = (solution, biases, bias_model, factor)
+        extra = {"gyro_bias": gyro_bias * factor} if factor != 1.0 else {}
         if key not in steps_cache:
             steps_cache.clear()
-            kw = {**model_kw, **({"gyro_bias": gyro_bias * factor} if factor != 1.0 else {})}
             steps_cache[key] = linear_steps(launcher(solution, biases, bias_model, trajectory,
-                                                     **kw))
+                                                     **model_kws[0], **extra))
         steps = steps_cache[key]
-        if aiding == "ins_only":
-            cov = ins_only_covariance(steps.F, steps.Q, steps.P0, t=steps.t,
-                                      state_names=steps.state_names)
-        else:
-            R = steps.R if aiding == "kf" else np.zeros_like(steps.R)
-            cov = kalman_covariance(steps.F, steps.Q, steps.H, R, steps.P0, t=steps.t,
-                                    state_names=steps.state_names)
-        names = list(cov.state_names)
-        psi = [names.index(f"psi_{a}") for a in "xyz"]
-        att = sigma_in_frame(cov.P_post[[0, -1]], psi, C_e_b[[0, -1]])
-        row = {"case": name, "solution": solution, "biases": biases, "bias_model": bias_model,
-               "aiding": aiding, "gyro_factor": factor}
-        for i, axis in enumerate(("roll", "pitch", "yaw")):
-            row[axis], row[f"{axis}_0"] = float(att[-1, i]), float(att[0, i])
-        for label, prefix in (("gyro_bias", "bg_"), ("accel_bias", "ba_"), ("gps_bias", "bp_")):
-            idx = [names.index(f"{prefix}{a}") for a in "xyz"] if f"{prefix}x" in names else []
-            sig = cov.sigma[:, idx] if idx else None
-            row[label] = float(np.sqrt(np.mean(sig[-1] ** 2))) if idx else np.nan
-            row[f"{label}_0"] = float(np.sqrt(np.mean(sig[0] ** 2))) if idx else np.nan
-        rows.append(row)
-        del cov
-    return pd.DataFrame(rows)
+        for variant, model_kw in enumerate(model_kws):
+            if variant == 0:
+                P0 = steps.P0
+            else:  # as linear_steps builds it: the model's P0, symmetrised
+                P0 = np.asarray(launcher(solution, biases, bias_model, trajectory, **model_kw,
+                                         **extra).P0, dtype=float)
+                P0 = 0.5 * (P0 + P0.T)
+            rows[variant].append(_evolution_row(
+                name, solution, biases, bias_model, aiding, factor, steps, P0, C_e_b))
+    return [pd.DataFrame(r) for r in rows]
+
+
+def _evolution_row(name, solution, biases, bias_model, aiding, factor, steps, P0,
+                   C_e_b) -> dict:
+    """One row of :func:`covariance_evolution` from the case's steps and initial P0."""
+    from navlib.covariance import ins_only_covariance, kalman_covariance, sigma_in_frame
+
+    if aiding == "ins_only":
+        cov = ins_only_covariance(steps.F, steps.Q, P0, t=steps.t,
+                                  state_names=steps.state_names)
+    else:
+        R = steps.R if aiding == "kf" else np.zeros_like(steps.R)
+        cov = kalman_covariance(steps.F, steps.Q, steps.H, R, P0, t=steps.t,
+                                state_names=steps.state_names)
+    names = list(cov.state_names)
+    psi = [names.index(f"psi_{a}") for a in "xyz"]
+    att = sigma_in_frame(cov.P_post[[0, -1]], psi, C_e_b[[0, -1]])
+    row = {"case": name, "solution": solution, "biases": biases, "bias_model": bias_model,
+           "aiding": aiding, "gyro_factor": factor}
+    for i, axis in enumerate(("roll", "pitch", "yaw")):
+        row[axis], row[f"{axis}_0"] = float(att[-1, i]), float(att[0, i])
+    for label, prefix in (("gyro_bias", "bg_"), ("accel_bias", "ba_"), ("gps_bias", "bp_")):
+        idx = [names.index(f"{prefix}{a}") for a in "xyz"] if f"{prefix}x" in names else []
+        sig = cov.sigma[:, idx] if idx else None
+        row[label] = float(np.sqrt(np.mean(sig[-1] ** 2))) if idx else np.nan
+        row[f"{label}_0"] = float(np.sqrt(np.mean(sig[0] ** 2))) if idx else np.nan
+    return row
 
 
 BARELY = 0.5
@@ -867,10 +892,10 @@ def _evolution_variants(quick: bool) -> dict:
 
         base = float(np.degrees(ASSUMED["sigma0_att"]))
         values = (base,) if quick else EVOLUTION_GRID["sigma0_att_deg"]
-        _EVO_CACHE[quick] = {
-            v: evolution_claims(covariance_evolution(
-                quick=quick, **({} if np.isclose(v, base) else {"sigma0_att": np.radians(v)})))
-            for v in values}
+        kws = [{} if np.isclose(v, base) else {"sigma0_att": np.radians(v)} for v in values]
+        tables = _evolution_tables(None, None, quick, kws)
+        _EVO_CACHE[quick] = {v: evolution_claims(table)
+                             for v, table in zip(values, tables, strict=True)}
     return _EVO_CACHE[quick]
 
 
