@@ -66,14 +66,14 @@ class NotebookAborted(RuntimeError):
         ``"timeout"`` (the per-cell limit passed while the kernel was busy), ``"stall"``
         (the watchdog found the kernel not answering and killed it) or ``"died"`` (the
         kernel process ended on its own).
-    cell_index : int
-        Index of the cell in the executed (papermill) notebook.
+
+    The failing cell is marked in the saved executed notebook (an error output), which is
+    where :mod:`navlib.reports` locates it.
     """
 
-    def __init__(self, kind: str, cell_index: int, message: str):
+    def __init__(self, kind: str, message: str):
         super().__init__(message)
         self.kind = kind
-        self.cell_index = cell_index
 
 
 @dataclass
@@ -330,7 +330,7 @@ def _register_engine() -> None:
                                                exception=ex)
                     break
                 except (CellTimeoutError, DeadKernelError) as ex:
-                    aborted = self._aborted(index, ex)
+                    aborted = self._aborted(ex)
                     cell = self.nb.cells[index]
                     cell.outputs.append(nbformat.v4.new_output(
                         "error", ename=type(aborted).__name__, evalue=str(aborted),
@@ -340,18 +340,18 @@ def _register_engine() -> None:
                 finally:
                     self.nb_man.cell_complete(self.nb.cells[index], cell_index=index)
 
-        def _aborted(self, index: int, ex: Exception) -> NotebookAborted:
+        def _aborted(self, ex: Exception) -> NotebookAborted:
             watch = getattr(self.km, "watch", None)
             if isinstance(ex, CellTimeoutError):
                 if watch is not None:
                     watch.kill_kernel()  # a busy kernel would delay the shutdown
                 return NotebookAborted(
-                    "timeout", index, f"cell timed out after the per-cell limit of "
+                    "timeout", f"cell timed out after the per-cell limit of "
                     f"{self.timeout} s (the kernel was still busy; it was stopped)")
             if watch is not None and watch.stall is not None:
-                return NotebookAborted("stall", index, f"kernel stalled: {watch.stall}; "
+                return NotebookAborted("stall", f"kernel stalled: {watch.stall}; "
                                        "the watchdog stopped it")
-            return NotebookAborted("died", index, "the kernel died while running the cell")
+            return NotebookAborted("died", "the kernel died while running the cell")
 
     class BoundedEngine(NBClientEngine):
         @classmethod
