@@ -57,6 +57,13 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _add_scheduler(parser) -> None:
+    """The ``--scheduler`` option of the Dask commands (``assess``, ``sweep``)."""
+    parser.add_argument("--scheduler", default=None, metavar="ADDR",
+                        help="Dask scheduler address (tcp://host:8786) or processes, threads, "
+                             "synchronous (default: $NAVLIB_SCHEDULER, else a local cluster)")
+
+
 def _add_assess(sub) -> None:
     ass = sub.add_parser(
         "assess", help="assess many flights (Dask tasks) into a summary table",
@@ -68,9 +75,7 @@ def _add_assess(sub) -> None:
                      help="a .ulg file, a DataFlash .bin file or an 'imu.csv,gnss.csv' pair")
     ass.add_argument("--output", type=Path, required=True, metavar="DIR",
                      help="folder for summary.csv and the flight pages")
-    ass.add_argument("--scheduler", default=None, metavar="ADDR",
-                     help="Dask scheduler address (tcp://host:8786) or processes, threads, "
-                          "synchronous (default: $NAVLIB_SCHEDULER, else a local cluster)")
+    _add_scheduler(ass)
     ass.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
                      metavar=("KEY", "VALUE"),
                      help="a keyword of assess_flight (preset, eta, nu, gnss_rate_hz, ...); "
@@ -108,9 +113,7 @@ def _add_sweep(sub) -> None:
                           "parsed as JSON or a Python literal, else a string")
     swp.add_argument("--output", type=Path, default=None, metavar="FILE.parquet",
                      help="save the results (resumable)")
-    swp.add_argument("--scheduler", default=None, metavar="ADDR",
-                     help="Dask scheduler address (tcp://host:8786) or processes, threads, "
-                          "synchronous (default: $NAVLIB_SCHEDULER, else a local cluster)")
+    _add_scheduler(swp)
     swp.add_argument("--list", action="store_true", help="list the evaluations, run nothing")
 
 
