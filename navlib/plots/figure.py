@@ -43,6 +43,19 @@ def figure(**figure_kw) -> Figure:
     return Figure(**figure_kw) if _DETACHED.get() else plt.figure(**figure_kw)
 
 
+def show(fig: Figure) -> None:
+    """Show ``fig`` as a notebook cell output and release it from pyplot.
+
+    The one display helper of the notebooks: the figure is rendered once by ``display`` and
+    closed, so the inline backend does not draw it a second time at the end of the cell and
+    a long notebook does not keep every figure alive.
+    """
+    from IPython.display import display
+
+    display(fig)
+    plt.close(fig)
+
+
 def subplots(nrows: int = 1, ncols: int = 1, **keywords):
     """``plt.subplots`` with the same keywords, on a :func:`figure` (detached or not)."""
     subplot_kw = {k: keywords.pop(k) for k in _SUBPLOT_KEYWORDS if k in keywords}
