@@ -85,7 +85,8 @@ STATE_GROUPS = {
 """Figure groups (Silva et al. Figs. 1–6 analogues)."""
 
 
-def _sym(names) -> str:
+def _set_text(names) -> str:
+    """A group of state names as set notation, e.g. ``{dvN, dvE}``."""
     return "{" + ", ".join(names) + "}"
 
 
@@ -252,7 +253,7 @@ def grouping_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
                       coupling_threshold=thr)
         rows.append({"reading": label, "threshold": thr,
                      "n_groups": len(res.unobservable_groups),
-                     "groups": "; ".join(_sym(g) for g in res.unobservable_groups),
+                     "groups": "; ".join(_set_text(g) for g in res.unobservable_groups),
                      "matches_paper": _groups_match(res.unobservable_groups),
                      "max_share_bgN_bgD_baD": float(res.unobservable_share[idx].max())})
     return pd.DataFrame(rows)
@@ -530,7 +531,7 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
 # claims
 # --------------------------------------------------------------------------------------------
 def _fmt_groups(groups) -> str:
-    return "; ".join(_sym(g) for g in groups)
+    return "; ".join(_set_text(g) for g in groups)
 
 
 def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
