@@ -50,7 +50,8 @@ def _segment_label(i: int, segment) -> str:
 
 
 def excitability_bars(analysis, ax=None):
-    """Fig. 2 analogue: bars of ``e_tau^i`` for the 21 components, one colour per segment.
+    """Fig. 2 analogue: bars of ``e_tau^i`` for each state (the 21 components, labelled with
+    the paper's e1-e21 when they are the 21-state model's), one colour per segment.
 
     Dashed line at the analysis's ``e_threshold`` ("lies in S_O", 1/sqrt(2) by default),
     dotted at the "very low" share :data:`navlib.metrics.LOW`.
@@ -67,7 +68,8 @@ def excitability_bars(analysis, ax=None):
     ax.axhline(analysis.settings["e_threshold"], color="0.3", linestyle="--", linewidth=0.8,
                gid="e_threshold")
     ax.axhline(LOW, color="0.6", linestyle=":", linewidth=0.8)
-    ax.set_xticks(x, [f"{PAPER_IDS[n]}\n{short_name(n)}" for n in names], fontsize=7)
+    ax.set_xticks(x, [f"{PAPER_IDS[n]}\n{short_name(n)}" if n in PAPER_IDS else short_name(n)
+                      for n in names], fontsize=7)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("excitability e")
     ax.set_title(_bars_title(analysis), fontsize=10)
@@ -78,8 +80,8 @@ def excitability_bars(analysis, ax=None):
 def _bars_title(analysis) -> str:
     s = analysis.settings
     segments = ", ".join(_segment_label(i, seg) for i, seg in enumerate(analysis.segments))
-    return (f"Excitability per segment: {segments}\n"
-            f"η = {s['eta']:.0e}, D0 {s['d0']}, {s['attitude_error']} attitude error")
+    frame = f", {s['attitude_error']} attitude error" if "attitude_error" in s else ""
+    return f"Excitability per segment: {segments}\nη = {s['eta']:.0e}, D0 {s['d0']}{frame}"
 
 
 def energy_spectrum(analysis, ax=None):

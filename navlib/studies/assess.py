@@ -14,8 +14,9 @@ segment could estimate. The summary states facts of the metrics at stated thresh
 nothing more: a state is *excitable* in a segment when ``e >= e_threshold`` (default
 ``1/sqrt(2)``: more than half of the state's unit vector lies in the excited subspace) and
 *sensible* when ``s >= s_threshold`` at no less than ``min_fraction`` of the segment's
-epochs. :meth:`FlightAssessment.with_settings` re-evaluates new segments or thresholds
-without refitting or rediscretising (the widgets use it).
+epochs (the defaults of :mod:`navlib.metrics`). :class:`FlightAssessment` is a
+:class:`navlib.metrics.SegmentedAnalysis`, so its ``with_settings`` re-evaluates new
+segments or thresholds without refitting or rediscretising (the widgets use it).
 
 Assumptions that matter (all visible in ``FlightAssessment.options``): the sensor preset
 (noise densities and the turn-on sigmas of ``P0``), the GNSS sigma (the records' median
