@@ -752,9 +752,9 @@ def check_segments(segments, t, span=None) -> tuple[tuple[float, float], ...]:
                                    f"[{first:g}, {last:g}] s")
         count = int(np.count_nonzero(in_segment(t, a, b)))
         if count < 2:
-            raise NavlibInputError(
-                f"segments[{i}]: ({a}, {b}) s holds {count} epoch(s) of the model; a segment "
-                f"needs at least 2 (epochs every {np.median(np.diff(t)):.3g} s)")
+            every = f" (epochs every {np.median(np.diff(t)):.3g} s)" if t.size > 1 else ""
+            raise NavlibInputError(f"segments[{i}]: ({a}, {b}) s holds {count} epoch(s) of the "
+                                   f"model; a segment needs at least 2{every}")
     return segs
 
 
