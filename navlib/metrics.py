@@ -16,8 +16,15 @@ feed them, and both work in the normalised coordinates of the corrected Eq. 11
   and ``s^j_k`` = norm of the projection of ``e_j`` on the practically sensible subspace.
 
 Helpers: :func:`nu_for` / :func:`nu_range` (spec A11), model wrappers
-:func:`excitability_segment` (segments, D0 choice of A19) and :func:`sensability_model`, and
-:func:`physical_bands` (the k-sigma bands of Figs. 3-5).
+:func:`excitability_segment` / :func:`excitability_segments` (segments, D0 choice of A19) and
+:func:`sensability_model`, and :func:`physical_bands` (the k-sigma bands of Figs. 3-5).
+
+:class:`SegmentedAnalysis` is the paper's whole analysis of one discretised model (§4-6):
+excitability per segment, sensability per epoch, the thresholds that read them (eta, nu and
+the shares :data:`E_THRESHOLD`, :data:`S_THRESHOLD`, :data:`MIN_FRACTION`), tidy frame views
+and :meth:`SegmentedAnalysis.with_settings`, which re-reads other segments or thresholds on
+the same model. The rocket study (:class:`navlib.studies.rocket.RocketAnalysis`) and the
+flight assessment (:class:`navlib.studies.assess.FlightAssessment`) are thin subclasses.
 """
 
 from __future__ import annotations
@@ -34,10 +41,19 @@ from navlib.errors import NavlibInputError
 from navlib.observability import observability_matrix
 
 __all__ = [
+    "E_THRESHOLD",
+    "LOW",
+    "MIN_FRACTION",
+    "S_THRESHOLD",
     "ExcitabilityResult",
+    "SegmentedAnalysis",
     "SensabilityResult",
+    "check_segments",
+    "check_thresholds",
     "excitability",
     "excitability_segment",
+    "excitability_segments",
+    "in_segment",
     "nu_for",
     "nu_range",
     "physical_bands",
@@ -542,13 +558,14 @@ def _n_states(n) -> int:
 def physical_bands(result: SensabilityResult, k: float = 2.0) -> pd.DataFrame:
     """Tidy frame of the physical ``±k sigma`` bands beside the sensability (Figs. 3-5).
 
-    Columns ``t``, ``state``, ``s``, ``sigma``, ``lower`` (= -k sigma), ``upper`` (= +k sigma).
+    Columns ``t``, ``state``, ``s``, ``sigma``, ``nr``, ``lower`` (= -k sigma), ``upper``
+    (= +k sigma).
     """
     if not isinstance(result, SensabilityResult):
         raise NavlibInputError(f"result: expected a SensabilityResult, got "
                                f"{type(result).__name__}")
     k = finite_scalar(k, "k", 0.0, low_open=True)
-    frame = result.to_frame().drop(columns="nr")
+    frame = result.to_frame()
     frame["lower"] = -k * frame["sigma"]
     frame["upper"] = k * frame["sigma"]
     return frame
@@ -642,8 +659,7 @@ def excitability_segment(model, t_a: float, t_b: float, P0=None, R0=None, eta: f
         epoch.
     """
     _check_model(model)
-    if d0 not in D0_CHOICES:
-        raise NavlibInputError(f"d0: expected one of {D0_CHOICES}, got {d0!r}")
+    d0 = _d0(d0)
     t_a = finite_scalar(t_a, "t_a")
     t_b = finite_scalar(t_b, "t_b")
     if t_b <= t_a:
@@ -658,3 +674,330 @@ def excitability_segment(model, t_a: float, t_b: float, P0=None, R0=None, eta: f
     result = excitability(segment.F, segment.H, P0, R0, eta=eta,
                           state_names=model.state_names, d0=variances)
     return replace(result, t_start=t_a, t_end=t_b)
+
+
+def excitability_segments(model, segments, eta: float = 1e-3, d0: str = "global",
+                          sensability: SensabilityResult | None = None, span=None) -> tuple:
+    """:func:`excitability_segment` for each ``(t_start, t_end)`` of ``segments`` (A12, A19).
+
+    ``segments`` are checked by :func:`check_segments` (inside ``span``, default the model
+    epochs). ``d0="filter"`` takes D0 from the filter covariance at each segment start; pass
+    the ``sensability`` result of the same model to reuse its covariance recursion.
+    """
+    _check_model(model)
+    segs = check_segments(segments, model.t, span)
+    return tuple(excitability_segment(model, a, b, eta=eta, d0=d0, P_filter=sensability)
+                 for a, b in segs)
+
+
+# --------------------------------------------------------------------------- segmented analysis
+
+
+E_THRESHOLD = float(1.0 / np.sqrt(2.0))
+"""Default reading of the excitability: a state lies (mostly) in the excited subspace when
+``e >= 1/sqrt(2)``, i.e. more than half of its unit vector's squared norm projects on it."""
+S_THRESHOLD = E_THRESHOLD
+"""Default reading of the sensability: the same share of the practically sensible subspace."""
+MIN_FRACTION = 0.5
+"""Default share of a segment's epochs with ``s >= s_threshold`` for a state to count as
+sensible in that segment."""
+LOW = 0.25
+"""Share below which a state is "barely" in a subspace: ``e^2`` (or ``s^2``) < 1/16."""
+THRESHOLD_KEYS = ("eta", "nu", "e_threshold", "s_threshold", "min_fraction")
+"""The thresholds a :class:`SegmentedAnalysis` keeps in its ``settings``."""
+_TOL = 1e-9
+
+
+def check_thresholds(eta: float = 1e-3, nu: float = 0.985, e_threshold: float = E_THRESHOLD,
+                     s_threshold: float = S_THRESHOLD,
+                     min_fraction: float = MIN_FRACTION) -> dict:
+    """The thresholds of a :class:`SegmentedAnalysis` as a dict of floats (keys
+    :data:`THRESHOLD_KEYS`), or a NavlibInputError naming the bad one.
+
+    ``eta`` in (0, 1) (A14), ``nu`` in (0, 1] (Def. 1, A11), the reading shares
+    ``e_threshold``, ``s_threshold`` and ``min_fraction`` in [0, 1].
+    """
+    return {"eta": _eta(eta), "nu": _nu(nu),
+            "e_threshold": finite_scalar(e_threshold, "e_threshold", 0.0, 1.0),
+            "s_threshold": finite_scalar(s_threshold, "s_threshold", 0.0, 1.0),
+            "min_fraction": finite_scalar(min_fraction, "min_fraction", 0.0, 1.0)}
+
+
+def in_segment(t, t_start: float, t_end: float, open_start: bool = False) -> np.ndarray:
+    """Boolean mask of the times ``t`` in the closed segment ``[t_start, t_end]`` (1 ns
+    tolerance; ``(t_start, t_end]`` with ``open_start``), the epochs a segment stacks (A12)."""
+    t = np.asarray(t, dtype=float)
+    low = t > t_start + _TOL if open_start else t >= t_start - _TOL
+    return low & (t <= t_end + _TOL)
+
+
+def check_segments(segments, t, span=None) -> tuple[tuple[float, float], ...]:
+    """``segments`` as ``(t_start, t_end)`` float pairs, each inside ``span`` (default the
+    first and last of the epochs ``t``) and holding at least two epochs of ``t``; else a
+    NavlibInputError naming the segment."""
+    t = np.asarray(t, dtype=float)
+    first, last = (t[0], t[-1]) if span is None else (float(span[0]), float(span[1]))
+    try:
+        segs = tuple((float(a), float(b)) for a, b in segments)
+    except (TypeError, ValueError) as exc:
+        raise NavlibInputError("segments: expected a sequence of (t_start, t_end) pairs") \
+            from exc
+    if not segs:
+        raise NavlibInputError("segments: need at least one segment")
+    for i, (a, b) in enumerate(segs):
+        if not (np.isfinite(a) and np.isfinite(b)) or b <= a:
+            raise NavlibInputError(f"segments[{i}]: need t_start < t_end, got ({a}, {b})")
+        if a < first - _TOL or b > last + _TOL:
+            raise NavlibInputError(f"segments[{i}]: ({a}, {b}) s lies outside the flight "
+                                   f"[{first:g}, {last:g}] s")
+        count = int(np.count_nonzero(in_segment(t, a, b)))
+        if count < 2:
+            every = f" (epochs every {np.median(np.diff(t)):.3g} s)" if t.size > 1 else ""
+            raise NavlibInputError(f"segments[{i}]: ({a}, {b}) s holds {count} epoch(s) of the "
+                                   f"model; a segment needs at least 2{every}")
+    return segs
+
+
+@dataclass(frozen=True, eq=False)
+class SegmentedAnalysis:
+    """Excitability per segment and sensability per epoch of one discretised model, with the
+    thresholds that read them (España et al. §4-6).
+
+    Build one with :meth:`build`; :meth:`with_settings` re-reads it with other segments,
+    thresholds or D0 choice on the same model (new SVDs only for new segments or D0, none
+    for a new eta, no new eigen-decomposition for a new nu).
+
+    Attributes
+    ----------
+    model : DiscreteModel
+        Discretised at its measurement epochs, with ``P0``.
+    trajectory : Trajectory or None
+        The flight the model is linearised about (its span bounds the segments).
+    segments : tuple of (float, float)
+        ``(t_start, t_end)`` of each segment, s.
+    excitability : tuple of ExcitabilityResult
+        One per segment (:func:`excitability_segments`).
+    sensability : SensabilityResult
+        Over all model epochs, ``P0`` at the first (:func:`sensability_model`).
+    settings : dict
+        The thresholds (:data:`THRESHOLD_KEYS`), ``d0`` (A19) and ``prior_update`` (A9), plus
+        the caller's descriptive choices (attitude-error frame, sensor preset, GNSS sigma...).
+    """
+
+    model: object
+    trajectory: object
+    segments: tuple
+    excitability: tuple
+    sensability: SensabilityResult
+    settings: dict
+
+    @classmethod
+    def build(cls, model, segments, *, trajectory=None, eta: float = 1e-3, nu: float = 0.985,
+              d0: str = "global", prior_update: bool = False,
+              e_threshold: float = E_THRESHOLD, s_threshold: float = S_THRESHOLD,
+              min_fraction: float = MIN_FRACTION, settings=None, **fields):
+        """Run the metrics of ``model`` over ``segments``.
+
+        Parameters
+        ----------
+        model : DiscreteModel
+            With ``P0`` (:func:`sensability_model`).
+        segments : sequence of (t_start, t_end)
+            Checked by :func:`check_segments` inside the trajectory's span (or the model's).
+        trajectory : Trajectory, optional
+        eta, nu, e_threshold, s_threshold, min_fraction : float
+            :func:`check_thresholds`.
+        d0 : {"global", "filter"}
+            D0 of the excitability per segment (A19); ``"filter"`` uses the sensability's
+            covariance recursion at each segment start.
+        prior_update : bool
+            Sensability with ``P0`` as a prior updated at the first epoch (A9).
+        settings : mapping, optional
+            Descriptive choices kept in ``settings`` beside the thresholds.
+        **fields
+            The further fields of a subclass.
+        """
+        _check_model(model)
+        th = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
+        d0 = _d0(d0)
+        span = _span(trajectory)
+        segs = check_segments(segments, model.t, span)
+        se = sensability_model(model, nu=th["nu"], prior_update=prior_update)
+        ex = excitability_segments(model, segs, th["eta"], d0, se, span)
+        return cls(model=model, trajectory=trajectory, segments=segs, excitability=ex,
+                   sensability=se, settings={**dict(settings or {}), **th, "d0": d0,
+                                             "prior_update": bool(prior_update)}, **fields)
+
+    # ----- identities
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(self.model.state_names)
+
+    @property
+    def thresholds(self) -> dict:
+        """``eta``, ``nu``, ``e_threshold``, ``s_threshold``, ``min_fraction``."""
+        return {k: self.settings[k] for k in THRESHOLD_KEYS}
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Column labels of the segments in wide tables: ``tau1, tau2, ...``."""
+        return tuple(f"tau{i + 1}" for i in range(len(self.segments)))
+
+    def _segment_keys(self) -> dict:
+        """Columns naming each segment in the long frames (one value per segment)."""
+        return {"segment": list(self.labels)}
+
+    def _state_columns(self) -> dict:
+        """Columns describing each state in the long frames (one value per state)."""
+        return {"state": list(self.state_names)}
+
+    def epochs(self, t_a: float, t_b: float, open_start: bool = False) -> np.ndarray:
+        """Indices of the model epochs in ``[t_a, t_b]`` (``(t_a, t_b]`` with ``open_start``)."""
+        return np.flatnonzero(in_segment(self.model.t, t_a, t_b, open_start))
+
+    def at(self, time: float) -> int:
+        """Index of the model epoch nearest ``time``."""
+        return int(np.argmin(np.abs(self.model.t - time)))
+
+    # ----- frame views
+
+    def excitability_table(self) -> pd.DataFrame:
+        """Wide table: states (rows, model order) by segments (columns :attr:`labels`),
+        values ``e``."""
+        return pd.DataFrame({label: ex.e for label, ex in zip(self.labels, self.excitability,
+                                                              strict=True)},
+                            index=pd.Index(self.state_names, name="state"))
+
+    def excitability_frame(self) -> pd.DataFrame:
+        """Long table, one row per (segment, state): the segment's key columns (``segment``
+        ...), ``t_start``, ``t_end``, the state's columns (``state`` ...), ``e``,
+        ``excitable`` (``e >= e_threshold``), ``ne`` and ``eta``."""
+        keys, states = self._segment_keys(), self._state_columns()
+        e_threshold = self.settings["e_threshold"]
+        frames = [pd.DataFrame({**{k: v[i] for k, v in keys.items()}, "t_start": a,
+                                "t_end": b, **states, "e": ex.e,
+                                "excitable": ex.e >= e_threshold, "ne": ex.ne, "eta": ex.eta})
+                  for i, ((a, b), ex) in enumerate(zip(self.segments, self.excitability,
+                                                       strict=True))]
+        return pd.concat(frames, ignore_index=True)
+
+    to_frame = excitability_frame
+
+    def spectrum_frame(self) -> pd.DataFrame:
+        """Tidy energy spectra: the segment's key columns, ``direction`` (1-based), ``S``,
+        ``excited``, ``ne``."""
+        keys = self._segment_keys()
+        frames = [ex.to_frame()[["direction", "S", "excited", "ne"]].assign(
+                      **{k: v[i] for k, v in keys.items()})
+                  for i, ex in enumerate(self.excitability)]
+        return pd.concat(frames, ignore_index=True)
+
+    def sensability_frame(self, k: float = 2.0) -> pd.DataFrame:
+        """Long table over time (:func:`physical_bands`): ``t``, ``state``, ``s``, ``sigma``,
+        ``nr``, ``lower``, ``upper`` (the physical ``k``-sigma band), plus the key columns of
+        the segment holding each epoch (NaN or "" outside the segments; an epoch on a
+        boundary belongs to the later segment)."""
+        frame = physical_bands(self.sensability, k)
+        t = self.sensability.t
+        index = np.full(t.size, -1)
+        for i, (a, b) in enumerate(self.segments):
+            index[in_segment(t, a, b)] = i
+        index = np.repeat(index, len(self.state_names))
+        for name, values in self._segment_keys().items():
+            values = np.asarray(values)
+            fill = np.nan if values.dtype.kind in "iuf" else ""
+            frame[name] = np.where(index >= 0, values[index], fill)
+        return frame
+
+    def state_table(self) -> pd.DataFrame:
+        """:meth:`excitability_frame` with, per (segment, state), ``s_fraction`` (share of the
+        segment's epochs with ``s >= s_threshold``), ``sensible`` (``s_fraction >=
+        min_fraction``), ``sigma_start``, ``sigma_end`` (physical posterior 1-sigma at the
+        segment's first and last epoch, SI) and their ``sigma_ratio``."""
+        long = self.excitability_frame()
+        se = self.sensability
+        s_ok = se.s >= self.settings["s_threshold"]
+        fraction, start, end = [], [], []
+        for a, b in self.segments:
+            sel = self.epochs(a, b)
+            fraction.append(s_ok[sel].mean(axis=0))
+            start.append(se.sigma[sel[0]])
+            end.append(se.sigma[sel[-1]])
+        long["s_fraction"] = np.concatenate(fraction)
+        long["sensible"] = long["s_fraction"] >= self.settings["min_fraction"]
+        long["sigma_start"] = np.concatenate(start)
+        long["sigma_end"] = np.concatenate(end)
+        long["sigma_ratio"] = long["sigma_end"] / long["sigma_start"]
+        return long
+
+    def summary(self) -> pd.DataFrame:
+        """One row per segment: its key columns, limits, ``n_epochs``, ``ne``, and the states
+        it could estimate by each metric: ``excitable`` and ``sensible`` (comma-separated
+        state names at the thresholds), with their counts."""
+        table = self.state_table()
+        n = len(self.state_names)
+        keys = self._segment_keys()
+        rows = []
+        for i, (a, b) in enumerate(self.segments):
+            part = table.iloc[i * n:(i + 1) * n]
+            excitable = part.loc[part["excitable"], "state"].tolist()
+            sensible = part.loc[part["sensible"], "state"].tolist()
+            rows.append({**{k: v[i] for k, v in keys.items()}, "t_start": a, "t_end": b,
+                         "n_epochs": self.epochs(a, b).size, "ne": int(part["ne"].iloc[0]),
+                         "n_excitable": len(excitable), "excitable": ", ".join(excitable) or "-",
+                         "n_sensible": len(sensible), "sensible": ", ".join(sensible) or "-"})
+        return pd.DataFrame(rows)
+
+    # ----- re-reading
+
+    def _segment_changes(self, segments) -> dict:
+        """The fields that change with new ``segments`` (None: none), checked."""
+        if segments is None:
+            return {}
+        return {"segments": check_segments(segments, self.model.t, _span(self.trajectory))}
+
+    def with_settings(self, segments=None, *, eta: float | None = None,
+                      nu: float | None = None, d0: str | None = None,
+                      e_threshold: float | None = None, s_threshold: float | None = None,
+                      min_fraction: float | None = None):
+        """The same model with other segments, thresholds or D0 choice (None keeps each).
+
+        New segments or a new ``d0`` redo the small per-segment SVDs; a new ``eta`` only
+        re-thresholds them (:meth:`ExcitabilityResult.with_eta`), a new ``nu`` the stored
+        eigen-decompositions (:meth:`SensabilityResult.with_nu`).
+        """
+        given = {"eta": eta, "nu": nu, "e_threshold": e_threshold, "s_threshold": s_threshold,
+                 "min_fraction": min_fraction}
+        th = check_thresholds(**{**self.thresholds,
+                                 **{k: v for k, v in given.items() if v is not None}})
+        d0 = self.settings["d0"] if d0 is None else _d0(d0)
+        changes = self._segment_changes(segments)
+        if changes or d0 != self.settings["d0"]:
+            ex = excitability_segments(self.model, changes.get("segments", self.segments),
+                                       th["eta"], d0, self.sensability, _span(self.trajectory))
+        else:
+            ex = tuple(e.with_eta(th["eta"]) for e in self.excitability)
+        se = self.sensability if th["nu"] == self.sensability.nu else \
+            self.sensability.with_nu(th["nu"])
+        return replace(self, **changes, excitability=ex, sensability=se,
+                       settings={**self.settings, **th, "d0": d0})
+
+    def with_eta(self, eta: float):
+        """Same analysis with another eta (no new SVD)."""
+        return self.with_settings(eta=eta)
+
+    def with_nu(self, nu: float):
+        """Same analysis with another nu (no new eigen-decomposition)."""
+        return self.with_settings(nu=nu)
+
+
+def _span(trajectory) -> tuple[float, float] | None:
+    """First and last time of ``trajectory`` (None without one: the model epochs bound)."""
+    return None if trajectory is None else (float(trajectory.t[0]), float(trajectory.t[-1]))
+
+
+def _d0(d0) -> str:
+    if d0 not in D0_CHOICES:
+        raise NavlibInputError(f"d0: expected one of {D0_CHOICES}, got {d0!r}")
+    return d0

@@ -442,7 +442,8 @@ def _sensability(model, full):
 
 
 def _excitability_run(prepared, **full) -> dict:
-    from navlib.studies.rocket import SEGMENT_LABELS, SEGMENTS, excitability_segments
+    from navlib.metrics import excitability_segments
+    from navlib.studies.rocket import SEGMENT_LABELS, SEGMENTS
 
     model = _rocket_model(prepared, full)
     se = _sensability(model, full) if full["d0"] == "filter" else None
@@ -468,20 +469,21 @@ def _roll_sensability(se, roll_axis) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _sensability_run(prepared, **full) -> dict:
-    from navlib.studies.rocket import SENSIBLE, TRANSIENT_S
+    from navlib.metrics import S_THRESHOLD
+    from navlib.studies.rocket import TRANSIENT_S
 
     model = _rocket_model(prepared, full)
     se = _sensability(model, full)
     later = se.t > se.t[0] + TRANSIENT_S
     s_roll, sigma_roll = _roll_sensability(se, prepared[1])
     out = {"nr_end": int(se.nr[-1]),
-           "n_sensible_end": int(np.sum(se.s[-1] >= SENSIBLE)),
+           "n_sensible_end": int(np.sum(se.s[-1] >= S_THRESHOLD)),
            "s_end_roll": float(s_roll[-1]),
-           "s_frac_roll": float(np.mean(s_roll[later] >= SENSIBLE)),
+           "s_frac_roll": float(np.mean(s_roll[later] >= S_THRESHOLD)),
            "sigma_end_roll_deg": float(np.degrees(sigma_roll[-1]))}
     for j, s in enumerate(model.state_names):
         out[f"s_end_{s}"] = float(se.s[-1, j])
-        out[f"s_frac_{s}"] = float(np.mean(se.s[later, j] >= SENSIBLE))
+        out[f"s_frac_{s}"] = float(np.mean(se.s[later, j] >= S_THRESHOLD))
     return out
 
 
@@ -511,16 +513,14 @@ def _nees_run(prepared, *, runs, seed, **full) -> dict:
 def _claims_run(prepared, **full) -> dict:
     from navlib.studies import rocket
 
-    model = _rocket_model(prepared, full)
-    se = _sensability(model, full)
-    ex = rocket.excitability_segments(model, rocket.SEGMENTS, full["eta"], full["d0"], se)
-    settings = {**rocket.BASELINE, **{k: full[k] for k in ("spin_hz", "eta", "nu", "d0",
-                                                            "gnss_sigma_m", "attitude_error")},
-                "prior_update": False}
     coning = {"coning_deg": full["coning_deg"], "coning_hz": full["coning_hz"]} \
         if full["coning_deg"] else {}
-    analysis = rocket.RocketAnalysis(model, rocket.rocket_trajectory(full["spin_hz"], **coning),
-                                     se, ex, rocket.SEGMENTS, settings)
+    analysis = rocket.RocketAnalysis.build(
+        _rocket_model(prepared, full), rocket.SEGMENTS,
+        trajectory=rocket.rocket_trajectory(full["spin_hz"], **coning), eta=full["eta"],
+        nu=full["nu"], d0=full["d0"],
+        settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
+                                       "imu_grade", "coning_deg")})
     claims = rocket.excitability_claims(analysis) + rocket.sensability_claims(analysis)
     passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
     return {**passed, "n_reproduced": int(sum(passed.values()))}

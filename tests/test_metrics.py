@@ -7,10 +7,14 @@ import pytest
 from navlib import NavlibInputError
 from navlib.covariance import kalman_covariance
 from navlib.metrics import (
+    E_THRESHOLD,
     ExcitabilityResult,
+    SegmentedAnalysis,
     SensabilityResult,
+    check_segments,
     excitability,
     excitability_segment,
+    excitability_segments,
     nu_for,
     nu_range,
     physical_bands,
@@ -295,6 +299,104 @@ def test_sensability_model_defaults_and_window(pv_model):
     assert isinstance(part.to_frame(), pd.DataFrame)
 
 
+# ---------------------------------------------------------------------------- segmented analysis
+
+PV_SEGMENTS = ((2.0, 8.0), (8.0, 20.0))
+
+
+@pytest.fixture(scope="module")
+def pv_analysis(pv_model):
+    return SegmentedAnalysis.build(pv_model, PV_SEGMENTS, eta=1e-2, nu=0.9,
+                                   settings={"what": "pv"})
+
+
+def test_segmented_analysis_is_the_wrappers(pv_model, pv_analysis):
+    a = pv_analysis
+    assert a.segments == PV_SEGMENTS and a.labels == ("tau1", "tau2")
+    for (t_a, t_b), ex in zip(PV_SEGMENTS, a.excitability, strict=True):
+        np.testing.assert_array_equal(ex.e, excitability_segment(pv_model, t_a, t_b,
+                                                                 eta=1e-2).e)
+    np.testing.assert_array_equal(a.sensability.s, sensability_model(pv_model, nu=0.9).s)
+    assert a.thresholds == {"eta": 1e-2, "nu": 0.9, "e_threshold": E_THRESHOLD,
+                            "s_threshold": E_THRESHOLD, "min_fraction": 0.5}
+    assert a.settings["what"] == "pv" and a.settings["d0"] == "global"
+    assert not a.settings["prior_update"] and a.state_names == ("p", "v")
+
+
+@pytest.mark.parametrize("change", [
+    {"segments": ((0.0, 10.0), (10.0, 20.0))}, {"eta": 1e-1}, {"nu": 0.99},
+    {"d0": "filter"}, {"e_threshold": 0.9, "s_threshold": 0.5, "min_fraction": 0.2},
+])
+def test_with_settings_equals_a_new_build(pv_model, pv_analysis, change):
+    fast = pv_analysis.with_settings(**change)
+    slow = SegmentedAnalysis.build(pv_model, change.get("segments", PV_SEGMENTS), **{
+        **pv_analysis.thresholds, **{k: v for k, v in change.items() if k != "segments"}})
+    assert fast.model is pv_model and fast.segments == slow.segments
+    assert fast.thresholds == slow.thresholds
+    assert fast.settings["d0"] == slow.settings["d0"] and fast.settings["what"] == "pv"
+    for a, b in zip(fast.excitability, slow.excitability, strict=True):
+        np.testing.assert_array_equal(a.e, b.e)
+        assert a.ne == b.ne
+    np.testing.assert_array_equal(fast.sensability.s, slow.sensability.s)
+    pd.testing.assert_frame_equal(fast.state_table(), slow.state_table())
+    if "segments" not in change and "d0" not in change:  # re-thresholded, no new SVD
+        assert all(a.U is b.U for a, b in zip(fast.excitability, pv_analysis.excitability,
+                                              strict=True))
+    assert fast.sensability.V is pv_analysis.sensability.V
+
+
+def test_segmented_frames(pv_analysis):
+    a = pv_analysis
+    long = a.excitability_frame()
+    assert len(long) == 4 and list(long["segment"]) == ["tau1", "tau1", "tau2", "tau2"]
+    assert (long["excitable"] == (long["e"] >= E_THRESHOLD)).all()
+    assert a.excitability_table().loc["v", "tau2"] == a.excitability[1].e[1]
+    spectrum = a.spectrum_frame()
+    np.testing.assert_allclose(spectrum.groupby("segment")["S"].sum(), 2.0)
+    bands = a.sensability_frame(k=3.0)
+    by_time = bands[bands["state"] == "p"].set_index("t")["segment"]
+    # epochs 0 and 1 lie outside; the boundary epoch 8 belongs to the later segment
+    assert by_time[0.0] == by_time[1.0] == "" and by_time[2.0] == by_time[7.0] == "tau1"
+    assert by_time[8.0] == by_time[20.0] == "tau2"
+    np.testing.assert_allclose(bands["upper"], 3.0 * bands["sigma"])
+    states = a.state_table()
+    k = a.epochs(8.0, 20.0)
+    assert k[0] == 8 and k.size == 13 and a.epochs(8.0, 20.0, open_start=True).size == 12
+    share = np.mean(a.sensability.s[k, 1] >= E_THRESHOLD)
+    assert states.iloc[3]["s_fraction"] == share
+    assert states.iloc[3]["sensible"] == (share >= 0.5)
+    assert states.iloc[3]["sigma_ratio"] == a.sensability.sigma[20, 1] / a.sensability.sigma[8, 1]
+    summary = a.summary()
+    assert list(summary["n_epochs"]) == [7, 13] and list(summary["segment"]) == ["tau1", "tau2"]
+    assert summary.loc[1, "n_sensible"] == states.iloc[2:]["sensible"].sum()
+
+
+@pytest.mark.parametrize(("segments", "match"), [
+    (5.0, "pairs"), ([], "at least one"), ([(8.0, 2.0)], r"segments\[0\]: need"),
+    ([(0.0, 8.0), (8.0, 25.0)], r"segments\[1\].*outside"),
+    ([(0.0, 8.0), (8.2, 8.9)], r"segments\[1\].*holds 0 epoch"),
+])
+def test_bad_segments_are_named(pv_model, pv_analysis, segments, match):
+    with pytest.raises(NavlibInputError, match=match):
+        check_segments(segments, pv_model.t)
+    with pytest.raises(NavlibInputError, match=match):
+        pv_analysis.with_settings(segments)
+    with pytest.raises(NavlibInputError, match=match):
+        excitability_segments(pv_model, segments)
+
+
+def test_bad_settings_are_named(pv_model, pv_analysis):
+    for kwargs, match in (({"eta": 1.0}, "eta"), ({"nu": 0.0}, "nu"), ({"d0": "local"}, "d0"),
+                          ({"e_threshold": 1.5}, "e_threshold"),
+                          ({"min_fraction": -0.1}, "min_fraction")):
+        with pytest.raises(NavlibInputError, match=match):
+            pv_analysis.with_settings(**kwargs)
+        with pytest.raises(NavlibInputError, match=match):
+            SegmentedAnalysis.build(pv_model, PV_SEGMENTS, **kwargs)
+    with pytest.raises(NavlibInputError, match="DiscreteModel"):
+        SegmentedAnalysis.build(np.eye(2), PV_SEGMENTS)
+
+
 def test_wrapper_argument_errors(pv_model):
     no_p0 = DiscreteModel(pv_model.t, pv_model.F, pv_model.Q, pv_model.H, pv_model.R,
                           pv_model.state_names)
@@ -387,3 +489,32 @@ def test_single_epoch_and_signed_vectors():
         assert np.all(pivot > 0)
     np.testing.assert_allclose(se.V[0] @ np.diag(se.eigenvalues[0]) @ se.V[0].T,
                                se.information[0], rtol=1e-10)
+
+
+def test_generic_figures_draw_the_analysis_thresholds(pv_analysis):
+    import matplotlib.pyplot as plt
+
+    from navlib.plots import metrics as mplots
+
+    strict = pv_analysis.with_settings(e_threshold=0.9, s_threshold=0.6)
+    fig = mplots.excitability_figure(strict)
+    lines = {ln.get_gid(): ln.get_ydata()[0] for ln in fig.axes[0].get_lines()}
+    assert lines["e_threshold"] == 0.9
+    assert mplots.excitability_figure(strict.with_settings(eta=1e-1), fig) is fig  # in place
+    again = mplots.excitability_figure(pv_analysis, fig)  # another threshold line: redrawn
+    assert [ln.get_ydata()[0] for ln in again.axes[0].get_lines()
+            if ln.get_gid() == "e_threshold"] == [E_THRESHOLD]
+    sens = mplots.sensability_figure(strict, ["v"])
+    assert 0.6 in [ln.get_ydata()[0] for ln in sens.axes[0].get_lines()]
+    plt.close("all")
+
+
+def test_generic_plots_do_not_load_a_study():
+    import subprocess
+    import sys
+
+    code = ("import sys, navlib.plots.metrics, navlib.metrics; "
+            "print(sorted(m for m in sys.modules if m.startswith('navlib.studies')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "[]"

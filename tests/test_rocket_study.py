@@ -108,8 +108,8 @@ def test_with_eta_and_nu_equal_recomputation(baseline):
 
 
 def test_filter_d0_uses_the_covariance_at_each_segment_start(baseline):
-    ex = rocket.excitability_segments(baseline.model, rocket.SEGMENTS, 1e-3, "filter",
-                                      baseline.sensability)
+    ex = metrics.excitability_segments(baseline.model, rocket.SEGMENTS, 1e-3, "filter",
+                                       baseline.sensability)
     k = baseline.at(19.0)
     np.testing.assert_allclose(ex[1].d0, baseline.sensability.sigma[k] ** 2)
     assert not np.allclose(ex[1].e, baseline.excitability[1].e)

@@ -1,7 +1,10 @@
-"""Figures for excitability and sensability on the rocket flight (notebooks 03 and 04).
+"""Figures for excitability and sensability (notebooks 03, 04 and 07).
 
-Builders take a :class:`navlib.studies.rocket.RocketAnalysis` (or tables made from one)
-and return a new matplotlib Figure; nothing is computed here beyond unit conversion:
+Builders take a :class:`navlib.metrics.SegmentedAnalysis` (the rocket study's
+:class:`~navlib.studies.rocket.RocketAnalysis`, a flight's
+:class:`~navlib.studies.assess.FlightAssessment`) or tables made from one, draw the
+analysis's own thresholds, and return a new matplotlib Figure; nothing is computed here
+beyond unit conversion:
 
 * :func:`excitability_bars` / :func:`energy_spectrum` / :func:`excitability_figure`:
   the Fig. 2 analogue (bars of ``e_tau^i``, 21 components x segments) and the log plot of
@@ -20,9 +23,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from navlib.covariance import covariance_ratio
+from navlib.metrics import E_THRESHOLD, LOW
 from navlib.models.ecef import PAPER_IDS
 from navlib.plots.figure import figure, subplots
-from navlib.studies.rocket import IN_SO, LOW, SENSIBLE
 from navlib.units import DEG, PPM
 
 SEGMENT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
@@ -47,9 +50,11 @@ def _segment_label(i: int, segment) -> str:
 
 
 def excitability_bars(analysis, ax=None):
-    """Fig. 2 analogue: bars of ``e_tau^i`` for the 21 components, one colour per segment.
+    """Fig. 2 analogue: bars of ``e_tau^i`` for each state (the 21 components, labelled with
+    the paper's e1-e21 when they are the 21-state model's), one colour per segment.
 
-    Dashed lines at 1/sqrt(2) ("lies in S_O") and at the "very low" threshold.
+    Dashed line at the analysis's ``e_threshold`` ("lies in S_O", 1/sqrt(2) by default),
+    dotted at the "very low" share :data:`navlib.metrics.LOW`.
     """
     fig, ax = (subplots(figsize=(11, 3.6)) if ax is None else (ax.figure, ax))
     names = analysis.state_names
@@ -60,9 +65,11 @@ def excitability_bars(analysis, ax=None):
         ax.bar(x - 0.4 + width * (i + 0.5), ex.e, width,
                color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)],
                label=f"τ{i + 1}")
-    ax.axhline(IN_SO, color="0.3", linestyle="--", linewidth=0.8)
+    ax.axhline(analysis.settings["e_threshold"], color="0.3", linestyle="--", linewidth=0.8,
+               gid="e_threshold")
     ax.axhline(LOW, color="0.6", linestyle=":", linewidth=0.8)
-    ax.set_xticks(x, [f"{PAPER_IDS[n]}\n{short_name(n)}" for n in names], fontsize=7)
+    ax.set_xticks(x, [f"{PAPER_IDS[n]}\n{short_name(n)}" if n in PAPER_IDS else short_name(n)
+                      for n in names], fontsize=7)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("excitability e")
     ax.set_title(_bars_title(analysis), fontsize=10)
@@ -73,8 +80,8 @@ def excitability_bars(analysis, ax=None):
 def _bars_title(analysis) -> str:
     s = analysis.settings
     segments = ", ".join(_segment_label(i, seg) for i, seg in enumerate(analysis.segments))
-    return (f"Excitability per segment: {segments}\n"
-            f"η = {s['eta']:.0e}, D0 {s['d0']}, {s['attitude_error']} attitude error")
+    frame = f", {s['attitude_error']} attitude error" if "attitude_error" in s else ""
+    return f"Excitability per segment: {segments}\nη = {s['eta']:.0e}, D0 {s['d0']}{frame}"
 
 
 def energy_spectrum(analysis, ax=None):
@@ -129,13 +136,16 @@ def excitability_figure(analysis, fig=None):
 
 def _update_in_place(fig, analysis) -> bool:
     """Set new heights, spectra, ne and eta on the artists of an excitability figure with
-    the same number of segments and states (no new artists, ticks or layout)."""
+    the same number of segments, states and ``e_threshold`` (no new artists, ticks or
+    layout)."""
     bars, spectrum = fig.axes[:2]
     containers = bars.containers
     lines = {ln.get_gid(): ln for ln in spectrum.get_lines()}
     k, n = len(analysis.excitability), len(analysis.state_names)
+    threshold = [ln.get_ydata()[0] for ln in bars.get_lines() if ln.get_gid() == "e_threshold"]
     if len(containers) != k or any(f"spectrum{i}" not in lines for i in range(k)) \
-            or len(containers[0].patches) != n:
+            or len(containers[0].patches) != n \
+            or threshold != [analysis.settings["e_threshold"]]:
         return False
     for i, ex in enumerate(analysis.excitability):
         for patch, height in zip(containers[i].patches, ex.e, strict=True):
@@ -180,11 +190,12 @@ def reshade_segments(fig, segments) -> list:
 
 def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: str = ""):
     """Figs. 3-5 analogues: sensability of each state (left axis) and its physical
-    ``±k sigma`` band (right axis, display units), segments shaded.
+    ``±k sigma`` band (right axis, display units), segments shaded, the analysis's
+    ``s_threshold`` dotted.
 
     Parameters
     ----------
-    analysis : RocketAnalysis
+    analysis : navlib.metrics.SegmentedAnalysis
     states : sequence of str
         e.g. ``["P_x", "V_x"]`` (Fig. 3), ``["theta_x", "theta_y", "theta_z"]`` (Fig. 4),
         ``["bg_x", "bg_y", "bg_z"]`` (Fig. 5).
@@ -198,7 +209,8 @@ def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: s
                          sharex=True, squeeze=False, layout="constrained")
     for ax, state, j in zip(axes[:, 0], states, idx, strict=True):
         ax.plot(se.t, se.s[:, j], color="tab:blue", linewidth=1.5, label="sensability")
-        ax.axhline(SENSIBLE, color="tab:blue", linestyle=":", linewidth=0.8)
+        ax.axhline(analysis.settings["s_threshold"], color="tab:blue", linestyle=":",
+                   linewidth=0.8)
         ax.set_ylim(-0.03, 1.05)
         ax.set_ylabel(f"s({state})", color="tab:blue")
         _shade_segments(ax, analysis.segments)
@@ -228,7 +240,7 @@ def measures_figure(analysis, states: Sequence[str]):
     for ax in (ax_s, ax_r):
         _shade_segments(ax, analysis.segments)
         ax.set_xlabel("t [s]")
-    ax_s.axhline(SENSIBLE, color="0.4", linestyle=":")
+    ax_s.axhline(analysis.settings["s_threshold"], color="0.4", linestyle=":")
     ax_s.set_ylabel("sensability s")
     ax_r.axhline(1.0, color="0.4", linestyle=":")
     ax_r.set_ylabel("σ(t0)/σ(t)  (PSINS ratio)")
@@ -248,7 +260,7 @@ def tension_figure(table):
                    s=50, color="tab:green" if r.all_three else "tab:red")
         ax.annotate(r.variant, (r.max_theta_growth, r.e16_tau2), fontsize=7,
                     xytext=(4, 2), textcoords="offset points")
-    ax.axhline(IN_SO, color="0.4", linestyle="--", linewidth=0.8)
+    ax.axhline(E_THRESHOLD, color="0.4", linestyle="--", linewidth=0.8)
     ax.axvline(1.0, color="0.4", linestyle=":", linewidth=0.8)
     ax.set_xscale("log")
     ax.set_xlabel("max σθ(t)/σθ(0) in τ2 (S6 wants < 1)")
@@ -259,16 +271,20 @@ def tension_figure(table):
 
 
 def sweep_figure(sweep, claim_ids: Sequence[str] | None = None):
-    """Pass/fail matrix of a sensitivity sweep (rows: settings; columns: claims)."""
-    from navlib.studies.rocket import CLAIM_IDS, SWEEP_BASELINE
+    """Pass/fail matrix of a sensitivity sweep (rows: settings; columns: claims).
 
-    claim_ids = list(CLAIM_IDS if claim_ids is None else claim_ids)
+    ``sweep`` as from :func:`navlib.studies.rocket.sensitivity_sweep`: a ``factor`` column,
+    the factor columns, one boolean column per claim (default: all of them, in order).
+    """
+    passed = [c for c in sweep.columns if sweep[c].dtype == bool]
+    claim_ids = passed if claim_ids is None else list(claim_ids)
+    factors = [c for c in sweep.columns if c not in ("factor", "n_reproduced", *passed)]
     matrix = sweep[claim_ids].to_numpy(dtype=float)
     labels = []
     for r in sweep.itertuples():
         if r.factor in ("baseline", "grid"):
             labels.append(r.factor if r.factor == "baseline" else
-                          ", ".join(f"{k}={getattr(r, k)}" for k in SWEEP_BASELINE))
+                          ", ".join(f"{k}={getattr(r, k)}" for k in factors))
         else:
             labels.append(f"{r.factor} = {getattr(r, r.factor)}")
     height = 0.28 * len(labels) + 1.2

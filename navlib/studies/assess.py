@@ -14,8 +14,9 @@ segment could estimate. The summary states facts of the metrics at stated thresh
 nothing more: a state is *excitable* in a segment when ``e >= e_threshold`` (default
 ``1/sqrt(2)``: more than half of the state's unit vector lies in the excited subspace) and
 *sensible* when ``s >= s_threshold`` at no less than ``min_fraction`` of the segment's
-epochs. :meth:`FlightAssessment.with_settings` re-evaluates new segments or thresholds
-without refitting or rediscretising (the widgets use it).
+epochs (the defaults of :mod:`navlib.metrics`). :class:`FlightAssessment` is a
+:class:`navlib.metrics.SegmentedAnalysis`, so its ``with_settings`` re-evaluates new
+segments or thresholds without refitting or rediscretising (the widgets use it).
 
 Assumptions that matter (all visible in ``FlightAssessment.options``): the sensor preset
 (noise densities and the turn-on sigmas of ``P0``), the GNSS sigma (the records' median
@@ -38,7 +39,14 @@ from navlib import sensors
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning, check_overlap
-from navlib.metrics import excitability_segment, sensability_model
+from navlib.metrics import (
+    E_THRESHOLD,
+    MIN_FRACTION,
+    S_THRESHOLD,
+    SegmentedAnalysis,
+    check_thresholds,
+    in_segment,
+)
 from navlib.models.ecef import PAPER_IDS, STATE_GROUPS, ecef21_at_epochs
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
@@ -52,13 +60,6 @@ from navlib.trajectory.fit import FIT_DEFAULTS
 __all__ = ["FlightAssessment", "assess_flight", "choose_preset", "describe_inputs",
            "fit_report", "fit_residuals"]
 
-E_THRESHOLD = 1.0 / math.sqrt(2.0)
-"""Default excitability threshold: ``e^2 > 1/2``, the state lies mostly in the excited
-subspace."""
-S_THRESHOLD = 1.0 / math.sqrt(2.0)
-"""Default sensability threshold (same reading for the sensible subspace)."""
-MIN_FRACTION = 0.5
-"""Default share of a segment's epochs at which ``s >= s_threshold`` must hold."""
 MIN_DURATION_S = 2.0
 """Shortest common IMU/GNSS span accepted, s."""
 MIN_GNSS_EPOCHS = 4
@@ -261,13 +262,18 @@ def _label(row) -> str:
 
 
 @dataclass(frozen=True, eq=False)
-class FlightAssessment:
+class FlightAssessment(SegmentedAnalysis):
     """Everything :func:`assess_flight` computed, with tidy views.
+
+    A :class:`navlib.metrics.SegmentedAnalysis` (``model``: the 21-state ECEF model
+    discretised at the GNSS epochs; ``trajectory``: the fitted reference trajectory, exact
+    IMU, ``parameters["fit_residuals"]``; ``segments``; ``excitability`` one per segment in
+    the order of ``segment_table``; ``sensability`` over the whole flight, ``P0`` at the
+    first epoch; ``settings`` and ``thresholds``: ``eta``, ``nu``, ``e_threshold``,
+    ``s_threshold``, ``min_fraction``) whose segments carry the flight phases, with:
 
     Attributes
     ----------
-    trajectory : Trajectory
-        The fitted reference trajectory (exact IMU; ``parameters["fit_residuals"]``).
     inputs : DataFrame
         :func:`describe_inputs` of the records.
     fit : DataFrame
@@ -277,14 +283,6 @@ class FlightAssessment:
     segment_table : DataFrame
         The segments assessed: ``segment`` (1-based), ``phase``, ``t_start``, ``t_end``,
         ``duration``, ``n_epochs`` (GNSS epochs of the model inside).
-    model : DiscreteModel
-        The 21-state ECEF model discretised at the GNSS epochs.
-    excitability : tuple of ExcitabilityResult
-        One per segment, in the order of ``segment_table``.
-    sensability : SensabilityResult
-        Over the whole flight, ``P0`` at the first epoch.
-    thresholds : dict
-        ``eta``, ``nu``, ``e_threshold``, ``s_threshold``, ``min_fraction``.
     options : dict
         Assumed values: ``preset``, ``gnss_rate_hz``, ``gnss_sigma_m``, fit and segmentation
         options, model options.
@@ -297,20 +295,17 @@ class FlightAssessment:
         When the record was split at long holes: every span's assessment in time order
         (this one among them); empty otherwise.
 
-    ``segments`` (tuple of ``(t_start, t_end)``), ``settings`` and ``state_names`` give the
-    view the figure builders of :mod:`navlib.plots.metrics` read (as from a
-    :class:`navlib.studies.rocket.RocketAnalysis`).
+    The long frames name each segment by ``segment`` (1-based) and ``phase``, and each state
+    by ``state``, ``paper_id`` (e1..e21) and ``group``; the wide
+    :meth:`~navlib.metrics.SegmentedAnalysis.excitability_table` labels its columns
+    ``"<segment> <phase> <t_start>-<t_end> s"``; :meth:`to_frame` is the per-segment
+    :meth:`~navlib.metrics.SegmentedAnalysis.summary`.
     """
 
-    trajectory: object
     inputs: pd.DataFrame
     fit: pd.DataFrame
     automatic: Segmentation
     segment_table: pd.DataFrame
-    model: object
-    excitability: tuple
-    sensability: object
-    thresholds: dict
     options: dict = field(default_factory=dict)
     gnss_residuals: pd.DataFrame | None = None
     imu_residuals: pd.DataFrame | None = None
@@ -318,169 +313,54 @@ class FlightAssessment:
     spans: tuple = ()
 
     @property
-    def state_names(self) -> tuple[str, ...]:
-        return tuple(self.model.state_names)
+    def labels(self) -> tuple[str, ...]:
+        return tuple(_label(r) for r in self.segment_table.itertuples(index=False))
 
-    @property
-    def segments(self) -> tuple[tuple[float, float], ...]:
-        """``(t_start, t_end)`` of each assessed segment, s."""
-        return tuple((float(a), float(b)) for a, b in
-                     zip(self.segment_table["t_start"], self.segment_table["t_end"],
-                         strict=True))
+    def _segment_keys(self) -> dict:
+        return {"segment": self.segment_table["segment"].to_numpy(),
+                "phase": self.segment_table["phase"].to_numpy()}
 
-    @property
-    def settings(self) -> dict:
-        """Thresholds and model choices, as the metric figure builders label them."""
-        return {**self.thresholds, "d0": "global",
-                "attitude_error": self.options.get("model_options", {}).get("attitude_error",
-                                                                            "ecef"),
-                "preset": self.options.get("preset"),
-                "gnss_sigma_m": self.options.get("gnss_sigma_m")}
-
-    def excitability_frame(self) -> pd.DataFrame:
-        """Long table: one row per (segment, state): ``segment``, ``phase``, ``t_start``,
-        ``t_end``, ``state``, ``paper_id`` (e1..e21), ``group``, ``e``, ``excitable``
-        (``e >= e_threshold``), ``ne``."""
-        frames = []
-        for row, ex in zip(self.segment_table.itertuples(index=False), self.excitability,
-                           strict=True):
-            frames.append(pd.DataFrame({
-                "segment": row.segment, "phase": row.phase, "t_start": row.t_start,
-                "t_end": row.t_end, "state": list(self.state_names),
+    def _state_columns(self) -> dict:
+        return {**super()._state_columns(),
                 "paper_id": [PAPER_IDS[s] for s in self.state_names],
-                "group": [_GROUP_OF[s] for s in self.state_names],
-                "e": ex.e, "excitable": ex.e >= self.thresholds["e_threshold"], "ne": ex.ne,
-            }))
-        return pd.concat(frames, ignore_index=True)
-
-    def excitability_table(self) -> pd.DataFrame:
-        """Wide table: the 21 states (rows, model order) by segments (columns), values ``e``."""
-        long = self.excitability_frame()
-        long["label"] = [_label(r) for r in long.itertuples(index=False)]
-        wide = long.pivot(index="state", columns="label", values="e")
-        labels = [_label(r) for r in self.segment_table.itertuples(index=False)]
-        return wide.loc[list(self.state_names), labels]
-
-    def sensability_frame(self) -> pd.DataFrame:
-        """Long table over time: ``t``, ``state``, ``s``, ``sigma`` (physical 1-sigma), ``nr``,
-        plus the ``segment`` and ``phase`` holding each epoch (NaN/"" outside segments)."""
-        frame = self.sensability.to_frame()
-        seg = _segment_of(self.sensability.t, self.segment_table)
-        index = np.repeat(seg, len(self.state_names))
-        table = self.segment_table
-        frame["segment"] = np.where(index >= 0, table["segment"].to_numpy()[index], np.nan)
-        frame["phase"] = np.where(index >= 0, table["phase"].to_numpy()[index], "")
-        return frame
-
-    def state_table(self) -> pd.DataFrame:
-        """One row per (segment, state): ``e``, ``excitable``, ``s_fraction`` (share of the
-        segment's epochs with ``s >= s_threshold``), ``sensible`` (``s_fraction >=
-        min_fraction``), ``sigma_start``, ``sigma_end`` (physical posterior 1-sigma at the
-        segment's first and last epoch, SI) and their ``sigma_ratio``."""
-        long = self.excitability_frame()
-        se = self.sensability
-        t = se.t
-        s_ok = se.s >= self.thresholds["s_threshold"]
-        fraction, start, end = [], [], []
-        for row in self.segment_table.itertuples(index=False):
-            sel = np.flatnonzero((t >= row.t_start - 1e-9) & (t <= row.t_end + 1e-9))
-            fraction.append(s_ok[sel].mean(axis=0))
-            start.append(se.sigma[sel[0]])
-            end.append(se.sigma[sel[-1]])
-        long["s_fraction"] = np.concatenate(fraction)
-        long["sensible"] = long["s_fraction"] >= self.thresholds["min_fraction"]
-        long["sigma_start"] = np.concatenate(start)
-        long["sigma_end"] = np.concatenate(end)
-        long["sigma_ratio"] = long["sigma_end"] / long["sigma_start"]
-        return long
-
-    def summary(self) -> pd.DataFrame:
-        """One row per segment: limits, ``n_epochs``, ``ne``, and the states that segment
-        could estimate by each metric: ``excitable`` and ``sensible`` (comma-separated state
-        names at the thresholds of ``thresholds``), with their counts."""
-        table = self.state_table()
-        rows = []
-        for seg in self.segment_table.itertuples(index=False):
-            part = table[table["segment"] == seg.segment]
-            excitable = part.loc[part["excitable"], "state"].tolist()
-            sensible = part.loc[part["sensible"], "state"].tolist()
-            rows.append({"segment": seg.segment, "phase": seg.phase, "t_start": seg.t_start,
-                         "t_end": seg.t_end, "n_epochs": seg.n_epochs,
-                         "ne": int(part["ne"].iloc[0]), "n_excitable": len(excitable),
-                         "excitable": ", ".join(excitable) or "-",
-                         "n_sensible": len(sensible), "sensible": ", ".join(sensible) or "-"})
-        return pd.DataFrame(rows)
+                "group": [_GROUP_OF[s] for s in self.state_names]}
 
     def to_frame(self) -> pd.DataFrame:
-        """The per-segment :meth:`summary`."""
+        """The per-segment :meth:`~navlib.metrics.SegmentedAnalysis.summary`."""
         return self.summary()
 
-    def with_settings(self, segments=None, *, eta: float | None = None,
-                      nu: float | None = None, e_threshold: float | None = None,
-                      s_threshold: float | None = None,
-                      min_fraction: float | None = None) -> FlightAssessment:
-        """The same flight with other segments or thresholds (no refit, same model).
-
-        ``segments`` as in :func:`assess_flight` (None keeps the current ones; ``"auto"``
-        returns to the automatic segmentation).
-        """
-        th = _thresholds({**self.thresholds, **{k: v for k, v in (
-            ("eta", eta), ("nu", nu), ("e_threshold", e_threshold),
-            ("s_threshold", s_threshold), ("min_fraction", min_fraction)) if v is not None}})
+    def _segment_changes(self, segments) -> dict:
+        """``segments`` as in :func:`assess_flight` (None keeps the current ones; ``"auto"``
+        returns to the automatic segmentation)."""
         if segments is None:
-            table = self.segment_table.drop(columns=["segment", "n_epochs"])
-        elif isinstance(segments, str) and segments == "auto":
-            table = self.automatic.segments
-        else:
-            table = segments
-        table = _segment_table(table, self.model, self.automatic, self.trajectory.t)
-        excit = _excitability(self.model, table, th["eta"])
-        sens = self.sensability if th["nu"] == self.sensability.nu else \
-            self.sensability.with_nu(th["nu"])
-        return replace(self, segment_table=table, excitability=excit, sensability=sens,
-                       thresholds=th)
+            return {}
+        if isinstance(segments, str) and segments == "auto":
+            segments = self.automatic.segments
+        table = _segment_table(segments, self.model, self.automatic, self.trajectory.t)
+        return {"segment_table": table, "segments": _pairs(table)}
 
 
-def _segment_of(t: np.ndarray, segments: pd.DataFrame) -> np.ndarray:
-    """Index (0-based row of ``segments``) holding each time, -1 outside; a boundary epoch
-    belongs to the later segment."""
-    out = np.full(t.size, -1)
-    for i, row in enumerate(segments.itertuples(index=False)):
-        out[(t >= row.t_start - 1e-9) & (t <= row.t_end + 1e-9)] = i
-    return out
-
-
-def _thresholds(values: Mapping) -> dict:
-    return {
-        "eta": finite_scalar(values["eta"], "eta", 0.0, 1.0, low_open=True),
-        "nu": finite_scalar(values["nu"], "nu", 0.0, 1.0, low_open=True),
-        "e_threshold": finite_scalar(values["e_threshold"], "e_threshold", 0.0, 1.0),
-        "s_threshold": finite_scalar(values["s_threshold"], "s_threshold", 0.0, 1.0),
-        "min_fraction": finite_scalar(values["min_fraction"], "min_fraction", 0.0, 1.0),
-    }
+def _pairs(table: pd.DataFrame) -> tuple[tuple[float, float], ...]:
+    return tuple((float(a), float(b)) for a, b in zip(table["t_start"], table["t_end"],
+                                                      strict=True))
 
 
 def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.DataFrame:
     """Normalise ``segments`` (inside the fitted flight ``t_flight``) and count the model
     epochs each holds (at least 2 needed; the last epoch may precede the flight's end)."""
     table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
-    t = model.t
-    counts = [int(np.count_nonzero((t >= a - 1e-9) & (t <= b + 1e-9)))
+    counts = [int(np.count_nonzero(in_segment(model.t, a, b)))
               for a, b in zip(table["t_start"], table["t_end"], strict=True)]
     for k, (count, row) in enumerate(zip(counts, table.itertuples(index=False), strict=True)):
         if count < 2:
             raise NavlibInputError(
                 f"segments: segment {k + 1} ({row.phase}, {row.t_start:.6g}..{row.t_end:.6g} s)"
                 f" holds {count} GNSS epoch(s) of the model; each segment needs at least 2 "
-                f"(epochs every {np.median(np.diff(t)):.3g} s)")
+                f"(epochs every {np.median(np.diff(model.t)):.3g} s)")
     table.insert(0, "segment", np.arange(1, len(table) + 1))
     table["n_epochs"] = counts
     return table
 
-
-def _excitability(model, table: pd.DataFrame, eta: float) -> tuple:
-    return tuple(excitability_segment(model, row.t_start, row.t_end, eta=eta)
-                 for row in table.itertuples(index=False))
 
 
 # --------------------------------------------------------------------------- pipeline
@@ -613,8 +493,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         rates below the fit's minimum (:data:`navlib.trajectory.fit.MIN_IMU_RATE_HZ`), bad
         thresholds or segments (naming the segment), and the fit's own input errors.
     """
-    thresholds = _thresholds({"eta": eta, "nu": nu, "e_threshold": e_threshold,
-                              "s_threshold": s_threshold, "min_fraction": min_fraction})
+    thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
     _check_frame(imu, "imu", _IMU_KEYS)
     _check_frame(gnss, "gnss", _GNSS_KEYS)
     gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
@@ -696,8 +575,6 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                              max_step_s=model_step_s, **model_options)
     table = _segment_table(automatic.segments if segments is None else segments, model,
                            automatic, trajectory.t)
-    excit = _excitability(model, table, thresholds["eta"])
-    sens = sensability_model(model, nu=thresholds["nu"])
     residuals = trajectory.parameters.get("fit_residuals", {})
     options = {"preset": preset, "preset_reason": preset_reason, "gnss_rate_hz": gnss_rate_hz,
                "gnss_sigma_m": sigma, "heading_fallback_deg": heading_fallback_deg,
@@ -705,11 +582,12 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                "model_options": model_options, "model_step_s": model_step_s,
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
                "attitude_source": residuals.get("heading_source")}
-    return FlightAssessment(trajectory=trajectory, inputs=inputs, fit=fit, automatic=automatic,
-                            segment_table=table, model=model, excitability=excit,
-                            sensability=sens, thresholds=thresholds, options=options,
-                            gnss_residuals=gnss_res, imu_residuals=imu_res,
-                            notes=tuple(notes))
+    settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
+                "preset": preset, "gnss_sigma_m": sigma}
+    return FlightAssessment.build(
+        model, _pairs(table), trajectory=trajectory, **thresholds, settings=settings,
+        inputs=inputs, fit=fit, automatic=automatic, segment_table=table, options=options,
+        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes))
 
 
 def _fit_notes(trajectory) -> list[str]:

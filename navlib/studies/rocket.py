@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from functools import lru_cache, partial
 
 import numpy as np
@@ -58,11 +58,11 @@ SEGMENTS = ((0.0, 19.0), (19.0, 60.0), (60.0, 86.0))
 """The paper's segments tau1 (pad), tau2 (powered flight and spin), tau3 (free fall), s."""
 SEGMENT_LABELS = ("tau1", "tau2", "tau3")
 
-IN_SO = float(1.0 / np.sqrt(2.0))
-"""Excitability above which a state "lies (mostly) in S_O" (spec §3, X4 note)."""
-SENSIBLE = IN_SO
-"""Sensability above which a state counts as sensible at an epoch."""
-LOW = 0.25
+IN_SO = metrics.E_THRESHOLD
+"""Excitability above which a state "lies (mostly) in S_O" (spec §3, X4 note): 1/sqrt(2)."""
+SENSIBLE = metrics.S_THRESHOLD
+"""Sensability above which a state counts as sensible at an epoch: 1/sqrt(2)."""
+LOW = metrics.LOW
 """Excitability (or sensability) below which a state is "very low" / "barely" excited."""
 BRIEF_S = 10.0
 """Longest total time (s) that still counts as "briefly" sensible (S7)."""
@@ -193,118 +193,23 @@ def rocket_chain(spin_hz: float = 2.0, attitude_error: str = "ecef", sensors=Non
 # --------------------------------------------------------------------------- the analysis
 
 
-@dataclass(frozen=True, eq=False)
-class RocketAnalysis:
+class RocketAnalysis(metrics.SegmentedAnalysis):
     """Excitability per segment and sensability per epoch on the rocket flight.
 
-    Attributes
-    ----------
-    model : DiscreteModel
-        The 21-state model at the GNSS epochs (with ``P0`` and ``R``).
-    trajectory : Trajectory
-    sensability : navlib.metrics.SensabilityResult
-    excitability : tuple of navlib.metrics.ExcitabilityResult
-        One per segment.
-    segments : tuple of (float, float)
-    settings : dict
-        The settings used (spin, frame, eta, nu, D0 choice, GNSS sigma, P0 sigmas).
+    A :class:`navlib.metrics.SegmentedAnalysis` of the 21-state model at the GNSS epochs
+    (``model`` with ``P0`` and ``R``, ``trajectory`` the flight, ``segments``,
+    ``excitability`` one result per segment, ``sensability``, ``settings``: spin, frame, eta,
+    nu, D0 choice, GNSS sigma, P0 sigmas) whose frames also carry the paper's state ids
+    (``paper_id``, e1-e21).
     """
 
-    model: object
-    trajectory: object
-    sensability: metrics.SensabilityResult
-    excitability: tuple
-    segments: tuple
-    settings: dict
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return self.model.state_names
+    def _state_columns(self) -> dict:
+        return {**super()._state_columns(),
+                "paper_id": [PAPER_IDS[s] for s in self.state_names]}
 
     def e(self) -> pd.DataFrame:
-        """Excitability table: rows states, columns segment labels."""
-        return pd.DataFrame({label: ex.e for label, ex in zip(self.labels, self.excitability,
-                                                              strict=True)},
-                            index=pd.Index(self.state_names, name="state"))
-
-    @property
-    def labels(self) -> tuple[str, ...]:
-        return tuple(f"tau{i + 1}" for i in range(len(self.segments)))
-
-    def excitability_frame(self) -> pd.DataFrame:
-        """Tidy: ``state, paper_id, segment, t_start, t_end, e, ne, eta``."""
-        rows = []
-        for label, (t_a, t_b), ex in zip(self.labels, self.segments, self.excitability,
-                                         strict=True):
-            rows.append(pd.DataFrame({
-                "state": self.state_names, "paper_id": [PAPER_IDS[s] for s in self.state_names],
-                "segment": label, "t_start": t_a, "t_end": t_b, "e": ex.e, "ne": ex.ne,
-                "eta": ex.eta,
-            }))
-        return pd.concat(rows, ignore_index=True)
-
-    def spectrum_frame(self) -> pd.DataFrame:
-        """Tidy energy spectra: ``segment, direction (1-based), S, excited``."""
-        rows = []
-        for label, ex in zip(self.labels, self.excitability, strict=True):
-            frame = ex.to_frame()[["direction", "S", "excited", "ne"]]
-            rows.append(frame.assign(segment=label))
-        return pd.concat(rows, ignore_index=True)
-
-    def sensability_frame(self, k: float = 2.0) -> pd.DataFrame:
-        """Tidy ``t, state, s, sigma, lower, upper`` with the physical ``k``-sigma band."""
-        return metrics.physical_bands(self.sensability, k)
-
-    to_frame = excitability_frame
-
-    def with_eta(self, eta: float) -> RocketAnalysis:
-        """Same analysis with another eta (no new SVD)."""
-        ex = tuple(e.with_eta(eta) for e in self.excitability)
-        return replace(self, excitability=ex, settings={**self.settings, "eta": ex[0].eta})
-
-    def with_nu(self, nu: float) -> RocketAnalysis:
-        """Same analysis with another nu (no new eigen-decomposition)."""
-        se = self.sensability.with_nu(nu)
-        return replace(self, sensability=se, settings={**self.settings, "nu": se.nu})
-
-    def epochs(self, t_a: float, t_b: float, open_start: bool = False) -> np.ndarray:
-        """Indices of the epochs in ``[t_a, t_b]`` (``(t_a, t_b]`` with ``open_start``)."""
-        t = self.model.t
-        low = t > t_a + 1e-9 if open_start else t >= t_a - 1e-9
-        return np.flatnonzero(low & (t <= t_b + 1e-9))
-
-    def at(self, time: float) -> int:
-        """Index of the epoch nearest ``time``."""
-        return int(np.argmin(np.abs(self.model.t - time)))
-
-
-def _segments(segments, t) -> tuple:
-    try:
-        segs = tuple((float(a), float(b)) for a, b in segments)
-    except (TypeError, ValueError) as exc:
-        raise NavlibInputError("segments: expected a sequence of (t_start, t_end) pairs") \
-            from exc
-    if not segs:
-        raise NavlibInputError("segments: need at least one segment")
-    for i, (a, b) in enumerate(segs):
-        if not (np.isfinite(a) and np.isfinite(b)) or b <= a:
-            raise NavlibInputError(f"segments[{i}]: need t_start < t_end, got ({a}, {b})")
-        if a < t[0] - 1e-9 or b > t[-1] + 1e-9:
-            raise NavlibInputError(f"segments[{i}]: ({a}, {b}) s lies outside the flight "
-                                   f"[{t[0]:g}, {t[-1]:g}] s")
-    return segs
-
-
-def excitability_segments(model, segments=SEGMENTS, eta: float = 1e-3, d0: str = "global",
-                          sensability=None) -> tuple:
-    """:func:`navlib.metrics.excitability_segment` for each segment (spec A12, A19).
-
-    ``d0="filter"`` takes D0 from the filter covariance at each segment start; pass the
-    ``sensability`` result of the same model to reuse its covariance recursion.
-    """
-    segs = _segments(segments, model.t)
-    return tuple(metrics.excitability_segment(model, a, b, eta=eta, d0=d0, P_filter=sensability)
-                 for a, b in segs)
+        """Excitability table: rows states, columns segment labels (``tau1``...)."""
+        return self.excitability_table()
 
 
 def analyze(spin_hz: float = 2.0, attitude_error: str = "ecef", eta: float = 1e-3,
@@ -345,15 +250,14 @@ def analyze(spin_hz: float = 2.0, attitude_error: str = "ecef", eta: float = 1e-
     model = rocket_chain(spin_hz, attitude_error, sensors, gnss_sigma_m,
                          trajectory_options=trajectory_options, **sigmas)
     traj = rocket_trajectory(spin_hz, **dict(_frozen(trajectory_options)))
-    se = metrics.sensability_model(model, nu=nu, prior_update=prior_update)
-    ex = excitability_segments(model, segments, eta, d0, se)
-    settings = {"spin_hz": float(spin_hz), "attitude_error": attitude_error, "eta": ex[0].eta,
-                "nu": se.nu, "d0": d0, "gnss_sigma_m": float(gnss_sigma_m),
-                "prior_update": bool(prior_update),
+    settings = {"spin_hz": float(spin_hz), "attitude_error": attitude_error,
+                "gnss_sigma_m": float(gnss_sigma_m),
                 "sensors": sensors if sensors is None or isinstance(sensors, str) else "custom",
                 **{k: float(sigmas.get(k, v)) for k, v in
                    {**P0_DEFAULTS, **parameter_sigmas(sensors)}.items()}}
-    return RocketAnalysis(model, traj, se, ex, _segments(segments, model.t), settings)
+    return RocketAnalysis.build(model, segments, trajectory=traj, eta=eta, nu=nu, d0=d0,
+                                prior_update=prior_update, e_threshold=IN_SO,
+                                s_threshold=SENSIBLE, settings=settings)
 
 
 # --------------------------------------------------------------------------- claim helpers
@@ -963,20 +867,15 @@ def _sweep_group(rows: list, sensors, attitude_error: str) -> list[dict]:
     """Claim verdicts of sweep rows sharing one :func:`_sweep_key`."""
     first = rows[0]
     imu, grade_sigmas = _graded(sensors, first["imu_grade"])
-    model = rocket_chain(first["spin_hz"], attitude_error, imu, first["gnss_sigma_m"],
-                         **grade_sigmas, **P0_SETS[first["p0"]])
-    se = metrics.sensability_model(model, nu=SWEEP_BASELINE["nu"])
-    excitations: dict = {}
+    base = analyze(first["spin_hz"], attitude_error, nu=SWEEP_BASELINE["nu"],
+                   gnss_sigma_m=first["gnss_sigma_m"], sensors=imu, **grade_sigmas,
+                   **P0_SETS[first["p0"]])
+    by_d0: dict = {}   # one set of segment SVDs per D0 choice, re-thresholded per row
     out = []
     for row in rows:
-        if row["d0"] not in excitations:
-            excitations[row["d0"]] = excitability_segments(model, SEGMENTS, 1e-3, row["d0"], se)
-        ex = tuple(e.with_eta(row["eta"]) for e in excitations[row["d0"]])
-        settings = {**BASELINE, "spin_hz": row["spin_hz"], "eta": row["eta"], "nu": row["nu"],
-                    "d0": row["d0"], "gnss_sigma_m": row["gnss_sigma_m"],
-                    "attitude_error": attitude_error, "prior_update": False}
-        analysis = RocketAnalysis(model, rocket_trajectory(row["spin_hz"]),
-                                  se.with_nu(row["nu"]), ex, SEGMENTS, settings)
+        if row["d0"] not in by_d0:
+            by_d0[row["d0"]] = base.with_settings(d0=row["d0"])
+        analysis = by_d0[row["d0"]].with_settings(eta=row["eta"], nu=row["nu"])
         claims = excitability_claims(analysis) + sensability_claims(analysis)
         passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
         out.append({"factor": row["factor"], **{k: row[k] for k in SWEEP_BASELINE}, **passed,
@@ -1221,15 +1120,9 @@ def robustness_variants(grid: dict | None = None, sensors=None) -> list[list[Cla
     for spin, p0, sg in itertools.product(grid["spin_hz"], grid["p0"], grid["sigma_sg_ppm"]):
         if p0 not in P0_SETS:
             raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
-        model = rocket_chain(spin, "ecef", sensors, BASELINE["gnss_sigma_m"],
-                             sigma_sg_ppm=sg, **P0_SETS[p0])
-        se = metrics.sensability_model(model, nu=BASELINE["nu"])
-        ex = excitability_segments(model, SEGMENTS, BASELINE["eta"], "global", se)
+        base = analyze(spin, sensors=sensors, sigma_sg_ppm=sg, **P0_SETS[p0])
         for eta, nu in itertools.product(grid["eta"], grid["nu"]):
-            settings = {**BASELINE, "spin_hz": spin, "eta": eta, "nu": nu,
-                        "prior_update": False, "sigma_sg_ppm": sg}
-            a = RocketAnalysis(model, rocket_trajectory(spin), se.with_nu(nu),
-                               tuple(e.with_eta(eta) for e in ex), SEGMENTS, settings)
+            a = base.with_settings(eta=eta, nu=nu)
             out.append(excitability_claims(a) + sensability_claims(a))
     return out
 

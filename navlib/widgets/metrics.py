@@ -1,12 +1,13 @@
 """Interactive panels for notebooks 03 (excitability) and 04 (sensability).
 
 Both panels call :mod:`navlib.studies.rocket` and the figure builders of
-:mod:`navlib.plots.metrics`, and recompute only what a change touches:
+:mod:`navlib.plots.metrics`, and recompute only what a change touches
+(:meth:`navlib.metrics.SegmentedAnalysis.with_settings`):
 
 * the discretised 21-state model is cached per attitude-error frame
   (:func:`navlib.studies.rocket.rocket_chain`);
-* a new eta reuses the segment SVDs (``with_eta``), new segment limits or D0 redo only the
-  three small SVDs, a new nu reuses the eigen-decompositions (``with_nu``);
+* a new eta reuses the segment SVDs, new segment limits or D0 redo only the three small
+  SVDs, a new nu reuses the eigen-decompositions;
 * the figure is kept and redrawn in place by Agg blitting (:class:`navlib.widgets.base.
   Blitter`), rendered once to PNG per update (the render path of
   :mod:`navlib.widgets.base`).
@@ -18,7 +19,6 @@ Both panels call :mod:`navlib.studies.rocket` and the figure builders of
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 
 import ipywidgets as widgets
 import numpy as np
@@ -56,7 +56,19 @@ def _claims_html(table) -> str:
             f"<th>ours</th></tr>{rows}</table>")
 
 
-class ExcitabilityPanel(Panel):
+class _ClaimsPanel(Panel):
+    """A panel showing one figure (part ``figure``) beside a claims table (part ``claims``)."""
+
+    @property
+    def image(self) -> widgets.Image:
+        return self.parts["figure"]
+
+    @property
+    def table(self) -> widgets.HTML:
+        return self.parts["claims"]
+
+
+class ExcitabilityPanel(_ClaimsPanel):
     """eta (log slider), the three segment limits (range sliders), attitude-error frame and
     D0 dropdowns; redraws the Fig. 2 analogue, the energy spectrum and the X1-X7 table.
 
@@ -92,19 +104,11 @@ class ExcitabilityPanel(Panel):
         }
         self.options = analyze_options
         self._bases: dict = {}
-        self._excitations: dict = {}
+        self._segmented: dict = {}
         self._figure = None
         self._blitter = None
         self.analysis = None
         super().__init__(controls, dpi=dpi)
-
-    @property
-    def image(self) -> widgets.Image:
-        return self.parts["figure"]
-
-    @property
-    def table(self) -> widgets.HTML:
-        return self.parts["claims"]
 
     def segments(self) -> tuple:
         return tuple(tuple(self.controls[f"tau{i + 1}"].value)
@@ -118,18 +122,12 @@ class ExcitabilityPanel(Panel):
     def compute(self):
         """The analysis for the current controls (cached pieces reused)."""
         c = self.controls
-        base = self._base(c["attitude_error"].value)
         key = (c["attitude_error"].value, c["d0"].value, self.segments())
-        if key not in self._excitations:
-            if len(self._excitations) > 64:
-                self._excitations.clear()
-            self._excitations[key] = rocket.excitability_segments(
-                base.model, self.segments(), base.settings["eta"], c["d0"].value,
-                base.sensability)
-        excitation = tuple(e.with_eta(c["eta"].value) for e in self._excitations[key])
-        return replace(base, excitability=excitation, segments=self.segments(),
-                       settings={**base.settings, "eta": excitation[0].eta,
-                                 "d0": c["d0"].value})
+        if key not in self._segmented:  # the segment SVDs, re-thresholded for each eta
+            if len(self._segmented) > 64:
+                self._segmented.clear()
+            self._segmented[key] = self._base(key[0]).with_settings(key[2], d0=key[1])
+        return self._segmented[key].with_settings(eta=c["eta"].value)
 
     def refresh(self, changed: set) -> None:
         """Recompute what changed and redraw the kept figure in place."""
@@ -153,7 +151,7 @@ class ExcitabilityPanel(Panel):
         self.status.value = f"ne {ne}; {_timing_text(self.last_timing)}"
 
 
-class SensabilityPanel(Panel):
+class SensabilityPanel(_ClaimsPanel):
     """nu slider (admissible range shown) and a state selector; redraws the sensability of
     the chosen states with their 2-sigma bands and the S1-S8 table.
 
@@ -185,14 +183,6 @@ class SensabilityPanel(Panel):
         self._blitter = None
         self.analysis = None
         super().__init__(controls, extras=[self.range_note], dpi=dpi)
-
-    @property
-    def image(self) -> widgets.Image:
-        return self.parts["figure"]
-
-    @property
-    def table(self) -> widgets.HTML:
-        return self.parts["claims"]
 
     def refresh(self, changed: set) -> None:
         """Re-threshold at the new nu (no new eigen-decomposition) and redraw."""
