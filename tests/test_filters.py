@@ -9,9 +9,10 @@ from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, filters
 from navlib.covariance import kalman_covariance
-from navlib.filters.ekf import _BlockTrajectory, _family
+from navlib.filters.measurements import GnssPosition
 from navlib.models import ecef21, launcher
-from navlib.models.base import DiscreteModel
+from navlib.models.base import DiscreteModel, Nominal
+from navlib.models.ecef import Ecef21ErrorState
 from navlib.outliers import Outlier, channel_profile, linear_mapping
 from navlib.rotations import exp_so3, log_so3
 from navlib.trajectory import launcher_ascent, sounding_rocket
@@ -249,13 +250,15 @@ def test_ekf_input_errors(short_launcher):
 
 
 def test_ecef21_model_builds_at_block(rocket):
-    """The EKF's block adapter gives the builder's own Jacobians on the reference."""
+    """The EKF's error-state model gives the builder's own Jacobians on the reference, and
+    the GNSS measurement its H."""
     model = ecef21(rocket)
-    block = _BlockTrajectory(rocket.t[:5], rocket.position[:5], rocket.C_b_e()[:5],
-                                     rocket.specific_force[:5], rocket.angular_rate[:5])
-    fam = _family("ecef21", block, {})
-    A, G, H = fam.jacobians(block.t, block.position, block.C_b_e(), block.specific_force,
-                            block.angular_rate)
+    nominal = Nominal(rocket.t[:5], rocket.position[:5], rocket.velocity[:5],
+                      rocket.C_b_e()[:5], rocket.specific_force[:5], rocket.angular_rate[:5], {})
+    es = Ecef21ErrorState.build()
+    A, G = es.jacobians(nominal)
+    H = np.stack([GnssPosition(es, [0], rocket.position[:1]).evaluate(0, nominal, j)[1]
+                  for j in range(5)])
     np.testing.assert_allclose(A, model.A[:5])
     np.testing.assert_allclose(G, model.G[:5])
     assert H.shape == (5, 3, 21)
