@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.linalg import block_diag
 
 from navlib._validation import finite_array, finite_scalar
 from navlib.discretize import discretize_steps
@@ -351,7 +350,10 @@ def _update(x, P, epoch, nominal, j, rows, m_all):
     else:
         z = np.concatenate([p[0] for p in parts])
         H = np.concatenate([p[1] for p in parts])
-        R = block_diag(*(p[2] for p in parts))
+        R = np.zeros((z.size, z.size))
+        ends = np.cumsum([0] + [p[0].size for p in parts])
+        for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
+            R[a:b, a:b] = p[2]
     innov = z - H @ x
     P, gain = joseph_update(P, H, R)
     full = np.full(m_all, np.nan)
