@@ -359,3 +359,72 @@ def test_ekf_numbers_unchanged(case, short_launcher, rocket):
         np.testing.assert_allclose(got[group], final[group], rtol=0,
                                    atol=1e-9 * np.abs(final[group]).max())
     assert np.mean(run.result.nis) == pytest.approx(nis, rel=1e-9)
+
+
+def test_launcher_error_state_is_the_builder_model(short_launcher):
+    """The launcher's error-state model has the builder's states, noise, P0 and measurement
+    rows, and its Jacobians along a trajectory are the builder's A and G; the layout finds
+    the navigation, bias and reference groups and keeps the RT block out of the reset."""
+    from navlib.models.launcher import LauncherErrorState
+
+    model = launcher("ins_gps_att_rt", "GAP", "markov", short_launcher)
+    es = LauncherErrorState.build("ins_gps_att_rt", "GAP", "markov",
+                                  step_s=model.parameters["s_t"])
+    nominal = Nominal(short_launcher.t, short_launcher.position, short_launcher.velocity,
+                      short_launcher.C_b_e(), short_launcher.specific_force,
+                      short_launcher.angular_rate, {})
+    A, G = es.jacobians(nominal)
+    np.testing.assert_array_equal(A, model.A)
+    np.testing.assert_array_equal(G, model.G)
+    np.testing.assert_array_equal(es.Qc, model.Qc)
+    np.testing.assert_array_equal(es.P0, model.P0)
+    assert es.state_names == model.state_names
+    assert sum((r.names for r in es.measurements.values()), ()) == model.measurement_names
+    sigmas = np.repeat([r.sigma for r in es.measurements.values()], 3)
+    np.testing.assert_array_equal(np.diag(model.R), sigmas**2)
+    names = np.array(model.state_names)
+    assert list(names[es.groups["attitude"]]) == ["psi_x", "psi_y", "psi_z"]
+    assert list(names[es.groups["bp"]]) == ["bp_x", "bp_y", "bp_z"]
+    assert list(names[es.groups["reference"]]) == ["psi_ref_x", "psi_ref_y", "psi_ref_z"]
+    assert list(names[~es.reset]) == [*(f"x{i}" for i in range(19, 26)),
+                                      "psi_ref_x", "psi_ref_y", "psi_ref_z"]
+    np.testing.assert_allclose(es.decay["bg"], -1.0 / model.parameters["c_g"])
+
+
+@pytest.mark.parametrize("frame", ["ecef", "body"])
+def test_correct_feeds_back_the_error_estimate(rocket, frame):
+    """``correct`` moves position and velocity by ``nav_sign dx``, the parameters by ``dx``,
+    and rotates the attitude by ``exp(S(dx_att))`` on the side of the model's attitude
+    error (ECEF ``psi``: left; body ``dtheta``: right)."""
+    es = Ecef21ErrorState.build(attitude_error=frame)
+    k = slice(100, 103)
+    nominal = Nominal(rocket.t[k], rocket.position[k], rocket.velocity[k], rocket.C_b_e()[k],
+                      rocket.specific_force[k], rocket.angular_rate[k],
+                      {g: np.zeros((3, 3)) for g in es.parameters})
+    dx = np.random.default_rng(0).normal(scale=1e-2, size=(3, 21))
+    out = es.correct(nominal, dx)
+    np.testing.assert_allclose(out.position - nominal.position, dx[:, 0:3], atol=1e-8)
+    np.testing.assert_allclose(out.velocity - nominal.velocity, dx[:, 3:6], atol=1e-12)
+    np.testing.assert_array_equal(out.parameters["sa"], dx[:, 18:21])
+    C, C2 = nominal.C_b_e, out.C_b_e
+    rel = C2 @ np.swapaxes(C, 1, 2) if frame == "ecef" else np.swapaxes(C, 1, 2) @ C2
+    np.testing.assert_allclose(log_so3(rel), dx[:, 6:9], atol=1e-14)
+
+
+def test_ekf_takes_an_error_state_model(short_launcher):
+    """A configured error-state model runs the same filter as its family name."""
+    from navlib.models.launcher import LauncherErrorState
+    from navlib.sensors import load_preset, simulate_gnss, simulate_imu
+    from navlib.strapdown import StrapdownState
+
+    spec = load_preset("launcher_table1")
+    imu = simulate_imu(short_launcher, spec, seed=3)
+    gnss = simulate_gnss(short_launcher, spec, seed=4, rate_hz=5.0)
+    init = StrapdownState.from_trajectory(short_launcher)
+    by_name = filters.ekf(imu, gnss, initial=init, biases="GAP", bias_model="random_walk")
+    es = LauncherErrorState.build("ins_gps", "GAP", "random_walk",
+                                  step_s=float(np.median(np.diff(imu.t))))
+    by_model = filters.ekf(imu, gnss, initial=init, model=es)
+    np.testing.assert_array_equal(by_model.position, by_name.position)
+    np.testing.assert_array_equal(by_model.sigma, by_name.sigma)
+    assert by_model.model == "launcher" and set(by_model.parameters) == {"bg", "ba", "bp"}

@@ -1,9 +1,13 @@
-"""Closed-loop INS/GNSS error-state EKF in ECEF (spec launcher.md §6.2-6.4; issue 5).
+"""Closed-loop INS/GNSS error-state EKF in ECEF (spec launcher.md §6.2-6.4; issues 5, 10).
 
 :func:`ekf` is described in its docstring (ECEF strapdown nominal state, error-state
 covariance from the model's Jacobians along the estimate, GNSS / attitude /
 reference-trajectory updates, feedback resets); :func:`simulate_ekf` feeds it simulated
-sensors (:mod:`navlib.sensors`).
+sensors (:mod:`navlib.sensors`). The loop knows no model: the error model is an
+:class:`~navlib.models.base.ErrorStateModel` (layout, reset states, ``jacobians``,
+``correct``, decay; :class:`~navlib.models.launcher.LauncherErrorState`,
+:class:`~navlib.models.ecef.Ecef21ErrorState`) and each measurement a
+:class:`~navlib.filters.measurements.Measurement` (innovation, ``H``, ``R``).
 """
 
 from __future__ import annotations
@@ -162,11 +166,12 @@ class EKFResult:
         })
 
 
-def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "ins_gps",
-        biases: str = "GA", bias_model: str = "markov", model_options: dict | None = None,
-        P0=None, attitude=None, reference=None, gnss_velocity_sigma: float | None = None,
-        initial_parameters: dict | None = None, method: str | None = None,
-        window_s: float = 0.1, keep_covariance: bool = False) -> EKFResult:
+def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
+        solution: str = "ins_gps", biases: str = "GA", bias_model: str = "markov",
+        model_options: dict | None = None, P0=None, attitude=None, reference=None,
+        gnss_velocity_sigma: float | None = None, initial_parameters: dict | None = None,
+        method: str | None = None, window_s: float = 0.1,
+        keep_covariance: bool = False) -> EKFResult:
     """Closed-loop (feedback) INS/GNSS error-state extended Kalman filter in ECEF.
 
     * **Nominal state**: ECEF position, velocity and attitude propagated by the strapdown
@@ -179,7 +184,8 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
       ``biases``, ``bias_model`` as in :func:`navlib.models.launcher`) or ``ecef21``
       (España et al. 2019 Eq. 24). Its covariance is propagated with the model's ``F``,
       ``Q`` whose Jacobians are evaluated **along the estimate** (the nominal trajectory
-      and corrected IMU signals, through the model builder), sample by sample.
+      and corrected IMU signals, ``jacobians(nominal)`` of the error-state model), sample
+      by sample.
     * **Updates**: GNSS position and velocity (launcher: ``z = INS - GNSS``, with the GPS
       bias estimate removed from the position; ecef21: ``z = GNSS - INS``, position only
       unless ``gnss_velocity_sigma`` is given); the attitude sensor for ``*_att``
@@ -205,7 +211,10 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
         samples.
     initial : navlib.strapdown.StrapdownState
         Nominal state at the first IMU sample.
-    model : {"launcher", "ecef21"}
+    model : {"launcher", "ecef21"} or ErrorStateModel
+        Error-model family (configured from the keywords below), or a configured
+        :class:`~navlib.models.base.ErrorStateModel` (then ``solution``, ``biases``,
+        ``bias_model``, ``model_options`` and ``gnss_velocity_sigma`` are not used).
     solution, biases, bias_model
         Launcher configuration (ignored for ecef21).
     model_options : dict, optional
