@@ -200,7 +200,9 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
       each propagation window (every measurement epoch when epochs are at least
       ``window_s`` apart, else every ``window_s``); within a window the error-state mean
       is carried by the linearised model, as in a linearised KF. The attitude reset
-      ignores the second-order covariance Jacobian ``I - S(psi)/2``.
+      carries the covariance through its Jacobian, ``I + S(a)/2`` for the ECEF attitude
+      error ``C = exp(S(psi)) C_hat`` corrected by ``a`` (``I - S(a)/2`` for the body
+      error), so that large attitude corrections keep the filter consistent.
 
     Parameters
     ----------
@@ -331,6 +333,8 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         end = es.correct(nominal.at(slice(-1, None)), x[None])     # feedback at the window end
         r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
         params = {g: p[0] for g, p in end.parameters.items()}
+        J = es.reset_jacobian(x)
+        P = _sym(J @ P @ J.T)
         x = np.where(es.reset, 0.0, x)
 
     def cat(i):

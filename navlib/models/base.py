@@ -8,7 +8,8 @@ arrays that ``navlib.observability`` and ``navlib.metrics`` take (spec api.md).
 
 :class:`ErrorStateModel` is what the closed-loop EKF (:func:`navlib.filters.ekf`) needs from
 an error model: the state layout as index arrays, which states are reset after feedback,
-``jacobians(nominal)`` along the estimate and ``correct(nominal, dx)``.
+``jacobians(nominal)`` along the estimate, ``correct(nominal, dx)`` and the Jacobian of the
+reset for the covariance.
 :class:`ErrorState` implements the layout-driven part (IMU compensation, feedback with the
 attitude reset); the launcher and 21-state ECEF models subclass it with their Jacobians.
 """
@@ -24,7 +25,7 @@ import pandas as pd
 
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.rotations import exp_so3
+from navlib.rotations import exp_so3, skew
 
 HOLDS = ("left", "mean")
 """How a trajectory model's matrices are held over one step (see LinearModel.discretize)."""
@@ -320,6 +321,10 @@ class ErrorStateModel(Protocol):
     def correct(self, nominal: Nominal, dx) -> Nominal:
         """``nominal`` corrected with error-state estimates ``dx`` (K, n) (feedback)."""
 
+    def reset_jacobian(self, dx) -> np.ndarray:
+        """Jacobian (n, n) of the error state across the feedback of ``dx`` (n,): the
+        covariance after the reset is ``J P J'``."""
+
 
 @dataclass(frozen=True, eq=False)
 class ErrorState:
@@ -359,8 +364,7 @@ class ErrorState:
 
     def correct(self, nominal: Nominal, dx) -> Nominal:
         """Feedback: position and velocity move by ``nav_sign dx``, the attitude by
-        ``exp(S(dx_att))`` on the side of :attr:`attitude_frame` (the reset that ignores
-        the second-order covariance Jacobian ``I - S(psi)/2``), parameters by ``dx``."""
+        ``exp(S(dx_att))`` on the side of :attr:`attitude_frame`, parameters by ``dx``."""
         s = self.nav_sign
         g = self.groups
         E = exp_so3(dx[:, g["attitude"]])
@@ -369,3 +373,12 @@ class ErrorState:
                        velocity=nominal.velocity + s * dx[:, g["velocity"]], C_b_e=C,
                        parameters={p: v + dx[:, g[p]] for p, v in nominal.parameters.items()})
 
+
+    def reset_jacobian(self, dx) -> np.ndarray:
+        """Identity but for the attitude block: after ``C_hat <- exp(S(a)) C_hat`` (ECEF
+        error ``C = exp(S(psi)) C_hat``) the error left is ``(I + S(a)/2) (psi - a)`` to first
+        order; after ``C_hat <- C_hat exp(S(a))`` (body error) ``I - S(a)/2``."""
+        J = np.eye(self.n)
+        att = self.groups["attitude"]
+        J[np.ix_(att, att)] += (-0.5 if self.attitude_frame == "body" else 0.5) * skew(dx[att])
+        return J
