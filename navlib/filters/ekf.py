@@ -295,7 +295,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     kept = np.flatnonzero(~es.reset)
     x = np.zeros(len(es.state_names))          # error-state mean (kept states persist)
     r, v, C = start
-    out = []
+    out = {key: [] for key in ("post", "kept", "P", "sigma", "innovation", "nis", "nis_dof")}
     for w0, w1 in itertools.pairwise(bounds):
         tw = t[w0:w1 + 1]
         dt = (tw - tw[0])[:, None]
@@ -327,9 +327,10 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                 x = x_next
                 P = _sym(F[j] @ P @ F[j].T + Q[j])
         if rec:                                # corrected estimates at this window's updates
-            dx = np.array([e[1] for e in rec])
-            out.append((es.correct(nominal.at(np.array([e[0] for e in rec])), dx),
-                        dx[:, kept], *(np.array([e[i] for e in rec]) for i in range(2, 7))))
+            j_up, dx, *rest = map(np.array, zip(*rec, strict=True))
+            for key, value in zip(out, (es.correct(nominal.at(j_up), dx), dx[:, kept], *rest),
+                                  strict=True):
+                out[key].append(value)
         end = es.correct(nominal.at(slice(-1, None)), x[None])     # feedback at the window end
         r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
         params = {g: p[0] for g, p in end.parameters.items()}
@@ -337,18 +338,17 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         P = _sym(J @ P @ J.T)
         x = np.where(es.reset, 0.0, x)
 
-    def cat(i):
-        return np.concatenate([o[i] for o in out])
-
-    post = [o[0] for o in out]
+    post = out.pop("post")
+    cat = {key: np.concatenate(value) for key, value in out.items()}
     return EKFResult(
         t=np.concatenate([p.t for p in post]),
         position=np.concatenate([p.position for p in post]),
         velocity=np.concatenate([p.velocity for p in post]),
         C_b_e=np.concatenate([p.C_b_e for p in post]),
         parameters={g: np.concatenate([p.parameters[g] for p in post]) for g in params},
-        kept=cat(1), sigma=cat(3), P=cat(2) if keep_covariance else None, innovation=cat(4),
-        nis=cat(5), nis_dof=cat(6), state_names=tuple(es.state_names),
+        kept=cat["kept"], sigma=cat["sigma"], P=cat["P"] if keep_covariance else None,
+        innovation=cat["innovation"], nis=cat["nis"], nis_dof=cat["nis_dof"],
+        state_names=tuple(es.state_names),
         measurement_names=sum((r.names for r in es.measurements.values()), ()),
         kept_names=tuple(es.state_names[i] for i in kept), model=es.name,
     )
