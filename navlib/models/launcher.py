@@ -201,11 +201,8 @@ def _parse(solution, biases, bias_model):
 def state_names(solution: str = "ins_gps", biases: str = "GAP",
                 bias_model: str = "markov") -> tuple[str, ...]:
     """State names of a configuration, in model order (spec launcher.md §3.1, §3.4)."""
-    letters = _parse(solution, biases, bias_model)
-    groups = ["psi", "dv", "dr", *letters]
-    if solution.endswith("_rt"):
-        groups += ["xa", "ref"]
-    return sum((_GROUPS[g] for g in groups), ())
+    return sum((_GROUPS[g] for g in _starts(solution, _parse(solution, biases, bias_model))),
+               ())
 
 
 def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
@@ -281,7 +278,7 @@ def _values(sensors, kw: dict, s_t: float) -> dict:
 
 
 def _starts(solution: str, letters: str) -> dict:
-    """First state index of each group present in a configuration."""
+    """First state index of each group present in a configuration, in state order."""
     start = {}
     pos = 0
     for g in ["psi", "dv", "dr", *letters] + (["xa", "ref"] if solution.endswith("_rt")
