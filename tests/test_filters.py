@@ -301,7 +301,7 @@ def test_noise_free_response_matches_a_hand_recursion(short_launcher):
 
 
 # Final navigation errors (pos_x..z m, vel_x..z m/s, att_x..z rad) and mean NIS of simulated
-# EKF runs, captured from commit e4d3d5b (the filter before it moved onto the error-state
+# EKF runs, captured from commit ef4a730 (the filter before it moved onto the error-state
 # protocol and the measurement classes, issue 10, with the attitude-reset covariance Jacobian
 # of that commit): the refactor must not move the numbers (18 configurations were compared
 # bitwise equal). Change them only with a deliberate change of the filter, and say why.

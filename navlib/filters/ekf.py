@@ -202,7 +202,8 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
       is carried by the linearised model, as in a linearised KF. The attitude reset
       carries the covariance through its Jacobian, ``I + S(a)/2`` for the ECEF attitude
       error ``C = exp(S(psi)) C_hat`` corrected by ``a`` (``I - S(a)/2`` for the body
-      error), so that large attitude corrections keep the filter consistent.
+      error; :meth:`~navlib.models.base.ErrorStateModel.reset_jacobian`); it matters when
+      corrections are large (the rocket's roll errors of tens of degrees).
 
     Parameters
     ----------
