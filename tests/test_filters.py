@@ -455,3 +455,34 @@ def test_reset_jacobian_maps_the_attitude_error_across_the_feedback(frame):
         miss = np.linalg.norm(left - J @ delta) / np.linalg.norm(delta)
         wrong = np.linalg.norm(left - (2 * np.eye(3) - J) @ delta) / np.linalg.norm(delta)
         assert miss < 0.01 < 0.05 < wrong
+
+
+def test_ekf_takes_a_new_measurement_as_one_object(short_launcher):
+    """A measurement the model does not declare, given with its rows, runs the same filter
+    as the model's own rows (GNSS velocity on the 21-state model) and its rows follow the
+    model's in the result; bad epochs are rejected."""
+    from navlib.filters.measurements import GnssVelocity
+    from navlib.models.base import MeasurementRows
+    from navlib.sensors import load_preset, simulate_gnss, simulate_imu
+    from navlib.strapdown import StrapdownState
+
+    spec = load_preset("launcher_table1")
+    imu = simulate_imu(short_launcher, spec, seed=5)
+    gnss = simulate_gnss(short_launcher, spec, seed=6, rate_hz=5.0)
+    init = StrapdownState.from_trajectory(short_launcher)
+    declared = filters.ekf(imu, gnss, initial=init, model="ecef21", gnss_velocity_sigma=0.2)
+    es = Ecef21ErrorState.build()
+    kg = np.searchsorted(imu.t, gnss["t"].to_numpy() - 1e-9)
+    np.testing.assert_allclose(imu.t[kg], gnss["t"], atol=1e-9)
+    velocity = GnssVelocity(es, kg, gnss[["vx", "vy", "vz"]].to_numpy(),
+                            rows=MeasurementRows(("gnss_vx", "gnss_vy", "gnss_vz"), 0.2))
+    extra = filters.ekf(imu, gnss, initial=init, model=es, measurements=[velocity])
+    assert extra.measurement_names == declared.measurement_names
+    np.testing.assert_array_equal(extra.position, declared.position)
+    np.testing.assert_array_equal(extra.innovation, declared.innovation)
+    with pytest.raises(NavlibInputError, match="declares no rows"):
+        GnssVelocity(es, kg, gnss[["vx", "vy", "vz"]].to_numpy())
+    bad = GnssVelocity(es, kg + imu.t.size, gnss[["vx", "vy", "vz"]].to_numpy(),
+                       rows=MeasurementRows(("vx", "vy", "vz"), 0.2))
+    with pytest.raises(NavlibInputError, match="IMU sample"):
+        filters.ekf(imu, gnss, initial=init, model=es, measurements=[bad])

@@ -24,7 +24,12 @@ from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import _psd_sqrt, _sym, joseph_update
 from navlib.filters.linear import METHODS
-from navlib.filters.measurements import _epoch_index, _imu_arrays, ekf_measurements
+from navlib.filters.measurements import (
+    Measurement,
+    _epoch_index,
+    _imu_arrays,
+    ekf_measurements,
+)
 from navlib.models.base import ErrorStateModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
 from navlib.models.launcher import LauncherErrorState
@@ -170,8 +175,8 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         solution: str = "ins_gps", biases: str = "GA", bias_model: str = "markov",
         model_options: dict | None = None, P0=None, attitude=None, reference=None,
         gnss_velocity_sigma: float | None = None, initial_parameters: dict | None = None,
-        method: str | None = None, window_s: float = 0.1,
-        keep_covariance: bool = False) -> EKFResult:
+        method: str | None = None, window_s: float = 0.1, keep_covariance: bool = False,
+        measurements: Sequence[Measurement] = ()) -> EKFResult:
     """Closed-loop (feedback) INS/GNSS error-state extended Kalman filter in ECEF.
 
     * **Nominal state**: ECEF position, velocity and attitude propagated by the strapdown
@@ -244,6 +249,10 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         Longest propagation window between feedback corrections when updates are denser.
     keep_covariance : bool
         Keep the full posterior covariances in the result.
+    measurements : sequence of Measurement, optional
+        Further measurements (:class:`~navlib.filters.measurements.Measurement` instances
+        built with this error model and IMU sample indices), updated after the ones above at
+        their epochs; their rows follow the model's in the result.
 
     Returns
     -------
@@ -266,8 +275,23 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         if g not in params:
             raise NavlibInputError(f"initial_parameters: model has no parameter group {g!r}")
         params[g] = finite_array(v, f"initial_parameters[{g!r}]", (3,)).copy()
+    names = [name for r in es.measurements.values() for name in r.names]
+    offsets = dict(zip(es.measurements, np.cumsum([0] + [len(r.names) for r in
+                                                         es.measurements.values()]),
+                       strict=False))
+    rows = {meas: np.arange(offsets[meas.kind], offsets[meas.kind] + len(meas.names))
+            for meas in ekf_measurements(es, t, gnss, attitude, reference)}
+    for meas in measurements:
+        if not isinstance(meas, Measurement):
+            raise NavlibInputError(f"measurements: expected Measurement instances, got "
+                                   f"{type(meas).__name__}")
+        if meas.index.size and (meas.index.min() < 0 or meas.index.max() >= t.size):
+            raise NavlibInputError(f"measurements: {meas.kind} epochs must be IMU sample "
+                                   f"indices in [0, {t.size - 1}]")
+        rows[meas] = np.arange(len(names), len(names) + len(meas.names))
+        names += meas.names
     events = {}            # IMU sample -> [(measurement, epoch)], in update order
-    for meas in ekf_measurements(es, t, gnss, attitude, reference):
+    for meas in rows:
         for i, k in enumerate(meas.index):
             events.setdefault(int(k), []).append((meas, i))
     if not events:
@@ -280,18 +304,16 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
     if bounds[-1] != t.size - 1:
         bounds.append(t.size - 1)
     return _run(es, t, f_meas, w_meas, start, params, P, events, bounds,
-                "euler" if method == "euler" else "series", keep_covariance)
+                "euler" if method == "euler" else "series", keep_covariance, rows, names)
 
 
-def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_covariance):
+def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_covariance,
+         rows, names):
     """The filter loop of :func:`ekf`: per window, nominal propagation, the error-state
     covariance along it, the updates, and feedback at the window end."""
     from navlib import strapdown
 
     Qc = np.asarray(es.Qc, dtype=float)
-    offsets = np.cumsum([0] + [len(rows.names) for rows in es.measurements.values()])
-    rows = {kind: np.arange(o, o + len(r.names)) for (kind, r), o
-            in zip(es.measurements.items(), offsets, strict=False)}
     observers = {meas for epoch in events.values() for meas, _ in epoch if meas.wants_posterior}
     kept = np.flatnonzero(~es.reset)
     x = np.zeros(len(es.state_names))          # error-state mean (kept states persist)
@@ -311,7 +333,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         for j in range(tw.size):
             k = w0 + j
             if k in events and (j > 0 or k == 0):
-                x, P, innov, nis, dof = _update(x, P, events[k], nominal, j, rows, offsets[-1])
+                x, P, innov, nis, dof = _update(x, P, events[k], nominal, j, rows, len(names))
                 rec.append((j, x.copy(), P.copy() if keep_covariance else None,
                             np.sqrt(np.clip(np.diag(P), 0, None)), innov, nis, dof))
                 if observers:                  # posterior navigation attitude
@@ -350,7 +372,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         kept=cat["kept"], sigma=cat["sigma"], P=cat["P"] if keep_covariance else None,
         innovation=cat["innovation"], nis=cat["nis"], nis_dof=cat["nis_dof"],
         state_names=tuple(es.state_names),
-        measurement_names=sum((r.names for r in es.measurements.values()), ()),
+        measurement_names=tuple(names),
         kept_names=tuple(es.state_names[i] for i in kept), model=es.name,
     )
 
@@ -371,7 +393,7 @@ def _update(x, P, epoch, nominal, j, rows, m_all):
     innov = z - H @ x
     P, gain = joseph_update(P, H, R)
     full = np.full(m_all, np.nan)
-    full[np.concatenate([rows[meas.kind] for meas, _ in epoch])] = innov
+    full[np.concatenate([rows[meas] for meas, _ in epoch])] = innov
     return x + gain.K @ innov, P, full, float(innov @ gain.S_pinv @ innov), int(gain.dof)
 
 

@@ -28,19 +28,21 @@ class Measurement(ABC):
     Parameters
     ----------
     model : navlib.models.base.ErrorStateModel
-        Its ``measurements[kind]`` gives the row names and per-axis sigma (``R = sigma^2 I``).
     index : ndarray (K,) of int
         IMU sample of each epoch.
     values : ndarray (K, ...)
         The measured values.
+    rows : navlib.models.base.MeasurementRows, optional
+        Row names and per-axis sigma (``R = sigma^2 I``); default the model's
+        ``measurements[kind]``.
 
     Attributes
     ----------
     kind : str
     names : tuple of str
-    H : ndarray (3, n)
+    H : ndarray (m, n)
         The measurement matrix where it does not depend on the nominal state.
-    R : ndarray (3, 3)
+    R : ndarray (m, m)
     wants_posterior : bool
         The filter reports the posterior navigation attitude (3, 3) after each update to the
         measurement's ``observe`` method.
@@ -49,14 +51,18 @@ class Measurement(ABC):
     kind: ClassVar[str]
     wants_posterior: ClassVar[bool] = False
 
-    def __init__(self, model, index, values):
-        rows = model.measurements[self.kind]
+    def __init__(self, model, index, values, rows=None):
+        if rows is None:
+            if self.kind not in model.measurements:
+                raise NavlibInputError(f"{self.kind}: the {model.name} model declares no rows "
+                                       "for it; give rows=MeasurementRows(names, sigma)")
+            rows = model.measurements[self.kind]
         self.index = np.asarray(index, dtype=int)
         self.values = values
-        self.names = rows.names
-        self.R = rows.sigma**2 * np.eye(3)
+        self.names = tuple(rows.names)
+        self.R = rows.sigma**2 * np.eye(len(self.names))
         self.nav_sign = model.nav_sign
-        self.H = np.zeros((3, len(model.state_names)))
+        self.H = np.zeros((len(self.names), len(model.state_names)))
         self._design(model.groups)
 
     @abstractmethod
@@ -65,7 +71,7 @@ class Measurement(ABC):
 
     @abstractmethod
     def evaluate(self, i: int, nominal, j: int):
-        """Innovation ``z`` (3,), ``H`` (3, n), ``R`` (3, 3) of epoch ``i``, at sample ``j`` of
+        """Innovation ``z`` (m,), ``H`` (m, n), ``R`` (m, m) of epoch ``i``, at sample ``j`` of
         ``nominal`` (:class:`navlib.models.base.Nominal`)."""
 
 
@@ -111,9 +117,9 @@ class AttitudeSensor(Measurement):
 
     kind = "att"
 
-    def __init__(self, model, index, values):
+    def __init__(self, model, index, values, rows=None):
         _ecef_attitude_error(model, "attitude")
-        super().__init__(model, index, values)
+        super().__init__(model, index, values, rows)
 
     def _design(self, groups):
         self.H[:, groups["attitude"]] = np.eye(3)
@@ -134,9 +140,9 @@ class ReferenceAttitude(Measurement):
 
     kind = "rt"
 
-    def __init__(self, model, index, values):
+    def __init__(self, model, index, values, rows=None):
         _ecef_attitude_error(model, "reference")
-        super().__init__(model, index, values)
+        super().__init__(model, index, values, rows)
         self.wants_posterior = callable(values)
         self._attitude = model.groups["attitude"]
         self._posterior = None
