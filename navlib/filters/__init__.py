@@ -16,8 +16,9 @@ or NIS), :meth:`LinearSimulation.consistency`.
 
 Modules: :mod:`~navlib.filters.kalman` (gains, Joseph update, NEES), :mod:`~navlib.filters.linear`
 (linear mode), :mod:`~navlib.filters.ekf` (EKF mode), :mod:`~navlib.filters.measurements`
-(EKF input data). The aiding-sensor simulations moved to :mod:`navlib.sensors`
-(:func:`~navlib.sensors.simulate_attitude_sensor`, :class:`~navlib.sensors.ReferenceTrajectory`).
+(the EKF's measurement classes and input data). The aiding-sensor simulations moved to
+:mod:`navlib.sensors` (:func:`~navlib.sensors.simulate_attitude_sensor`,
+:class:`~navlib.sensors.ReferenceTrajectory`).
 """
 
 from navlib.filters.ekf import EKFResult, EKFRun, ekf, simulate_ekf

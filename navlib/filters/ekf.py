@@ -1,9 +1,13 @@
-"""Closed-loop INS/GNSS error-state EKF in ECEF (spec launcher.md §6.2-6.4; issue 5).
+"""Closed-loop INS/GNSS error-state EKF in ECEF (spec launcher.md §6.2-6.4; issues 5, 10).
 
 :func:`ekf` is described in its docstring (ECEF strapdown nominal state, error-state
 covariance from the model's Jacobians along the estimate, GNSS / attitude /
 reference-trajectory updates, feedback resets); :func:`simulate_ekf` feeds it simulated
-sensors (:mod:`navlib.sensors`).
+sensors (:mod:`navlib.sensors`). The loop knows no model: the error model is an
+:class:`~navlib.models.base.ErrorStateModel` (layout, reset states, ``jacobians``,
+``correct``, decay; :class:`~navlib.models.launcher.LauncherErrorState`,
+:class:`~navlib.models.ecef.Ecef21ErrorState`) and each measurement a
+:class:`~navlib.filters.measurements.Measurement` (innovation, ``H``, ``R``).
 """
 
 from __future__ import annotations
@@ -20,135 +24,39 @@ from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import _psd_sqrt, _sym, joseph_update
 from navlib.filters.linear import METHODS
-from navlib.filters.measurements import _MEAS_KINDS, _epoch_index, _imu_arrays, _rotations
-from navlib.models.base import LinearModel
+from navlib.filters.measurements import (
+    Measurement,
+    _epoch_index,
+    _imu_arrays,
+    ekf_measurements,
+)
+from navlib.models.base import ErrorStateModel, Nominal
+from navlib.models.ecef import Ecef21ErrorState
+from navlib.models.launcher import LauncherErrorState
 from navlib.outliers import as_outliers
-from navlib.rotations import exp_so3, log_so3
+from navlib.rotations import log_so3
 from navlib.sensors import ReferenceTrajectory, simulate_attitude_sensor
 
-FAMILIES = ("launcher", "ecef21")
+_MODELS = {"launcher": LauncherErrorState, "ecef21": Ecef21ErrorState}
+FAMILIES = tuple(_MODELS)
 """Error-model families the EKF runs with: Beaudoin's launcher models
 (:func:`navlib.models.launcher`) and España's 21-state ECEF model
 (:func:`navlib.models.ecef21`)."""
-
-_GROUP_STATES = {
-    "launcher": {"att": "psi", "vel": "dv", "pos": "dr", "bg": "bg", "ba": "ba", "bp": "bp"},
-    "ecef21": {"att": "theta", "vel": "V", "pos": "P", "bg": "bg", "ba": "ba", "sg": "sg",
-               "sa": "sa"},
-}
 _AXES = ("x", "y", "z")
 
 
-class _BlockTrajectory:
-    """The few Trajectory attributes the model builders read, for a block of the estimate.
-
-    ``navlib.models.launcher`` reads ``t``, ``attitude.as_matrix()`` and ``specific_force``;
-    ``navlib.models.ecef21`` also ``position``, ``angular_rate``, ``C_b_e()`` and
-    ``rate_hz``. Here they hold the filter's nominal (estimated) trajectory and corrected
-    IMU signals, so the Jacobians are evaluated along the estimate (an EKF).
-    """
-
-    def __init__(self, t, position, C_b_e, f_b, w_ib_b):
-        self.t = t
-        self.position = position
-        self._C = C_b_e
-        self.specific_force = f_b
-        self.angular_rate = w_ib_b
-        self.attitude = self
-
-    def as_matrix(self):
-        return self._C
-
-    def C_b_e(self):
-        return self._C
-
-    @property
-    def rate_hz(self) -> float:
-        return float(1.0 / np.median(np.diff(self.t)))
-
-
-@dataclass(frozen=True, eq=False)
-class _Family:
-    """Error-state layout of one model family and how it maps onto the nominal state."""
-
-    name: str
-    model: LinearModel                 # built once, for names, Qc, P0, R, parameters
-    options: dict
-    idx: dict                          # group -> index array (3,)
-    kept: np.ndarray                   # non-reset states (reference-trajectory block)
-    decay: dict                        # parameter group -> (3,) continuous rate (1/s)
-    nav_sign: float                    # +1: error = true - estimate (ecef21); -1: est - true
-
-    @property
-    def state_names(self):
-        return self.model.state_names
-
-    @property
-    def n(self) -> int:
-        return self.model.n
-
-    def correct_imu(self, params, f_b, w_ib_b, dt_from_start):
-        """Compensate IMU samples with the parameter estimates, decayed per sample."""
-        def value(group):
-            if group not in params:
-                return 0.0
-            rate = self.decay[group]
-            return params[group][None, :] * np.exp(rate[None, :] * dt_from_start[:, None])
-        f = f_b - value("ba")
-        w = w_ib_b - value("bg")
-        if "sa" in params:
-            f = f / (1.0 + params["sa"])
-        if "sg" in params:
-            w = w / (1.0 + params["sg"])
-        return f, w
-
-    def jacobians(self, t, position, C_b_e, f_b, w_ib_b):
-        """``A`` (K, n, n), ``G`` (K, n, q), ``H`` (K, m, n) along the nominal samples."""
-        block = _BlockTrajectory(t, position, C_b_e, f_b, w_ib_b)
-        if self.name == "launcher":
-            from navlib.models.launcher import launcher
-
-            m = launcher(trajectory=block, **self.options)
-            H = np.broadcast_to(m.H, (t.size, *m.H.shape[-2:]))
-            return m.A, m.G, H
-        from navlib.models.ecef import ecef21_jacobians
-
-        A, G = ecef21_jacobians(position, C_b_e, f_b, w_ib_b,
-                                self.options.get("attitude_error", "ecef"))
-        return A, G, np.broadcast_to(self.model.H, (t.size, *self.model.H.shape))
-
-
-def _family(model: str, trajectory_block, options: dict) -> _Family:
-    if model == "launcher":
-        from navlib.models.launcher import launcher
-
-        m = launcher(trajectory=trajectory_block, **options)
-    elif model == "ecef21":
-        from navlib.models.ecef import ecef21
-
-        opts = dict(options)
-        sensors = opts.pop("sensors", None)
-        m = ecef21(trajectory_block, sensors, **opts)
-        options = dict(options)
-    else:
+def _error_model(model, t, solution, biases, bias_model, options, gnss_velocity_sigma,
+                 sensors=None) -> ErrorStateModel:
+    """The error-state model named ``model`` configured from the EKF's keywords (or
+    ``model`` itself when it is one)."""
+    if not isinstance(model, str):
+        return model
+    if model not in _MODELS:
         raise NavlibInputError(f"model: expected one of {FAMILIES}, got {model!r}")
-    names = m.state_names
-    groups = _GROUP_STATES[model]
-    idx = {}
-    for group, prefix in groups.items():
-        cand = [f"{prefix}_{a}" for a in _AXES]
-        if all(c in names for c in cand):
-            idx[group] = np.array([names.index(c) for c in cand])
-    kept = np.array([i for i, s in enumerate(names)
-                     if (s.startswith("x") and s[1:].isdigit()) or s.startswith("psi_ref")],
-                    dtype=int)
-    A0 = np.asarray(m.A[0] if m.A.ndim == 3 else m.A)
-    decay = {}
-    for group in ("bg", "ba", "sg", "sa", "bp"):
-        if group in idx:
-            block = A0[np.ix_(idx[group], idx[group])]
-            decay[group] = np.diag(block).copy()
-    return _Family(model, m, options, idx, kept, decay, -1.0 if model == "launcher" else 1.0)
+    return _MODELS[model].from_options(
+        dict(options or {}), step_s=float(np.median(np.diff(t))), solution=solution,
+        biases=biases, bias_model=bias_model, gnss_velocity_sigma=gnss_velocity_sigma,
+        sensors=sensors)
 
 
 @dataclass(frozen=True, eq=False)
@@ -263,11 +171,12 @@ class EKFResult:
         })
 
 
-def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "ins_gps",
-        biases: str = "GA", bias_model: str = "markov", model_options: dict | None = None,
-        P0=None, attitude=None, reference=None, gnss_velocity_sigma: float | None = None,
-        initial_parameters: dict | None = None, method: str | None = None,
-        window_s: float = 0.1, keep_covariance: bool = False) -> EKFResult:
+def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
+        solution: str = "ins_gps", biases: str = "GA", bias_model: str = "markov",
+        model_options: dict | None = None, P0=None, attitude=None, reference=None,
+        gnss_velocity_sigma: float | None = None, initial_parameters: dict | None = None,
+        method: str | None = None, window_s: float = 0.1, keep_covariance: bool = False,
+        measurements: Sequence[Measurement] = ()) -> EKFResult:
     """Closed-loop (feedback) INS/GNSS error-state extended Kalman filter in ECEF.
 
     * **Nominal state**: ECEF position, velocity and attitude propagated by the strapdown
@@ -280,7 +189,8 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
       ``biases``, ``bias_model`` as in :func:`navlib.models.launcher`) or ``ecef21``
       (España et al. 2019 Eq. 24). Its covariance is propagated with the model's ``F``,
       ``Q`` whose Jacobians are evaluated **along the estimate** (the nominal trajectory
-      and corrected IMU signals, through the model builder), sample by sample.
+      and corrected IMU signals, ``jacobians(nominal)`` of the error-state model), sample
+      by sample.
     * **Updates**: GNSS position and velocity (launcher: ``z = INS - GNSS``, with the GPS
       bias estimate removed from the position; ecef21: ``z = GNSS - INS``, position only
       unless ``gnss_velocity_sigma`` is given); the attitude sensor for ``*_att``
@@ -295,7 +205,10 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
       each propagation window (every measurement epoch when epochs are at least
       ``window_s`` apart, else every ``window_s``); within a window the error-state mean
       is carried by the linearised model, as in a linearised KF. The attitude reset
-      ignores the second-order covariance Jacobian ``I - S(psi)/2``.
+      carries the covariance through its Jacobian, ``I + S(a)/2`` for the ECEF attitude
+      error ``C = exp(S(psi)) C_hat`` corrected by ``a`` (``I - S(a)/2`` for the body
+      error; :meth:`~navlib.models.base.ErrorStateModel.reset_jacobian`); it matters when
+      corrections are large (the rocket's roll errors of tens of degrees).
 
     Parameters
     ----------
@@ -306,7 +219,10 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
         samples.
     initial : navlib.strapdown.StrapdownState
         Nominal state at the first IMU sample.
-    model : {"launcher", "ecef21"}
+    model : {"launcher", "ecef21"} or ErrorStateModel
+        Error-model family (configured from the keywords below), or a configured
+        :class:`~navlib.models.base.ErrorStateModel` (then ``solution``, ``biases``,
+        ``bias_model``, ``model_options`` and ``gnss_velocity_sigma`` are not used).
     solution, biases, bias_model
         Launcher configuration (ignored for ecef21).
     model_options : dict, optional
@@ -333,182 +249,97 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
         Longest propagation window between feedback corrections when updates are denser.
     keep_covariance : bool
         Keep the full posterior covariances in the result.
+    measurements : sequence of Measurement, optional
+        Further measurements (:class:`~navlib.filters.measurements.Measurement` instances
+        built with this error model and IMU sample indices), updated after the ones above at
+        their epochs; their rows follow the model's in the result.
 
     Returns
     -------
     EKFResult
     """
     t, f_meas, w_meas = _imu_arrays(imu)
-    N = t.size
-    opts = dict(model_options or {})
-    if model == "launcher":
-        opts.update(solution=solution, biases=biases, bias_model=bias_model)
-        opts.setdefault("s_t", float(np.median(np.diff(t))))
-    method = method or ("euler" if model == "launcher" else "expm")
+    es = _error_model(model, t, solution, biases, bias_model, model_options,
+                      gnss_velocity_sigma)
+    method = method or es.default_method
     if method not in METHODS:
         raise NavlibInputError(f"method: expected one of {METHODS}, got {method!r}")
     window_s = finite_scalar(window_s, "window_s", 0.0, low_open=True)
-    r0 = finite_array(initial.position, "initial.position", (3,))
-    v0 = finite_array(initial.velocity, "initial.velocity", (3,))
-    C0 = initial.attitude.as_matrix()
-    probe = _BlockTrajectory(t[:2], np.array([r0, r0]), np.array([C0, C0]), f_meas[:2],
-                             w_meas[:2])
-    fam = _family(model, probe, opts)
-    n = fam.n
-    P = fam.model.P0 if P0 is None else finite_array(P0, "P0", (n, n))
-    P = _sym(np.array(P, dtype=float))
-    Qc = np.asarray(fam.model.Qc, dtype=float)
-
-    # measurement rows of the model, by kind
-    meas_names = list(fam.model.measurement_names)
-    R_model = np.asarray(fam.model.R, dtype=float)
-    if R_model.ndim == 3:
-        R_model = R_model[0]
-    extra_vel = model == "ecef21" and gnss_velocity_sigma is not None
-    if extra_vel:
-        gnss_velocity_sigma = finite_scalar(gnss_velocity_sigma, "gnss_velocity_sigma", 0.0,
-                                            low_open=True)
-        meas_names += [f"gnss_v{a}" for a in _AXES]
-        R_model = np.block([[R_model, np.zeros((R_model.shape[0], 3))],
-                            [np.zeros((3, R_model.shape[0])),
-                             gnss_velocity_sigma**2 * np.eye(3)]])
-    rows = {}
-    for kind, prefix in _MEAS_KINDS[model].items():
-        sel = [i for i, s in enumerate(meas_names) if s.startswith(prefix)
-               and s[len(prefix):] in _AXES]
-        if len(sel) == 3:
-            rows[kind] = np.array(sel)
-
-    # measurement data on IMU samples
-    events = {}            # sample index -> list of (kind, value)
-
-    def add(kind, k_idx, values):
-        for k, v in zip(k_idx, values, strict=True):
-            events.setdefault(int(k), []).append((kind, v))
-
-    if gnss is not None:
-        if not isinstance(gnss, pd.DataFrame) or not {"t", "x", "y", "z"} <= set(gnss.columns):
-            raise NavlibInputError("gnss: expected a DataFrame with columns t, x, y, z")
-        kg = _epoch_index(t, gnss["t"].to_numpy(float), "gnss")
-        add("gnss_pos", kg, gnss[["x", "y", "z"]].to_numpy(float))
-        if "gnss_vel" in rows and {"vx", "vy", "vz"} <= set(gnss.columns):
-            add("gnss_vel", kg, gnss[["vx", "vy", "vz"]].to_numpy(float))
-    if "att" in rows:
-        if attitude is None:
-            raise NavlibInputError(f"attitude: solution {solution!r} needs attitude-sensor data")
-        ta, Ca = _rotations(attitude, "attitude")
-        add("att", _epoch_index(t, ta, "attitude"), Ca)
-    ref_callable = ref_nav = None
-    if "rt" in rows:
-        if reference is None:
-            raise NavlibInputError(f"reference: solution {solution!r} needs reference-"
-                                   "trajectory attitudes or a ReferenceTrajectory")
-        if callable(reference):
-            ref_callable = reference
-            for k in range(N):
-                events.setdefault(k, []).append(("rt", None))
-        else:
-            tr, Cr = _rotations(reference, "reference")
-            add("rt", _epoch_index(t, tr, "reference"), Cr)
-    if not events:
-        raise NavlibInputError("gnss: no measurements; give GNSS (or aiding) data")
-    update_idx = np.array(sorted(events))
-
-    # windows: boundaries at update samples at least window_s apart (last sample closes)
-    bounds = [0]
-    for k in update_idx:
-        if k > bounds[-1] and t[k] - t[bounds[-1]] >= window_s - 1e-9:
-            bounds.append(int(k))
-    if bounds[-1] != N - 1:
-        bounds.append(N - 1)
-
-    params = {g: np.zeros(3) for g in fam.decay}
+    start = (finite_array(initial.position, "initial.position", (3,)),
+             finite_array(initial.velocity, "initial.velocity", (3,)),
+             initial.attitude.as_matrix())
+    n = len(es.state_names)
+    P = _sym(np.array(es.P0 if P0 is None else finite_array(P0, "P0", (n, n)), dtype=float))
+    params = {g: np.zeros(3) for g in es.parameters}
     for g, v in (initial_parameters or {}).items():
         if g not in params:
             raise NavlibInputError(f"initial_parameters: model has no parameter group {g!r}")
         params[g] = finite_array(v, f"initial_parameters[{g!r}]", (3,)).copy()
-    x = np.zeros(n)                      # error-state mean (kept states persist)
-    reset = np.ones(n, dtype=bool)
-    reset[fam.kept] = False
-    kept = fam.kept
-    pos_i, vel_i, att_i = fam.idx["pos"], fam.idx["vel"], fam.idx["att"]
-    att_body = model == "ecef21" and opts.get("attitude_error", "ecef") == "body"
-    s = fam.nav_sign
+    names = [name for r in es.measurements.values() for name in r.names]
+    offsets = dict(zip(es.measurements, np.cumsum([0] + [len(r.names) for r in
+                                                         es.measurements.values()]),
+                       strict=False))
+    rows = {meas: np.arange(offsets[meas.kind], offsets[meas.kind] + len(meas.names))
+            for meas in ekf_measurements(es, t, gnss, attitude, reference)}
+    for meas in measurements:
+        if not isinstance(meas, Measurement):
+            raise NavlibInputError(f"measurements: expected Measurement instances, got "
+                                   f"{type(meas).__name__}")
+        if meas.index.size and (meas.index.min() < 0 or meas.index.max() >= t.size):
+            raise NavlibInputError(f"measurements: {meas.kind} epochs must be IMU sample "
+                                   f"indices in [0, {t.size - 1}]")
+        rows[meas] = np.arange(len(names), len(names) + len(meas.names))
+        names += meas.names
+    events = {}            # IMU sample -> [(measurement, epoch)], in update order
+    for meas in rows:
+        for i, k in enumerate(meas.index):
+            events.setdefault(int(k), []).append((meas, i))
+    if not events:
+        raise NavlibInputError("gnss: no measurements; give GNSS (or aiding) data")
+    # windows: boundaries at update samples at least window_s apart (last sample closes)
+    bounds = [0]
+    for k in sorted(events):
+        if k > bounds[-1] and t[k] - t[bounds[-1]] >= window_s - 1e-9:
+            bounds.append(k)
+    if bounds[-1] != t.size - 1:
+        bounds.append(t.size - 1)
+    return _run(es, t, f_meas, w_meas, start, params, P, events, bounds,
+                "euler" if method == "euler" else "series", keep_covariance, rows, names)
 
-    def corrected(r, v, C, dx):
-        """Nominal (K, ...) corrected with error-state means dx (K, n)."""
-        r2 = r + s * dx[:, pos_i]
-        v2 = v + s * dx[:, vel_i]
-        E = exp_so3(dx[:, att_i])
-        C2 = C @ E if att_body else E @ C
-        return r2, v2, C2
 
-    out_t, out_r, out_v, out_C, out_sig, out_P = [], [], [], [], [], []
-    out_par = {g: [] for g in params}
-    out_kept, out_innov, out_nis, out_dof = [], [], [], []
-    m_all = len(meas_names)
-    state = (r0, v0, C0)
+def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_covariance,
+         rows, names):
+    """The filter loop of :func:`ekf`: per window, nominal propagation, the error-state
+    covariance along it, the updates, and feedback at the window end."""
     from navlib import strapdown
 
+    Qc = np.asarray(es.Qc, dtype=float)
+    observers = {meas for epoch in events.values() for meas, _ in epoch if meas.wants_posterior}
+    kept = np.flatnonzero(~es.reset)
+    x = np.zeros(len(es.state_names))          # error-state mean (kept states persist)
+    r, v, C = start
+    out = {key: [] for key in ("post", "kept", "P", "sigma", "innovation", "nis", "nis_dof")}
     for w0, w1 in itertools.pairwise(bounds):
-        sl = slice(w0, w1 + 1)
-        tw = t[sl]
-        f_c, w_c = fam.correct_imu(params, f_meas[sl], w_meas[sl], tw - tw[0])
-        nav = strapdown.integrate(tw, f_c, w_c, state[0], state[1], state[2])
-        Cw = nav.attitude.as_matrix()
-        A, G, Hw = fam.jacobians(tw, nav.position, Cw, f_c, w_c)
-        if extra_vel:
-            Hv = np.zeros((tw.size, 3, n))
-            Hv[:, :, vel_i] = np.eye(3)
-            Hw = np.concatenate([Hw, Hv], axis=1)
-        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(tw),
-                                method="euler" if method == "euler" else "series")
-        rec = []   # (local index, dx, P)
+        tw = t[w0:w1 + 1]
+        dt = (tw - tw[0])[:, None]
+        par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
+        f_c, w_c = es.compensate(par, f_meas[w0:w1 + 1], w_meas[w0:w1 + 1])
+        nav = strapdown.integrate(tw, f_c, w_c, r, v, C)
+        nominal = Nominal(tw, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c,
+                          par)
+        A, G = es.jacobians(nominal)
+        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(tw), method=method)
+        rec = []                               # (local index, dx, P, sigma, innovation, NIS, dof)
         for j in range(tw.size):
             k = w0 + j
             if k in events and (j > 0 or k == 0):
-                zs, sel = [], []
-                for kind, value in events[k]:
-                    if kind not in rows:
-                        continue
-                    C_hat = Cw[j]
-                    if kind == "gnss_pos":
-                        gps = value
-                        if model == "launcher":
-                            z = nav.position[j] - gps
-                            if "bp" in params:
-                                z = z - params["bp"] * np.exp(fam.decay["bp"] * (tw[j] - tw[0]))
-                        else:
-                            z = gps - nav.position[j]
-                    elif kind == "gnss_vel":
-                        z = (nav.velocity[j] - value if model == "launcher"
-                             else value - nav.velocity[j])
-                    elif kind == "att":
-                        z = log_so3(value @ C_hat.T)
-                    else:   # rt
-                        if ref_callable is not None:
-                            C_ref = np.asarray(ref_callable(k, t[k], ref_nav), dtype=float)
-                        else:
-                            C_ref = value
-                        z = log_so3(C_hat.T @ C_ref)
-                    zs.append(z)
-                    sel.append(rows[kind])
-                if sel:
-                    sel = np.concatenate(sel)
-                    z = np.concatenate(zs)
-                    Hk = Hw[j][sel]
-                    Rk = R_model[np.ix_(sel, sel)]
-                    innov = z - Hk @ x
-                    P, gain = joseph_update(P, Hk, Rk)
-                    K, S_pinv, dof = gain.K, gain.S_pinv, int(gain.dof)
-                    x = x + K @ innov
-                    full = np.full(m_all, np.nan)
-                    full[sel] = innov
-                    if ref_callable is not None:
-                        ref_nav = exp_so3(x[att_i]) @ Cw[j]      # posterior navigation attitude
-                    rec.append((j, x.copy(), P.copy() if keep_covariance else None,
-                                np.sqrt(np.clip(np.diag(P), 0, None)), full,
-                                float(innov @ S_pinv @ innov), dof))
+                x, P, innov, nis, dof = _update(x, P, events[k], nominal, j, rows, len(names))
+                rec.append((j, x.copy(), P.copy() if keep_covariance else None,
+                            np.sqrt(np.clip(np.diag(P), 0, None)), innov, nis, dof))
+                if observers:                  # posterior navigation attitude
+                    C_post = es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
+                    for meas in observers:
+                        meas.observe(C_post)
             if j < tw.size - 1:
                 x_next = F[j] @ x
                 if kept.size:
@@ -518,43 +349,52 @@ def ekf(imu, gnss=None, *, initial, model: str = "launcher", solution: str = "in
                     x_next[kept] = F[j][np.ix_(kept, kept)] @ x[kept]
                 x = x_next
                 P = _sym(F[j] @ P @ F[j].T + Q[j])
-        # record the corrected estimates of this window's updates
-        if rec:
-            jj = np.array([r[0] for r in rec])
-            dx = np.array([r[1] for r in rec])
-            r2, v2, C2 = corrected(nav.position[jj], nav.velocity[jj], Cw[jj], dx)
-            out_t.append(tw[jj])
-            out_r.append(r2)
-            out_v.append(v2)
-            out_C.append(C2)
-            for g in params:
-                nominal = params[g][None, :] * np.exp(fam.decay[g][None, :]
-                                                      * (tw[jj] - tw[0])[:, None])
-                out_par[g].append(nominal + dx[:, fam.idx[g]])
-            out_kept.append(dx[:, fam.kept])
-            out_sig.append(np.array([r[3] for r in rec]))
-            if keep_covariance:
-                out_P.append(np.array([r[2] for r in rec]))
-            out_innov.append(np.array([r[4] for r in rec]))
-            out_nis.append(np.array([r[5] for r in rec]))
-            out_dof.append(np.array([r[6] for r in rec]))
-        # feedback at the window end
-        r_end, v_end, C_end = corrected(nav.position[-1:], nav.velocity[-1:], Cw[-1:], x[None])
-        state = (r_end[0], v_end[0], C_end[0])
-        span = tw[-1] - tw[0]
-        for g in params:
-            params[g] = params[g] * np.exp(fam.decay[g] * span) + x[fam.idx[g]]
-        x = np.where(reset, 0.0, x)
+        if rec:                                # corrected estimates at this window's updates
+            j_up, dx, *rest = map(np.array, zip(*rec, strict=True))
+            for key, value in zip(out, (es.correct(nominal.at(j_up), dx), dx[:, kept], *rest),
+                                  strict=True):
+                out[key].append(value)
+        end = es.correct(nominal.at(slice(-1, None)), x[None])     # feedback at the window end
+        r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
+        params = {g: p[0] for g, p in end.parameters.items()}
+        J = es.reset_jacobian(x)
+        P = _sym(J @ P @ J.T)
+        x = np.where(es.reset, 0.0, x)
 
-    cat = np.concatenate
+    post = out.pop("post")
+    cat = {key: np.concatenate(value) for key, value in out.items()}
     return EKFResult(
-        t=cat(out_t), position=cat(out_r), velocity=cat(out_v), C_b_e=cat(out_C),
-        parameters={g: cat(v) for g, v in out_par.items()},
-        kept=cat(out_kept), sigma=cat(out_sig), P=cat(out_P) if keep_covariance else None,
-        innovation=cat(out_innov), nis=cat(out_nis), nis_dof=cat(out_dof),
-        state_names=tuple(fam.state_names), measurement_names=tuple(meas_names),
-        kept_names=tuple(fam.state_names[i] for i in fam.kept), model=model,
+        t=np.concatenate([p.t for p in post]),
+        position=np.concatenate([p.position for p in post]),
+        velocity=np.concatenate([p.velocity for p in post]),
+        C_b_e=np.concatenate([p.C_b_e for p in post]),
+        parameters={g: np.concatenate([p.parameters[g] for p in post]) for g in params},
+        kept=cat["kept"], sigma=cat["sigma"], P=cat["P"] if keep_covariance else None,
+        innovation=cat["innovation"], nis=cat["nis"], nis_dof=cat["nis_dof"],
+        state_names=tuple(es.state_names),
+        measurement_names=tuple(names),
+        kept_names=tuple(es.state_names[i] for i in kept), model=es.name,
     )
+
+
+def _update(x, P, epoch, nominal, j, rows, m_all):
+    """Joseph update with the measurements of one epoch stacked; the innovation in the
+    model's measurement rows (NaN where not measured), NIS and its dof."""
+    parts = [meas.evaluate(i, nominal, j) for meas, i in epoch]
+    if len(parts) == 1:
+        z, H, R = parts[0]
+    else:
+        z = np.concatenate([p[0] for p in parts])
+        H = np.concatenate([p[1] for p in parts])
+        R = np.zeros((z.size, z.size))
+        ends = np.cumsum([0] + [p[0].size for p in parts])
+        for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
+            R[a:b, a:b] = p[2]
+    innov = z - H @ x
+    P, gain = joseph_update(P, H, R)
+    full = np.full(m_all, np.nan)
+    full[np.concatenate([rows[meas] for meas, _ in epoch])] = innov
+    return x + gain.K @ innov, P, full, float(innov @ gain.S_pinv @ innov), int(gain.dof)
 
 
 @dataclass(frozen=True, eq=False)
@@ -630,9 +470,11 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
 
     outliers = as_outliers(outliers)
     spec = sensor_lib.load_preset(sensors) if isinstance(sensors, str) else sensors
+    es = _error_model(model, np.asarray(trajectory.t, dtype=float), solution, biases,
+                      bias_model, model_options, gnss_velocity_sigma, sensors=sensors)
     seq = np.random.SeedSequence(seed)
     g_imu, g_gnss, g_att, g_ref, g_init = (np.random.default_rng(s) for s in seq.spawn(5))
-    if model != "launcher" or "P" not in biases.upper():
+    if "bp" not in es.parameters:
         # truth matches the filter model: no GNSS position bias unless it is estimated
         from dataclasses import replace
 
@@ -662,56 +504,34 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     gnss[["vx", "vy", "vz"]] = inject(gnss[["vx", "vy", "vz"]].to_numpy(), tg, outliers,
                                       "gnss_vel")
 
-    opts = dict(model_options or {})
-    if model == "ecef21" and isinstance(sensors, str):
-        opts.setdefault("sensors", sensors)      # the filter assumes the simulated sensors
     attitude = reference = None
-    if model == "launcher" and solution.startswith("ins_gps_att"):
-        sigma_att = opts.get("sigma_att", spec.attitude_sigma or 0.0)
+    if "att" in es.measurements:
+        sigma_att = (model_options or {}).get("sigma_att", spec.attitude_sigma or 0.0)
         attitude = simulate_attitude_sensor(trajectory, sigma_att if noise else 0.0, rng=g_att,
                                             outliers=outliers)
-    if model == "launcher" and solution.endswith("_rt"):
-        from navlib.models.launcher import ASSUMED
-
+    if "rt" in es.measurements:
         reference = ReferenceTrajectory(
-            trajectory, sigma_wind=opts.get("sigma_wind", ASSUMED["sigma_wind"]),
-            a1_sign=opts.get("a1_sign", 1.0), rng=g_ref, outliers=outliers, noise=noise)
+            trajectory, sigma_wind=es.settings["sigma_wind"], a1_sign=es.settings["a1_sign"],
+            rng=g_ref, outliers=outliers, noise=noise)
 
-    # initial error from the model's P0 navigation block (the model's sign convention)
+    # initial error: a draw from the model's P0 navigation block, fed back with minus sign
     truth0 = strapdown.StrapdownState.from_trajectory(trajectory, 0)
-    probe = _BlockTrajectory(t[:2], trajectory.position[:2], trajectory.attitude[:2].as_matrix(),
-                             trajectory.specific_force[:2], trajectory.angular_rate[:2])
-    if model == "launcher":
-        fopts = {**opts, "solution": solution, "biases": biases, "bias_model": bias_model,
-                 "s_t": float(np.median(np.diff(t)))}
-    else:
-        fopts = opts
-    fam = _family(model, probe, fopts)
-    nav = np.concatenate([fam.idx["pos"], fam.idx["vel"], fam.idx["att"]])
-    P_nav = fam.model.P0[np.ix_(nav, nav)]
+    nav = np.concatenate([es.groups[g] for g in ("position", "velocity", "attitude")])
+    P_nav = es.P0[np.ix_(nav, nav)]
     dx0 = (g_init.standard_normal(9) @ _psd_sqrt(P_nav).T) if initial_error else np.zeros(9)
-    s = fam.nav_sign
-    C0 = trajectory.attitude[0].as_matrix()
-    body = model == "ecef21" and opts.get("attitude_error", "ecef") == "body"
-    C_hat0 = C0 @ exp_so3(-dx0[6:9]) if body else exp_so3(-dx0[6:9]) @ C0
-    # error = s (true - estimate) for position/velocity; C_true = exp(S(psi)) C_hat
-    initial = strapdown.StrapdownState(
-        t=truth0.t, position=truth0.position - s * dx0[:3],
-        velocity=truth0.velocity - s * dx0[3:6],
-        q_b_e=_as_quat(C_hat0))
-    result = ekf(imu_df, gnss, initial=initial, model=model, solution=solution, biases=biases,
-                 bias_model=bias_model, model_options=opts, attitude=attitude,
-                 reference=reference, window_s=window_s, keep_covariance=keep_covariance,
-                 gnss_velocity_sigma=gnss_velocity_sigma)
+    dx = np.zeros((1, len(es.state_names)))
+    dx[0, nav] = -dx0
+    hat0 = es.correct(Nominal(t[:1], truth0.position[None], truth0.velocity[None],
+                              trajectory.attitude[:1].as_matrix(), f_b[:1], w_b[:1], {}), dx)
+    initial = strapdown.StrapdownState(t=truth0.t, position=hat0.position[0],
+                                       velocity=hat0.velocity[0], q_b_e=_as_quat(hat0.C_b_e[0]))
+    result = ekf(imu_df, gnss, initial=initial, model=es, attitude=attitude,
+                 reference=reference, window_s=window_s, keep_covariance=keep_covariance)
     k = _epoch_index(t, result.t, "result")
-    truth_par = {}
-    if "bg" in fam.idx:
-        truth_par["bg"] = imu.gyro.bias[k]
-    if "ba" in fam.idx:
-        truth_par["ba"] = imu.accel.bias[k]
-    if "bp" in fam.idx:
-        kg = np.searchsorted(tg, result.t)
-        kg = np.clip(kg, 0, tg.size - 1)
+    truth_par = {g: bias[k] for g, bias in (("bg", imu.gyro.bias), ("ba", imu.accel.bias))
+                 if g in es.parameters}
+    if "bp" in es.parameters:
+        kg = np.clip(np.searchsorted(tg, result.t), 0, tg.size - 1)
         truth_par["bp"] = -gnss[["bias_x", "bias_y", "bias_z"]].to_numpy()[kg]
     return EKFRun(result, result.errors(trajectory), truth_par,
                   reference.history() if reference is not None else None, dx0)

@@ -1,18 +1,203 @@
-"""Measurement data of the EKF: IMU samples, epochs on the IMU clock, attitude series,
-and the measurement rows of each error-model family (issue 5)."""
+"""Measurements of the EKF (issue 10): GNSS position and velocity, the attitude sensor and
+the reference-trajectory pseudo-measurement, each giving its innovation, ``H`` and ``R`` for
+the current nominal state; and the input parsing (IMU samples, epochs on the IMU clock,
+attitude series).
+
+A measurement is built with the error model (:class:`navlib.models.base.ErrorStateModel`),
+whose ``measurements`` name the kinds it uses with their rows and sigma, and its data on the
+IMU clock (``index``: IMU sample of each epoch). The filter calls
+:meth:`Measurement.evaluate` at each epoch; a new measurement is one new subclass.
+"""
 
 from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
 
 import numpy as np
 import pandas as pd
 
 from navlib._validation import finite_array
 from navlib.errors import NavlibInputError
+from navlib.rotations import log_so3
 
-_MEAS_KINDS = {
-    "launcher": {"att": "psi_m_", "gnss_vel": "dv_m_", "gnss_pos": "dr_m_", "rt": "psi_ref_m_"},
-    "ecef21": {"gnss_pos": "gnss_", "gnss_vel": "gnss_v"},
-}
+
+class Measurement(ABC):
+    """One kind of EKF measurement: its epochs, data and rows of the error model.
+
+    Parameters
+    ----------
+    model : navlib.models.base.ErrorStateModel
+    index : ndarray (K,) of int
+        IMU sample of each epoch.
+    values : ndarray (K, ...)
+        The measured values.
+    rows : navlib.models.base.MeasurementRows, optional
+        Row names and per-axis sigma (``R = sigma^2 I``); default the model's
+        ``measurements[kind]``.
+
+    Attributes
+    ----------
+    kind : str
+    names : tuple of str
+    H : ndarray (m, n)
+        The measurement matrix where it does not depend on the nominal state.
+    R : ndarray (m, m)
+    wants_posterior : bool
+        The filter reports the posterior navigation attitude (3, 3) after each update to the
+        measurement's ``observe`` method.
+    """
+
+    kind: ClassVar[str]
+    wants_posterior: ClassVar[bool] = False
+
+    def __init__(self, model, index, values, rows=None):
+        if rows is None:
+            if self.kind not in model.measurements:
+                raise NavlibInputError(f"{self.kind}: the {model.name} model declares no rows "
+                                       "for it; give rows=MeasurementRows(names, sigma)")
+            rows = model.measurements[self.kind]
+        self.index = np.asarray(index, dtype=int)
+        self.values = values
+        self.names = tuple(rows.names)
+        self.R = rows.sigma**2 * np.eye(len(self.names))
+        self.nav_sign = model.nav_sign
+        self.H = np.zeros((len(self.names), len(model.state_names)))
+        self._design(model.groups)
+
+    @abstractmethod
+    def _design(self, groups):
+        """Fill the constant part of :attr:`H` from the model's state groups."""
+
+    @abstractmethod
+    def evaluate(self, i: int, nominal, j: int):
+        """Innovation ``z`` (m,), ``H`` (m, n), ``R`` (m, m) of epoch ``i``, at sample ``j`` of
+        ``nominal`` (:class:`navlib.models.base.Nominal`)."""
+
+
+class GnssPosition(Measurement):
+    """ECEF GNSS position (m): ``z = nav_sign (r_gnss - r_hat)``, minus the nominal GNSS bias
+    estimate when the model has one (``bp``: ``H = [I, I]``, Beaudoin et al. 2018 eq. 2)."""
+
+    kind = "gnss_pos"
+
+    def _design(self, groups):
+        self.H[:, groups["position"]] = np.eye(3)
+        if "bp" in groups:
+            self.H[:, groups["bp"]] = np.eye(3)
+
+    def evaluate(self, i, nominal, j):
+        z = self.nav_sign * (self.values[i] - nominal.position[j])
+        if "bp" in nominal.parameters:
+            z = z - nominal.parameters["bp"][j]
+        return z, self.H, self.R
+
+
+class GnssVelocity(Measurement):
+    """ECEF GNSS velocity (m/s): ``z = nav_sign (v_gnss - v_hat)``, ``H = I`` on velocity."""
+
+    kind = "gnss_vel"
+
+    def _design(self, groups):
+        self.H[:, groups["velocity"]] = np.eye(3)
+
+    def evaluate(self, i, nominal, j):
+        return self.nav_sign * (self.values[i] - nominal.velocity[j]), self.H, self.R
+
+
+def _ecef_attitude_error(model, kind):
+    if model.attitude_frame != "ecef":
+        raise NavlibInputError(f"{kind}: measured with the ECEF attitude error psi; the "
+                               f"{model.name} model uses {model.attitude_frame!r}")
+
+
+class AttitudeSensor(Measurement):
+    """Body -> ECEF attitude sensor (Beaudoin et al. 2018 eq. 3): ``z = rotvec(C_att C_hat')``,
+    ECEF axes, ``H = I`` on the attitude error ``psi``."""
+
+    kind = "att"
+
+    def __init__(self, model, index, values, rows=None):
+        _ecef_attitude_error(model, "attitude")
+        super().__init__(model, index, values, rows)
+
+    def _design(self, groups):
+        self.H[:, groups["attitude"]] = np.eye(3)
+
+    def evaluate(self, i, nominal, j):
+        return log_so3(self.values[i] @ nominal.C_b_e[j].T), self.H, self.R
+
+
+class ReferenceAttitude(Measurement):
+    """Reference-trajectory pseudo-measurement (Beaudoin et al. 2018 eq. 8), noise-free:
+    ``z = rotvec(C_hat' C_ref)`` in body axes, ``H = [C_hat', I]`` on ``psi`` and the
+    reference-trajectory attitude ``psi_ref``.
+
+    ``values`` are reference attitudes (K, 3, 3), or a callable
+    ``reference(k, t_k, C_nav_prev) -> (3, 3)`` (a :class:`navlib.sensors.ReferenceTrajectory`)
+    called at each epoch with the posterior navigation attitude of the previous epoch.
+    """
+
+    kind = "rt"
+
+    def __init__(self, model, index, values, rows=None):
+        _ecef_attitude_error(model, "reference")
+        super().__init__(model, index, values, rows)
+        self.wants_posterior = callable(values)
+        self._attitude = model.groups["attitude"]
+        self._posterior = None
+
+    def _design(self, groups):
+        self.H[:, groups["reference"]] = np.eye(3)
+
+    def evaluate(self, i, nominal, j):
+        C_hat = nominal.C_b_e[j]
+        if callable(self.values):
+            C_ref = np.asarray(self.values(int(self.index[i]), nominal.t[j], self._posterior),
+                               dtype=float)
+        else:
+            C_ref = self.values[i]
+        H = self.H.copy()
+        H[:, self._attitude] = C_hat.T
+        return log_so3(C_hat.T @ C_ref), H, self.R
+
+    def observe(self, C_b_e):
+        """Posterior navigation attitude after the update (for the next callable call)."""
+        self._posterior = C_b_e
+
+
+def ekf_measurements(model, t, gnss=None, attitude=None, reference=None) -> list:
+    """The measurements of ``model`` from the EKF's data, in update order (GNSS position,
+    GNSS velocity, attitude sensor, reference trajectory).
+
+    GNSS velocity is used when the model has its rows and ``gnss`` has ``vx, vy, vz``; the
+    attitude sensor and the reference trajectory are required when the model uses them.
+    """
+    kinds = model.measurements
+    out = []
+    if gnss is not None:
+        if not isinstance(gnss, pd.DataFrame) or not {"t", "x", "y", "z"} <= set(gnss.columns):
+            raise NavlibInputError("gnss: expected a DataFrame with columns t, x, y, z")
+        kg = _epoch_index(t, gnss["t"].to_numpy(float), "gnss")
+        out.append(GnssPosition(model, kg, gnss[["x", "y", "z"]].to_numpy(float)))
+        if "gnss_vel" in kinds and {"vx", "vy", "vz"} <= set(gnss.columns):
+            out.append(GnssVelocity(model, kg, gnss[["vx", "vy", "vz"]].to_numpy(float)))
+    if "att" in kinds:
+        if attitude is None:
+            raise NavlibInputError(f"attitude: the {model.name} model uses attitude-sensor "
+                                   "updates; give attitude data")
+        ta, Ca = _rotations(attitude, "attitude")
+        out.append(AttitudeSensor(model, _epoch_index(t, ta, "attitude"), Ca))
+    if "rt" in kinds:
+        if reference is None:
+            raise NavlibInputError(f"reference: the {model.name} model needs reference-"
+                                   "trajectory attitudes or a ReferenceTrajectory")
+        if callable(reference):
+            out.append(ReferenceAttitude(model, np.arange(t.size), reference))
+        else:
+            tr, Cr = _rotations(reference, "reference")
+            out.append(ReferenceAttitude(model, _epoch_index(t, tr, "reference"), Cr))
+    return out
 
 
 def _imu_arrays(imu):

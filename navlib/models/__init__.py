@@ -6,14 +6,17 @@
 * ``ecef21`` / ``ecef21_at_epochs``: the 21-state ECEF model of España et al. (2019);
 * ``launcher`` / ``simplified_gps_bias``: the launcher models of Beaudoin et al. (2018);
 * ``ssac``: the stationary local-level models of Silva et al. (2017).
+
+``ErrorStateModel`` is what the closed-loop EKF needs from a model (layout, reset states,
+``jacobians``, ``correct``); ``LauncherErrorState`` and ``Ecef21ErrorState`` implement it.
 """
 
-from navlib.models.base import DiscreteModel, LinearModel
-from navlib.models.ecef import ecef21, ecef21_at_epochs
-from navlib.models.launcher import launcher, simplified_gps_bias
+from navlib.models.base import DiscreteModel, ErrorStateModel, LinearModel, Nominal
+from navlib.models.ecef import Ecef21ErrorState, ecef21, ecef21_at_epochs
+from navlib.models.launcher import LauncherErrorState, launcher, simplified_gps_bias
 from navlib.models.ssac import ssac
 
 __all__ = [
-    "DiscreteModel", "LinearModel", "ecef21", "ecef21_at_epochs", "launcher",
-    "simplified_gps_bias", "ssac",
+    "DiscreteModel", "Ecef21ErrorState", "ErrorStateModel", "LauncherErrorState", "LinearModel",
+    "Nominal", "ecef21", "ecef21_at_epochs", "launcher", "simplified_gps_bias", "ssac",
 ]

@@ -1,21 +1,31 @@
-"""Linear error models: the continuous model type and its discrete form.
+"""Linear error models: the continuous model type, its discrete form, and the error-state
+protocol of the filters.
 
 Every model carries ``state_names``; :meth:`LinearModel.subset` deletes rows and columns
 consistently (Beaudoin et al. 2018 §2.1: "corresponding lines and columns are
 eliminated"); :meth:`LinearModel.discretize` returns a :class:`DiscreteModel` with the
 arrays that ``navlib.observability`` and ``navlib.metrics`` take (spec api.md).
+
+:class:`ErrorStateModel` is what the closed-loop EKF (:func:`navlib.filters.ekf`) needs from
+an error model: the state layout as index arrays, which states are reset after feedback,
+``jacobians(nominal)`` along the estimate, ``correct(nominal, dx)`` and the Jacobian of the
+reset for the covariance.
+:class:`ErrorState` implements the layout-driven part (IMU compensation, feedback with the
+attitude reset); the launcher and 21-state ECEF models subclass it with their Jacobians.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple, Protocol
 
 import numpy as np
 import pandas as pd
 
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
+from navlib.rotations import exp_so3, skew
 
 HOLDS = ("left", "mean")
 """How a trajectory model's matrices are held over one step (see LinearModel.discretize)."""
@@ -207,3 +217,168 @@ class LinearModel:
         """One row per state: name and initial standard deviation when P0 is known."""
         sigma = np.sqrt(np.diag(self.P0)) if self.P0 is not None else np.full(self.n, np.nan)
         return pd.DataFrame({"state": list(self.state_names), "sigma0": sigma})
+
+
+# --- error-state protocol of the closed-loop filters ------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Nominal:
+    """The filter's nominal (estimated) state over ``K`` IMU samples.
+
+    Attributes
+    ----------
+    t : ndarray (K,)
+    position, velocity : ndarray (K, 3)
+        ECEF position (m) and velocity (m/s) of the strapdown mechanisation.
+    C_b_e : ndarray (K, 3, 3)
+        Body -> ECEF attitude.
+    f_b, w_ib_b : ndarray (K, 3)
+        IMU specific force and inertial rate compensated with the parameter estimates.
+    parameters : dict
+        Parameter estimates (K, 3) by group (``bg``, ``ba``, ``sg``, ``sa``, ``bp``), in the
+        model's convention, decayed to each sample.
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    C_b_e: np.ndarray
+    f_b: np.ndarray
+    w_ib_b: np.ndarray
+    parameters: dict
+
+    def at(self, index) -> Nominal:
+        """The samples ``index`` (an index array or slice)."""
+        return Nominal(self.t[index], self.position[index], self.velocity[index],
+                       self.C_b_e[index], self.f_b[index], self.w_ib_b[index],
+                       {g: v[index] for g, v in self.parameters.items()})
+
+
+class MeasurementRows(NamedTuple):
+    """Rows of one measurement kind in an error model: their names and per-axis sigma."""
+
+    names: tuple[str, ...]
+    sigma: float
+
+
+class ErrorStateModel(Protocol):
+    """What the closed-loop EKF needs from an error model (issue 10).
+
+    Attributes
+    ----------
+    name : str
+    state_names : tuple of str
+    Qc : ndarray (q, q)
+        Power spectral density of the noise input of :meth:`jacobians`' ``G``.
+    P0 : ndarray (n, n)
+        Default initial covariance.
+    groups : dict
+        State layout: group -> indices (3,). ``position``, ``velocity``, ``attitude`` always;
+        parameter groups ``bg``, ``ba`` (gyro, accelerometer biases), ``sg``, ``sa`` (scale
+        factors), ``bp`` (GNSS position bias) and ``reference`` (reference-trajectory
+        attitude) when the model has them.
+    parameters : tuple of str
+        The parameter groups, estimated in the nominal state and fed back.
+    reset : ndarray (n,) of bool
+        States zeroed after feedback (those with a nominal counterpart).
+    decay : dict
+        Parameter group -> continuous decay rates (3,), 1/s (0 for random walks): nominal
+        estimates decay as ``exp(rate t)`` between feedbacks.
+    nav_sign : float
+        ``+1`` when errors are ``true - estimate``, ``-1`` for ``estimate - true``.
+    attitude_frame : {"ecef", "body"}
+        ``C_true = exp(S(psi)) C_hat`` (ECEF ``psi``) or ``C_hat exp(S(dtheta))`` (body).
+    measurements : dict
+        Measurement kind (``gnss_pos``, ``gnss_vel``, ``att``, ``rt``) -> :class:`MeasurementRows`,
+        in the model's measurement order: the kinds the model uses.
+    default_method : str
+        Per-step discretisation the filter uses unless told otherwise.
+    settings : dict
+        The values the model was built with (its builder's ``parameters``).
+    """
+
+    name: str
+    state_names: tuple[str, ...]
+    Qc: np.ndarray
+    P0: np.ndarray
+    groups: Mapping[str, np.ndarray]
+    parameters: tuple[str, ...]
+    reset: np.ndarray
+    decay: Mapping[str, np.ndarray]
+    nav_sign: float
+    attitude_frame: str
+    measurements: Mapping[str, MeasurementRows]
+    default_method: str
+    settings: Mapping
+
+    def jacobians(self, nominal: Nominal) -> tuple[np.ndarray, np.ndarray]:
+        """Continuous ``A`` (K, n, n) and noise input ``G`` (K, n, q) along ``nominal``."""
+
+    def compensate(self, parameters: Mapping, f_b, w_ib_b) -> tuple[np.ndarray, np.ndarray]:
+        """IMU samples (K, 3) compensated with parameter estimates (K, 3) by group."""
+
+    def correct(self, nominal: Nominal, dx) -> Nominal:
+        """``nominal`` corrected with error-state estimates ``dx`` (K, n) (feedback)."""
+
+    def reset_jacobian(self, dx) -> np.ndarray:
+        """Jacobian (n, n) of the error state across the feedback of ``dx`` (n,): the
+        covariance after the reset is ``J P J'``."""
+
+
+@dataclass(frozen=True, eq=False)
+class ErrorState:
+    """IMU compensation and feedback of an :class:`ErrorStateModel` from its layout.
+
+    The attributes are those of :class:`ErrorStateModel`; subclasses add :meth:`jacobians`.
+    """
+
+    name: str
+    state_names: tuple[str, ...]
+    Qc: np.ndarray
+    P0: np.ndarray
+    groups: dict
+    parameters: tuple[str, ...]
+    reset: np.ndarray
+    decay: dict
+    nav_sign: float
+    attitude_frame: str
+    measurements: dict
+    default_method: str
+    settings: dict
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    def compensate(self, parameters, f_b, w_ib_b):
+        """``f = (f_hat - b_a) / (1 + s_a)``, likewise ``omega`` with ``b_g, s_g``, for the
+        groups the model holds (the IMU inverse model, spec excitability.md A7)."""
+        f = f_b - parameters["ba"] if "ba" in parameters else f_b
+        w = w_ib_b - parameters["bg"] if "bg" in parameters else w_ib_b
+        if "sa" in parameters:
+            f = f / (1.0 + parameters["sa"])
+        if "sg" in parameters:
+            w = w / (1.0 + parameters["sg"])
+        return f, w
+
+    def correct(self, nominal: Nominal, dx) -> Nominal:
+        """Feedback: position and velocity move by ``nav_sign dx``, the attitude by
+        ``exp(S(dx_att))`` on the side of :attr:`attitude_frame`, parameters by ``dx``."""
+        s = self.nav_sign
+        g = self.groups
+        E = exp_so3(dx[:, g["attitude"]])
+        C = nominal.C_b_e @ E if self.attitude_frame == "body" else E @ nominal.C_b_e
+        return replace(nominal, position=nominal.position + s * dx[:, g["position"]],
+                       velocity=nominal.velocity + s * dx[:, g["velocity"]], C_b_e=C,
+                       parameters={p: v + dx[:, g[p]] for p, v in nominal.parameters.items()})
+
+
+    def reset_jacobian(self, dx) -> np.ndarray:
+        """Identity but for the attitude block: after ``C_hat <- exp(S(a)) C_hat`` (ECEF
+        error ``C = exp(S(psi)) C_hat``) the error left is ``(I + S(a)/2) (psi - a)`` to first
+        order; after ``C_hat <- C_hat exp(S(a))`` (body error) ``I - S(a)/2``."""
+        J = np.eye(self.n)
+        att = self.groups["attitude"]
+        J[np.ix_(att, att)] += (-0.5 if self.attitude_frame == "body" else 0.5) * skew(dx[att])
+        return J

@@ -28,6 +28,7 @@ Discretisation to the GNSS epochs chains per-IMU-step transitions (spec A8):
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from functools import lru_cache
 from itertools import pairwise
 
@@ -37,7 +38,13 @@ from navlib import earth, units
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.models.base import HOLDS, DiscreteModel, LinearModel
+from navlib.models.base import (
+    HOLDS,
+    DiscreteModel,
+    ErrorState,
+    LinearModel,
+    MeasurementRows,
+)
 from navlib.rotations import skew
 
 STATE_NAMES = (
@@ -455,3 +462,53 @@ def _step_means(A, G, Qc, hold, decimated):
         W = noise(G)
         return 0.5 * (A[:-1] + A[1:]), 0.5 * (W[:-1] + W[1:])
     return 0.5 * (A[:-1] + A[1:]), noise(0.5 * (G[:-1] + G[1:]))
+
+
+_GROUP_NAMES = ("position", "velocity", "attitude", "bg", "ba", "sg", "sa")
+
+
+@dataclass(frozen=True, eq=False)
+class Ecef21ErrorState(ErrorState):
+    """The 21-state ECEF model as the error-state model of :func:`navlib.filters.ekf`.
+
+    Errors are ``truth - estimate`` (``nav_sign = +1``, España et al. 2019), the attitude
+    error ECEF or body (spec A4); the 12 IMU parameters (``bg, ba, sg, sa``) are random walks
+    (no decay) and every state is reset after feedback. Measurements: GNSS position, and
+    GNSS velocity when its sigma is given. Jacobians: :func:`ecef21_jacobians`, discretised
+    by the batched matrix exponential by default. Build with :meth:`build`.
+    """
+
+    @classmethod
+    def build(cls, sensors=None, *, attitude_error: str = "ecef", gnss_sigma_m: float = 5.0,
+              gnss_velocity_sigma: float | None = None, **sigmas) -> Ecef21ErrorState:
+        """The model of :func:`ecef21` (same keywords), plus GNSS velocity updates with
+        sigma ``gnss_velocity_sigma`` (m/s) when given."""
+        parts = _constant_parts(sensors, attitude_error, gnss_sigma_m, sigmas)
+        rows = {"gnss_pos": MeasurementRows(("gnss_x", "gnss_y", "gnss_z"),
+                                            parts["parameters"]["gnss_sigma_m"])}
+        if gnss_velocity_sigma is not None:
+            rows["gnss_vel"] = MeasurementRows(
+                ("gnss_vx", "gnss_vy", "gnss_vz"),
+                finite_scalar(gnss_velocity_sigma, "gnss_velocity_sigma", 0.0, low_open=True))
+        groups = {g: np.arange(3 * i, 3 * i + 3) for i, g in enumerate(_GROUP_NAMES)}
+        return cls(name="ecef21", state_names=STATE_NAMES, Qc=parts["Qc"], P0=parts["P0"],
+                   groups=groups, parameters=_GROUP_NAMES[3:], reset=np.ones(21, dtype=bool),
+                   decay={g: np.zeros(3) for g in _GROUP_NAMES[3:]}, nav_sign=1.0,
+                   attitude_frame=attitude_error, measurements=rows, default_method="expm",
+                   settings=parts["parameters"])
+
+    @classmethod
+    def from_options(cls, options: dict, *, gnss_velocity_sigma: float | None = None,
+                     sensors=None, **_) -> Ecef21ErrorState:
+        """:meth:`build` from the EKF's keywords: ``options`` are :func:`ecef21`'s, whose
+        ``sensors`` default to the simulated ``sensors`` preset when known (the launcher's
+        solution, biases and bias model do not apply)."""
+        options = dict(options)
+        if isinstance(sensors, str):
+            options.setdefault("sensors", sensors)
+        return cls.build(gnss_velocity_sigma=gnss_velocity_sigma, **options)
+
+    def jacobians(self, nominal):
+        """:func:`ecef21_jacobians` along the nominal trajectory and compensated IMU."""
+        return ecef21_jacobians(nominal.position, nominal.C_b_e, nominal.f_b, nominal.w_ib_b,
+                                self.attitude_frame)

@@ -42,12 +42,14 @@ terms ("the shaded terms") to zero and keeps the driving noise.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.earth import EARTH_RATE_ECEF
 from navlib.errors import NavlibInputError
-from navlib.models.base import LinearModel
+from navlib.models.base import ErrorState, LinearModel, MeasurementRows
 from navlib.rotations import skew
 from navlib.sensors import SensorSpec, load_preset
 from navlib.units import DEG
@@ -199,11 +201,8 @@ def _parse(solution, biases, bias_model):
 def state_names(solution: str = "ins_gps", biases: str = "GAP",
                 bias_model: str = "markov") -> tuple[str, ...]:
     """State names of a configuration, in model order (spec launcher.md §3.1, §3.4)."""
-    letters = _parse(solution, biases, bias_model)
-    groups = ["psi", "dv", "dr", *letters]
-    if solution.endswith("_rt"):
-        groups += ["xa", "ref"]
-    return sum((_GROUPS[g] for g in groups), ())
+    return sum((_GROUPS[g] for g in _starts(solution, _parse(solution, biases, bias_model))),
+               ())
 
 
 def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
@@ -261,8 +260,13 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
         ) from exc
     if t.size < 2:
         raise NavlibInputError(f"trajectory: need at least 2 samples, got {t.size}")
-    p = {**sensor_values(sensors), **ASSUMED, "a1_sign": 1.0,
-         "s_t": float(np.median(np.diff(t)))}
+    return _model(solution, letters, bias_model, t, C_b_e, f_b, sensors, kw,
+                  float(np.median(np.diff(t))))
+
+
+def _values(sensors, kw: dict, s_t: float) -> dict:
+    """The model's values: preset, :data:`ASSUMED`, then the keywords (validated)."""
+    p = {**sensor_values(sensors), **ASSUMED, "a1_sign": 1.0, "s_t": s_t}
     for key, value in kw.items():
         p[key] = finite_scalar(value, key)
     if p["a1_sign"] not in (1.0, -1.0):
@@ -270,16 +274,26 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
     for key in _OPTIONS:
         if key != "a1_sign" and not 0 < p[key] < np.inf:
             raise NavlibInputError(f"{key}: must be positive and finite, got {p[key]}")
+    return p
 
-    rt = solution.endswith("_rt")
-    att = solution.startswith("ins_gps_att")
-    names = state_names(solution, letters, bias_model)
-    n, N = len(names), t.size
+
+def _starts(solution: str, letters: str) -> dict:
+    """First state index of each group present in a configuration, in state order."""
     start = {}
     pos = 0
-    for g in ["psi", "dv", "dr", *letters] + (["xa", "ref"] if rt else []):
+    for g in ["psi", "dv", "dr", *letters] + (["xa", "ref"] if solution.endswith("_rt")
+                                               else []):
         start[g] = pos
         pos += len(_GROUPS[g])
+    return start
+
+
+def _dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict):
+    """``A`` (N, n, n), ``G`` (N, n, q) and the PSDs (q,) along attitudes and specific forces
+    (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of spec §3.4)."""
+    rt = solution.endswith("_rt")
+    start = _starts(solution, letters)
+    n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
 
     def sl(group, size=3):
         return slice(start[group], start[group] + size)
@@ -293,8 +307,7 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
     A[:, sl("dv"), sl("dv")] = -2.0 * W_ie
     A[:, sl("dr"), sl("dv")] = I3
     # noise channels: gyro, accel white noise; one driving noise per bias; wind
-    noise_groups = ["wg", "wa", *(f"w{b}" for b in letters)] + (["wind"] if rt else [])
-    q = 3 * len(noise_groups)
+    q = 3 * len(_noise_groups(solution, letters))
     G = np.zeros((N, n, q))
     G[:, sl("psi"), 0:3] = -C_b_e
     G[:, sl("dv"), 3:6] = C_b_e
@@ -317,29 +330,58 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
         A[:, sl("xa"), sl("psi")] = p["a1_sign"] * C_e_b
         G[:, sl("ref"), q - 3:q] = I3
         psd += [p["sigma_wind"] ** 2 * p["s_t"]] * 3
+    return A, G, np.array(psd)
+
+
+def _measurements(solution: str, p: dict) -> dict:
+    """Measurement kind -> rows (names, per-axis sigma), in the model's order: attitude
+    sensor (att solutions), GPS velocity, GPS position, RT attitude difference (RT
+    solutions, noise-free)."""
+    rows = {}
+    if solution.startswith("ins_gps_att"):
+        rows["att"] = MeasurementRows(tuple(f"psi_m_{a}" for a in _AXES), p["sigma_att"])
+    rows["gnss_vel"] = MeasurementRows(tuple(f"dv_m_{a}" for a in _AXES), p["sigma_gps_vel"])
+    rows["gnss_pos"] = MeasurementRows(tuple(f"dr_m_{a}" for a in _AXES), p["sigma_gps_pos"])
+    if solution.endswith("_rt"):
+        rows["rt"] = MeasurementRows(tuple(f"psi_ref_m_{a}" for a in _AXES), 0.0)
+    return rows
+
+
+def _noise_groups(solution: str, letters: str) -> list:
+    return ["wg", "wa", *(f"w{b}" for b in letters)] + (["wind"] if solution.endswith("_rt")
+                                                         else [])
+
+
+def _model(solution, letters, bias_model, t, C_b_e, f_b, sensors, kw, s_t) -> LinearModel:
+    """:func:`launcher` on attitude and specific-force samples (validated configuration)."""
+    p = _values(sensors, kw, s_t)
+    rt = solution.endswith("_rt")
+    names = state_names(solution, letters, bias_model)
+    start = _starts(solution, letters)
+    n, N = len(names), t.size
+
+    def sl(group, size=3):
+        return slice(start[group], start[group] + size)
+
+    I3 = np.eye(3)
+    A, G, psd = _dynamics(C_b_e, f_b, solution, letters, bias_model, p)
     Qc = np.diag(psd)
+    noise_groups = _noise_groups(solution, letters)
 
     # measurements: [attitude;] GPS velocity; GPS position (+ b_p) [; RT difference, eq. 8]
-    rows, sigmas, meas_names = [], [], []
-    if att:
-        rows.append(("psi", None))
-        sigmas += [p["sigma_att"]] * 3
-        meas_names += [f"psi_m_{a}" for a in _AXES]
-    rows += [("dv", None), ("dr", "P" if "P" in letters else None)]
-    sigmas += [p["sigma_gps_vel"]] * 3 + [p["sigma_gps_pos"]] * 3
-    meas_names += [f"dv_m_{a}" for a in _AXES] + [f"dr_m_{a}" for a in _AXES]
-    m = 3 * len(rows) + (3 if rt else 0)
+    meas = _measurements(solution, p)
+    columns = {"att": ["psi"], "gnss_vel": ["dv"],
+               "gnss_pos": ["dr", *(["P"] if "P" in letters else [])]}
+    m = 3 * len(meas)
     H = np.zeros((N, m, n)) if rt else np.zeros((m, n))
-    for i, (group, extra) in enumerate(rows):
-        H[..., 3 * i:3 * i + 3, sl(group)] = I3
-        if extra:
-            H[..., 3 * i:3 * i + 3, sl(extra)] = I3
+    for i, kind in enumerate(k for k in meas if k != "rt"):
+        for group in columns[kind]:
+            H[..., 3 * i:3 * i + 3, sl(group)] = I3
     if rt:
-        H[:, m - 3:, sl("psi")] = C_e_b
+        H[:, m - 3:, sl("psi")] = np.swapaxes(C_b_e, 1, 2)
         H[:, m - 3:, sl("ref")] = I3
-        sigmas += [0.0] * 3
-        meas_names += [f"psi_ref_m_{a}" for a in _AXES]
-    R = np.diag(np.square(sigmas))
+    R = np.diag(np.square([rows.sigma for rows in meas.values() for _ in _AXES]))
+    meas_names = sum((rows.names for rows in meas.values()), ())
 
     sigma0 = {"psi": p["sigma0_att"], "dv": p["sigma0_vel"], "dr": p["sigma0_pos"],
               "G": p["gyro_bias"], "A": p["accel_bias"], "P": p["sigma_bp"], "ref": 0.0}
@@ -352,6 +394,64 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
               "sensors": sensors if isinstance(sensors, str) else sensors.name, **p}
     return LinearModel(
         state_names=names, A=A, G=G, Qc=Qc, H=H, R=R, t=t, P0=P0,
-        measurement_names=tuple(meas_names), noise_names=noise_names,
+        measurement_names=meas_names, noise_names=noise_names,
         name=f"{solution}/{letters or '-'}/{bias_model}", parameters=params,
     )
+
+
+_PARAMETER_GROUPS = {"G": "bg", "A": "ba", "P": "bp"}
+
+
+@dataclass(frozen=True, eq=False)
+class LauncherErrorState(ErrorState):
+    """A launcher model as the error-state model of :func:`navlib.filters.ekf`.
+
+    Errors are ``estimate - truth`` (``nav_sign = -1``) with the ECEF attitude error ``psi``
+    (spec launcher.md §3.1); the parameter groups are the biases ``bg``, ``ba`` (body) and
+    ``bp`` (minus the GPS position bias, E frame), decaying at ``-1/c`` for Markov biases.
+    The reference-trajectory block (``x19..x25``, ``psi_ref``, spec §3.4) is the launcher's
+    divergence from its reference: it has no nominal counterpart and is not reset. The
+    Jacobians are :func:`launcher`'s ``A``, ``G`` (Euler steps by default, as the paper).
+    Build with :meth:`build`.
+    """
+
+    @classmethod
+    def build(cls, solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
+              *, step_s: float, sensors=DEFAULT_SENSORS, **kw) -> LauncherErrorState:
+        """The configuration of :func:`launcher` (same keywords) at IMU step ``step_s``
+        (the default ``s_t``)."""
+        reject_unknown(kw, _OPTIONS, "launcher")
+        letters = _parse(solution, biases, bias_model)
+        step_s = finite_scalar(step_s, "step_s", 0.0, low_open=True)
+        model = _model(solution, letters, bias_model, np.zeros(1), np.eye(3)[None],
+                       np.zeros((1, 3)), sensors, kw, step_s)
+        start = _starts(solution, letters)
+        groups = {name: np.arange(start[g], start[g] + 3) for g, name in
+                  (("dr", "position"), ("dv", "velocity"), ("psi", "attitude"),
+                   ("ref", "reference"), *_PARAMETER_GROUPS.items()) if g in start}
+        parameters = tuple(_PARAMETER_GROUPS[b] for b in letters)
+        decay = {g: np.diag(model.A[0][np.ix_(groups[g], groups[g])]).copy()
+                 for g in parameters}
+        reset = np.ones(model.n, dtype=bool)
+        if "xa" in start:
+            reset[start["xa"]:] = False
+        return cls(name="launcher", state_names=model.state_names, Qc=model.Qc, P0=model.P0,
+                   groups=groups, parameters=parameters, reset=reset, decay=decay,
+                   nav_sign=-1.0, attitude_frame="ecef",
+                   measurements=_measurements(solution, model.parameters),
+                   default_method="euler", settings=model.parameters)
+
+    @classmethod
+    def from_options(cls, options: dict, *, step_s: float, solution: str, biases: str,
+                     bias_model: str, **_) -> LauncherErrorState:
+        """:meth:`build` from the EKF's keywords (``options`` are :func:`launcher`'s; the
+        EKF's GNSS-velocity sigma and simulated sensors do not apply: the launcher takes
+        GPS velocity at ``sigma_gps_vel`` and its values from ``sensors``)."""
+        return cls.build(solution, biases, bias_model, step_s=step_s, **options)
+
+    def jacobians(self, nominal):
+        """:func:`launcher`'s ``A``, ``G`` along the nominal attitude and specific force."""
+        s = self.settings
+        A, G, _ = _dynamics(nominal.C_b_e, nominal.f_b, s["solution"], s["biases"],
+                            s["bias_model"], s)
+        return A, G
