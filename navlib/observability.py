@@ -21,6 +21,7 @@ import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 import pandas as pd
@@ -302,7 +303,8 @@ def analyze(O, rtol: float | None = None, state_names: Sequence[str] | None = No
         if np.any(scale <= 0):
             raise NavlibInputError("scale: state scales must be positive")
     try:
-        _, s, Vt = np.linalg.svd(O, full_matrices=True)
+        # a complete V needs full matrices only when O has fewer rows than columns
+        _, s, Vt = np.linalg.svd(O, full_matrices=M < n)
     except np.linalg.LinAlgError as exc:  # pragma: no cover - SVD of finite input converges
         raise NavlibInputError(f"O: SVD did not converge ({exc})") from exc
     rank = int(np.sum(s > tol * s[0])) if s[0] > 0 else 0
@@ -431,13 +433,12 @@ def _model_arrays(model, method: str):
         n_samples = t.size
         A = np.asarray(model.A)
         dt = np.diff(t)
-        zero_G = np.zeros((model.n, 1))
-        zero_Qc = np.zeros((1, 1))
+        zero_W = np.zeros((model.n, model.n))  # no noise: only F is used
 
         def transitions(idx):
             flat = np.ravel(idx)
             A_part = A[flat] if A.ndim == 3 else np.broadcast_to(A, (flat.size, *A.shape))
-            F = discretize_steps(A_part, zero_G, zero_Qc, dt[flat], method)[0]
+            F = discretize_steps(A_part, None, None, dt[flat], method, W=zero_W)[0]
             return F.reshape(*np.shape(idx), *F.shape[1:])
 
         H = np.asarray(model.H)
@@ -449,23 +450,103 @@ def _model_arrays(model, method: str):
     )
 
 
-def _stack_time_varying(transitions, H, steps, window):
-    """Local matrices of eq. (6) at consecutive ``steps``: (K, window * m, n).
+def _gram_rows(X, n: int) -> np.ndarray:
+    """``n`` rows with the Gram matrix ``X' X`` of each stack ``X`` (..., p, n).
 
-    Block ``j`` of ``O(k)`` is ``M_j[k] = H[k+j] F[k+j-1] ... F[k]``; the recursion
-    ``M_j[k] = M_{j-1}[k+1] F[k]`` (the backward recursion O(k) = [H_k; O(k+1)[:-1] F_k]
-    reorganised by block) runs batched over all steps at once.
+    The R factor of ``X`` when ``p > n``, else ``X`` followed by zero rows: the singular
+    values are those of ``X`` (padded with zeros up to ``n``).
     """
-    k0, K = int(steps[0]), steps.size
-    F = transitions(np.arange(k0, k0 + K + window - 2))
-    cur = H[k0:k0 + K + window - 1]
-    m, n = cur.shape[1:]
-    O = np.empty((K, window, m, n))
-    O[:, 0] = cur[:K]
-    for j in range(1, window):
-        cur = np.matmul(cur[1:], F[:cur.shape[0] - 1])
-        O[:, j] = cur[:K]
-    return O.reshape(K, window * m, n)
+    p = X.shape[-2]
+    if p > n:
+        return np.linalg.qr(X, mode="r")
+    out = np.zeros((*X.shape[:-2], n, n))
+    out[..., :p, :] = X
+    return out
+
+
+def _block_data(transitions, H, k0: int, n_blocks: int, window: int):
+    """``H`` (n_blocks + 1, w, m, n) and ``F`` (n_blocks + 1, w, n, n) of the steps from
+    ``k0`` in blocks of ``w``; past the mission ``H = 0`` and ``F = I``, which only steps
+    without a complete window read."""
+    m, n = H.shape[1:]
+    idx = np.arange(k0, k0 + (n_blocks + 1) * window)
+    Hs = np.zeros((idx.size, m, n))
+    inside = idx[idx < H.shape[0]]
+    Hs[:inside.size] = H[inside]
+    Fs = np.empty((idx.size, n, n))
+    inside = idx[idx < H.shape[0] - 1]
+    Fs[:inside.size] = transitions(inside)
+    Fs[inside.size:] = np.eye(n)
+    shape = (n_blocks + 1, window)
+    return Hs.reshape(*shape, m, n), Fs.reshape(*shape, n, n)
+
+
+def _suffix_factors(Hb, Fb):
+    """Block suffixes of eq. (6): ``Y[:, r]`` (n x n) has the Gram matrix of the block rows
+    ``H_r; H_{r+1} F_r; ...; H_{w-1} F_{w-2} ... F_r`` of each block, and
+    ``Phi[:, r] = F_{w-1} ... F_r`` maps step ``r`` to the next block's start.
+
+    Backward recursion ``Y_r = R([H_r; Y_{r+1} F_r])``, one (m + n) x n QR per step.
+    """
+    nb, w, m, n = Hb.shape
+    Y = np.empty((nb, w, n, n))
+    Phi = np.empty((nb, w, n, n))
+    Y[:, w - 1] = _gram_rows(Hb[:, w - 1], n)
+    Phi[:, w - 1] = Fb[:, w - 1]
+    stack = np.empty((nb, m + n, n))
+    for r in range(w - 2, -1, -1):
+        stack[:, :m] = Hb[:, r]
+        np.matmul(Y[:, r + 1], Fb[:, r], out=stack[:, m:])
+        Y[:, r] = np.linalg.qr(stack, mode="r")
+        np.matmul(Phi[:, r + 1], Fb[:, r], out=Phi[:, r])
+    return Y, Phi
+
+
+def _prefix_factors(Hb, Fb):
+    """Block prefixes of eq. (6): ``P[:, j]`` (n x n) has the Gram matrix of the first
+    ``j + 1`` block rows from each block's start, ``H_0; H_1 F_0; ...; H_j F_{j-1} ... F_0``.
+
+    Forward recursion ``P_j = R([P_{j-1}; H_j Psi_j])`` with ``Psi_j = F_{j-1} ... F_0``.
+    """
+    nb, w, m, n = Hb.shape
+    P = np.empty((nb, max(w - 1, 0), n, n))
+    if w < 2:
+        return P
+    P[:, 0] = _gram_rows(Hb[:, 0], n)
+    psi = Fb[:, 0]
+    stack = np.empty((nb, n + m, n))
+    for j in range(1, w - 1):
+        stack[:, :n] = P[:, j - 1]
+        np.matmul(Hb[:, j], psi, out=stack[:, n:])
+        P[:, j] = np.linalg.qr(stack, mode="r")
+        psi = Fb[:, j] @ psi
+    return P
+
+
+def _sliding_singular_values(transitions, H, k0: int, K: int, window: int) -> np.ndarray:
+    """Singular values of eq. (6)'s ``O(k)`` at the consecutive steps ``k0 .. k0 + K - 1``.
+
+    Two-stack sliding window (docs/assumptions.md, launcher.md §6.1): with blocks of ``w``
+    steps from ``k0``, the window of step ``k = b w + r`` is the suffix of block ``b`` from
+    ``r`` (``w - r`` block rows) followed by the first ``r`` block rows of block ``b + 1``
+    times the suffix transition, so ``O(k)`` is orthogonally equivalent to
+    ``[Y_r; P_{r-1} Phi_r]`` (2n x n, see :func:`_suffix_factors`, :func:`_prefix_factors`)
+    and has its singular values. Per step: two (m + n) x n QRs, four n x n products and the
+    SVD of one 2n x n stack, instead of forming the ``w m x n`` matrix (``w - 1`` block
+    products) and factorising it. Each factor is a backward-stable QR of rows whose norms
+    are bounded by those of ``O(k)`` (the transitions are near I), so the singular values
+    agree with the direct ones to a few ``eps * sigma_max``.
+    """
+    n = H.shape[2]
+    n_blocks = -(-K // window)
+    Hb, Fb = _block_data(transitions, H, k0, n_blocks, window)
+    Y, Phi = _suffix_factors(Hb[:-1], Fb[:-1])
+    P = _prefix_factors(Hb[1:], Fb[1:])
+    C = np.empty((n_blocks, window, 2 * n, n))
+    C[:, :, :n] = Y
+    C[:, 0, n:] = 0.0
+    np.matmul(P, Phi[:, 1:], out=C[:, 1:, n:])
+    return np.linalg.svd(C.reshape(-1, 2 * n, n)[:K], compute_uv=False)
 
 
 def _stack_time_varying_strided(transitions, H, steps, window):
@@ -500,11 +581,19 @@ def _evaluable_steps(n_epochs: int, window: int, variant: str) -> int:
     return n_epochs - window + 1 if variant == "time_varying" else n_epochs - 1
 
 
+def _sliding(variant: str, stride: int, window: int, m: int, n: int) -> bool:
+    """Whether :func:`_sliding_singular_values` applies: every step of eq. (6), and a window
+    with at least as many rows as states (else ``O(k)`` has fewer than ``n`` singular values,
+    padded with exact zeros below)."""
+    return variant == "time_varying" and stride == 1 and window * m >= n
+
+
 def _singular_values_chunk(transitions, H, steps, window, variant, stride):
+    m, n = H.shape[1:]
+    if _sliding(variant, stride, window, m, n):
+        return _sliding_singular_values(transitions, H, int(steps[0]), steps.size, window)
     if variant == "frozen":
         O = _stack_frozen(transitions, H, steps, window)
-    elif stride == 1:
-        O = _stack_time_varying(transitions, H, steps, window)
     else:
         O = _stack_time_varying_strided(transitions, H, steps, window)
     if O.shape[1] > O.shape[2]:
@@ -514,6 +603,17 @@ def _singular_values_chunk(transitions, H, steps, window, variant, stride):
     return np.linalg.svd(O, compute_uv=False)
 
 
+@cache
+def _blas_controller():
+    """threadpoolctl's view of the loaded BLAS libraries (scanned once: ~10 ms a scan), or
+    ``None`` when ``threadpoolctl`` is not installed."""
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:
+        return None
+    return ThreadpoolController()
+
+
 def _blas_single_thread():
     """Context limiting BLAS to one thread (our threads split the work instead).
 
@@ -521,11 +621,8 @@ def _blas_single_thread():
     one thread and collapses when other processes load the cores; ``threadpoolctl`` (an
     optional dependency) switches it off. Returns ``None`` when it is not installed.
     """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        return None
-    return threadpool_limits(1)
+    controller = _blas_controller()
+    return None if controller is None else controller.limit(limits=1)
 
 
 def local_observability(model, window: int | None = None, variant: str = "time_varying",
@@ -585,6 +682,8 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
     tol = rtol if rtol is not None else _default_rtol((window * m, n))
     tol = finite_scalar(tol, "rtol", low=0.0, high=1.0)
     steps = np.arange(0, n_eval, stride)
+    if _sliding(variant, stride, window, m, n):  # whole blocks of the sliding window
+        chunk = max(chunk // window, 1) * window
     pieces = [steps[i:i + chunk] for i in range(0, steps.size, chunk)]
     limit = _blas_single_thread()
     if n_jobs is None:

@@ -16,6 +16,7 @@ rows depend on the trajectory and on the frozen / time-varying reading of eq. (6
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -192,17 +193,45 @@ class Table2Result:
         return match_counts(self.frame, TOLERANCES if tolerances is None else tolerances)
 
 
-def _config_row(config, trajectory, *, window, variant, stride, rtol, method, n_jobs,
-                model_kw) -> dict:
-    """Our Table 2 row of one ``(solution, biases, bias_model)`` configuration."""
+def _config_model(config, trajectory, model_kw):
+    """The launcher model of one ``(solution, biases, bias_model)`` configuration."""
     solution, biases, bias_model = config
-    model = launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
+    return launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
+
+
+def _model_row(config, model, trajectory, *, window, variant, stride, rtol, method,
+               n_jobs) -> dict:
+    """Our Table 2 row of one configuration from its model."""
+    solution, biases, bias_model = config
     res = local_observability(model, window=window, variant=variant, stride=stride,
                               rtol=rtol, method=method, n_jobs=n_jobs)
     return {"solution": solution, "biases": biases, "bias_model": bias_model,
             "n_states": model.n, "n_unobservable": res.n_unobservable,
             "log10_cond": res.log10_max_cond, "rank_constant": res.rank_constant,
             **_mid_step_analysis(model, res, trajectory, window, variant, method, rtol)}
+
+
+def _config_row(config, trajectory, *, model_kw, **options) -> dict:
+    """Our Table 2 row of one configuration (one task of the ``scheduler`` run)."""
+    return _model_row(config, _config_model(config, trajectory, model_kw), trajectory,
+                      **options)
+
+
+def _local_rows(configs, trajectory, progress, model_kw, options) -> list[dict]:
+    """The rows one configuration after the other, each model built in a background thread
+    while the previous one is analysed (a build is serial numpy work that would otherwise
+    leave the analysis threads' cores idle)."""
+    rows = []
+    with ThreadPoolExecutor(1) as builder:
+        upcoming = builder.submit(_config_model, configs[0], trajectory, model_kw)
+        for i, config in enumerate(configs):
+            if progress is not None:
+                progress(i, len(configs), config)
+            model = upcoming.result()
+            if i + 1 < len(configs):
+                upcoming = builder.submit(_config_model, configs[i + 1], trajectory, model_kw)
+            rows.append(_model_row(config, model, trajectory, **options))
+    return rows
 
 
 def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
@@ -247,18 +276,15 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
         trajectory = launcher_ascent()
     configs = configurations(solutions)
     options = {"window": window, "variant": variant, "stride": stride, "rtol": rtol,
-               "method": method, "model_kw": model_kw}
+               "method": method}
     if scheduler is not None:  # one task per configuration (navlib.sweep.map_tasks)
         from navlib.sweep import map_tasks
 
-        rows = map_tasks(partial(_config_row, n_jobs=1, **options), configs, scheduler,
-                         shared={"trajectory": trajectory}, desc="Table 2")
+        rows = map_tasks(partial(_config_row, n_jobs=1, model_kw=model_kw, **options),
+                         configs, scheduler, shared={"trajectory": trajectory}, desc="Table 2")
     else:
-        rows = []
-        for i, config in enumerate(configs):
-            if progress is not None:
-                progress(i, len(configs), config)
-            rows.append(_config_row(config, trajectory, n_jobs=n_jobs, **options))
+        rows = _local_rows(configs, trajectory, progress, model_kw,
+                           {**options, "n_jobs": n_jobs})
     ours = pd.DataFrame(rows)
     paper = paper_table2().rename(columns={"n_unobservable": "paper_unobservable",
                                            "log10_cond": "paper_log10_cond",
