@@ -11,7 +11,9 @@ Contract: spec api.md "Observability".
 * :func:`local_observability` evaluates the local observability matrix at every step of a
   discrete model, either as printed in Beaudoin et al. (2018) eq. (6) (time-varying sequence
   ``C(k); C(k+1)A(k); ...``) or with the step's matrices frozen (PWCS, spec launcher.md §6.1
-  item 2). It is vectorised over steps and split across threads (see :func:`local_observability`).
+  item 2). It is vectorised over steps and split across threads (see :func:`local_observability`);
+  at every step of eq. (6) it carries QR factors from step to step (a sliding window,
+  :func:`_sliding_singular_values`) instead of factorising each stacked matrix.
 """
 
 from __future__ import annotations
@@ -519,7 +521,8 @@ def _prefix_factors(Hb, Fb):
         stack[:, :n] = P[:, j - 1]
         np.matmul(Hb[:, j], psi, out=stack[:, n:])
         P[:, j] = np.linalg.qr(stack, mode="r")
-        psi = Fb[:, j] @ psi
+        if j < w - 2:
+            psi = Fb[:, j] @ psi
     return P
 
 
@@ -533,9 +536,9 @@ def _sliding_singular_values(transitions, H, k0: int, K: int, window: int) -> np
     ``[Y_r; P_{r-1} Phi_r]`` (2n x n, see :func:`_suffix_factors`, :func:`_prefix_factors`)
     and has its singular values. Per step: two (m + n) x n QRs, four n x n products and the
     SVD of one 2n x n stack, instead of forming the ``w m x n`` matrix (``w - 1`` block
-    products) and factorising it. Each factor is a backward-stable QR of rows whose norms
-    are bounded by those of ``O(k)`` (the transitions are near I), so the singular values
-    agree with the direct ones to a few ``eps * sigma_max``.
+    products) and factorising it. Each factor is a backward-stable QR and the transitions
+    over a window are well scaled (Euler steps ``I + A dt``), so the singular values agree
+    with the direct ones to a few rounding units of ``sigma_max`` (tests/test_local_sliding.py).
     """
     n = H.shape[2]
     n_blocks = -(-K // window)
@@ -636,6 +639,14 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
     ``[H_k; H_k F_k; ...; H_k F_k^(w-1)]`` (``variant="frozen"``, PWCS), with ``w = n`` block
     rows by default.
 
+    Time-varying at every step (``stride=1``, ``w m >= n``): the singular values come from
+    the sliding-window factors of :func:`_sliding_singular_values` (docs/assumptions.md,
+    launcher.md §6.1), equal to those of an SVD of each stacked ``O(k)`` to a few rounding
+    units of its largest singular value, hence the same ranks and the same finite condition
+    numbers (to a relative ``~eps * cond``); an exactly singular ``O(k)`` gets a condition
+    number of the order of ``1 / eps`` either way (its digits are rounding noise). Otherwise
+    each evaluated ``O(k)`` is stacked and factorised (QR, then the SVD of the n x n factor).
+
     Parameters
     ----------
     model : DiscreteModel or LinearModel
@@ -657,7 +668,8 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
         Threads over chunks of steps (BLAS limited to one thread each through
         ``threadpoolctl``); default all cores when ``threadpoolctl`` is installed, else 1.
     chunk : int
-        Steps per batch (bounds memory: ``chunk * window * m * n`` floats).
+        Steps per batch (bounds memory: ``chunk * window * m * n`` floats, or about
+        ``8 chunk n^2`` on the sliding path, where it is rounded down to whole windows).
 
     Returns
     -------
