@@ -870,8 +870,10 @@ test of :func:`navlib.observability.local_observability` makes it affordable). E
 or 40th step gives the same unobservable counts, match column and match counts, maximum
 condition orders of the full-rank rows up to 0.6 decade lower (the INS/GPS-only rows), and
 other rounding-noise digits for the numerically singular ones, which ``T2-RW-P``'s second
-check reads (it passes at stride 40 with the stacked factorisation, 16.9 and above, and
-fails at stride 1 where some random-walk b_p rows stay at 16.4)."""
+check reads: at stride 40 (each stacked matrix factorised) every random-walk b_p row has
+log10 cond 16.9 or more and the claim is reproduced at every tolerance; at stride 1 (the
+sliding-window factors) some stay at 16.4, below ``17 - cond_tol`` for 0.25 and 0.5 decade,
+and the claim is partly reproduced there."""
 TOLERANCE_CLAIMS = ("T2-table", "T2-att-noRT", "T2-att-RT", "T2-threshold", "T2-ins-gps")
 """Table 2 claims whose checks use the condition-order tolerance (the others count ranks)."""
 
