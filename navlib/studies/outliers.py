@@ -34,11 +34,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
+from threadpoolctl import threadpool_limits
 
 from navlib._validation import finite_scalar
 from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.filters import LinearFilter, nees_values, prepare_linear, simulate_linear
+from navlib.filters.linear import unit_responses
 from navlib.models.launcher import SOLUTIONS, launcher
 from navlib.outliers import PAPER_TESTS, Outlier, RecoveryScore, score_recovery
 from navlib.studies import claims as engine
@@ -63,10 +65,13 @@ def default_trajectory(quick: bool = False):
 
 
 class FilterCache:
-    """Prepared linear filters (:class:`navlib.filters.LinearFilter`) by configuration.
+    """Prepared linear filters (:class:`navlib.filters.LinearFilter`) by configuration, and
+    the outlier responses computed with them.
 
     One launcher configuration along a 150 s, 200 Hz trajectory holds about 0.8 GB of
     matrices, so the cache keeps at most ``size`` of them (least recently used dropped).
+    The projected unit responses (:meth:`unit_responses`, a few MB) are kept for every
+    configuration, also after its filter was dropped.
     """
 
     def __init__(self, trajectory, size: int = 2, **model_options):
@@ -74,6 +79,7 @@ class FilterCache:
         self.size = int(size)
         self.model_options = model_options
         self._items: dict = {}
+        self._responses: dict = {}
 
     def get(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
             ) -> LinearFilter:
@@ -89,6 +95,57 @@ class FilterCache:
         self._items[key] = value
         return value
 
+    def unit_responses(self, solution: str, requests: Sequence[tuple[Outlier, str]], *,
+                       biases: str = "GAP", bias_model: str = "markov",
+                       record_every: int = 1) -> list[UnitResponse]:
+        """The :class:`UnitResponse` of each ``(outlier, watch)`` request on one solution.
+
+        Responses not kept yet are computed together, one filter recursion for all of them
+        (:func:`navlib.filters.linear.unit_responses`), and kept.
+        """
+        config = (solution, biases, bias_model)
+        wanted = [(config, _unit(o), watch, int(record_every)) for o, watch in requests]
+        missing = [w for w in dict.fromkeys(wanted) if w not in self._responses]
+        if missing:
+            units = list(dict.fromkeys(w[1] for w in missing))
+            sim = unit_responses(self.get(*config), units, record_every=record_every)
+            C = self.trajectory.attitude.as_matrix()[sim.index]
+            for watch in dict.fromkeys(w[2] for w in missing):
+                truth, est, sigma = sim.project(watch_rows(watch, sim.state_names, C))
+                for w in missing:
+                    if w[2] == watch:
+                        i = units.index(w[1])
+                        self._responses[w] = UnitResponse(sim.t, truth[:, i], est[:, i],
+                                                          sigma, sim.applied[i])
+        return [self._responses[w] for w in wanted]
+
+
+@dataclass(frozen=True, eq=False)
+class UnitResponse:
+    """Noise-free response of one prepared filter to an outlier of unit magnitude, projected
+    on a watched quantity (:meth:`FilterCache.unit_responses`).
+
+    Attributes
+    ----------
+    t : ndarray (K,)
+    truth, estimate : ndarray (K, p)
+        The watched error state and its estimate per unit of the outlier's magnitude.
+    sigma : ndarray (K, p)
+        Filter standard deviation of the watched quantity (independent of the outlier).
+    applied : bool
+    """
+
+    t: np.ndarray
+    truth: np.ndarray
+    estimate: np.ndarray
+    sigma: np.ndarray
+    applied: bool
+
+
+def _unit(outlier: Outlier) -> Outlier:
+    """``outlier`` with magnitude 1 (the key of its unit response)."""
+    return replace(outlier, magnitude=1.0)
+
 
 _RT_ONLY_OPTIONS = ("a1_sign", "sigma_wind")
 """Launcher options that enter only the RT block (``psi_ref``, ``A1``, wind) of
@@ -96,9 +153,9 @@ _RT_ONLY_OPTIONS = ("a1_sign", "sigma_wind")
 
 
 def _adopt(cache: FilterCache, other: FilterCache) -> None:
-    """Put into ``cache`` the prepared filters of ``other`` that are the same models: all of
-    them when both use the same trajectory and model options, the non-RT ones when the
-    options differ only in :data:`_RT_ONLY_OPTIONS`."""
+    """Put into ``cache`` the prepared filters and unit responses of ``other`` that are the
+    same models: all of them when both use the same trajectory and model options, the
+    non-RT ones when the options differ only in :data:`_RT_ONLY_OPTIONS`."""
     if other.trajectory is not cache.trajectory:
         return
     a, b = cache.model_options, other.model_options
@@ -108,6 +165,9 @@ def _adopt(cache: FilterCache, other: FilterCache) -> None:
     for key, value in other._items.items():
         if not differ or not key[0].endswith("_rt"):
             cache._items.setdefault(key, value)
+    for key, value in other._responses.items():
+        if not differ or not key[0][0].endswith("_rt"):
+            cache._responses.setdefault(key, value)
 
 
 def record_stride(trajectory, spacing_s: float = 0.02) -> int:
@@ -204,6 +264,11 @@ def outlier_response(solution: str, outlier: Outlier, watch: str = "roll", *,
                      **model_options) -> OutlierResponse:
     """The exact outlier-induced error of one launcher solution (linear mode).
 
+    The response is ``outlier.magnitude`` times the filter's response to the same outlier
+    of unit magnitude (:meth:`FilterCache.unit_responses`, kept in ``cache``): the linear
+    Kalman filter is linear in its inputs and its gains do not depend on the data, so the
+    scaling is exact (up to rounding) and other magnitudes cost no new run.
+
     Parameters
     ----------
     solution : str
@@ -230,19 +295,16 @@ def outlier_response(solution: str, outlier: Outlier, watch: str = "roll", *,
     if cache is None:
         cache = FilterCache(trajectory if trajectory is not None else default_trajectory(),
                             size=1, **model_options)
-    prepared = cache.get(solution, biases, bias_model)
-    sim = simulate_linear(prepared, outliers=outlier, noise=False, initial_error=False,
-                          record_every=record_every)
-    C = cache.trajectory.attitude.as_matrix()[sim.index]
-    rows = watch_rows(watch, sim.state_names, C)
-    truth, est, sigma = sim.project(rows)
-    truth, est = truth[:, 0], est[:, 0]
+    unit, = cache.unit_responses(solution, [(outlier, watch)], biases=biases,
+                                 bias_model=bias_model, record_every=record_every)
+    truth, est, sigma = outlier.magnitude * unit.truth, outlier.magnitude * unit.estimate, \
+        unit.sigma
     induced = est - truth
-    score = score_recovery(sim.t, induced if induced.shape[1] > 1 else induced[:, 0],
+    score = score_recovery(unit.t, induced if induced.shape[1] > 1 else induced[:, 0],
                            t_outlier=outlier.time, window=window,
                            sigma=sigma if sigma.shape[1] > 1 else sigma[:, 0],
                            averaging=averaging)
-    return OutlierResponse(solution, watch, outlier, bool(sim.applied[0]), sim.t, truth, est,
+    return OutlierResponse(solution, watch, outlier, bool(unit.applied), unit.t, truth, est,
                            induced, sigma, score)
 
 
@@ -362,6 +424,14 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 and (time is None or r.outlier.time == time)}
     responses = {}
     for sol, tids in jobs.items():
+        requests = [(PAPER_TESTS[tid].outlier(shape, time=time), PAPER_TESTS[tid].watch)
+                    for tid in tids for shape in shapes if (tid, sol, shape) not in same]
+        if "T4" in tids and sol == "ins_gps_att_rt" and divergence:
+            requests.append((PAPER_TESTS["T4"].outlier("spike", time=time), "ref_roll"))
+        if requests:              # one recursion for all of this filter's responses
+            cache.unit_responses(sol, requests, biases=biases,
+                                 bias_model=_bias_model(biases, bias_model),
+                                 record_every=record_every)
         for tid in tids:
             test = PAPER_TESTS[tid]
             for shape in shapes:
@@ -698,7 +768,7 @@ def monte_carlo_outlier(solution: str, outlier: Outlier, watch: str = "roll", *,
     sim = simulate_linear(prepared, runs=runs, seed=seed, outliers=outlier,
                           record_every=record_every, progress=progress)
     resp = simulate_linear(prepared, outliers=outlier, noise=False, initial_error=False,
-                           record_every=record_every)
+                           record_every=record_every, nees=False)
     C = cache.trajectory.attitude.as_matrix()[sim.index]
     rows = watch_rows(watch, sim.state_names, C)
     truth, est, sigma = sim.project(rows)
@@ -763,8 +833,12 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     sensors at every sample as in the paper, noise-free so the response is isolated) and
     compare its roll response with the linear filter's.
 
-    ``cache``: prepared linear filters to reuse for the linear response when it holds the
-    same trajectory and model options (else a fresh one is built)."""
+    The run with the outlier starts from the state of the run without it at the last
+    propagation window before the outlier (``simulate_ekf(..., resume=...)``: the same
+    numbers as a run from the start, whose first part is the nominal run's), except for
+    the RT solutions, whose closed-loop reference trajectory keeps a state of its own.
+    ``cache``: prepared linear filters and responses to reuse for the linear response
+    when it holds the same trajectory and model options (else a fresh one is built)."""
     from navlib.filters import simulate_ekf
 
     traj = trajectory if trajectory is not None else default_trajectory()
@@ -772,8 +846,12 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     kw = dict(model="launcher", solution=solution, biases=biases, bias_model=bias_model,
               model_options=model_options or None, gnss_rate_hz=traj.rate_hz, noise=False,
               initial_error=False, window_s=window_s)
-    faulty = simulate_ekf(traj, outliers=outlier, **kw)
-    nominal = simulate_ekf(traj, **kw)
+    resumable = not solution.endswith("_rt")
+    before = outlier.time - float(np.max(np.diff(traj.t)))
+    with threadpool_limits(1):          # small matrices, one step at a time
+        nominal = simulate_ekf(traj, snapshot_before=before if resumable else None, **kw)
+        faulty = simulate_ekf(traj, outliers=outlier, resume=nominal if resumable else None,
+                              **kw)
     # navigation roll error (C_true = exp(S(psi)) C_hat, body axes) = truth - estimate of
     # the error state after feedback; the linear 'induced' is estimate - truth
     induced = -(faulty.errors["roll"].to_numpy() - nominal.errors["roll"].to_numpy())
@@ -802,10 +880,11 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
     from navlib.filters import simulate_ekf
 
     bias_model = _bias_model(biases, bias_model)
-    run = simulate_ekf(trajectory, solution=solution, biases=biases, bias_model=bias_model,
-                       model_options=model_options or None, seed=seed,
-                       gnss_rate_hz=trajectory.rate_hz, window_s=window_s,
-                       keep_covariance=True)
+    with threadpool_limits(1):          # small matrices, one step at a time
+        run = simulate_ekf(trajectory, solution=solution, biases=biases,
+                           bias_model=bias_model, model_options=model_options or None,
+                           seed=seed, gnss_rate_hz=trajectory.rate_hz, window_s=window_s,
+                           keep_covariance=True)
     res = run.result
     k = np.searchsorted(trajectory.t, res.t)
     C_e_b = np.swapaxes(trajectory.attitude.as_matrix()[k], 1, 2)
