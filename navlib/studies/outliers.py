@@ -40,7 +40,7 @@ from navlib._validation import finite_scalar
 from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.filters import LinearFilter, nees_values, prepare_linear, simulate_linear
-from navlib.filters.linear import unit_responses
+from navlib.filters.linear import recorded_epochs, unit_responses
 from navlib.models.launcher import SOLUTIONS, launcher
 from navlib.outliers import PAPER_TESTS, Outlier, RecoveryScore, score_recovery
 from navlib.studies import claims as engine
@@ -66,12 +66,15 @@ def default_trajectory(quick: bool = False):
 
 class FilterCache:
     """Prepared linear filters (:class:`navlib.filters.LinearFilter`) by configuration, and
-    the outlier responses computed with them.
+    what the study reads from them.
 
     One launcher configuration along a 150 s, 200 Hz trajectory holds about 0.8 GB of
-    matrices, so the cache keeps at most ``size`` of them (least recently used dropped).
-    The projected unit responses (:meth:`unit_responses`, a few MB) are kept for every
-    configuration, also after its filter was dropped.
+    matrices (prepared with ``compact=True``), so the cache keeps at most ``size`` of them
+    (least recently used dropped before a new one is prepared). What the figures and
+    verdicts read from a filter is kept for every configuration, also after its filter was
+    dropped, and shared with caches that adopt it (:func:`_adopt`): its
+    :class:`CovarianceSummary` (taken when it is prepared) and the projected unit
+    responses of :meth:`unit_responses` (a few MB each).
     """
 
     def __init__(self, trajectory, size: int = 2, **model_options):
@@ -79,6 +82,7 @@ class FilterCache:
         self.size = int(size)
         self.model_options = model_options
         self._items: dict = {}
+        self._summaries: dict = {}
         self._responses: dict = {}
 
     def get(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
@@ -87,29 +91,47 @@ class FilterCache:
         if key in self._items:
             value = self._items.pop(key)
         else:
+            while self._items and len(self._items) >= self.size:
+                self._items.pop(next(iter(self._items)))
             model = launcher(solution, biases, bias_model, self.trajectory,
                              **self.model_options)
-            value = prepare_linear(model)
-            while len(self._items) >= self.size:
-                self._items.pop(next(iter(self._items)))
+            value = prepare_linear(model, compact=True)
+            self._summaries.setdefault(key, CovarianceSummary.of(value))
         self._items[key] = value
         return value
+
+    def release(self) -> None:
+        """Drop the prepared filters (what was read from them stays): frees their memory
+        before a computation that prepares others, e.g. :func:`assumption_sensitivity`."""
+        self._items.clear()
+
+    def summary(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
+                ) -> CovarianceSummary:
+        """The :class:`CovarianceSummary` of one configuration (prepared when not known)."""
+        key = (solution, biases, bias_model)
+        if key not in self._summaries:
+            self.get(*key)
+        return self._summaries[key]
 
     def unit_responses(self, solution: str, requests: Sequence[tuple[Outlier, str]], *,
                        biases: str = "GAP", bias_model: str = "markov",
                        record_every: int = 1) -> list[UnitResponse]:
-        """The :class:`UnitResponse` of each ``(outlier, watch)`` request on one solution.
+        """The :class:`UnitResponse` of each ``(outlier, watch)`` request on one solution,
+        at every ``record_every``-th epoch (and the last).
 
-        Responses not kept yet are computed together, one filter recursion for all of them
-        (:func:`navlib.filters.linear.unit_responses`), and kept.
+        Responses not kept yet are computed together at every epoch, one filter
+        recursion for all of them (:func:`navlib.filters.linear.unit_responses`), and
+        kept; a record stride takes their epochs of
+        :func:`navlib.filters.linear.recorded_epochs`, the same numbers a run recording
+        only those epochs gives.
         """
         config = (solution, biases, bias_model)
-        wanted = [(config, _unit(o), watch, int(record_every)) for o, watch in requests]
+        wanted = [(config, _unit(o), watch) for o, watch in requests]
         missing = [w for w in dict.fromkeys(wanted) if w not in self._responses]
         if missing:
             units = list(dict.fromkeys(w[1] for w in missing))
-            sim = unit_responses(self.get(*config), units, record_every=record_every)
-            C = self.trajectory.attitude.as_matrix()[sim.index]
+            sim = unit_responses(self.get(*config), units)
+            C = self.trajectory.attitude.as_matrix()
             for watch in dict.fromkeys(w[2] for w in missing):
                 truth, est, sigma = sim.project(watch_rows(watch, sim.state_names, C))
                 for w in missing:
@@ -117,7 +139,46 @@ class FilterCache:
                         i = units.index(w[1])
                         self._responses[w] = UnitResponse(sim.t, truth[:, i], est[:, i],
                                                           sigma, sim.applied[i])
-        return [self._responses[w] for w in wanted]
+        return [self._responses[w].every(record_every) for w in wanted]
+
+
+@dataclass(frozen=True, eq=False)
+class CovarianceSummary:
+    """The parts of one filter's posterior covariance history that the covariance figures
+    and verdicts read (Figs. 7, 10, 11 and :func:`sigma_ratios`), at every epoch.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+    state_names : tuple of str
+    variances : ndarray (N, n)
+        Diagonal of ``P_post``.
+    attitude_names : tuple of str
+        ``psi_x..z`` and, for the RT solutions, ``psi_ref_x..z``.
+    attitude : ndarray (N, a, a)
+        The block of ``P_post`` of those states.
+    """
+
+    t: np.ndarray
+    state_names: tuple
+    variances: np.ndarray
+    attitude_names: tuple
+    attitude: np.ndarray
+
+    @classmethod
+    def of(cls, prepared: LinearFilter) -> CovarianceSummary:
+        cov = prepared.covariance
+        names = tuple(cov.state_names)
+        wanted = tuple(f"{g}_{a}" for g in ("psi", "psi_ref") for a in "xyz"
+                       if f"{g}_{a}" in names)
+        idx = np.array([names.index(s) for s in wanted])
+        P = cov.P_post
+        return cls(cov.t, names, np.diagonal(P, axis1=1, axis2=2).copy(), wanted,
+                   P[:, idx[:, None], idx])
+
+    def index(self, names: Sequence[str]) -> np.ndarray:
+        """Positions of ``names`` in ``attitude_names``."""
+        return np.array([self.attitude_names.index(s) for s in names])
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,6 +201,14 @@ class UnitResponse:
     estimate: np.ndarray
     sigma: np.ndarray
     applied: bool
+
+    def every(self, record_every: int) -> UnitResponse:
+        """The epochs a run with ``record_every`` records."""
+        if int(record_every) == 1:
+            return self
+        k = recorded_epochs(self.t.size, record_every)
+        return UnitResponse(self.t[k], self.truth[k], self.estimate[k], self.sigma[k],
+                            self.applied)
 
 
 def _unit(outlier: Outlier) -> Outlier:
@@ -165,6 +234,9 @@ def _adopt(cache: FilterCache, other: FilterCache) -> None:
     for key, value in other._items.items():
         if not differ or not key[0].endswith("_rt"):
             cache._items.setdefault(key, value)
+    for key, value in other._summaries.items():
+        if not differ or not key[0].endswith("_rt"):
+            cache._summaries.setdefault(key, value)
     for key, value in other._responses.items():
         if not differ or not key[0][0].endswith("_rt"):
             cache._responses.setdefault(key, value)
@@ -574,15 +646,16 @@ def correlation_fig10(trajectory=None, *, duration: float = 5.0,
     if cache is None:
         traj = trajectory if trajectory is not None else default_trajectory()
         cache = FilterCache(traj, size=1, **model_options)
-    cov = cache.get(solution, biases, bias_model).covariance
+    cov = cache.summary(solution, biases, bias_model)
+    if "psi_ref_x" not in cov.attitude_names:
+        raise NavlibInputError(f"solution: {solution!r} has no launcher divergence "
+                               "(psi_ref); use an RT solution")
     t = cov.t
     keep = t <= t[0] + duration + 1e-9
     C_e_b = np.swapaxes(cache.trajectory.attitude.as_matrix(), 1, 2)
-    P = cov.P_post[keep]
-    names = list(cov.state_names)
-    psi = [names.index(f"psi_{a}") for a in "xyz"]
-    ref = [names.index(f"psi_ref_{a}") for a in "xyz"]
-    rho = group_correlation(P, psi, ref, C_a=C_e_b[keep])
+    psi = cov.index([f"psi_{a}" for a in "xyz"])
+    ref = cov.index([f"psi_ref_{a}" for a in "xyz"])
+    rho = group_correlation(cov.attitude[keep], psi, ref, C_a=C_e_b[keep])
     return pd.DataFrame({
         "t": np.repeat(t[keep], 3),
         "axis": np.tile(np.array(["roll", "pitch", "yaw"], dtype=object), keep.sum()),
@@ -609,10 +682,9 @@ def roll_sigma(trajectory=None, *, pairs=(("ins_gps", "ins_gps_rt"),
     C_e_b = np.swapaxes(traj.attitude.as_matrix(), 1, 2)[::stride]
     frames = []
     for sol in dict.fromkeys(s for pair in pairs for s in pair):
-        cov = cache.get(sol, biases, bias_model).covariance
-        names = list(cov.state_names)
-        psi = [names.index(f"psi_{a}") for a in "xyz"]
-        sig = sigma_in_frame(cov.P_post[::stride], psi, C_e_b)
+        cov = cache.summary(sol, biases, bias_model)
+        psi = cov.index([f"psi_{a}" for a in "xyz"])
+        sig = sigma_in_frame(cov.attitude[::stride], psi, C_e_b)
         t = cov.t[::stride]
         frames.append(pd.DataFrame({
             "t": np.repeat(t, 3), "solution": sol,
@@ -628,14 +700,15 @@ def sigma_ratios(a: str = "ins_gps", b: str = "ins_gps_rt", *, cache: FilterCach
     """RMS sigma of solution ``b`` over that of ``a`` for every common state, after
     ``after`` seconds (< 1: ``b`` estimates the state better)."""
     bias_model = _bias_model(biases, bias_model)
-    ca = cache.get(a, biases, bias_model).covariance
-    cb = cache.get(b, biases, bias_model).covariance
+    ca = cache.summary(a, biases, bias_model)
+    cb = cache.summary(b, biases, bias_model)
     keep = ca.t >= ca.t[0] + after
     common = [s for s in ca.state_names if s in cb.state_names]
-    ia, ib = ca.index(common), cb.index(common)
+    ia = [ca.state_names.index(s) for s in common]
+    ib = [cb.state_names.index(s) for s in common]
 
     def rms(cov, idx):
-        return np.sqrt(np.mean(np.diagonal(cov.P_post[keep], axis1=1, axis2=2)[:, idx], axis=0))
+        return np.sqrt(np.mean(cov.variances[keep][:, idx], axis=0))
 
     with np.errstate(invalid="ignore", divide="ignore"):
         return pd.Series(rms(cb, ib) / rms(ca, ia), index=common, name=f"{b}/{a}")
@@ -908,7 +981,7 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
 def assumption_sensitivity(variants: dict, trajectory=None, *,
                            tests: Sequence[str] = ("T1", "T2", "T3", "T4"),
                            window: float = DEFAULTS["window"], time: float | None = None,
-                           cache_size: int = 2, cache: FilterCache | None = None
+                           cache_size: int = 1, cache: FilterCache | None = None
                            ) -> pd.DataFrame:
     """Spike-outlier verdicts of T1-T4 under alternative readings of the paper.
 
@@ -920,12 +993,13 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
     trajectory : Trajectory, optional
         Default: that of ``cache``, else :func:`default_trajectory`.
     cache_size : int
-        Prepared filters kept per variant.
+        Prepared filters kept while a variant runs (none after it: later variants need
+        only its responses).
     cache : FilterCache, optional
-        Filters already prepared (e.g. by :func:`paper_tests`): a variant reuses those that
-        are the same model (same trajectory and options; the non-RT solutions also when
-        only the RT-only options ``a1_sign``/``sigma_wind`` differ), so does a later
-        variant with the earlier variants' non-RT filters.
+        Filters and responses already computed (e.g. by :func:`paper_tests`): a variant
+        reuses those of the same model (same trajectory and options; the non-RT solutions
+        also when only the RT-only options ``a1_sign``/``sigma_wind`` differ), so does a
+        later variant with the earlier variants' non-RT responses.
 
     Returns
     -------
@@ -946,6 +1020,7 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
             _adopt(variant_cache, other)
         st = paper_tests(cache=variant_cache, shapes=("spike",), tests=tests, window=window,
                          time=time, divergence=False, **study_kw, **kw)
+        variant_cache.release()
         pool = [*pool[:1 if cache is not None else 0], variant_cache]
         claim = {c.claim_id: c.verdict for c in st.claims}
         for (tid, sol, _shape), r in st.responses.items():
@@ -1013,7 +1088,7 @@ def _variants(quick: bool) -> dict:
     windows = (30.0,) if quick else ROBUSTNESS_GRID["window"]
     out, previous, first = {}, None, None
     for sign in ROBUSTNESS_GRID["a1_sign"]:
-        cache = FilterCache(traj, size=4, a1_sign=sign)
+        cache = FilterCache(traj, size=1, a1_sign=sign)
         if previous is not None:
             _adopt(cache, previous)
         previous = None
