@@ -358,7 +358,8 @@ class LinearFilter:
         Update epochs.
     gains : Gains
     covariance : navlib.covariance.CovarianceResult
-        Prior and posterior covariances at every epoch.
+        Prior and posterior covariances at every epoch (posteriors only, ``P_prior``
+        None, when prepared with ``compact=True``).
     """
 
     steps: LinearSteps

@@ -77,6 +77,10 @@ class FilterCache:
     responses of :meth:`unit_responses` (a few MB each).
     """
 
+    KEEP_RESPONSES = 256
+    """Unit responses kept (oldest dropped first): a long-lived cache (a sweep, a panel)
+    stays bounded."""
+
     def __init__(self, trajectory, size: int = 2, **model_options):
         self.trajectory = trajectory
         self.size = int(size)
@@ -139,7 +143,10 @@ class FilterCache:
                         i = units.index(w[1])
                         self._responses[w] = UnitResponse(sim.t, truth[:, i], est[:, i],
                                                           sigma, sim.applied[i])
-        return [self._responses[w].every(record_every) for w in wanted]
+        found = [self._responses[w].every(record_every) for w in wanted]
+        while len(self._responses) > max(self.KEEP_RESPONSES, len(wanted)):
+            self._responses.pop(next(iter(self._responses)))
+        return found
 
 
 @dataclass(frozen=True, eq=False)
