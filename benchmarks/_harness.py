@@ -2,15 +2,22 @@
 
 A case times ``func`` (best of ``repeat`` runs after one warm-up) and compares it with its
 ``goal_s`` (the performance goal from the issue). ``ratio`` = time / goal, so a ratio
-below 1 meets the goal. ``extra`` may return further columns (e.g. a FLOP-rate ratio).
+below 1 meets the goal. ``extra`` may return further columns (e.g. a FLOP-rate ratio) and
+``table`` a table of the case's own, printed when the case has run. :func:`run_jobs` spreads
+a module's independent runs over worker processes.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from functools import cache
+from pathlib import Path
+
+import pandas as pd
 
 
 @dataclass
@@ -23,6 +30,7 @@ class Case:
     warmup: bool = True
     extra: Callable[[float], dict] | None = None
     notes: str = field(default="")
+    table: Callable[[], pd.DataFrame] | None = None
 
 
 def time_case(case: Case) -> dict:
@@ -40,7 +48,32 @@ def time_case(case: Case) -> dict:
         row.update(case.extra(best))
     if case.notes:
         row["notes"] = case.notes
+    if case.table is not None:
+        with pd.option_context("display.width", 200, "display.max_columns", 30,
+                               "display.float_format", "{:.4g}".format):
+            print(f"{case.name}:\n{case.table().to_string(index=False)}\n", flush=True)
     return row
+
+
+@cache
+def _module(path: str):
+    spec = importlib.util.spec_from_file_location(Path(path).stem, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _job(path: str, name: str, args: tuple):
+    return getattr(_module(path), name)(*args)
+
+
+def run_jobs(path: str, name: str, jobs: Sequence[tuple], workers: int = 2) -> list:
+    """``[module.name(*args) for args in jobs]`` in ``workers`` processes, for the benchmark
+    module at ``path`` (``run.py`` loads modules from their files, so worker processes find
+    the function by file and name rather than by pickling it). Jobs return plain data
+    (arrays, numbers): the module's own classes are not importable by name."""
+    with ProcessPoolExecutor(workers) as pool:
+        return list(pool.map(_job, [path] * len(jobs), [name] * len(jobs), jobs))
 
 
 @cache

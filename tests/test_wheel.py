@@ -28,27 +28,30 @@ def test_wheel_installs_and_reports_outside_the_checkout(tmp_path):
                            timeout=600)
     assert build.returncode == 0, build.stderr[-2000:]
     (wheel,) = wheels.glob("navlib_workbook-*.whl")
-    site = tmp_path / "site"
-    install = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
-                              "--target", str(site), str(wheel)], capture_output=True,
-                             text=True, timeout=600)
+    # a fresh virtual environment outside the checkout: the wheel's declared dependencies
+    # are resolved from the package index, so a missing one fails here
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    python = venv / "bin" / "python"
+    install = subprocess.run([str(python), "-m", "pip", "install", "--quiet",
+                              "--disable-pip-version-check", str(wheel)],
+                             capture_output=True, text=True, timeout=1200)
     assert install.returncode == 0, install.stderr[-2000:]
     work = tmp_path / "elsewhere"
     work.mkdir()
-    # the installed copy comes first on the path (the editable finder only runs after it)
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     probe = subprocess.run(
-        [sys.executable, "-c", "import navlib, navlib.resources as r, navlib.sensors as s;"
+        [str(python), "-c", "import navlib, navlib.resources as r, navlib.sensors as s;"
          "print(navlib.__file__); print(r.notebooks_dir()); print(s.list_presets())"],
         cwd=work, env=env, capture_output=True, text=True, timeout=120)
     assert probe.returncode == 0, probe.stderr
     module, notebooks, presets = probe.stdout.splitlines()
-    assert module.startswith(str(site)) and notebooks.startswith(str(site))
+    assert module.startswith(str(venv)) and notebooks.startswith(str(venv))
     assert "motionpak_tactical" in presets
-    report = subprocess.run([sys.executable, "-m", "navlib", "report", "--quick", "--only",
+    report = subprocess.run([str(python), "-m", "navlib", "report", "--quick", "--only",
                              "01", "07"], cwd=work, env=env, capture_output=True, text=True,
                             timeout=900)
     assert report.returncode == 0, report.stderr[-3000:]
     assert (work / "reports" / "index.html").is_file()
     assert (work / "reports" / "07_assess_flight.html").is_file()  # read ../data/sample_flight
-    assert not (site / "reports").exists()
+    assert not (venv / "reports").exists()

@@ -60,6 +60,42 @@ def _error_model(model, t, solution, biases, bias_model, options, gnss_velocity_
 
 
 @dataclass(frozen=True, eq=False)
+class EKFSnapshot:
+    """The state of the :func:`ekf` loop at the start of one propagation window and the
+    results before it, to resume another run there (``ekf(..., resume=...)``).
+
+    A run whose inputs equal this run's up to ``sample`` (e.g. the same simulated sensors
+    with an outlier after it) computes exactly the same up to there, so resuming gives
+    the same numbers as running it from the start.
+
+    Attributes
+    ----------
+    window : int
+        Index of the window in ``bounds``.
+    sample : int
+        IMU sample where that window starts (``t`` its time).
+    t : float
+    bounds : tuple of int
+        The run's window boundaries (a resumed run must have the same).
+    imu : ndarray (sample + 1, 6)
+        The IMU samples (specific force, rate) up to ``sample``, checked on resume.
+    state : tuple
+        ``(x, (r, v, C), params, P)``: error-state mean, nominal state, parameter
+        estimates and covariance at the window start.
+    results : dict
+        The per-update results before the window.
+    """
+
+    window: int
+    sample: int
+    t: float
+    bounds: tuple
+    imu: np.ndarray
+    state: tuple
+    results: dict
+
+
+@dataclass(frozen=True, eq=False)
 class EKFResult:
     """Output of :func:`ekf` at the measurement-update epochs (posterior, after correction).
 
@@ -86,6 +122,8 @@ class EKFResult:
     nis : ndarray (K,), nis_dof : ndarray (K,)
     state_names, measurement_names, kept_names : tuple of str
     model : str
+    snapshot : EKFSnapshot or None
+        The loop state taken with ``ekf(..., snapshot_before=...)``.
     """
 
     t: np.ndarray
@@ -103,6 +141,7 @@ class EKFResult:
     measurement_names: tuple[str, ...]
     kept_names: tuple[str, ...]
     model: str
+    snapshot: EKFSnapshot | None = None
 
     @property
     def attitude(self):
@@ -176,7 +215,8 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         model_options: dict | None = None, P0=None, attitude=None, reference=None,
         gnss_velocity_sigma: float | None = None, initial_parameters: dict | None = None,
         method: str | None = None, window_s: float = 0.1, keep_covariance: bool = False,
-        measurements: Sequence[Measurement] = ()) -> EKFResult:
+        measurements: Sequence[Measurement] = (), snapshot_before: float | None = None,
+        resume: EKFSnapshot | None = None) -> EKFResult:
     """Closed-loop (feedback) INS/GNSS error-state extended Kalman filter in ECEF.
 
     * **Nominal state**: ECEF position, velocity and attitude propagated by the strapdown
@@ -253,6 +293,16 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         Further measurements (:class:`~navlib.filters.measurements.Measurement` instances
         built with this error model and IMU sample indices), updated after the ones above at
         their epochs; their rows follow the model's in the result.
+    snapshot_before : float, optional
+        Keep the loop state at the start of the last propagation window that starts before
+        this time, s (``result.snapshot``).
+    resume : EKFSnapshot, optional
+        Start at a snapshot of another run instead of at the first sample: the IMU samples
+        up to the snapshot must be the same (checked) and so must the aiding data (the
+        caller's promise, as for the same simulated sensors with an outlier after it); the
+        result is then that of the whole run. Not with measurements that watch the
+        filter's posterior (the closed-loop reference trajectory), whose own state the
+        snapshot does not hold.
 
     Returns
     -------
@@ -304,13 +354,39 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
     if bounds[-1] != t.size - 1:
         bounds.append(t.size - 1)
     return _run(es, t, f_meas, w_meas, start, params, P, events, bounds,
-                "euler" if method == "euler" else "series", keep_covariance, rows, names)
+                "euler" if method == "euler" else "series", keep_covariance, rows, names,
+                _resume_point(t, f_meas, w_meas, bounds, events, snapshot_before, resume))
+
+
+def _resume_point(t, f_meas, w_meas, bounds, events, snapshot_before, resume):
+    """``(window to snapshot or None, snapshot to resume from or None)`` of :func:`ekf`."""
+    if snapshot_before is None and resume is None:
+        return None, None
+    if any(meas.wants_posterior for epoch in events.values() for meas, _ in epoch):
+        raise NavlibInputError("snapshot_before, resume: not with measurements that watch "
+                               "the posterior (closed-loop reference trajectory)")
+    window = None
+    if snapshot_before is not None:
+        starts = np.flatnonzero(t[np.asarray(bounds[:-1])] < snapshot_before)
+        if not starts.size:
+            raise NavlibInputError(f"snapshot_before: {snapshot_before} s is not after the "
+                                   f"first sample ({t[0]:g} s)")
+        window = int(starts[-1])
+    if resume is not None:
+        imu = np.column_stack([f_meas, w_meas])[:resume.sample + 1]
+        if tuple(bounds) != resume.bounds or not np.array_equal(imu, resume.imu):
+            raise NavlibInputError("resume: the snapshot is of a run with other IMU samples "
+                                   "or propagation windows before it")
+        if window is not None and window < resume.window:
+            raise NavlibInputError("snapshot_before: before the resumed snapshot")
+    return window, resume
 
 
 def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_covariance,
-         rows, names):
+         rows, names, resume_point=(None, None)):
     """The filter loop of :func:`ekf`: per window, nominal propagation, the error-state
-    covariance along it, the updates, and feedback at the window end."""
+    covariance along it, the updates, and feedback at the window end (from the window of
+    a snapshot to resume, keeping one at another window, ``resume_point``)."""
     from navlib import strapdown
 
     Qc = np.asarray(es.Qc, dtype=float)
@@ -319,7 +395,21 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     x = np.zeros(len(es.state_names))          # error-state mean (kept states persist)
     r, v, C = start
     out = {key: [] for key in ("post", "kept", "P", "sigma", "innovation", "nis", "nis_dof")}
-    for w0, w1 in itertools.pairwise(bounds):
+    snap_window, resume = resume_point
+    first, snapshot = 0, None
+    if resume is not None:
+        x, (r, v, C), params, P = (resume.state[0].copy(), resume.state[1], dict(resume.state[2]),
+                                   resume.state[3].copy())
+        out = {key: list(value) for key, value in resume.results.items()}
+        first = resume.window
+    for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
+        if i < first:
+            continue
+        if i == snap_window:
+            snapshot = EKFSnapshot(i, w0, float(t[w0]), tuple(bounds),
+                                   np.column_stack([f_meas, w_meas])[:w0 + 1],
+                                   (x.copy(), (r, v, C), dict(params), P.copy()),
+                                   {key: list(value) for key, value in out.items()})
         tw = t[w0:w1 + 1]
         dt = (tw - tw[0])[:, None]
         par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
@@ -373,7 +463,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         innovation=cat["innovation"], nis=cat["nis"], nis_dof=cat["nis_dof"],
         state_names=tuple(es.state_names),
         measurement_names=tuple(names),
-        kept_names=tuple(es.state_names[i] for i in kept), model=es.name,
+        kept_names=tuple(es.state_names[i] for i in kept), model=es.name, snapshot=snapshot,
     )
 
 
@@ -427,7 +517,8 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
                  model_options: dict | None = None, gnss_rate_hz: float | None = None,
                  outliers=None, seed=None, initial_error: bool = True, noise: bool = True,
                  window_s: float = 0.1, keep_covariance: bool = False,
-                 gnss_velocity_sigma: float | None = None) -> EKFRun:
+                 gnss_velocity_sigma: float | None = None, snapshot_before: float | None = None,
+                 resume: EKFRun | None = None) -> EKFRun:
     """Simulate sensors along ``trajectory``, inject outliers and run :func:`ekf`.
 
     The IMU and GNSS come from :func:`navlib.sensors.simulate_imu` /
@@ -459,6 +550,13 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     outliers : Outlier or sequence of Outlier, optional
     seed : int, optional
     initial_error, noise : bool
+    snapshot_before : float, optional
+        As in :func:`ekf` (``run.result.snapshot``).
+    resume : EKFRun, optional
+        A run of the same call without ``outliers`` and with a snapshot taken before the
+        earliest outlier (a sample spacing before its time): this run starts there, which
+        gives the same result as running it from the start (the simulated sensors are the
+        same until the outliers, whose injection changes nothing before them).
 
     Returns
     -------
@@ -499,6 +597,7 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     for i, a in enumerate(_AXES):
         imu_df[f"w_{a}"] = w_b[:, i]
     tg = gnss["t"].to_numpy(float)
+    snapshot = _snapshot_to_resume(resume, outliers, (t, tg))
     gnss = gnss.copy()
     gnss[["x", "y", "z"]] = inject(gnss[["x", "y", "z"]].to_numpy(), tg, outliers, "gnss_pos")
     gnss[["vx", "vy", "vz"]] = inject(gnss[["vx", "vy", "vz"]].to_numpy(), tg, outliers,
@@ -526,7 +625,8 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     initial = strapdown.StrapdownState(t=truth0.t, position=hat0.position[0],
                                        velocity=hat0.velocity[0], q_b_e=_as_quat(hat0.C_b_e[0]))
     result = ekf(imu_df, gnss, initial=initial, model=es, attitude=attitude,
-                 reference=reference, window_s=window_s, keep_covariance=keep_covariance)
+                 reference=reference, window_s=window_s, keep_covariance=keep_covariance,
+                 snapshot_before=snapshot_before, resume=snapshot)
     k = _epoch_index(t, result.t, "result")
     truth_par = {g: bias[k] for g, bias in (("bg", imu.gyro.bias), ("ba", imu.accel.bias))
                  if g in es.parameters}
@@ -535,6 +635,22 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
         truth_par["bp"] = -gnss[["bias_x", "bias_y", "bias_z"]].to_numpy()[kg]
     return EKFRun(result, result.errors(trajectory), truth_par,
                   reference.history() if reference is not None else None, dx0)
+
+
+def _snapshot_to_resume(resume, outliers, clocks) -> EKFSnapshot | None:
+    """The snapshot of ``resume`` (:func:`simulate_ekf`), checked to lie before the
+    outliers' first sample (the largest sample spacing of the IMU and GNSS ``clocks``
+    before the earliest outlier time)."""
+    if resume is None:
+        return None
+    snapshot = getattr(getattr(resume, "result", None), "snapshot", None)
+    if snapshot is None:
+        raise NavlibInputError("resume: expected an EKFRun made with snapshot_before=")
+    spacing = max(float(np.max(np.diff(c))) for c in clocks if c.size > 1)
+    if outliers and snapshot.t >= min(o.time for o in outliers) - spacing:
+        raise NavlibInputError(f"resume: the snapshot at {snapshot.t:g} s is not before the "
+                               "outliers")
+    return snapshot
 
 
 def _as_quat(C) -> np.ndarray:

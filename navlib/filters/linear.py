@@ -20,13 +20,14 @@ IMU outliers enter as a known input on the matching noise channel,
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
+from threadpoolctl import threadpool_limits
 
 from navlib._validation import finite_array
-from navlib.covariance import kalman_covariance
+from navlib.covariance import CovarianceResult, kalman_covariance
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import (
@@ -39,9 +40,16 @@ from navlib.filters.kalman import (
     nees_values,
 )
 from navlib.models.base import DiscreteModel, LinearModel
-from navlib.outliers import as_outliers, channel_profile, linear_mapping
+from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
 
 METHODS = ("euler", "expm")
+
+_ONE_THREAD = 1
+"""BLAS threads of the covariance recursion and of the simulation (``threadpoolctl``).
+Their matrices are small (n <= 30) and come one step or one epoch at a time: OpenBLAS's
+threads inside each of those calls only synchronise, and on a loaded machine a batched
+eigen-decomposition of the recorded covariances ran up to 25 times slower with them
+(notebook 05 profile, issue 14). One thread gives the same numbers."""
 
 _MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
@@ -96,8 +104,13 @@ class LinearSteps:
         return len(self.state_names)
 
 
+def _noise_covariance(L) -> np.ndarray:
+    """``Q_k = L_k L_k'`` of the Euler form, (K, n, n)."""
+    return L @ np.swapaxes(L, 1, 2)
+
+
 def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
-                 noise_names: Sequence[str] = ()) -> LinearSteps:
+                 noise_names: Sequence[str] = (), with_q: bool = True) -> LinearSteps:
     """Per-step ``F, Q`` (and the noise factor / input) of a model for :func:`simulate_linear`.
 
     Parameters
@@ -113,6 +126,9 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
     noise_input, noise_names
         For a DiscreteModel: ``Gamma`` (N-1, n, q) and its channel names, needed only for
         IMU outliers.
+    with_q : bool
+        False: no ``Q`` for the Euler form of a LinearModel (``steps.Q`` None), where it is
+        ``L_k L_k'`` and can be formed a block of steps at a time.
     """
     if method not in METHODS:
         raise NavlibInputError(f"method: expected one of {METHODS}, got {method!r}")
@@ -132,7 +148,7 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
             F = np.eye(n) + A * dt[:, None, None]
             Gamma = G * dt[:, None, None]
             L = (G @ _psd_sqrt(Qc)) * np.sqrt(dt)[:, None, None]
-            Q = L @ np.swapaxes(L, 1, 2)
+            Q = _noise_covariance(L) if with_q else None
         else:
             F, Q = discretize_steps(A, G, Qc, dt, method="series")
             Gamma = _phi1_series(A, dt) @ G
@@ -179,8 +195,10 @@ class LinearSimulation:
         True error state and its posterior estimate per run.
     P : ndarray (K, n, n)
         Posterior covariance (shared by all runs).
-    nees : ndarray (K, R)
-        ``(x_hat - x)' P^+ (x_hat - x)`` per run, with ``nees_dof`` (K,) degrees of freedom.
+    nees : ndarray (K, R) or None
+        ``(x_hat - x)' P^+ (x_hat - x)`` per run, with ``nees_dof`` (K,) degrees of freedom
+        (None when not computed: ``simulate_linear(..., nees=False)``,
+        :func:`unit_responses`).
     nis_t : ndarray (M,)
         Update epochs.
     nis : ndarray (M, R)
@@ -199,8 +217,8 @@ class LinearSimulation:
     truth: np.ndarray
     estimate: np.ndarray
     P: np.ndarray
-    nees: np.ndarray
-    nees_dof: np.ndarray
+    nees: np.ndarray | None
+    nees_dof: np.ndarray | None
     nis_t: np.ndarray
     nis: np.ndarray
     nis_dof: np.ndarray
@@ -263,10 +281,14 @@ class LinearSimulation:
         return truth, est, np.sqrt(np.clip(var, 0.0, None))
 
     def consistency(self, alpha: float = 0.05) -> dict:
-        """Fraction of epochs whose run-averaged NEES / NIS lie inside the chi-square bounds."""
+        """Fraction of epochs whose run-averaged NEES / NIS lie inside the chi-square bounds
+        (NaN for a NEES not computed)."""
         out = {}
         for key, values, dof in (("nees", self.nees, self.nees_dof),
                                  ("nis", self.nis, self.nis_dof)):
+            if values is None:
+                out[key] = np.nan
+                continue
             valid = dof > 0
             if not valid.any():
                 out[key] = np.nan
@@ -295,6 +317,8 @@ class LinearSimulation:
 
     def nees_frame(self) -> pd.DataFrame:
         """Run-averaged NEES per recorded epoch with its degrees of freedom and 95 % bounds."""
+        if self.nees is None:
+            raise NavlibInputError("nees_frame: this simulation has no NEES (nees=False)")
         lo, hi = chi2_bounds(self.nees_dof, self.runs)
         return pd.DataFrame({"t": self.t, "nees": self.nees.mean(axis=1),
                              "dof": self.nees_dof, "lower": lo, "upper": hi})
@@ -334,7 +358,8 @@ class LinearFilter:
         Update epochs.
     gains : Gains
     covariance : navlib.covariance.CovarianceResult
-        Prior and posterior covariances at every epoch.
+        Prior and posterior covariances at every epoch (posteriors only, ``P_prior``
+        None, when prepared with ``compact=True``).
     """
 
     steps: LinearSteps
@@ -364,22 +389,65 @@ class LinearFilter:
 
 
 def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measured=None,
-                   P0=None, noise_input=None, noise_names: Sequence[str] = ()
-                   ) -> LinearFilter:
+                   P0=None, noise_input=None, noise_names: Sequence[str] = (),
+                   compact: bool = False) -> LinearFilter:
     """Discretise a model and run its Kalman covariance recursion once.
 
     Parameters as in :func:`simulate_linear`. The covariance is
     :func:`navlib.covariance.kalman_covariance` (Joseph form), the gains
-    :func:`kalman_gains` from its priors.
+    :func:`kalman_gains` from its priors. BLAS runs on one thread here (:data:`_ONE_THREAD`).
+
+    ``compact=True`` keeps what :func:`simulate_linear` needs and drops the rest: the
+    recursion runs over blocks of epochs (:func:`_blockwise_covariance`, the same
+    posteriors and gains), the filter keeps no prior covariances
+    (``covariance.P_prior`` is None) and no process noise (``steps.Q`` is None; the noise
+    is sampled through ``steps.L``; the Euler ``Q`` is never formed whole). For a 28-state
+    model at 200 Hz over 150 s that is about 0.8 GB held instead of 1.2 GB, and about
+    1.2 GB at most while preparing (the model's own matrices included) instead of 1.7 GB.
     """
     if isinstance(model, LinearFilter):
         return model
     steps = linear_steps(model, method=method, P0=P0, noise_input=noise_input,
-                         noise_names=noise_names)
+                         noise_names=noise_names, with_q=not compact)
     mask = _measured_mask(steps.t.size, update_every, measured)
-    cov = kalman_covariance(steps.F, steps.Q, steps.H, steps.R, steps.P0, measured=mask,
-                            t=steps.t, state_names=steps.state_names)
-    return LinearFilter(steps, mask, kalman_gains(cov.P_prior, steps.H, steps.R, mask), cov)
+    with threadpool_limits(_ONE_THREAD):
+        if compact:
+            cov, gains = _blockwise_covariance(steps, mask)
+            return LinearFilter(replace(steps, Q=None), mask, gains, cov)
+        cov = kalman_covariance(steps.F, steps.Q, steps.H, steps.R, steps.P0, measured=mask,
+                                t=steps.t, state_names=steps.state_names)
+        gains = kalman_gains(cov.P_prior, steps.H, steps.R, mask)
+    return LinearFilter(steps, mask, gains, cov)
+
+
+def _blockwise_covariance(steps: LinearSteps, mask, block: int = 2048):
+    """:func:`navlib.covariance.kalman_covariance` and :func:`kalman_gains` block by block.
+
+    Each block of epochs starts from the prior the previous block computed for its first
+    epoch (``P0`` of that block, updated there when measured), so every step does the same
+    arithmetic as one recursion over all epochs: the same posteriors and gains, with only
+    one block of priors (and of ``Q = L L'`` when ``steps.Q`` is None) held at a time.
+    Returns ``(CovarianceResult without priors, Gains)``.
+    """
+    N, n = steps.t.size, steps.n
+    m = steps.H.shape[-2]
+    P_post = np.empty((N, n, n))
+    K, S_pinv, dof = np.empty((N, n, m)), np.empty((N, m, m)), np.empty(N, dtype=int)
+    prior = steps.P0
+    for a in range(0, N, block):
+        b = min(N, a + block)
+        end = min(N - 1, b)                     # one epoch more: the next block's prior
+        Q = steps.Q[a:end] if steps.Q is not None else _noise_covariance(steps.L[a:end])
+        part = kalman_covariance(steps.F[a:end], Q, steps.H[a:end + 1],
+                                 steps.R[a:end + 1], prior, measured=mask[a:end + 1],
+                                 t=steps.t[a:end + 1], state_names=steps.state_names)
+        P_post[a:b] = part.P_post[:b - a]
+        g = kalman_gains(part.P_prior[:b - a], steps.H[a:b], steps.R[a:b], mask[a:b])
+        K[a:b], S_pinv[a:b], dof[a:b] = g.K, g.S_pinv, g.dof
+        if b < N:
+            prior = part.P_prior[b - a]
+    return (CovarianceResult(steps.t, None, P_post, mask.copy(), tuple(steps.state_names)),
+            Gains(K, S_pinv, dof))
 
 
 def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
@@ -387,7 +455,7 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
                     update_every: int = 1, measured=None, record_every: int | None = None,
                     P0=None, noise_input=None, noise_names: Sequence[str] = (),
                     progress: Callable[[int, int], None] | None = None, scheduler=None,
-                    runs_per_task: int = 25) -> LinearSimulation:
+                    runs_per_task: int = 25, nees: bool = True) -> LinearSimulation:
     """Monte-Carlo simulation of the linear error-state Kalman filter, runs vectorised.
 
     Parameters
@@ -428,6 +496,10 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         (:func:`navlib.sweep.monte_carlo_linear`: seeds from ``SeedSequence(seed)``, results
         independent of the scheduler; ``progress`` is then a progress bar of the tasks);
         default None: one vectorised batch here.
+    nees : bool
+        Compute the NEES of the recorded epochs (default). False leaves ``nees`` and
+        ``nees_dof`` None: a noise-free response has no use for them, and their
+        eigen-decompositions of the recorded covariances cost more than the run.
 
     Returns
     -------
@@ -452,19 +524,73 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     prepared = prepare_linear(model, method=method, update_every=update_every,
                               measured=measured, P0=P0, noise_input=noise_input,
                               noise_names=noise_names)
-    steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
+    steps = prepared.steps
     runs = int(runs)
     if runs < 1:
         raise NavlibInputError(f"runs: expected >= 1, got {runs}")
     if rng is not None and seed is not None:
         raise NavlibInputError("seed, rng: give one of them, not both")
     rng = rng if rng is not None else np.random.default_rng(seed)
-    t, F, L, H, R = steps.t, steps.F, steps.L, steps.H, steps.R
-    N, n = t.size, steps.n
-    m = H.shape[-2]
+    z_add, x_input, applied = _outlier_inputs(steps, outliers)
+    if record_every is None:
+        per_epoch = 2 * 8 * runs * steps.n
+        record_every = max(1, int(np.ceil(steps.t.size * per_epoch / _MEMORY_BUDGET)))
+    if initial_error:
+        x = rng.standard_normal((runs, steps.n)) @ _psd_sqrt(steps.P0).T
+    else:
+        x = np.zeros((runs, steps.n))
+    return _simulate(prepared, x, z_add, x_input, recorded_epochs(steps.t.size, record_every),
+                     rng if noise else None, outliers, applied, progress, nees)
 
-    # outliers -> measurement additions (N, m) and noise-channel inputs (N-1, q_in)
-    z_add = np.zeros((N, m))
+
+def unit_responses(model, outliers, *, record_every: int = 1) -> LinearSimulation:
+    """Noise-free responses of the linear filter to each outlier at unit magnitude.
+
+    Run ``i`` of the result is the response (true error and estimate, from a zero initial
+    error, no noise) to ``outliers[i]`` with its magnitude replaced by 1 in the channel's SI
+    unit; all runs share one recursion. The response to the same outlier of magnitude ``a``
+    is exactly ``a`` times run ``i``: the recursion is linear in its inputs and its gains
+    do not depend on the data (they come from the covariance recursion, which sees only
+    the model, :func:`prepare_linear`). That holds for this linear Kalman filter, not for
+    the EKF, whose Jacobians follow its own estimate.
+
+    Parameters
+    ----------
+    model : LinearModel, DiscreteModel or LinearFilter
+        As in :func:`simulate_linear` (prepared with its defaults unless a LinearFilter).
+    outliers : sequence of Outlier
+        One per run; each may name a channel kind (all three axes at once).
+    record_every : int
+        Keep every n-th epoch (the last is always kept).
+
+    Returns
+    -------
+    LinearSimulation
+        ``runs = len(outliers)``, ``outliers`` the unit outliers; ``nees`` is None.
+    """
+    units = tuple(Outlier(o.channel, o.time, 1.0, o.shape, o.duration)
+                  for o in as_outliers(outliers))
+    if not units:
+        raise NavlibInputError("outliers: need at least one Outlier")
+    prepared = prepare_linear(model)
+    steps = prepared.steps
+    inputs = [_outlier_inputs(steps, (o,)) for o in units]
+    z_add = np.stack([z for z, _, _ in inputs], axis=1)                # (N, C, m)
+    x_input = None
+    if any(u is not None for _, u, _ in inputs):
+        zero = np.zeros((steps.t.size - 1, steps.n))
+        x_input = np.stack([zero if u is None else u for _, u, _ in inputs], axis=1)
+    applied = tuple(a[0] for _, _, a in inputs)
+    x = np.zeros((len(units), steps.n))
+    return _simulate(prepared, x, z_add, x_input, recorded_epochs(steps.t.size, record_every),
+                     None, units, applied, None, False)
+
+
+def _outlier_inputs(steps: LinearSteps, outliers) -> tuple:
+    """Outliers -> measurement additions ``z_add`` (N, m), the state input over each step
+    (N-1, n) or None, and whether each outlier reaches the model (module docstring)."""
+    t = steps.t
+    z_add = np.zeros((t.size, steps.H.shape[-2]))
     u_cols, u_vals = [], []
     applied = []
     for o in outliers:
@@ -479,36 +605,44 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
             if mp.index is None:
                 continue
             values = mp.sign * channel_profile((o,), ch, t)
+            ok = True
             if mp.target == "measurement":
-                ok = True
                 z_add[:, mp.index] += values
             else:
-                ok = True
                 u_cols.append(mp.index)
                 u_vals.append(values[:-1])
         applied.append(ok)
+    x_input = None
     if u_cols:
-        cols = np.array(u_cols)
-        B = steps.Gamma[:, :, cols]                       # (N-1, n, c)
+        B = steps.Gamma[:, :, np.array(u_cols)]                # (N-1, n, c)
         x_input = np.einsum("knc,ck->kn", B, np.array(u_vals))
-    else:
-        x_input = None
+    return z_add, x_input, tuple(applied)
 
-    if record_every is None:
-        per_epoch = 2 * 8 * runs * n
-        record_every = max(1, int(np.ceil(N * per_epoch / _MEMORY_BUDGET)))
+
+def recorded_epochs(N: int, record_every) -> np.ndarray:
+    """The epochs :func:`simulate_linear` records of ``N``: every ``record_every``-th and
+    the last."""
     record_every = int(record_every)
     if record_every < 1:
         raise NavlibInputError(f"record_every: expected >= 1, got {record_every}")
     rec = np.arange(0, N, record_every)
-    if rec[-1] != N - 1:
-        rec = np.append(rec, N - 1)
+    return rec if rec[-1] == N - 1 else np.append(rec, N - 1)
+
+
+def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, applied,
+              progress, with_nees: bool) -> LinearSimulation:
+    """The filter recursion over a batch of runs (true error ``x`` (R, n) at epoch 0).
+
+    ``z_add`` (N, m) or per run (N, R, m) and ``x_input`` (N-1, n) or (N-1, R, n) are the
+    outlier inputs; ``rng`` None: no noise (a deterministic run from zero stays exactly
+    zero until the first input, so the recursion starts there).
+    """
+    steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
+    t = steps.t
+    N, n = t.size, steps.n
+    runs, m = x.shape[0], steps.H.shape[-2]
     slot = np.full(N, -1)
     slot[rec] = np.arange(rec.size)
-
-    R_sqrt = _psd_sqrt(R[:1]) if np.all(R == R[:1]) else _psd_sqrt(R)
-    const_R = R_sqrt.shape[0] == 1
-    q = L.shape[-1]
 
     truth_rec = np.empty((rec.size, runs, n))
     est_rec = np.empty((rec.size, runs, n))
@@ -518,18 +652,14 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     upd_slot = np.full(N, -1)
     upd_slot[upd] = np.arange(upd.size)
 
-    if initial_error:
-        x = rng.standard_normal((runs, n)) @ _psd_sqrt(steps.P0).T
-    else:
-        x = np.zeros((runs, n))
     x_hat = np.zeros((runs, n))
-    # a deterministic response from zero stays exactly zero until the first outlier input:
-    # start the recursion there and write the zero histories directly
     k0 = 0
-    if not noise and not initial_error:
-        active = np.flatnonzero(np.any(z_add != 0, axis=1) & mask)
+    if rng is None and not np.any(x):
+        per_step = tuple(range(1, z_add.ndim))
+        active = np.flatnonzero(np.any(z_add != 0, axis=per_step) & mask)
         if x_input is not None:
-            active = np.concatenate([active, np.flatnonzero(np.any(x_input != 0, axis=1))])
+            active = np.concatenate([active, np.flatnonzero(np.any(x_input != 0,
+                                                                   axis=per_step))])
         k0 = int(active.min()) if active.size else N
         before = rec[rec < k0]
         truth_rec[slot[before]] = 0.0
@@ -537,6 +667,33 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         upd_before = upd[upd < k0]
         nis[upd_slot[upd_before]] = 0.0
         innov_rec[slot[upd_before[slot[upd_before] >= 0]]] = 0.0
+    with threadpool_limits(_ONE_THREAD):
+        _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot,
+                   (truth_rec, est_rec, innov_rec, nis))
+        P_post = prepared.covariance.P_post
+        P_rec = P_post if rec.size == N else P_post[rec]
+        nees = nees_dof = None
+        if with_nees:
+            nees, nees_dof = nees_values(est_rec - truth_rec, P_rec,
+                                         basis=prepared.nees_basis(rec))
+    return LinearSimulation(
+        t=t[rec], truth=truth_rec, estimate=est_rec, P=P_rec, nees=nees, nees_dof=nees_dof,
+        nis_t=t[upd], nis=nis, nis_dof=gains.dof[upd], innovation=innov_rec,
+        state_names=tuple(steps.state_names), measurement_names=tuple(steps.measurement_names),
+        outliers=tuple(outliers), applied=tuple(applied), index=rec,
+    )
+
+
+def _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot, out):
+    """Steps ``k0 ..`` of :func:`_simulate`, writing into ``out`` (truth, estimate and
+    innovation at the recorded epochs, NIS at the updates)."""
+    truth_rec, est_rec, innov_rec, nis = out
+    steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
+    F, L, H, R = steps.F, steps.L, steps.H, steps.R
+    N, runs, m, q = steps.t.size, x.shape[0], H.shape[-2], L.shape[-1]
+    noise = rng is not None
+    R_sqrt = _psd_sqrt(R[:1]) if np.all(R == R[:1]) else _psd_sqrt(R)
+    const_R = R_sqrt.shape[0] == 1
     chunk = 256
     K_all, S_pinv = gains.K, gains.S_pinv
     for c0 in range(0, N, chunk):
@@ -568,11 +725,3 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
                 x_hat = x_hat @ Fk
         if progress is not None:
             progress(c1, N)
-    P_rec = prepared.covariance.P_post[rec]
-    nees, nees_dof = nees_values(est_rec - truth_rec, P_rec, basis=prepared.nees_basis(rec))
-    return LinearSimulation(
-        t=t[rec], truth=truth_rec, estimate=est_rec, P=P_rec, nees=nees, nees_dof=nees_dof,
-        nis_t=t[upd], nis=nis, nis_dof=gains.dof[upd], innovation=innov_rec,
-        state_names=tuple(steps.state_names), measurement_names=tuple(steps.measurement_names),
-        outliers=outliers, applied=tuple(applied), index=rec,
-    )

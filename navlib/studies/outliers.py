@@ -34,11 +34,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
+from threadpoolctl import threadpool_limits
 
 from navlib._validation import finite_scalar
 from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.filters import LinearFilter, nees_values, prepare_linear, simulate_linear
+from navlib.filters.linear import recorded_epochs, unit_responses
 from navlib.models.launcher import SOLUTIONS, launcher
 from navlib.outliers import PAPER_TESTS, Outlier, RecoveryScore, score_recovery
 from navlib.studies import claims as engine
@@ -63,17 +65,29 @@ def default_trajectory(quick: bool = False):
 
 
 class FilterCache:
-    """Prepared linear filters (:class:`navlib.filters.LinearFilter`) by configuration.
+    """Prepared linear filters (:class:`navlib.filters.LinearFilter`) by configuration, and
+    what the study reads from them.
 
     One launcher configuration along a 150 s, 200 Hz trajectory holds about 0.8 GB of
-    matrices, so the cache keeps at most ``size`` of them (least recently used dropped).
+    matrices (prepared with ``compact=True``), so the cache keeps at most ``size`` of them
+    (least recently used dropped before a new one is prepared). What the figures and
+    verdicts read from a filter is kept for every configuration, also after its filter was
+    dropped, and shared with caches that adopt it (:func:`_adopt`): its
+    :class:`CovarianceSummary` (taken when it is prepared) and the projected unit
+    responses of :meth:`unit_responses` (a few MB each).
     """
+
+    KEEP_RESPONSES = 256
+    """Unit responses kept (oldest dropped first): a long-lived cache (a sweep, a panel)
+    stays bounded."""
 
     def __init__(self, trajectory, size: int = 2, **model_options):
         self.trajectory = trajectory
         self.size = int(size)
         self.model_options = model_options
         self._items: dict = {}
+        self._summaries: dict = {}
+        self._responses: dict = {}
 
     def get(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
             ) -> LinearFilter:
@@ -81,13 +95,132 @@ class FilterCache:
         if key in self._items:
             value = self._items.pop(key)
         else:
+            while self._items and len(self._items) >= self.size:
+                self._items.pop(next(iter(self._items)))
             model = launcher(solution, biases, bias_model, self.trajectory,
                              **self.model_options)
-            value = prepare_linear(model)
-            while len(self._items) >= self.size:
-                self._items.pop(next(iter(self._items)))
+            value = prepare_linear(model, compact=True)
+            self._summaries.setdefault(key, CovarianceSummary.of(value))
         self._items[key] = value
         return value
+
+    def release(self) -> None:
+        """Drop the prepared filters (what was read from them stays): frees their memory
+        before a computation that prepares others, e.g. :func:`assumption_sensitivity`."""
+        self._items.clear()
+
+    def summary(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
+                ) -> CovarianceSummary:
+        """The :class:`CovarianceSummary` of one configuration (prepared when not known)."""
+        key = (solution, biases, bias_model)
+        if key not in self._summaries:
+            self.get(*key)
+        return self._summaries[key]
+
+    def unit_responses(self, solution: str, requests: Sequence[tuple[Outlier, str]], *,
+                       biases: str = "GAP", bias_model: str = "markov",
+                       record_every: int = 1) -> list[UnitResponse]:
+        """The :class:`UnitResponse` of each ``(outlier, watch)`` request on one solution,
+        at every ``record_every``-th epoch (and the last).
+
+        Responses not kept yet are computed together at every epoch, one filter
+        recursion for all of them (:func:`navlib.filters.linear.unit_responses`), and
+        kept; a record stride takes their epochs of
+        :func:`navlib.filters.linear.recorded_epochs`, the same numbers a run recording
+        only those epochs gives.
+        """
+        config = (solution, biases, bias_model)
+        wanted = [(config, _unit(o), watch) for o, watch in requests]
+        missing = [w for w in dict.fromkeys(wanted) if w not in self._responses]
+        if missing:
+            units = list(dict.fromkeys(w[1] for w in missing))
+            sim = unit_responses(self.get(*config), units)
+            C = self.trajectory.attitude.as_matrix()
+            for watch in dict.fromkeys(w[2] for w in missing):
+                truth, est, sigma = sim.project(watch_rows(watch, sim.state_names, C))
+                for w in missing:
+                    if w[2] == watch:
+                        i = units.index(w[1])
+                        self._responses[w] = UnitResponse(sim.t, truth[:, i], est[:, i],
+                                                          sigma, sim.applied[i])
+        found = [self._responses[w].every(record_every) for w in wanted]
+        while len(self._responses) > max(self.KEEP_RESPONSES, len(wanted)):
+            self._responses.pop(next(iter(self._responses)))
+        return found
+
+
+@dataclass(frozen=True, eq=False)
+class CovarianceSummary:
+    """The parts of one filter's posterior covariance history that the covariance figures
+    and verdicts read (Figs. 7, 10, 11 and :func:`sigma_ratios`), at every epoch.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+    state_names : tuple of str
+    variances : ndarray (N, n)
+        Diagonal of ``P_post``.
+    attitude_names : tuple of str
+        ``psi_x..z`` and, for the RT solutions, ``psi_ref_x..z``.
+    attitude : ndarray (N, a, a)
+        The block of ``P_post`` of those states.
+    """
+
+    t: np.ndarray
+    state_names: tuple
+    variances: np.ndarray
+    attitude_names: tuple
+    attitude: np.ndarray
+
+    @classmethod
+    def of(cls, prepared: LinearFilter) -> CovarianceSummary:
+        cov = prepared.covariance
+        names = tuple(cov.state_names)
+        wanted = tuple(f"{g}_{a}" for g in ("psi", "psi_ref") for a in "xyz"
+                       if f"{g}_{a}" in names)
+        idx = np.array([names.index(s) for s in wanted])
+        P = cov.P_post
+        return cls(cov.t, names, np.diagonal(P, axis1=1, axis2=2).copy(), wanted,
+                   P[:, idx[:, None], idx])
+
+    def index(self, names: Sequence[str]) -> np.ndarray:
+        """Positions of ``names`` in ``attitude_names``."""
+        return np.array([self.attitude_names.index(s) for s in names])
+
+
+@dataclass(frozen=True, eq=False)
+class UnitResponse:
+    """Noise-free response of one prepared filter to an outlier of unit magnitude, projected
+    on a watched quantity (:meth:`FilterCache.unit_responses`).
+
+    Attributes
+    ----------
+    t : ndarray (K,)
+    truth, estimate : ndarray (K, p)
+        The watched error state and its estimate per unit of the outlier's magnitude.
+    sigma : ndarray (K, p)
+        Filter standard deviation of the watched quantity (independent of the outlier).
+    applied : bool
+    """
+
+    t: np.ndarray
+    truth: np.ndarray
+    estimate: np.ndarray
+    sigma: np.ndarray
+    applied: bool
+
+    def every(self, record_every: int) -> UnitResponse:
+        """The epochs a run with ``record_every`` records."""
+        if int(record_every) == 1:
+            return self
+        k = recorded_epochs(self.t.size, record_every)
+        return UnitResponse(self.t[k], self.truth[k], self.estimate[k], self.sigma[k],
+                            self.applied)
+
+
+def _unit(outlier: Outlier) -> Outlier:
+    """``outlier`` with magnitude 1 (the key of its unit response)."""
+    return replace(outlier, magnitude=1.0)
 
 
 _RT_ONLY_OPTIONS = ("a1_sign", "sigma_wind")
@@ -96,9 +229,9 @@ _RT_ONLY_OPTIONS = ("a1_sign", "sigma_wind")
 
 
 def _adopt(cache: FilterCache, other: FilterCache) -> None:
-    """Put into ``cache`` the prepared filters of ``other`` that are the same models: all of
-    them when both use the same trajectory and model options, the non-RT ones when the
-    options differ only in :data:`_RT_ONLY_OPTIONS`."""
+    """Put into ``cache`` the prepared filters and unit responses of ``other`` that are the
+    same models: all of them when both use the same trajectory and model options, the
+    non-RT ones when the options differ only in :data:`_RT_ONLY_OPTIONS`."""
     if other.trajectory is not cache.trajectory:
         return
     a, b = cache.model_options, other.model_options
@@ -108,6 +241,12 @@ def _adopt(cache: FilterCache, other: FilterCache) -> None:
     for key, value in other._items.items():
         if not differ or not key[0].endswith("_rt"):
             cache._items.setdefault(key, value)
+    for key, value in other._summaries.items():
+        if not differ or not key[0].endswith("_rt"):
+            cache._summaries.setdefault(key, value)
+    for key, value in other._responses.items():
+        if not differ or not key[0][0].endswith("_rt"):
+            cache._responses.setdefault(key, value)
 
 
 def record_stride(trajectory, spacing_s: float = 0.02) -> int:
@@ -204,6 +343,11 @@ def outlier_response(solution: str, outlier: Outlier, watch: str = "roll", *,
                      **model_options) -> OutlierResponse:
     """The exact outlier-induced error of one launcher solution (linear mode).
 
+    The response is ``outlier.magnitude`` times the filter's response to the same outlier
+    of unit magnitude (:meth:`FilterCache.unit_responses`, kept in ``cache``): the linear
+    Kalman filter is linear in its inputs and its gains do not depend on the data, so the
+    scaling is exact (up to rounding) and other magnitudes cost no new run.
+
     Parameters
     ----------
     solution : str
@@ -230,19 +374,16 @@ def outlier_response(solution: str, outlier: Outlier, watch: str = "roll", *,
     if cache is None:
         cache = FilterCache(trajectory if trajectory is not None else default_trajectory(),
                             size=1, **model_options)
-    prepared = cache.get(solution, biases, bias_model)
-    sim = simulate_linear(prepared, outliers=outlier, noise=False, initial_error=False,
-                          record_every=record_every)
-    C = cache.trajectory.attitude.as_matrix()[sim.index]
-    rows = watch_rows(watch, sim.state_names, C)
-    truth, est, sigma = sim.project(rows)
-    truth, est = truth[:, 0], est[:, 0]
+    unit, = cache.unit_responses(solution, [(outlier, watch)], biases=biases,
+                                 bias_model=bias_model, record_every=record_every)
+    truth, est, sigma = outlier.magnitude * unit.truth, outlier.magnitude * unit.estimate, \
+        unit.sigma
     induced = est - truth
-    score = score_recovery(sim.t, induced if induced.shape[1] > 1 else induced[:, 0],
+    score = score_recovery(unit.t, induced if induced.shape[1] > 1 else induced[:, 0],
                            t_outlier=outlier.time, window=window,
                            sigma=sigma if sigma.shape[1] > 1 else sigma[:, 0],
                            averaging=averaging)
-    return OutlierResponse(solution, watch, outlier, bool(sim.applied[0]), sim.t, truth, est,
+    return OutlierResponse(solution, watch, outlier, bool(unit.applied), unit.t, truth, est,
                            induced, sigma, score)
 
 
@@ -362,6 +503,14 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 and (time is None or r.outlier.time == time)}
     responses = {}
     for sol, tids in jobs.items():
+        requests = [(PAPER_TESTS[tid].outlier(shape, time=time), PAPER_TESTS[tid].watch)
+                    for tid in tids for shape in shapes if (tid, sol, shape) not in same]
+        if "T4" in tids and sol == "ins_gps_att_rt" and divergence:
+            requests.append((PAPER_TESTS["T4"].outlier("spike", time=time), "ref_roll"))
+        if requests:              # one recursion for all of this filter's responses
+            cache.unit_responses(sol, requests, biases=biases,
+                                 bias_model=_bias_model(biases, bias_model),
+                                 record_every=record_every)
         for tid in tids:
             test = PAPER_TESTS[tid]
             for shape in shapes:
@@ -504,15 +653,16 @@ def correlation_fig10(trajectory=None, *, duration: float = 5.0,
     if cache is None:
         traj = trajectory if trajectory is not None else default_trajectory()
         cache = FilterCache(traj, size=1, **model_options)
-    cov = cache.get(solution, biases, bias_model).covariance
+    cov = cache.summary(solution, biases, bias_model)
+    if "psi_ref_x" not in cov.attitude_names:
+        raise NavlibInputError(f"solution: {solution!r} has no launcher divergence "
+                               "(psi_ref); use an RT solution")
     t = cov.t
     keep = t <= t[0] + duration + 1e-9
     C_e_b = np.swapaxes(cache.trajectory.attitude.as_matrix(), 1, 2)
-    P = cov.P_post[keep]
-    names = list(cov.state_names)
-    psi = [names.index(f"psi_{a}") for a in "xyz"]
-    ref = [names.index(f"psi_ref_{a}") for a in "xyz"]
-    rho = group_correlation(P, psi, ref, C_a=C_e_b[keep])
+    psi = cov.index([f"psi_{a}" for a in "xyz"])
+    ref = cov.index([f"psi_ref_{a}" for a in "xyz"])
+    rho = group_correlation(cov.attitude[keep], psi, ref, C_a=C_e_b[keep])
     return pd.DataFrame({
         "t": np.repeat(t[keep], 3),
         "axis": np.tile(np.array(["roll", "pitch", "yaw"], dtype=object), keep.sum()),
@@ -539,10 +689,9 @@ def roll_sigma(trajectory=None, *, pairs=(("ins_gps", "ins_gps_rt"),
     C_e_b = np.swapaxes(traj.attitude.as_matrix(), 1, 2)[::stride]
     frames = []
     for sol in dict.fromkeys(s for pair in pairs for s in pair):
-        cov = cache.get(sol, biases, bias_model).covariance
-        names = list(cov.state_names)
-        psi = [names.index(f"psi_{a}") for a in "xyz"]
-        sig = sigma_in_frame(cov.P_post[::stride], psi, C_e_b)
+        cov = cache.summary(sol, biases, bias_model)
+        psi = cov.index([f"psi_{a}" for a in "xyz"])
+        sig = sigma_in_frame(cov.attitude[::stride], psi, C_e_b)
         t = cov.t[::stride]
         frames.append(pd.DataFrame({
             "t": np.repeat(t, 3), "solution": sol,
@@ -558,14 +707,15 @@ def sigma_ratios(a: str = "ins_gps", b: str = "ins_gps_rt", *, cache: FilterCach
     """RMS sigma of solution ``b`` over that of ``a`` for every common state, after
     ``after`` seconds (< 1: ``b`` estimates the state better)."""
     bias_model = _bias_model(biases, bias_model)
-    ca = cache.get(a, biases, bias_model).covariance
-    cb = cache.get(b, biases, bias_model).covariance
+    ca = cache.summary(a, biases, bias_model)
+    cb = cache.summary(b, biases, bias_model)
     keep = ca.t >= ca.t[0] + after
     common = [s for s in ca.state_names if s in cb.state_names]
-    ia, ib = ca.index(common), cb.index(common)
+    ia = [ca.state_names.index(s) for s in common]
+    ib = [cb.state_names.index(s) for s in common]
 
     def rms(cov, idx):
-        return np.sqrt(np.mean(np.diagonal(cov.P_post[keep], axis1=1, axis2=2)[:, idx], axis=0))
+        return np.sqrt(np.mean(cov.variances[keep][:, idx], axis=0))
 
     with np.errstate(invalid="ignore", divide="ignore"):
         return pd.Series(rms(cb, ib) / rms(ca, ia), index=common, name=f"{b}/{a}")
@@ -698,7 +848,7 @@ def monte_carlo_outlier(solution: str, outlier: Outlier, watch: str = "roll", *,
     sim = simulate_linear(prepared, runs=runs, seed=seed, outliers=outlier,
                           record_every=record_every, progress=progress)
     resp = simulate_linear(prepared, outliers=outlier, noise=False, initial_error=False,
-                           record_every=record_every)
+                           record_every=record_every, nees=False)
     C = cache.trajectory.attitude.as_matrix()[sim.index]
     rows = watch_rows(watch, sim.state_names, C)
     truth, est, sigma = sim.project(rows)
@@ -763,8 +913,12 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     sensors at every sample as in the paper, noise-free so the response is isolated) and
     compare its roll response with the linear filter's.
 
-    ``cache``: prepared linear filters to reuse for the linear response when it holds the
-    same trajectory and model options (else a fresh one is built)."""
+    The run with the outlier starts from the state of the run without it at the last
+    propagation window before the outlier (``simulate_ekf(..., resume=...)``: the same
+    numbers as a run from the start, whose first part is the nominal run's), except for
+    the RT solutions, whose closed-loop reference trajectory keeps a state of its own.
+    ``cache``: prepared linear filters and responses to reuse for the linear response
+    when it holds the same trajectory and model options (else a fresh one is built)."""
     from navlib.filters import simulate_ekf
 
     traj = trajectory if trajectory is not None else default_trajectory()
@@ -772,8 +926,12 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     kw = dict(model="launcher", solution=solution, biases=biases, bias_model=bias_model,
               model_options=model_options or None, gnss_rate_hz=traj.rate_hz, noise=False,
               initial_error=False, window_s=window_s)
-    faulty = simulate_ekf(traj, outliers=outlier, **kw)
-    nominal = simulate_ekf(traj, **kw)
+    resumable = not solution.endswith("_rt")
+    before = outlier.time - float(np.max(np.diff(traj.t)))
+    with threadpool_limits(1):          # small matrices, one step at a time
+        nominal = simulate_ekf(traj, snapshot_before=before if resumable else None, **kw)
+        faulty = simulate_ekf(traj, outliers=outlier, resume=nominal if resumable else None,
+                              **kw)
     # navigation roll error (C_true = exp(S(psi)) C_hat, body axes) = truth - estimate of
     # the error state after feedback; the linear 'induced' is estimate - truth
     induced = -(faulty.errors["roll"].to_numpy() - nominal.errors["roll"].to_numpy())
@@ -802,10 +960,11 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
     from navlib.filters import simulate_ekf
 
     bias_model = _bias_model(biases, bias_model)
-    run = simulate_ekf(trajectory, solution=solution, biases=biases, bias_model=bias_model,
-                       model_options=model_options or None, seed=seed,
-                       gnss_rate_hz=trajectory.rate_hz, window_s=window_s,
-                       keep_covariance=True)
+    with threadpool_limits(1):          # small matrices, one step at a time
+        run = simulate_ekf(trajectory, solution=solution, biases=biases,
+                           bias_model=bias_model, model_options=model_options or None,
+                           seed=seed, gnss_rate_hz=trajectory.rate_hz, window_s=window_s,
+                           keep_covariance=True)
     res = run.result
     k = np.searchsorted(trajectory.t, res.t)
     C_e_b = np.swapaxes(trajectory.attitude.as_matrix()[k], 1, 2)
@@ -829,7 +988,7 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
 def assumption_sensitivity(variants: dict, trajectory=None, *,
                            tests: Sequence[str] = ("T1", "T2", "T3", "T4"),
                            window: float = DEFAULTS["window"], time: float | None = None,
-                           cache_size: int = 2, cache: FilterCache | None = None
+                           cache_size: int = 1, cache: FilterCache | None = None
                            ) -> pd.DataFrame:
     """Spike-outlier verdicts of T1-T4 under alternative readings of the paper.
 
@@ -841,12 +1000,13 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
     trajectory : Trajectory, optional
         Default: that of ``cache``, else :func:`default_trajectory`.
     cache_size : int
-        Prepared filters kept per variant.
+        Prepared filters kept while a variant runs (none after it: later variants need
+        only its responses).
     cache : FilterCache, optional
-        Filters already prepared (e.g. by :func:`paper_tests`): a variant reuses those that
-        are the same model (same trajectory and options; the non-RT solutions also when
-        only the RT-only options ``a1_sign``/``sigma_wind`` differ), so does a later
-        variant with the earlier variants' non-RT filters.
+        Filters and responses already computed (e.g. by :func:`paper_tests`): a variant
+        reuses those of the same model (same trajectory and options; the non-RT solutions
+        also when only the RT-only options ``a1_sign``/``sigma_wind`` differ), so does a
+        later variant with the earlier variants' non-RT responses.
 
     Returns
     -------
@@ -867,6 +1027,7 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
             _adopt(variant_cache, other)
         st = paper_tests(cache=variant_cache, shapes=("spike",), tests=tests, window=window,
                          time=time, divergence=False, **study_kw, **kw)
+        variant_cache.release()
         pool = [*pool[:1 if cache is not None else 0], variant_cache]
         claim = {c.claim_id: c.verdict for c in st.claims}
         for (tid, sol, _shape), r in st.responses.items():
@@ -934,7 +1095,7 @@ def _variants(quick: bool) -> dict:
     windows = (30.0,) if quick else ROBUSTNESS_GRID["window"]
     out, previous, first = {}, None, None
     for sign in ROBUSTNESS_GRID["a1_sign"]:
-        cache = FilterCache(traj, size=4, a1_sign=sign)
+        cache = FilterCache(traj, size=1, a1_sign=sign)
         if previous is not None:
             _adopt(cache, previous)
         previous = None

@@ -1,0 +1,134 @@
+"""What notebook 05 and the outlier study show, as one long table, for before/after checks.
+
+:func:`notebook_values` executes the code cells of ``notebooks/05_outlier_sensitivity.ipynb``
+in this process (``display`` collects the shown objects instead of rendering them) and
+flattens every table, Markdown text and widget status the notebook shows into rows
+``item, row, column, value``; :func:`claim_values` does the same for the claims engine's
+outlier study (:func:`navlib.studies.outliers._variants`: baseline and robustness set).
+Numbers are written with 17 significant digits, text as it is.
+
+``python tests/outlier_tables.py`` rewrites the reference files in ``tests/data/``
+(only ever at a commit whose results are the reference).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = Path(__file__).resolve().parent / "data"
+NOTEBOOK = ROOT / "notebooks" / "05_outlier_sensitivity.ipynb"
+COLUMNS = ["item", "row", "column", "value"]
+
+
+def _cell(value) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value)) if math.isfinite(value) else str(float(value))
+    return str(value)
+
+
+def _rows(item: str, obj) -> list[tuple]:
+    if isinstance(obj, pd.Series):
+        obj = obj.to_frame()
+    if isinstance(obj, pd.DataFrame):
+        return [(item, str(r), str(c), _cell(v)) for r, row in obj.iterrows()
+                for c, v in row.items()]
+    if hasattr(obj, "data") and isinstance(obj.data, str):          # Markdown
+        return [(item, "", "text", obj.data)]
+    return [(item, "", "type", type(obj).__name__)]
+
+
+def notebook_values(quick: bool) -> pd.DataFrame:
+    """Run notebook 05's code cells (``quick`` as its parameter) and flatten what it shows."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    nb = json.loads(NOTEBOOK.read_text())
+    shown: list = []
+    scope = {"__name__": "__main__"}
+    for cell in nb["cells"]:
+        if cell["cell_type"] != "code":
+            continue
+        source = "".join(cell["source"]).replace(
+            "from IPython.display import Markdown, display", "from IPython.display import Markdown")
+        if "parameters" in cell.get("metadata", {}).get("tags", []):
+            source += f"\nquick = {quick}\n"
+        scope["display"] = lambda *objs, **_kw: shown.extend(objs)
+        exec(compile(source, "notebook-05", "exec"), scope)
+    rows = []
+    for i, obj in enumerate(shown):
+        rows += _rows(f"shown {i}", obj)
+    # the same results unrounded
+    rows.append(("panel", "", "status", scope["panel"].status.value))
+    rows += _rows("study claims", scope["study"].claims_frame())
+    rows += _rows("study table", scope["study"].table())
+    rows += _rows("capture", pd.Series(scope["study"].capture, name="value"))
+    if "sens" in scope:
+        rows += _rows("sensitivity", scope["sens"])
+    for solution, check in scope.get("checks", {}).items():
+        rows += _rows(f"ekf {solution}", pd.DataFrame(
+            {"ekf": check.score_ekf.as_dict(), "linear": check.linear.score.as_dict()}))
+    rows += _rows("monte carlo", pd.Series(scope["mc"].score.as_dict(), name="score"))
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def claim_values(quick: bool) -> pd.DataFrame:
+    """The claims engine's outlier study: every (window, a1_sign) variant's claims and the
+    robustness fractions."""
+    from navlib.studies import outliers
+    from navlib.studies.claims import claims_frame
+
+    outliers._CACHE.clear()
+    rows = []
+    for (window, sign), claims in outliers._variants(quick).items():
+        frame = claims_frame(claims)[["claim_id", "ours", "verdict", "checks"]]
+        rows += _rows(f"variant {window:g} {sign:+g}", frame.set_index("claim_id"))
+    rows += _rows("robustness", pd.Series(outliers._robustness(quick), name="fraction"))
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def differences(got: pd.DataFrame, want: pd.DataFrame, rtol: float = 1e-9) -> list[str]:
+    """Rows that differ: text exactly, numbers to ``rtol`` (also numbers inside text, e.g.
+    a claim's "retained 0.93": compared after formatting, so exactly)."""
+    out = []
+    if list(got[["item", "row", "column"]].itertuples(index=False)) != list(
+            want[["item", "row", "column"]].itertuples(index=False)):
+        return ["the tables have different rows: "
+                f"{len(got)} now, {len(want)} in the reference"]
+    for g, w, key in zip(got.value, want.value,
+                         want[["item", "row", "column"]].itertuples(index=False), strict=True):
+        try:
+            a, b = float(g), float(w)
+        except ValueError:
+            if g != w:
+                out.append(f"{tuple(key)}: {g!r} != {w!r}")
+            continue
+        if not (a == b or (math.isnan(a) and math.isnan(b))
+                or abs(a - b) <= rtol * max(abs(a), abs(b))):
+            out.append(f"{tuple(key)}: {a!r} != {b!r}")
+    return out
+
+
+def reference(name: str) -> pd.DataFrame:
+    return pd.read_csv(DATA / name, dtype=str, keep_default_na=False)
+
+
+if __name__ == "__main__":
+    DATA.mkdir(exist_ok=True)
+    sys.path.insert(0, str(ROOT))
+    which = sys.argv[1:] or ["quick", "full", "claims-quick", "claims-full"]
+    for name in which:
+        quick = name.endswith("quick")
+        frame = claim_values(quick) if name.startswith("claims") else notebook_values(quick)
+        frame.to_csv(DATA / f"outliers_{name.replace('-', '_')}.csv", index=False)
+        print(name, len(frame), "rows")
