@@ -669,7 +669,7 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
         ``threadpoolctl``); default all cores when ``threadpoolctl`` is installed, else 1.
     chunk : int
         Steps per batch (bounds memory: ``chunk * window * m * n`` floats, or about
-        ``8 chunk n^2`` on the sliding path, where it is rounded down to whole windows).
+        ``8 chunk n^2`` on the sliding path, which rounds it to whole windows).
 
     Returns
     -------
