@@ -616,7 +616,9 @@ def covariance_evolution(trajectory=None, cases=None, *, quick: bool = False,
 def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.DataFrame]:
     """:func:`covariance_evolution` for several ``model_kw`` that differ only in the initial
     sigmas (``sigma0_*``, which enter P0 alone): the per-step F, Q, H, R of each case are
-    built once and shared by every variant."""
+    built once and every variant's recursion runs in one stacked recursion over the
+    variants' P0 (:func:`navlib.covariance.kalman_covariances`, the same numbers as one
+    recursion per variant)."""
     from navlib.filters import linear_steps
     from navlib.models.launcher import sensor_values
     from navlib.trajectory import launcher_ascent
@@ -640,33 +642,44 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
         extra = {"gyro_bias": gyro_bias * factor} if factor != 1.0 else {}
         if key not in steps_cache:
             steps_cache.clear()
-            steps_cache[key] = linear_steps(launcher(solution, biases, bias_model, trajectory,
-                                                     **model_kws[0], **extra))
-        steps = steps_cache[key]
-        for variant, model_kw in enumerate(model_kws):
-            if variant == 0:
-                P0 = steps.P0
-            else:  # as linear_steps builds it: the model's P0, symmetrised
-                P0 = np.asarray(launcher(solution, biases, bias_model, trajectory, **model_kw,
-                                         **extra).P0, dtype=float)
-                P0 = 0.5 * (P0 + P0.T)
-            rows[variant].append(_evolution_row(
-                name, solution, biases, bias_model, aiding, factor, steps, P0, C_e_b))
+            config = (solution, biases, bias_model)
+            steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra))
+            steps_cache[key] = (steps, [steps.P0, *(
+                _variant_P0(config, trajectory, {**kw, **extra}) for kw in model_kws[1:])])
+        steps, P0s = steps_cache[key]
+        covs = _evolution_covariances(aiding, steps, P0s)
+        for variant, cov in enumerate(covs):
+            rows[variant].append(_evolution_row(name, solution, biases, bias_model, aiding,
+                                                factor, cov, C_e_b))
     return [pd.DataFrame(r) for r in rows]
 
 
-def _evolution_row(name, solution, biases, bias_model, aiding, factor, steps, P0,
-                   C_e_b) -> dict:
-    """One row of :func:`covariance_evolution` from the case's steps and initial P0."""
-    from navlib.covariance import ins_only_covariance, kalman_covariance, sigma_in_frame
+def _variant_P0(config: tuple, trajectory, model_kw: dict) -> np.ndarray:
+    """P0 of :func:`navlib.models.launcher` with ``model_kw``, symmetrised as
+    :func:`navlib.filters.linear_steps` does. P0 depends on the configuration and the sigmas
+    only, so the model is built on the trajectory's first two samples."""
+    from types import SimpleNamespace
 
-    if aiding == "ins_only":
-        cov = ins_only_covariance(steps.F, steps.Q, P0, t=steps.t,
-                                  state_names=steps.state_names)
-    else:
-        R = steps.R if aiding == "kf" else np.zeros_like(steps.R)
-        cov = kalman_covariance(steps.F, steps.Q, steps.H, R, P0, t=steps.t,
-                                state_names=steps.state_names)
+    head = SimpleNamespace(t=trajectory.t[:2], attitude=trajectory.attitude[:2],
+                           specific_force=trajectory.specific_force[:2])
+    P0 = np.asarray(launcher(*config, head, **model_kw).P0, dtype=float)
+    return 0.5 * (P0 + P0.T)
+
+
+def _evolution_covariances(aiding: str, steps, P0s) -> list:
+    """The covariance histories of one case for every initial covariance of ``P0s``."""
+    from navlib.covariance import kalman_covariances
+
+    H, R = (None, None) if aiding == "ins_only" else \
+        (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
+    return kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t,
+                              state_names=steps.state_names)
+
+
+def _evolution_row(name, solution, biases, bias_model, aiding, factor, cov, C_e_b) -> dict:
+    """One row of :func:`covariance_evolution` from the case's covariance history."""
+    from navlib.covariance import sigma_in_frame
+
     names = list(cov.state_names)
     psi = [names.index(f"psi_{a}") for a in "xyz"]
     att = sigma_in_frame(cov.P_post[[0, -1]], psi, C_e_b[[0, -1]])
