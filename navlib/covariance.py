@@ -706,12 +706,16 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     flips = np.where(np.einsum("kij,kij->kj", V[1:], V[:-1]) < 0, -1.0, 1.0)
     V[1:] *= np.cumprod(flips, axis=0)[:, None, :]  # chained: each column vs the flipped one
     tracked_V = V.copy()
-    gap = degenerate_tol * order
     forward = anchor == "start"
+    # the clusters of every epoch at once: label[k, i] numbers the cluster of sorted mode i
+    # (a gap above degenerate_tol * o starts a new one), first[k, i] marks its first mode
+    labels = np.zeros((count, n), dtype=int)
+    labels[:, 1:] = np.cumsum(-np.diff(w, axis=1) > degenerate_tol * order, axis=1)
+    first = np.diff(labels, axis=1, prepend=-1) != 0
     for k in (range(1, count) if forward else range(count - 2, -1, -1)) if track else ():
         prev, cur = tracked_V[k - 1 if forward else k + 1], V[k]
         M = cur.T @ prev  # overlaps: rows current sorted vectors, columns previous tracked
-        label = np.concatenate([[0], np.cumsum(-np.diff(w[k]) > gap)])
+        label = labels[k]
         new = np.empty_like(prev)
         if label[-1] == n - 1:  # all eigenvalues separated: assign by maximum overlap
             rows, cols = linear_sum_assignment(-np.abs(M))
@@ -721,8 +725,8 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
         # squared projection of each previous vector onto each cluster's subspace; every
         # sorted position is a slot of its cluster, so a cluster receives as many previous
         # vectors as its dimension
-        starts = np.flatnonzero(np.diff(label, prepend=-1))
-        sizes = np.diff(np.append(starts, n))
+        starts = np.flatnonzero(first[k])
+        sizes = np.bincount(label)
         proj = np.add.reduceat(M**2, starts, axis=0)
         rows, cols = linear_sum_assignment(-proj[label])
         single = sizes[label[rows]] == 1
