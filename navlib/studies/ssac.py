@@ -18,6 +18,7 @@ ssac.md §4.4; the paper's own values were lost from the seed text.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import pandas as pd
@@ -546,7 +547,15 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
     modes at the end of the run (normalised coordinates, equal sigma per axis of a triad),
     restricted to each bias triad; ``body_share`` is its diagonal (per body axis) and
     ``ned_share`` the diagonal of ``C_b_n P C_n_b`` (per NED axis), both as sqrt.
+    Cached per orientation and duration (the notebook and :func:`ssac_claims` ask for the
+    same one); each call returns its own copy.
     """
+    ypr = tuple(float(v) for v in np.ravel(ypr_deg))
+    return _orientation_table(ypr, float(duration_s)).copy()
+
+
+@lru_cache(maxsize=4)
+def _orientation_table(ypr_deg: tuple, duration_s: float) -> pd.DataFrame:
     from scipy.spatial.transform import Rotation
 
     C = Rotation.from_euler("ZYX", ypr_deg, degrees=True).as_matrix()
