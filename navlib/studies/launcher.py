@@ -646,11 +646,9 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
             steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra))
             steps_cache[key] = (steps, [steps.P0, *(
                 _variant_P0(config, trajectory, {**kw, **extra}) for kw in model_kws[1:])])
-        steps, P0s = steps_cache[key]
-        covs = _evolution_covariances(aiding, steps, P0s)
-        for variant, cov in enumerate(covs):
-            rows[variant].append(_evolution_row(name, solution, biases, bias_model, aiding,
-                                                factor, cov, C_e_b))
+        case = (name, solution, biases, bias_model, aiding, factor)
+        for variant, row in enumerate(_evolution_rows(case, *steps_cache[key], C_e_b)):
+            rows[variant].append(row)
     return [pd.DataFrame(r) for r in rows]
 
 
@@ -666,14 +664,18 @@ def _variant_P0(config: tuple, trajectory, model_kw: dict) -> np.ndarray:
     return 0.5 * (P0 + P0.T)
 
 
-def _evolution_covariances(aiding: str, steps, P0s) -> list:
-    """The covariance histories of one case for every initial covariance of ``P0s``."""
+def _evolution_rows(case: tuple, steps, P0s, C_e_b) -> list[dict]:
+    """The rows of one case (name, solution, biases, bias model, aiding, gyro factor) for
+    every initial covariance of ``P0s``, from one stacked recursion (its histories are
+    released on return)."""
     from navlib.covariance import kalman_covariances
 
+    aiding = case[4]
     H, R = (None, None) if aiding == "ins_only" else \
         (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
-    return kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t,
+    covs = kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t,
                               state_names=steps.state_names)
+    return [_evolution_row(*case, cov, C_e_b) for cov in covs]
 
 
 def _evolution_row(name, solution, biases, bias_model, aiding, factor, cov, C_e_b) -> dict:
