@@ -1042,4 +1042,5 @@ def _robustness(quick: bool = False) -> dict:
 
 engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", _baseline_claims,
                              ROBUSTNESS_GRID, _robustness,
-                             "full factorial; one covariance run per point"))
+                             "full factorial; the points' P0 in one stacked covariance "
+                             "recursion per state count"))
