@@ -86,8 +86,9 @@ def test_ssac_runs_equal_separate_runs():
             np.testing.assert_array_equal(study.eigen.tracked_vectors,
                                           single.eigen.tracked_vectors)
             assert study.model.parameters["P0_variant"] == P0
-    with pytest.raises(NavlibInputError, match="initial"):
-        study_ssac.runs([])
+    for bad in ([], ["matched"], 3):
+        with pytest.raises(NavlibInputError, match="initial"):
+            study_ssac.runs(bad)
 
 
 def test_p0_sensitivity_reuses_the_rerun():

@@ -376,15 +376,24 @@ def runs(initial, duration_s: float = 3600.0, dt: float = 1.0, lat_deg: float = 
     dt = finite_scalar(dt, "dt", 0.0, duration_s, low_open=True)
     options = {} if sigma_nu is None else {"sigma_nu": sigma_nu}
     models = [ssac(n_states, lat_deg, alt_m, P0=P0, attitude_scale=scale, C_b_n=C_b_n,
-                   **options) for P0, scale in initial]
-    if not models:
-        raise NavlibInputError("initial: need at least one (P0, attitude_scale) pair")
+                   **options) for P0, scale in _pairs(initial)]
     n_epochs = round(duration_s / dt) + 1
     discrete = models[0].discretize(dt=dt, n_epochs=n_epochs)
     covs = kalman_covariances(discrete, P0=np.stack([m.P0 for m in models]),
                               update_first=True)
     return [SSACStudy(model, cov, normalized_eigen(cov, model.P0, track=track))
             for model, cov in zip(models, covs, strict=True)]
+
+
+def _pairs(initial) -> list[tuple]:
+    """``initial`` of :func:`runs` as a non-empty list of (P0, attitude_scale) pairs."""
+    try:
+        pairs = [(P0, scale) for P0, scale in initial]
+    except (TypeError, ValueError) as exc:
+        raise NavlibInputError("initial: expected (P0, attitude_scale) pairs") from exc
+    if not pairs:
+        raise NavlibInputError("initial: need at least one (P0, attitude_scale) pair")
+    return pairs
 
 
 def closed_form_limits(study: SSACStudy) -> pd.DataFrame:
