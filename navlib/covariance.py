@@ -41,6 +41,7 @@ __all__ = [
     "group_correlation",
     "ins_only_covariance",
     "kalman_covariance",
+    "kalman_covariances",
     "normalized_eigen",
     "sigma_in_frame",
 ]
@@ -123,14 +124,15 @@ class CovarianceResult:
         })
 
 
-def _inputs(F, Q, H, R, P0, t, n_epochs, state_names, measurements=True):
-    """Resolve a DiscreteModel or plain arrays into stacks (N-1 F/Q, N H/R)."""
+def _inputs(F, Q, H, R, P0, t, n_epochs, state_names, measurements=True, stacked=False):
+    """Resolve a DiscreteModel or plain arrays into stacks (N-1 F/Q, N H/R, B P0): ``P0``
+    is one (n, n) matrix (B = 1), or with ``stacked`` a (B, n, n) stack or B matrices."""
     if isinstance(F, DiscreteModel):
         model = F
         Q = model.Q if Q is None else Q
         H = model.H if H is None and measurements else H
         R = model.R if R is None and measurements else R
-        P0 = model.P0 if P0 is None else P0
+        P0 = (model.P0 if not stacked else [model.P0]) if P0 is None else P0
         t = model.t if t is None else t
         state_names = model.state_names if state_names is None else state_names
         F = model.F
@@ -152,7 +154,7 @@ def _inputs(F, Q, H, R, P0, t, n_epochs, state_names, measurements=True):
         raise NavlibInputError(f"F: matrices must be square, got shape {F.shape}")
     F = _stack(F, count - 1, (n, n), "F")
     Q = _stack(Q, count - 1, (n, n), "Q")
-    P0 = finite_array(P0, "P0", shape=(n, n))
+    P0 = _initial(P0, n) if stacked else finite_array(P0, "P0", shape=(n, n))[None]
     if t is None:
         t = np.arange(count, dtype=float)
     else:
@@ -165,6 +167,101 @@ def _inputs(F, Q, H, R, P0, t, n_epochs, state_names, measurements=True):
         H = _stack(H, count, (m, n), "H")
         R = _stack(R if R is not None else np.zeros((m, m)), count, (m, m), "R")
     return F, Q, H, R, _sym(P0), t, _names(state_names, n)
+
+
+def _initial(P0, n: int) -> np.ndarray:
+    """Initial covariances as a (B, n, n) stack, B >= 1."""
+    P0 = finite_array(P0, "P0")
+    if P0.ndim != 3 or P0.shape[0] < 1 or P0.shape[1:] != (n, n):
+        raise NavlibInputError(f"P0: expected B >= 1 initial covariances of shape ({n}, {n}), "
+                               f"got shape {P0.shape}")
+    return P0
+
+
+def _epochs_measured(measured, count: int, update_first: bool, has_h: bool) -> np.ndarray:
+    """The update epochs of :func:`kalman_covariance` (all by default, epoch 0 only when
+    ``update_first``; none without ``H``)."""
+    if measured is None:
+        measured = np.ones(count, dtype=bool)
+        measured[0] = bool(update_first)
+    else:
+        measured = np.asarray(measured, dtype=bool)
+        if measured.shape != (count,):
+            raise NavlibInputError(f"measured: expected {count} booleans, got {measured.shape}")
+        measured = measured.copy()
+        if not update_first:
+            measured[0] = False
+    if not has_h:
+        measured[:] = False
+    return measured
+
+
+def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float):
+    """The Joseph-form recursion of :func:`kalman_covariance` for a stack of initial
+    covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: ``P_prior, P_post`` (B, N, n, n).
+
+    Every step is one stacked product or decomposition over the B members; each member
+    goes through the very operations of its own recursion (stacked ``matmul``, ``inv`` and
+    ``eigh`` treat each matrix alone), so its history is the same to the last bit. The
+    steps stay sequential (the Riccati recursion); the noise test of every epoch's ``R`` is
+    one batched call before the loop.
+    """
+    count, (batch, n) = measured.size, P0.shape[:2]
+    if H is not None:
+        from navlib.filters.kalman import definite_noise, joseph_update
+
+        r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
+    P_prior = np.empty((batch, count, n, n))
+    P_post = np.empty((batch, count, n, n))
+    P = P0
+    for k in range(count):
+        if k:
+            P = F[k - 1] @ P @ F[k - 1].T + Q[k - 1]
+            P = _sym(P)
+        P_prior[:, k] = P
+        if measured[k]:
+            P, _ = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol, definite=r_definite[k])
+        P_post[:, k] = P
+    return P_prior, P_post
+
+
+def kalman_covariances(F, Q=None, H=None, R=None, P0=None, *, update_first: bool = True,
+                       measured=None, t=None, n_epochs: int | None = None,
+                       state_names=None, pinv_rtol: float = 1e-12) -> list[CovarianceResult]:
+    """:func:`kalman_covariance` for several initial covariances sharing ``F, Q, H, R``.
+
+    The points of an assumption set that differ only in ``P0`` (initial sigmas) share the
+    model; their recursions run as one, stacked over the initial covariances, and give the
+    same histories as separate :func:`kalman_covariance` calls, to the bit, at a fraction
+    of the per-step cost.
+
+    Parameters
+    ----------
+    F, Q, H, R, update_first, measured, t, n_epochs, state_names, pinv_rtol
+        As :func:`kalman_covariance` (``H`` None: INS-only, as :func:`ins_only_covariance`).
+    P0 : ndarray (B, n, n) or sequence of B (n, n) arrays
+        The initial covariances (default: the DiscreteModel's one).
+
+    Returns
+    -------
+    list of CovarianceResult
+        One per initial covariance, in order.
+    """
+    return _run(F, Q, H, R, P0, update_first, measured, t, n_epochs, state_names, pinv_rtol,
+                stacked=True)
+
+
+def _run(F, Q, H, R, P0, update_first, measured, t, n_epochs, state_names, pinv_rtol,
+         stacked: bool) -> list[CovarianceResult]:
+    """Validate the inputs of :func:`kalman_covariances` (``stacked``) or
+    :func:`kalman_covariance` and run :func:`_recursion`."""
+    F, Q, H, R, P0, t, names = _inputs(F, Q, H, R, P0, t, n_epochs, state_names,
+                                       stacked=stacked)
+    pinv_rtol = finite_scalar(pinv_rtol, "pinv_rtol", 0.0, 1.0)
+    measured = _epochs_measured(measured, t.size, update_first, H is not None)
+    P_prior, P_post = _recursion(F, Q, H, R, P0, measured, pinv_rtol)
+    return [CovarianceResult(t, prior, post, measured, names)
+            for prior, post in zip(P_prior, P_post, strict=True)]
 
 
 def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool = True,
@@ -213,37 +310,8 @@ def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool 
     stays symmetric positive semi-definite with ``R = 0`` (ideal measurements drive
     ``H P+ H'`` to zero exactly).
     """
-    F, Q, H, R, P0, t, names = _inputs(F, Q, H, R, P0, t, n_epochs, state_names)
-    count, n = t.size, P0.shape[0]
-    pinv_rtol = finite_scalar(pinv_rtol, "pinv_rtol", 0.0, 1.0)
-    if measured is None:
-        measured = np.ones(count, dtype=bool)
-        measured[0] = bool(update_first)
-    else:
-        measured = np.asarray(measured, dtype=bool)
-        if measured.shape != (count,):
-            raise NavlibInputError(f"measured: expected {count} booleans, got {measured.shape}")
-        measured = measured.copy()
-        if not update_first:
-            measured[0] = False
-    if H is None:
-        measured[:] = False
-    else:
-        from navlib.filters.kalman import definite_noise, joseph_update
-
-        r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
-    P_prior = np.empty((count, n, n))
-    P_post = np.empty((count, n, n))
-    P = P0
-    for k in range(count):
-        if k:
-            P = F[k - 1] @ P @ F[k - 1].T + Q[k - 1]
-            P = 0.5 * (P + P.T)
-        P_prior[k] = P
-        if measured[k]:
-            P, _ = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol, definite=r_definite[k])
-        P_post[k] = P
-    return CovarianceResult(t, P_prior, P_post, measured, names)
+    return _run(F, Q, H, R, P0, update_first, measured, t, n_epochs, state_names, pinv_rtol,
+                stacked=False)[0]
 
 
 def ins_only_covariance(F, Q=None, P0=None, *, t=None, n_epochs: int | None = None,
@@ -255,7 +323,7 @@ def ins_only_covariance(F, Q=None, P0=None, *, t=None, n_epochs: int | None = No
     """
     F, Q, _, _, P0, t, names = _inputs(F, Q, None, None, P0, t, n_epochs, state_names,
                                       measurements=False)
-    return kalman_covariance(F, Q, None, None, P0, t=t, state_names=names)
+    return kalman_covariance(F, Q, None, None, P0[0], t=t, state_names=names)
 
 
 def _covariances(P) -> np.ndarray:
@@ -638,12 +706,16 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     flips = np.where(np.einsum("kij,kij->kj", V[1:], V[:-1]) < 0, -1.0, 1.0)
     V[1:] *= np.cumprod(flips, axis=0)[:, None, :]  # chained: each column vs the flipped one
     tracked_V = V.copy()
-    gap = degenerate_tol * order
     forward = anchor == "start"
+    # the clusters of every epoch at once: label[k, i] numbers the cluster of sorted mode i
+    # (a gap above degenerate_tol * o starts a new one), first[k, i] marks its first mode
+    labels = np.zeros((count, n), dtype=int)
+    labels[:, 1:] = np.cumsum(-np.diff(w, axis=1) > degenerate_tol * order, axis=1)
+    first = np.diff(labels, axis=1, prepend=-1) != 0
     for k in (range(1, count) if forward else range(count - 2, -1, -1)) if track else ():
         prev, cur = tracked_V[k - 1 if forward else k + 1], V[k]
         M = cur.T @ prev  # overlaps: rows current sorted vectors, columns previous tracked
-        label = np.concatenate([[0], np.cumsum(-np.diff(w[k]) > gap)])
+        label = labels[k]
         new = np.empty_like(prev)
         if label[-1] == n - 1:  # all eigenvalues separated: assign by maximum overlap
             rows, cols = linear_sum_assignment(-np.abs(M))
@@ -653,8 +725,8 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
         # squared projection of each previous vector onto each cluster's subspace; every
         # sorted position is a slot of its cluster, so a cluster receives as many previous
         # vectors as its dimension
-        starts = np.flatnonzero(np.diff(label, prepend=-1))
-        sizes = np.diff(np.append(starts, n))
+        starts = np.flatnonzero(first[k])
+        sizes = np.bincount(label)
         proj = np.add.reduceat(M**2, starts, axis=0)
         rows, cols = linear_sum_assignment(-proj[label])
         single = sizes[label[rows]] == 1

@@ -642,7 +642,9 @@ def covariance_evolution(trajectory=None, cases=None, *, quick: bool = False,
 def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.DataFrame]:
     """:func:`covariance_evolution` for several ``model_kw`` that differ only in the initial
     sigmas (``sigma0_*``, which enter P0 alone): the per-step F, Q, H, R of each case are
-    built once and shared by every variant."""
+    built once and every variant's recursion runs in one stacked recursion over the
+    variants' P0 (:func:`navlib.covariance.kalman_covariances`, the same numbers as one
+    recursion per variant)."""
     from navlib.filters import linear_steps
     from navlib.models.launcher import sensor_values
     from navlib.trajectory import launcher_ascent
@@ -666,43 +668,57 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
         extra = {"gyro_bias": gyro_bias * factor} if factor != 1.0 else {}
         if key not in steps_cache:
             steps_cache.clear()
-            steps_cache[key] = linear_steps(launcher(solution, biases, bias_model, trajectory,
-                                                     **model_kws[0], **extra))
-        steps = steps_cache[key]
-        for variant, model_kw in enumerate(model_kws):
-            if variant == 0:
-                P0 = steps.P0
-            else:  # as linear_steps builds it: the model's P0, symmetrised
-                P0 = np.asarray(launcher(solution, biases, bias_model, trajectory, **model_kw,
-                                         **extra).P0, dtype=float)
-                P0 = 0.5 * (P0 + P0.T)
-            rows[variant].append(_evolution_row(
-                name, solution, biases, bias_model, aiding, factor, steps, P0, C_e_b))
+            config = (solution, biases, bias_model)
+            steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra))
+            steps_cache[key] = (steps, [steps.P0, *(
+                _variant_P0(config, trajectory, {**kw, **extra}) for kw in model_kws[1:])])
+        case = (name, solution, biases, bias_model, aiding, factor)
+        for variant, row in enumerate(_evolution_rows(case, *steps_cache[key], C_e_b)):
+            rows[variant].append(row)
     return [pd.DataFrame(r) for r in rows]
 
 
-def _evolution_row(name, solution, biases, bias_model, aiding, factor, steps, P0,
-                   C_e_b) -> dict:
-    """One row of :func:`covariance_evolution` from the case's steps and initial P0."""
-    from navlib.covariance import ins_only_covariance, kalman_covariance, sigma_in_frame
+def _variant_P0(config: tuple, trajectory, model_kw: dict) -> np.ndarray:
+    """P0 of :func:`navlib.models.launcher` with ``model_kw``, symmetrised as
+    :func:`navlib.filters.linear_steps` does. P0 depends on the configuration and the sigmas
+    only, so the model is built on the trajectory's first two samples."""
+    from types import SimpleNamespace
 
-    if aiding == "ins_only":
-        cov = ins_only_covariance(steps.F, steps.Q, P0, t=steps.t,
-                                  state_names=steps.state_names)
-    else:
-        R = steps.R if aiding == "kf" else np.zeros_like(steps.R)
-        cov = kalman_covariance(steps.F, steps.Q, steps.H, R, P0, t=steps.t,
-                                state_names=steps.state_names)
+    head = SimpleNamespace(t=trajectory.t[:2], attitude=trajectory.attitude[:2],
+                           specific_force=trajectory.specific_force[:2])
+    P0 = np.asarray(launcher(*config, head, **model_kw).P0, dtype=float)
+    return 0.5 * (P0 + P0.T)
+
+
+def _evolution_rows(case: tuple, steps, P0s, C_e_b) -> list[dict]:
+    """The rows of one case (name, solution, biases, bias model, aiding, gyro factor) for
+    every initial covariance of ``P0s``, from one stacked recursion (its histories are
+    released on return)."""
+    from navlib.covariance import kalman_covariances
+
+    aiding = case[4]
+    H, R = (None, None) if aiding == "ins_only" else \
+        (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
+    covs = kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t,
+                              state_names=steps.state_names)
+    return [_evolution_row(*case, cov, C_e_b) for cov in covs]
+
+
+def _evolution_row(name, solution, biases, bias_model, aiding, factor, cov, C_e_b) -> dict:
+    """One row of :func:`covariance_evolution` from the case's covariance history."""
+    from navlib.covariance import sigma_in_frame
+
     names = list(cov.state_names)
+    ends = cov.P_post[[0, -1]]  # the row reads the first and the last epoch only
     psi = [names.index(f"psi_{a}") for a in "xyz"]
-    att = sigma_in_frame(cov.P_post[[0, -1]], psi, C_e_b[[0, -1]])
+    att = sigma_in_frame(ends, psi, C_e_b[[0, -1]])
     row = {"case": name, "solution": solution, "biases": biases, "bias_model": bias_model,
            "aiding": aiding, "gyro_factor": factor}
     for i, axis in enumerate(("roll", "pitch", "yaw")):
         row[axis], row[f"{axis}_0"] = float(att[-1, i]), float(att[0, i])
     for label, prefix in (("gyro_bias", "bg_"), ("accel_bias", "ba_"), ("gps_bias", "bp_")):
         idx = [names.index(f"{prefix}{a}") for a in "xyz"] if f"{prefix}x" in names else []
-        sig = cov.sigma[:, idx] if idx else None
+        sig = sigma_in_frame(ends, idx) if idx else None
         row[label] = float(np.sqrt(np.mean(sig[-1] ** 2))) if idx else np.nan
         row[f"{label}_0"] = float(np.sqrt(np.mean(sig[0] ** 2))) if idx else np.nan
     return row
@@ -948,5 +964,6 @@ engine.register(engine.Study(
     _table2_robustness, "the tolerance-dependent claims re-judged on the same table", order=1))
 engine.register(engine.Study("covariance", "Beaudoin et al. (2018)", _evolution_claims,
                              EVOLUTION_GRID, _evolution_robustness,
-                             "one covariance-evolution table per initial attitude sigma",
+                             "one covariance-evolution table per initial attitude sigma; "
+                             "the sigmas' recursions stacked per case",
                              order=2))

@@ -18,6 +18,7 @@ ssac.md §4.4; the paper's own values were lost from the seed text.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import pandas as pd
@@ -28,7 +29,7 @@ from navlib.covariance import (
     CovarianceResult,
     NormalizedEigenResult,
     convergence_time,
-    kalman_covariance,
+    kalman_covariances,
     normalized_eigen,
 )
 from navlib.errors import NavlibInputError
@@ -46,11 +47,13 @@ __all__ = [
     "closed_form_limits",
     "equivalence_scale",
     "grouping_table",
+    "modified_run",
     "null_space_table",
     "observability_table",
     "orientation_table",
     "p0_sensitivity",
     "run",
+    "runs",
     "ssac_claims",
 ]
 
@@ -345,16 +348,52 @@ def run(duration_s: float = 3600.0, dt: float = 1.0, lat_deg: float = SITE_LAT_D
     C_b_n : ndarray (3, 3), optional
         IMU orientation (body to NED); default aligned, as in the paper.
     """
+    return runs([(P0, attitude_scale)], duration_s, dt, lat_deg, alt_m, n_states=n_states,
+                sigma_nu=sigma_nu, track=track, C_b_n=C_b_n)[0]
+
+
+def runs(initial, duration_s: float = 3600.0, dt: float = 1.0, lat_deg: float = SITE_LAT_DEG,
+         alt_m: float = SITE_ALT_M, *, n_states: int = 15, sigma_nu: float | None = None,
+         track: bool = True, C_b_n=None) -> list[SSACStudy]:
+    """:func:`run` for several initial covariances of one model (an assumption set's P0
+    points): the model is discretised once and the recursions run stacked
+    (:func:`navlib.covariance.kalman_covariances`), with the numbers of separate runs.
+
+    Parameters
+    ----------
+    initial : sequence of (P0, attitude_scale)
+        The :func:`navlib.models.ssac` ``P0`` (variant name or matrix) and ``attitude_scale``
+        of each run; they enter the model's ``P0`` only.
+    duration_s, dt, lat_deg, alt_m, n_states, sigma_nu, track, C_b_n
+        As :func:`run`.
+
+    Returns
+    -------
+    list of SSACStudy
+        One per entry of ``initial``, in order.
+    """
     duration_s = finite_scalar(duration_s, "duration_s", 0.0, 1e6, low_open=True)
     dt = finite_scalar(dt, "dt", 0.0, duration_s, low_open=True)
     options = {} if sigma_nu is None else {"sigma_nu": sigma_nu}
-    model = ssac(n_states, lat_deg, alt_m, P0=P0, attitude_scale=attitude_scale, C_b_n=C_b_n,
-                 **options)
+    models = [ssac(n_states, lat_deg, alt_m, P0=P0, attitude_scale=scale, C_b_n=C_b_n,
+                   **options) for P0, scale in _pairs(initial)]
     n_epochs = round(duration_s / dt) + 1
-    discrete = model.discretize(dt=dt, n_epochs=n_epochs)
-    cov = kalman_covariance(discrete, update_first=True)
-    eig = normalized_eigen(cov, model.P0, track=track)
-    return SSACStudy(model, cov, eig)
+    discrete = models[0].discretize(dt=dt, n_epochs=n_epochs)
+    covs = kalman_covariances(discrete, P0=np.stack([m.P0 for m in models]),
+                              update_first=True)
+    return [SSACStudy(model, cov, normalized_eigen(cov, model.P0, track=track))
+            for model, cov in zip(models, covs, strict=True)]
+
+
+def _pairs(initial) -> list[tuple]:
+    """``initial`` of :func:`runs` as a non-empty list of (P0, attitude_scale) pairs."""
+    try:
+        pairs = [(P0, scale) for P0, scale in initial]
+    except (TypeError, ValueError) as exc:
+        raise NavlibInputError("initial: expected (P0, attitude_scale) pairs") from exc
+    if not pairs:
+        raise NavlibInputError("initial: need at least one (P0, attitude_scale) pair")
+    return pairs
 
 
 def closed_form_limits(study: SSACStudy) -> pd.DataFrame:
@@ -469,19 +508,20 @@ def subspace_drift(eig: NormalizedEigenResult, t_from: float = 1800.0) -> float:
 
 def p0_sensitivity(study: SSACStudy | None = None,
                    attitude_scale: float = P0_MODIFIED_ATTITUDE_SCALE,
-                   duration_s: float = 3600.0) -> pd.DataFrame:
+                   duration_s: float = 3600.0, modified: SSACStudy | None = None
+                   ) -> pd.DataFrame:
     """The P0-sensitivity experiment (ssac.md §5.4 item 18) against the matched P0.
 
-    Reruns with the attitude sigmas of P0 times ``attitude_scale`` and reports, for both
-    runs, each paper pair's bias share in the pair subspace at the end (1 = the eigenvector
-    lies entirely along the bias: "complete non-estimability") and the final attitude sigma
-    (deg), which worsens when the biases lose estimability.
+    Reruns with the attitude sigmas of the matched P0 times ``attitude_scale`` and reports,
+    for both runs, each paper pair's bias share in the pair subspace at the end (1 = the
+    eigenvector lies entirely along the bias: "complete non-estimability") and the final
+    attitude sigma (deg), which worsens when the biases lose estimability. ``modified``:
+    that rerun when already made (:func:`modified_run`, e.g. stacked with others by
+    :func:`runs`).
     """
     base = study if study is not None else run(duration_s=duration_s, track=False)
-    p = base.model.parameters
-    modified = run(duration_s=float(base.t[-1] - base.t[0]), dt=float(base.t[1] - base.t[0]),
-                   lat_deg=np.degrees(p["lat"]), alt_m=p["alt"], n_states=base.model.n,
-                   attitude_scale=attitude_scale, track=False)
+    if modified is None:
+        modified = modified_run(base, attitude_scale)
     rows = []
     for label, st in (("matched", base), (f"attitude x{attitude_scale:g}", modified)):
         ps = pair_structure(st.eigen)
@@ -490,6 +530,17 @@ def p0_sensitivity(study: SSACStudy | None = None,
             rows.append({"P0": label, "pair": row["pair"], "bias_share": row["share_b"],
                          "attitude_share": row["share_x"], "sigma_attitude_end_deg": sig[x]})
     return pd.DataFrame(rows)
+
+
+def modified_run(study: SSACStudy, attitude_scale: float = P0_MODIFIED_ATTITUDE_SCALE
+                 ) -> SSACStudy:
+    """The rerun of :func:`p0_sensitivity`: the matched P0 with its attitude sigmas times
+    ``attitude_scale``, on the time grid, site and state count of ``study``."""
+    p = study.model.parameters
+    return run(duration_s=float(study.t[-1] - study.t[0]),
+               dt=float(study.t[1] - study.t[0]), lat_deg=np.degrees(p["lat"]),
+               alt_m=p["alt"], n_states=study.model.n, attitude_scale=attitude_scale,
+               track=False)
 
 
 ORIENTATION_DEG = (30.0, 20.0, 10.0)
@@ -505,7 +556,15 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
     modes at the end of the run (normalised coordinates, equal sigma per axis of a triad),
     restricted to each bias triad; ``body_share`` is its diagonal (per body axis) and
     ``ned_share`` the diagonal of ``C_b_n P C_n_b`` (per NED axis), both as sqrt.
+    Cached per orientation and duration (the notebook and :func:`ssac_claims` ask for the
+    same one); each call returns its own copy.
     """
+    ypr = tuple(float(v) for v in np.ravel(ypr_deg))
+    return _orientation_table(ypr, float(duration_s)).copy()
+
+
+@lru_cache(maxsize=4)
+def _orientation_table(ypr_deg: tuple, duration_s: float) -> pd.DataFrame:
     from scipy.spatial.transform import Rotation
 
     C = Rotation.from_euler("ZYX", ypr_deg, degrees=True).as_matrix()
@@ -955,17 +1014,21 @@ QUICK_DURATION_S = 600.0
 
 
 def _grid_claims(quick: bool) -> dict:
+    """The claims at every point of :data:`ROBUSTNESS_GRID` (the baseline only in quick
+    mode). The points differ in P0 alone, so the 15-state runs (with the P0-sensitivity
+    rerun, the same for every point: :func:`modified_run`) and the 12-state runs are two
+    stacked recursions (:func:`runs`)."""
     duration = QUICK_DURATION_S if quick else 3600.0
     tables = _static_tables(SITE_LAT_DEG, SITE_ALT_M, duration)
-    out = {}
-    for p0 in ROBUSTNESS_GRID["P0"]:
-        for scale in ROBUSTNESS_GRID["attitude_scale"]:
-            if quick and (p0, scale) != ("matched", 1.0):
-                continue
-            study = run(duration, P0=p0, attitude_scale=scale, track=False)
-            reduced = run(duration, P0=p0, attitude_scale=scale, n_states=12, track=False)
-            out[(p0, scale)] = ssac_claims(study, tables=tables, reduced=reduced)
-    return out
+    points = [(p0, scale) for p0 in ROBUSTNESS_GRID["P0"]
+              for scale in ROBUSTNESS_GRID["attitude_scale"]
+              if not quick or (p0, scale) == ("matched", 1.0)]
+    *full, modified = runs([*points, ("matched", P0_MODIFIED_ATTITUDE_SCALE)], duration,
+                           track=False)
+    reduced = runs(points, duration, n_states=12, track=False)
+    return {point: ssac_claims(study, tables=tables, reduced=small,
+                               p0_table=p0_sensitivity(study, modified=modified))
+            for point, study, small in zip(points, full, reduced, strict=True)}
 
 
 _CACHE: dict = {}
@@ -988,4 +1051,5 @@ def _robustness(quick: bool = False) -> dict:
 
 engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", _baseline_claims,
                              ROBUSTNESS_GRID, _robustness,
-                             "full factorial; one covariance run per point"))
+                             "full factorial; the points' P0 in one stacked covariance "
+                             "recursion per state count"))
