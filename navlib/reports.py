@@ -135,8 +135,9 @@ class NotebookRun:
     name : str
         Notebook stem.
     status : str
-        ``"ok"`` or ``"failed"`` (``"restarting"`` only in the progress call announcing a
-        restart after a stall).
+        ``"ok"`` or ``"failed"`` (in progress calls only: ``"restarting"`` announcing a
+        restart after a stall, ``"stopped"`` for a run cut short because another notebook
+        failed under ``fail_fast``).
     seconds : float
         Wall time of the papermill execution (kernel start included), s.
     parameters : dict
@@ -185,8 +186,9 @@ class ReportInterrupted(BaseException):
 class ReportError(RuntimeError):
     """At least one notebook failed; nothing was published.
 
-    ``runs`` holds every :class:`NotebookRun` attempted, failed ones with their
-    :class:`CellFailure`.
+    ``runs`` holds every :class:`NotebookRun` that ran to its end (in name order), failed
+    ones with their :class:`CellFailure`; runs stopped because of ``fail_fast`` are left
+    out.
     """
 
     def __init__(self, runs: Sequence[NotebookRun]):
@@ -199,7 +201,9 @@ class ReportError(RuntimeError):
 
 Progress = Callable[[int, int, str, "NotebookRun | None"], None]
 """``progress(position, total, name, run)``: called with ``run=None`` when notebook number
-``position`` (1-based) starts and with its :class:`NotebookRun` when it ends."""
+``position`` (1-based, in the order notebooks start) starts and with its
+:class:`NotebookRun` when it ends; always from the thread that called :func:`run_reports`,
+also when several notebooks run at once (their events then interleave)."""
 
 
 # --------------------------------------------------------------------------- discovery
@@ -680,7 +684,8 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     jobs : int
         Notebooks run at once, each in its own kernel (capped at the number selected; 1:
         one after the other, in name order). Longest first, by the times in the output
-        folder's previous manifest (name order without one); each kernel gets
+        folder's previous manifest (or that of :func:`default_output_dir`; name order
+        without one); each kernel gets
         ``cpus // jobs`` BLAS/OpenMP threads (:func:`kernel_environment`).
     cache : bool
         False: the kernels run with ``NAVLIB_NO_CACHE=1``, so every trajectory and model
@@ -735,9 +740,7 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     staging.chmod(0o777 & ~umask)  # mkdtemp makes it private; a report folder is not
     try:
         with _signals_interrupt():
-            runs = _run_all(queue, staging, settings, progress)
-            order = [info.name for info in selected]
-            runs.sort(key=lambda run: order.index(run.name))
+            runs = _run_all(selected, queue, staging, settings, progress)
             _publish(staging, output, runs, partial=only is not None)
         return runs
     except (ReportInterrupted, KeyboardInterrupt):
@@ -760,9 +763,14 @@ def _remove_orphaned_staging(output: Path) -> None:
 
 
 def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[NotebookInfo]:
-    """Longest first, by the ``seconds`` of the previous manifest in ``output``; notebooks
-    it does not time come first, in name order (they may be long)."""
-    entries = _load_manifest(output).get("notebooks", {})
+    """Longest first, by the ``seconds`` of the previous manifest in ``output`` or, when it
+    has none (a new folder), in :func:`default_output_dir` (the last ``make report``);
+    notebooks it does not time come first, in name order (they may be long)."""
+    entries: dict = {}
+    for folder in (output, default_output_dir()):
+        entries = _load_manifest(folder).get("notebooks", {})
+        if entries:
+            break
 
     def seconds(info: NotebookInfo) -> float:
         entry = entries.get(info.name)
@@ -774,10 +782,11 @@ def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[Noteboo
     return sorted(selected, key=lambda info: -seconds(info))  # stable: ties by name
 
 
-def _run_all(queue: Sequence[NotebookInfo], staging: Path, settings: _Settings,
-             progress: Progress | None) -> list[NotebookRun]:
+def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], staging: Path,
+             settings: _Settings, progress: Progress | None) -> list[NotebookRun]:
     """Execute the notebooks of ``queue`` (in that order) on ``settings.jobs`` worker
-    threads into ``staging``; ReportError unless all are ok.
+    threads into ``staging``; their runs in the order of ``selected``, or ReportError
+    with them unless all are ok.
 
     Only the calling thread reports progress (workers post their events to it), so
     progress lines never interleave mid-line and Ctrl-C / SIGTERM reach it while it
@@ -829,6 +838,8 @@ def _run_all(queue: Sequence[NotebookInfo], staging: Path, settings: _Settings,
                 runs.append(run)
     finally:
         kernels.stop_if_running(workers)
+    names = [info.name for info in selected]
+    runs.sort(key=lambda run: names.index(run.name))
     if not all(r.ok for r in runs):
         raise ReportError(runs)
     return runs

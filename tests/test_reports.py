@@ -311,12 +311,17 @@ def test_parallel_runs_overlap_and_publish_both(tmp_path, monkeypatch):
     assert all((tmp_path / "out" / f"{r.name}.html").exists() for r in runs)
 
 
-@pytest.mark.notebook
-def test_parallel_failure_keeps_the_old_report_and_stops_the_kernels(good, tmp_path):
+def _bad_and_slow(good, tmp_path: Path, sleep: float) -> tuple[Path, Path]:
+    """Notebooks 01_bad (fails at cell 3) and 02_slow (sleeps; writes its kernel's pid)."""
     nbdir = tmp_path / "notebooks"
     nbdir.mkdir()
     shutil.copy(good[0] / "03_bad.ipynb", nbdir / "01_bad.ipynb")
-    pid_file = _timed(nbdir, "02_slow", 3.0)
+    return nbdir, _timed(nbdir, "02_slow", sleep)
+
+
+@pytest.mark.notebook
+def test_parallel_failure_keeps_the_old_report_and_stops_the_kernels(good, tmp_path):
+    nbdir, pid_file = _bad_and_slow(good, tmp_path, 3.0)
     out = tmp_path / "out"
     shutil.copytree(good[1], out)
     before = _snapshot(out)
@@ -332,11 +337,8 @@ def test_parallel_failure_keeps_the_old_report_and_stops_the_kernels(good, tmp_p
 
 @pytest.mark.notebook
 def test_parallel_fail_fast_stops_the_other_kernel(good, tmp_path):
-    nbdir = tmp_path / "notebooks"
-    nbdir.mkdir()
-    shutil.copy(good[0] / "03_bad.ipynb", nbdir / "01_bad.ipynb")
+    nbdir, pid_file = _bad_and_slow(good, tmp_path, 300.0)
     # the bad notebook waits until the slow one's kernel runs, so both are running
-    pid_file = _timed(nbdir, "02_slow", 300.0)
     nb = nbformat.read(nbdir / "01_bad.ipynb", as_version=4)
     nb.cells[2].source = (f"import os, time\nwhile not os.path.exists({str(pid_file)!r}):\n"
                           "    time.sleep(0.1)\nx = 1")
@@ -376,12 +378,17 @@ def test_sigterm_with_two_kernels_running_stops_both(tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]
 
 
-def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path):
+def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path, monkeypatch):
     infos = reports.list_notebooks(good[0])
-    out = tmp_path / "out"
+    out, default = tmp_path / "out", tmp_path / "reports"
     out.mkdir()
+    default.mkdir()
+    monkeypatch.setattr(reports, "default_output_dir", lambda: default)
     order = lambda: [i.name for i in reports._queue_order(infos, out)]  # noqa: E731
     assert order() == ["01_good", "02_other", "03_bad"]  # no manifest: name order
+    (default / "manifest.json").write_text(json.dumps({"notebooks": {
+        "01_good": {"seconds": 9.0}, "02_other": {"seconds": 1.0}, "03_bad": {"seconds": 5.0}}}))
+    assert order() == ["01_good", "03_bad", "02_other"]  # a new folder: the last make report
     (out / "manifest.json").write_text(json.dumps({"notebooks": {
         "01_good": {"seconds": 2.0}, "02_other": {"seconds": 30.0}}}))
     assert order() == ["03_bad", "02_other", "01_good"]  # untimed first: it may be long
