@@ -1,20 +1,30 @@
 """Per-notebook cost of a full-mode report (issue 14, point 5): wall time and peak kernel
-memory of each ``notebooks/NN_*.ipynb``.
+memory of each ``notebooks/NN_*.ipynb``, and the whole report cold and warm.
 
-Each case runs ``python -m navlib report --only NN --output <temp dir>`` in a subprocess
-(papermill execution plus the HTML export, kernel start included) once, with no warm-up, and
-polls the subprocess tree with :mod:`psutil` every 0.2 s: ``peak_kernel_gb`` is the largest
-resident set size seen for the kernel process (the ``ipykernel`` child), so a peak shorter
-than the polling period can be missed. Goals: notebook 05 < 30 s (the issue's own goal); every
-other notebook gets an equal share of the remaining 60 s of the < 90 s report goal.
+Each ``notebook/`` case runs ``python -m navlib report --only NN --no-cache --output <temp
+dir>`` in a subprocess (papermill execution plus the HTML export, kernel start included,
+nothing read from the cache: a first run) once, with no warm-up, and polls the subprocess
+tree with :mod:`psutil` every 0.2 s: ``peak_kernel_gb`` is the largest resident set size
+seen for the kernel process (the ``ipykernel`` child), so a peak shorter than the polling
+period can be missed. Goals: notebook 05 < 30 s (the issue's own goal); every other notebook
+gets an equal share of the remaining 60 s of the < 90 s report goal.
 
-Usage: ``python benchmarks/run.py notebook`` (only these cases) or
-``python benchmarks/run.py notebook/05`` (one notebook). Takes about the time of a full
-``make report`` (several minutes).
+The ``report/`` cases run the whole report (``python -m navlib report --jobs N``) with a
+cache folder of their own: ``cold`` starts from an empty folder (a first ``make report``),
+``warm`` runs again on the entries the cold run of the same N left (a second one). Goal:
+the issue's 90 s. ``load_1min`` is the load average when the case ended (the machine is
+shared: compare rows taken back to back).
+
+Usage: ``python benchmarks/run.py notebook`` (the per-notebook cases),
+``python benchmarks/run.py notebook/05`` (one notebook), ``python benchmarks/run.py report/``
+(the whole-report cases; each takes about the time of a ``make report``).
 """
 
 from __future__ import annotations
 
+import atexit
+import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -53,7 +63,7 @@ def run_notebook(number: str, peaks: dict) -> float:
     with tempfile.TemporaryDirectory(prefix="navlib-bench-") as out:
         start = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "navlib", "report", "--only", number,
-                                 "--output", out], stdout=subprocess.DEVNULL,
+                                 "--no-cache", "--output", out], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.PIPE, text=True)
         peak = 0
         while proc.poll() is None:
@@ -65,6 +75,47 @@ def run_notebook(number: str, peaks: dict) -> float:
             raise RuntimeError(f"notebook {number} failed:\n{err[-2000:]}")
     peaks[number] = peak
     return elapsed
+
+
+def run_report(jobs: int, cache_dir: Path) -> float:
+    """Wall time of a whole full-mode report with ``jobs`` kernels and the cache in
+    ``cache_dir``, s."""
+    env = {k: v for k, v in os.environ.items() if k != "NAVLIB_NO_CACHE"}
+    env["NAVLIB_CACHE_DIR"] = str(cache_dir)
+    with tempfile.TemporaryDirectory(prefix="navlib-bench-") as out:
+        start = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-m", "navlib", "report", "--jobs", str(jobs),
+                               "--output", out], env=env, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE, text=True)
+        elapsed = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise RuntimeError(f"report --jobs {jobs} failed:\n{proc.stderr[-2000:]}")
+    return elapsed
+
+
+def report_cases() -> list[Case]:
+    """Whole report, cold then warm cache, one and two kernels at a time."""
+    root = Path(tempfile.mkdtemp(prefix="navlib-bench-cache-"))
+    atexit.register(shutil.rmtree, root, ignore_errors=True)
+    out = []
+    for jobs in (1, 2):
+        folder = root / f"jobs{jobs}"
+
+        def cold(jobs=jobs, folder=folder):
+            shutil.rmtree(folder, ignore_errors=True)
+            return run_report(jobs, folder)
+
+        def warm(jobs=jobs, folder=folder):
+            if not folder.is_dir():  # the cold case did not run: fill the cache first
+                run_report(jobs, folder)
+            return run_report(jobs, folder)
+
+        for state, func in (("cold", cold), ("warm", warm)):
+            out.append(Case(f"report/jobs{jobs}-{state}", f"full mode, --jobs {jobs}", func,
+                            REPORT_GOAL_S, repeat=1, warmup=False,
+                            extra=lambda _t: {"load_1min": os.getloadavg()[0]},
+                            notes=f"{state} cache"))
+    return out
 
 
 def cases() -> list[Case]:
@@ -82,4 +133,4 @@ def cases() -> list[Case]:
             extra=lambda _t, n=number: {"peak_kernel_gb": peaks.get(n, 0) / 1e9},
             notes="05: issue goal; others: share of the 90 s report"
             if number == "05" else ""))
-    return out
+    return out + report_cases()

@@ -1,4 +1,5 @@
-"""Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]``
+"""Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]
+[--jobs N] [--no-cache]``
 ``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``
 and ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from navlib import reports
@@ -52,6 +54,13 @@ def _parser() -> argparse.ArgumentParser:
                           f"(default: {reports.DEFAULT_CELL_TIMEOUT_S:.0f}; 0: no limit). "
                           "A kernel that stops answering is restarted once whatever the "
                           "limit")
+    rep.add_argument("--jobs", type=int, default=None, metavar="N",
+                     help="run up to N notebooks at once, each in its own kernel with "
+                          "cpus/N BLAS threads (default: the number of CPUs, "
+                          f"{reports.available_cpus()} here; 1: one after the other)")
+    rep.add_argument("--no-cache", action="store_true",
+                     help="rebuild every trajectory and model: the kernels run with "
+                          "NAVLIB_NO_CACHE=1 and read or write no cache entry")
     _add_assess(sub)
     _add_sweep(sub)
     return parser
@@ -148,14 +157,39 @@ def _sweep(args) -> int:
     return 0
 
 
-def _print_progress(position: int, total: int, name: str, run) -> None:
-    if run is None:
-        print(f"[{position}/{total}] {name} ... ", end="", file=sys.stderr, flush=True)
-    elif run.status == "restarting":
-        print(f"stalled at {run.failure.describe()}; restarting the kernel and re-running "
-              f"{name} ... ", end="", file=sys.stderr, flush=True)
-    else:
-        print(f"{run.status} ({run.seconds:.1f} s)", file=sys.stderr, flush=True)
+class _ProgressPrinter:
+    """Progress lines on stderr: ``[k/N] name ... ok (12.3 s)``.
+
+    One notebook at a time, its line is completed in place as now. When another notebook
+    starts while a line is open (parallel runs), that line is ended with ``running`` and
+    every later event of it gets a line of its own, so lines never mix.
+    """
+
+    def __init__(self):
+        self._open: str | None = None  # the notebook whose line awaits its end
+
+    def _write(self, text: str) -> None:
+        print(text, end="", file=sys.stderr, flush=True)
+
+    def __call__(self, position: int, total: int, name: str, run) -> None:
+        prefix = f"[{position}/{total}] {name} ... "
+        if run is None:
+            if self._open is not None:
+                self._write("running\n")
+            self._write(prefix)
+            self._open = name
+            return
+        if self._open != name:
+            if self._open is not None:
+                self._write("running\n")
+            self._write(prefix)
+        self._open = None
+        if run.status == "restarting":
+            self._write(f"stalled at {run.failure.describe()}; restarting the kernel and "
+                        f"re-running {name} ... ")
+            self._open = name
+        else:
+            self._write(f"{run.status} ({run.seconds:.1f} s)\n")
 
 
 def _list(notebooks: Path, only) -> None:
@@ -172,11 +206,14 @@ def _report(args) -> int:
         _list(notebooks, args.only)
         return 0
     parameters = reports.parse_parameters(args.parameter)
+    start = time.perf_counter()
     try:
         runs = reports.run_reports(notebooks, output, quick=args.quick, only=args.only,
-                                   parameters=parameters, progress=_print_progress,
+                                   parameters=parameters, progress=_ProgressPrinter(),
                                    fail_fast=args.fail_fast,
-                                   timeout_s=None if args.timeout == 0 else args.timeout)
+                                   timeout_s=None if args.timeout == 0 else args.timeout,
+                                   jobs=reports.available_cpus() if args.jobs is None
+                                   else args.jobs, cache=not args.no_cache)
     except reports.ReportInterrupted as exc:
         print(f"\n{exc}", file=sys.stderr)
         return 128 + exc.signum
@@ -190,7 +227,8 @@ def _report(args) -> int:
         return 1
     total = sum(r.seconds for r in runs)
     index = Path(output).resolve() / reports.INDEX
-    print(f"{len(runs)} notebook(s) ok in {total:.1f} s; report: {index}", file=sys.stderr)
+    print(f"{len(runs)} notebook(s) ok in {total:.1f} s of kernel time, "
+          f"{time.perf_counter() - start:.1f} s wall; report: {index}", file=sys.stderr)
     return 0
 
 

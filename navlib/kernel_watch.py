@@ -34,6 +34,7 @@ import subprocess
 import threading
 import time
 import weakref
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -55,6 +56,7 @@ KERNEL_NAME = "python3"
 """The kernel spec name given to papermill (always started with ``sys.executable``)."""
 
 _LIVE_WATCHES: weakref.WeakSet[KernelWatch] = weakref.WeakSet()
+_LIVE_LOCK = threading.Lock()  # report runs start kernels from several threads
 
 
 class NotebookAborted(RuntimeError):
@@ -114,7 +116,8 @@ class KernelWatch:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        _LIVE_WATCHES.add(self)
+        with _LIVE_LOCK:
+            _LIVE_WATCHES.add(self)
 
     # ------------------------------------------------------------------ messages
     def sent(self, msg: dict) -> None:
@@ -164,8 +167,13 @@ class KernelWatch:
 
     # ------------------------------------------------------------------ watchdog
     def start(self, pid: int) -> None:
-        """Start watching the kernel process ``pid`` (a daemon thread, 0.5 s period)."""
+        """Start watching the kernel process ``pid`` (a daemon thread, 0.5 s period). A
+        watch already stopped (the run was interrupted while this kernel was launching)
+        kills the kernel instead."""
         self.pid = int(pid)
+        if self._stop.is_set():
+            self.kill_kernel()
+            return
         self._thread = threading.Thread(target=self._run, name=f"kernel-watch-{pid}",
                                         daemon=True)
         self._thread.start()
@@ -205,7 +213,9 @@ class KernelWatch:
 
 def kill_all_kernels() -> None:
     """Stop every watched kernel of this process (used when a report run is interrupted)."""
-    for watch in list(_LIVE_WATCHES):
+    with _LIVE_LOCK:
+        watches = list(_LIVE_WATCHES)
+    for watch in watches:
         watch.stop()
         watch.kill_kernel()
 
@@ -274,9 +284,11 @@ def _classes() -> _Classes:
             return channel
 
     class CurrentPythonKernelManager(AsyncKernelManager):
-        """Starts ipykernel with ``sys.executable`` and hands its client the watch."""
+        """Starts ipykernel with ``sys.executable`` (its environment: this process's plus
+        ``extra_env``) and hands its client the watch."""
 
         watch: KernelWatch | None = None
+        extra_env: Mapping[str, str] | None = None
 
         async def _async_launch_kernel(self, kernel_cmd, **kw):
             kw.setdefault("stderr", subprocess.DEVNULL)
@@ -297,16 +309,19 @@ def _classes() -> _Classes:
             if self._kernel_spec is None:
                 spec = get_kernel_dict()
                 # inline figures even when the caller exports MPLBACKEND=Agg (headless CI)
-                spec["env"] = {"MPLBACKEND": "module://matplotlib_inline.backend_inline"}
+                spec["env"] = {"MPLBACKEND": "module://matplotlib_inline.backend_inline",
+                               **(self.extra_env or {})}
                 self._kernel_spec = KernelSpec(resource_dir="", **spec)
             return self._kernel_spec
 
     return _Classes(SlicedPollChannel, WatchedKernelClient, CurrentPythonKernelManager)
 
 
-def kernel_manager_class(watch: KernelWatch):
-    """A kernel-manager class bound to ``watch`` (papermill instantiates it itself)."""
-    return type("WatchedKernelManager", (_classes().kernel_manager,), {"watch": watch})
+def kernel_manager_class(watch: KernelWatch, env: Mapping[str, str] | None = None):
+    """A kernel-manager class bound to ``watch`` and the kernel's extra environment ``env``
+    (papermill instantiates it itself)."""
+    return type("WatchedKernelManager", (_classes().kernel_manager,),
+                {"watch": watch, "extra_env": dict(env or {})})
 
 
 @functools.cache
@@ -357,12 +372,15 @@ def _register_engine() -> None:
         @classmethod
         def execute_managed_notebook(cls, nb_man, kernel_name, log_output=False,
                                      stdout_file=None, stderr_file=None, start_timeout=60,
-                                     execution_timeout=None, **kwargs):
+                                     execution_timeout=None, kernel_cwd=None, **kwargs):
             kwargs.pop("input_path", None)
             kwargs.pop("timeout", None)
             kwargs.pop("startup_timeout", None)
+            # the kernel starts in kernel_cwd; papermill's own ``cwd`` would chdir the whole
+            # process, which several notebooks running in threads cannot share
             return BoundedNotebookClient(
                 nb_man, timeout=execution_timeout, startup_timeout=start_timeout,
+                resources={"metadata": {"path": kernel_cwd}} if kernel_cwd else {},
                 kernel_name=kernel_name, log_output=log_output, stdout_file=stdout_file,
                 stderr_file=stderr_file, **kwargs).execute()
 
@@ -370,8 +388,12 @@ def _register_engine() -> None:
 
 
 def execute_notebook(input_path, output_path, *, parameters: dict, cwd,
-                     timeout_s: float | None, watch: KernelWatch) -> None:
-    """Execute one notebook with papermill, bounded: see the module docstring.
+                     timeout_s: float | None, watch: KernelWatch,
+                     env: Mapping[str, str] | None = None) -> None:
+    """Execute one notebook with papermill, bounded: see the module docstring. The kernel
+    runs in ``cwd`` with ``env`` added to its environment; this process's working
+    directory is never changed, so several threads may call this at once (one kernel
+    each).
 
     Raises
     ------
@@ -387,9 +409,9 @@ def execute_notebook(input_path, output_path, *, parameters: dict, cwd,
     try:
         papermill.execute_notebook(
             str(input_path), str(output_path), parameters=parameters,
-            kernel_name=KERNEL_NAME, engine_name=ENGINE_NAME, cwd=str(cwd),
+            kernel_name=KERNEL_NAME, engine_name=ENGINE_NAME, kernel_cwd=str(cwd),
             progress_bar=False, log_output=False, execution_timeout=timeout_s,
-            kernel_manager_class=kernel_manager_class(watch))
+            kernel_manager_class=kernel_manager_class(watch, env))
     finally:
         watch.stop()
         watch.kill_kernel()

@@ -23,6 +23,11 @@ A run restricted with ``only`` refreshes the selected pages and keeps the other 
 previous report (the index lists all of them, each with the date and mode it was made in);
 a full run replaces the whole report (README files excepted).
 
+Notebooks run one after the other, or up to ``jobs`` at once (each in its own kernel, on
+a worker thread of the runner; the guarantees above hold for each, and Ctrl-C or SIGTERM
+stops them all). Kernels are started with BLAS/OpenMP thread counts that share the cores
+between them, and with ``NAVLIB_NO_CACHE=1`` when ``cache=False`` (:mod:`navlib.cache`).
+
 Parameters: ``quick=True`` and explicit ``parameters`` are injected only into notebooks whose
 tagged ``parameters`` cell assigns that name (so papermill never warns about unknown
 parameters and ``-p imu_path x.csv`` reaches only the notebooks that read flight data); a
@@ -37,7 +42,9 @@ import dataclasses
 import datetime as _dt
 import html
 import json
+import math
 import os
+import queue as queue_module
 import re
 import shutil
 import signal
@@ -128,8 +135,9 @@ class NotebookRun:
     name : str
         Notebook stem.
     status : str
-        ``"ok"`` or ``"failed"`` (``"restarting"`` only in the progress call announcing a
-        restart after a stall).
+        ``"ok"`` or ``"failed"`` (in progress calls only: ``"restarting"`` announcing a
+        restart after a stall, ``"stopped"`` for a run cut short because another notebook
+        failed under ``fail_fast``).
     seconds : float
         Wall time of the papermill execution (kernel start included), s.
     parameters : dict
@@ -178,8 +186,9 @@ class ReportInterrupted(BaseException):
 class ReportError(RuntimeError):
     """At least one notebook failed; nothing was published.
 
-    ``runs`` holds every :class:`NotebookRun` attempted, failed ones with their
-    :class:`CellFailure`.
+    ``runs`` holds every :class:`NotebookRun` that ran to its end (in name order), failed
+    ones with their :class:`CellFailure`; runs stopped because of ``fail_fast`` are left
+    out.
     """
 
     def __init__(self, runs: Sequence[NotebookRun]):
@@ -192,7 +201,9 @@ class ReportError(RuntimeError):
 
 Progress = Callable[[int, int, str, "NotebookRun | None"], None]
 """``progress(position, total, name, run)``: called with ``run=None`` when notebook number
-``position`` (1-based) starts and with its :class:`NotebookRun` when it ends."""
+``position`` (1-based, in the order notebooks start) starts and with its
+:class:`NotebookRun` when it ends; always from the thread that called :func:`run_reports`,
+also when several notebooks run at once (their events then interleave)."""
 
 
 # --------------------------------------------------------------------------- discovery
@@ -389,22 +400,118 @@ def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
     html_path.write_text(body, encoding="utf-8")
 
 
-def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float | None,
-             on_restart: Callable[[CellFailure], None] | None = None) -> NotebookRun:
-    """Run one notebook; a stalled kernel gets one restart of the whole notebook."""
+_STOPPED = "stopped: another notebook failed and fail_fast was set"
+_EVENT_WAIT_S = 0.25  # the main thread's wait for worker events (signals are handled between)
+_JOIN_S = 30.0  # how long stopped workers get to finish after their kernels were killed
+BLAS_THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+"""Thread-count variables :func:`kernel_environment` sets for each kernel."""
+
+
+def available_cpus() -> int:
+    """CPUs this process may run on (its affinity mask where the platform has one)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def kernel_environment(jobs: int, cache: bool = True) -> dict[str, str]:
+    """Variables added to each kernel's environment when ``jobs`` kernels run at once.
+
+    Each BLAS/OpenMP pool gets ``max(1, cpus // jobs)`` threads so the kernels together do
+    not oversubscribe the cores; a variable already set in this process's environment is
+    left to the user. ``cache=False`` adds ``NAVLIB_NO_CACHE=1`` (:mod:`navlib.cache`).
+    """
+    threads = str(max(1, available_cpus() // max(1, jobs)))
+    env = {name: threads for name in BLAS_THREAD_VARIABLES if not os.environ.get(name)}
+    if not cache:
+        env["NAVLIB_NO_CACHE"] = "1"
+    return env
+
+
+@dataclass(frozen=True)
+class _Settings:
+    """What every notebook of one run is executed with."""
+
+    quick: bool
+    parameters: Mapping[str, object]
+    fail_fast: bool
+    timeout_s: float | None
+    jobs: int
+    env: Mapping[str, str]
+
+
+class _Kernels:
+    """The kernel watches of one run: :meth:`stop` kills the running kernels and refuses
+    new ones (a kernel launched while it runs is killed by its watch as it starts)."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._watches: set[KernelWatch] = set()
+        self.stopped = False
+
+    def watch(self) -> KernelWatch | None:
+        """A new watch for the next kernel (None once the run is stopped)."""
+        with self._lock:
+            if self.stopped:
+                return None
+            watch = KernelWatch()
+            self._watches.add(watch)
+            return watch
+
+    def release(self, watch: KernelWatch) -> None:
+        with self._lock:
+            self._watches.discard(watch)
+
+    def stop(self) -> None:
+        with self._lock:
+            self.stopped = True
+            watches = list(self._watches)
+        for watch in watches:
+            watch.stop()
+            watch.kill_kernel()
+
+    def stop_if_running(self, workers: Sequence[threading.Thread]) -> None:
+        """After the run (or on its way out through an exception): stop what still runs
+        and give the workers :data:`_JOIN_S` to return."""
+        if any(w.is_alive() for w in workers):
+            self.stop()
+        deadline = time.monotonic() + _JOIN_S
+        for worker in workers:
+            if worker.ident is not None:
+                worker.join(max(0.0, deadline - time.monotonic()))
+
+
+def _execute(info: NotebookInfo, staging: Path, params: dict, settings: _Settings,
+             kernels: _Kernels, on_restart: Callable[[CellFailure], None] | None = None
+             ) -> NotebookRun:
+    """Run one notebook; a stalled kernel gets one restart of the whole notebook. A run cut
+    short by :meth:`_Kernels.stop` (another notebook failed under ``fail_fast``) is
+    ``"stopped"``."""
     executed = staging / f"{info.name}.ipynb"
     source_nb = _read_notebook(info.path)
     start = time.perf_counter()
     stalls: list[str] = []
     lost = 0
+
+    def ended(status: str, failure: CellFailure | None = None, seconds: float | None = None,
+              **pages) -> NotebookRun:
+        seconds = time.perf_counter() - start if seconds is None else seconds
+        return NotebookRun(info.name, status, seconds, params, failure=failure,
+                           title=info.title, stalls=tuple(stalls), lost_wakeups=lost, **pages)
+
     for attempt in (1, 2):
-        watch = KernelWatch()
+        watch = kernels.watch()
+        if watch is None:
+            return ended("stopped", CellFailure(-1, "Stopped", _STOPPED))
         try:
             execute_notebook(info.path, executed, parameters=params, cwd=info.path.parent,
-                             timeout_s=timeout_s, watch=watch)
+                             timeout_s=settings.timeout_s, watch=watch, env=settings.env)
         except Exception as exc:  # any failure of the run is reported, not raised
             lost += watch.lost_wakeups
             failure = _failure_from(exc, executed, source_nb)
+            if kernels.stopped:
+                return ended("stopped", dataclasses.replace(failure, evalue=_STOPPED))
             stalled = isinstance(exc, NotebookAborted) and exc.kind == "stall"
             if stalled and attempt == 1:
                 stalls.append(failure.describe())
@@ -414,21 +521,18 @@ def _execute(info: NotebookInfo, staging: Path, params: dict, timeout_s: float |
             if stalled:
                 failure = dataclasses.replace(failure, evalue=f"{failure.evalue} (also on the "
                                               "first run, before the kernel was restarted)")
-            return NotebookRun(info.name, "failed", time.perf_counter() - start, params,
-                               failure=failure, title=info.title, stalls=tuple(stalls),
-                               lost_wakeups=lost)
+            return ended("failed", failure)
+        finally:
+            kernels.release(watch)
         lost += watch.lost_wakeups
         break
     seconds = time.perf_counter() - start
     try:
         _export_html(executed, staging / f"{info.name}.html", info.title)
     except Exception as exc:  # nbconvert errors are varied; report them as a failed page
-        return NotebookRun(info.name, "failed", seconds, params,
-                           failure=CellFailure(-1, type(exc).__name__, f"HTML export: {exc}"),
-                           title=info.title, stalls=tuple(stalls), lost_wakeups=lost)
-    return NotebookRun(info.name, "ok", seconds, params, html=f"{info.name}.html",
-                       ipynb=f"{info.name}.ipynb", title=info.title, stalls=tuple(stalls),
-                       lost_wakeups=lost)
+        return ended("failed", CellFailure(-1, type(exc).__name__, f"HTML export: {exc}"),
+                     seconds)
+    return ended("ok", None, seconds, html=f"{info.name}.html", ipynb=f"{info.name}.ipynb")
 
 
 # --------------------------------------------------------------------------- publishing
@@ -548,7 +652,8 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
                 only: Iterable[str] | None = None,
                 parameters: Mapping[str, object] | None = None,
                 progress: Progress | None = None, fail_fast: bool = False,
-                timeout_s: float | None = DEFAULT_CELL_TIMEOUT_S) -> list[NotebookRun]:
+                timeout_s: float | None = DEFAULT_CELL_TIMEOUT_S, jobs: int = 1,
+                cache: bool = True) -> list[NotebookRun]:
     """Execute the report notebooks and publish them into ``output_dir``.
 
     Parameters
@@ -568,18 +673,28 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     progress : callable, optional
         See :data:`Progress`.
     fail_fast : bool
-        Stop at the first failing notebook instead of running the rest.
+        Stop at the first failing notebook instead of running the rest (notebooks running
+        alongside it are stopped; they are left out of the returned runs).
     timeout_s : float or None
         Per-cell time limit, s (default :data:`DEFAULT_CELL_TIMEOUT_S`; None: no limit). A
         cell over the limit fails the notebook. Independently of it, a kernel that stops
         answering (idle without replying, or never starting a cell) is a stall: the kernel
         is killed and the notebook re-run once, then the notebook fails
         (:mod:`navlib.kernel_watch`).
+    jobs : int
+        Notebooks run at once, each in its own kernel (capped at the number selected; 1:
+        one after the other, in name order). Longest first, by the times in the output
+        folder's previous manifest (or that of :func:`default_output_dir`; name order
+        without one); each kernel gets
+        ``cpus // jobs`` BLAS/OpenMP threads (:func:`kernel_environment`).
+    cache : bool
+        False: the kernels run with ``NAVLIB_NO_CACHE=1``, so every trajectory and model
+        is rebuilt and nothing is stored (:mod:`navlib.cache`).
 
     Returns
     -------
     list of NotebookRun
-        One per selected notebook, in order; all ``ok``.
+        One per selected notebook, in name order; all ``ok``.
 
     Raises
     ------
@@ -599,6 +714,8 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
             raise NavlibInputError(f"parameters: name {key!r} is not a Python identifier")
     if timeout_s is not None and not timeout_s > 0:
         raise NavlibInputError(f"timeout_s: must be > 0 s, got {timeout_s}")
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise NavlibInputError(f"jobs: expected a whole number >= 1, got {jobs!r}")
     selected = select_notebooks(list_notebooks(notebooks), only)
     if not selected:
         raise NavlibInputError(f"notebooks_dir: no NN_*.ipynb notebooks in {notebooks}")
@@ -611,6 +728,10 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     _check_output_dir(output, notebooks)
     output.parent.mkdir(parents=True, exist_ok=True)
 
+    jobs = min(jobs, len(selected))
+    settings = _Settings(quick, parameters, fail_fast, timeout_s, jobs,
+                         kernel_environment(jobs, cache))
+    queue = _queue_order(selected, output) if jobs > 1 else list(selected)
     _remove_orphaned_staging(output)
     staging = Path(tempfile.mkdtemp(prefix=f".{output.name}.tmp-{os.getpid()}-",
                                     dir=output.parent))
@@ -619,8 +740,7 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     staging.chmod(0o777 & ~umask)  # mkdtemp makes it private; a report folder is not
     try:
         with _signals_interrupt():
-            runs = _run_all(selected, staging, quick, parameters, progress, fail_fast,
-                            timeout_s)
+            runs = _run_all(selected, queue, staging, settings, progress)
             _publish(staging, output, runs, partial=only is not None)
         return runs
     except (ReportInterrupted, KeyboardInterrupt):
@@ -642,27 +762,84 @@ def _remove_orphaned_staging(output: Path) -> None:
             shutil.rmtree(folder, ignore_errors=True)
 
 
-def _run_all(selected: Sequence[NotebookInfo], staging: Path, quick: bool,
-             parameters: Mapping[str, object], progress: Progress | None, fail_fast: bool,
-             timeout_s: float | None) -> list[NotebookRun]:
-    """Execute the selected notebooks into ``staging``; ReportError unless all are ok."""
-    runs: list[NotebookRun] = []
-    for position, info in enumerate(selected, start=1):
-        if progress:
-            progress(position, len(selected), info.name, None)
-        params = _parameters_for(info, quick, parameters)
-
-        def restarting(failure, position=position, info=info, params=params):
-            if progress:
-                progress(position, len(selected), info.name, NotebookRun(
-                    info.name, "restarting", 0.0, params, failure=failure))
-
-        run = _execute(info, staging, params, timeout_s, on_restart=restarting)
-        runs.append(run)
-        if progress:
-            progress(position, len(selected), info.name, run)
-        if fail_fast and not run.ok:
+def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[NotebookInfo]:
+    """Longest first, by the ``seconds`` of the previous manifest in ``output`` or, when it
+    has none (a new folder), in :func:`default_output_dir` (the last ``make report``);
+    notebooks it does not time come first, in name order (they may be long)."""
+    entries: dict = {}
+    for folder in (output, default_output_dir()):
+        entries = _load_manifest(folder).get("notebooks", {})
+        if entries:
             break
+
+    def seconds(info: NotebookInfo) -> float:
+        entry = entries.get(info.name)
+        try:
+            return float(entry["seconds"])
+        except (TypeError, KeyError, ValueError):
+            return math.inf
+
+    return sorted(selected, key=lambda info: -seconds(info))  # stable: ties by name
+
+
+def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], staging: Path,
+             settings: _Settings, progress: Progress | None) -> list[NotebookRun]:
+    """Execute the notebooks of ``queue`` (in that order) on ``settings.jobs`` worker
+    threads into ``staging``; their runs in the order of ``selected``, or ReportError
+    with them unless all are ok.
+
+    Only the calling thread reports progress (workers post their events to it), so
+    progress lines never interleave mid-line and Ctrl-C / SIGTERM reach it while it
+    waits. On any exception here (an interrupt included) the kernels are stopped and the
+    workers joined before it propagates, so nothing writes into ``staging`` afterwards.
+    """
+    events: queue_module.SimpleQueue = queue_module.SimpleQueue()
+    kernels = _Kernels()
+    pending = iter(list(enumerate(queue, start=1)))
+    lock = threading.Lock()
+    total = len(queue)
+
+    def work():
+        while not kernels.stopped:
+            with lock:
+                position, info = next(pending, (0, None))
+            if info is None:
+                return
+            params = _parameters_for(info, settings.quick, settings.parameters)
+
+            def restarting(failure, position=position, info=info, params=params):
+                events.put((position, info.name, NotebookRun(
+                    info.name, "restarting", 0.0, params, failure=failure)))
+
+            events.put((position, info.name, None))
+            try:
+                run = _execute(info, staging, params, settings, kernels, restarting)
+            except Exception as exc:  # a runner bug must not leave the main thread waiting
+                run = NotebookRun(info.name, "failed", 0.0, params, title=info.title,
+                                  failure=CellFailure(-1, type(exc).__name__, str(exc)))
+            if settings.fail_fast and run.status == "failed":
+                kernels.stop()  # before this worker could take the next notebook
+            events.put((position, info.name, run))
+
+    workers = [threading.Thread(target=work, name=f"report-worker-{k}", daemon=True)
+               for k in range(settings.jobs)]
+    runs: list[NotebookRun] = []
+    try:
+        for worker in workers:
+            worker.start()
+        while any(w.is_alive() for w in workers) or not events.empty():
+            try:
+                position, name, run = events.get(timeout=_EVENT_WAIT_S)
+            except queue_module.Empty:
+                continue
+            if progress:
+                progress(position, total, name, run)
+            if run is not None and run.status in ("ok", "failed"):
+                runs.append(run)
+    finally:
+        kernels.stop_if_running(workers)
+    names = [info.name for info in selected]
+    runs.sort(key=lambda run: names.index(run.name))
     if not all(r.ok for r in runs):
         raise ReportError(runs)
     return runs

@@ -2,6 +2,10 @@
 
 Figures built in tests render off-screen (Agg). Notebook kernels are unaffected: the report
 runner starts them with the inline backend whatever MPLBACKEND says.
+
+The on-disk cache (navlib.cache) is off for the whole run, kernels and subprocesses
+included (they inherit the environment), so no test depends on entries left by an earlier
+run; tests/test_cache.py turns it on in a folder of its own.
 """
 
 import os
@@ -11,6 +15,7 @@ import matplotlib
 import pytest
 
 matplotlib.use("Agg")
+os.environ["NAVLIB_NO_CACHE"] = "1"
 
 PX4_DIR = Path(
     os.environ.get("NAVLIB_PX4_DIR")

@@ -7,8 +7,10 @@ into each test's own folder before a test modifies it.
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import nbformat
@@ -255,3 +257,188 @@ def test_cli_failure_exits_nonzero_naming_notebook_and_cell(good, tmp_path):
         in proc.stderr
     assert not (tmp_path / "out").exists()
 
+
+
+# ---------------------------------------------------------------------- parallel runs
+
+TIMED = """\
+import json, os, time
+start = time.time()
+open({pid_file!r}, "w").write(str(os.getpid()))
+time.sleep({sleep})
+print(json.dumps({{"start": start, "end": time.time(),
+                   "omp": os.environ.get("OMP_NUM_THREADS")}}))
+"""
+
+
+def _timed(folder: Path, name: str, sleep: float, *extra: str) -> Path:
+    pid_file = folder.parent / f"{name}.pid"
+    _write(folder / f"{name}.ipynb", [
+        ("md", f"# {name}"),
+        ("code", "quick = False", "parameters"),
+        ("code", TIMED.format(pid_file=str(pid_file), sleep=sleep)),
+        *(("code", source) for source in extra),
+    ])
+    return pid_file
+
+
+def _gone(pid: int) -> bool:
+    import psutil
+
+    return not psutil.pid_exists(pid) or psutil.Process(pid).status() == "zombie"
+
+
+@pytest.mark.notebook
+def test_parallel_runs_overlap_and_publish_both(tmp_path, monkeypatch):
+    for name in reports.BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    _timed(nbdir, "01_first", 4.0)
+    _timed(nbdir, "02_second", 4.0)
+    events = []
+    runs = reports.run_reports(nbdir, tmp_path / "out", jobs=2,
+                               progress=lambda p, t, n, r: events.append(
+                                   (n, None if r is None else r.status)))
+    assert [r.name for r in runs] == ["01_first", "02_second"] and all(r.ok for r in runs)
+    assert [e[1] for e in events[:2]] == [None, None]  # both started before either ended
+    spans = [json.loads(_stdout(tmp_path / "out" / f"{r.name}.ipynb")) for r in runs]
+    assert max(s["start"] for s in spans) < min(s["end"] for s in spans)  # they overlapped
+    threads = str(max(1, reports.available_cpus() // 2))
+    assert {s["omp"] for s in spans} == {threads}
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())["notebooks"]
+    assert sorted(manifest) == ["01_first", "02_second"]
+    assert all((tmp_path / "out" / f"{r.name}.html").exists() for r in runs)
+
+
+def _bad_and_slow(good, tmp_path: Path, sleep: float) -> tuple[Path, Path]:
+    """Notebooks 01_bad (fails at cell 3) and 02_slow (sleeps; writes its kernel's pid)."""
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    shutil.copy(good[0] / "03_bad.ipynb", nbdir / "01_bad.ipynb")
+    return nbdir, _timed(nbdir, "02_slow", sleep)
+
+
+@pytest.mark.notebook
+def test_parallel_failure_keeps_the_old_report_and_stops_the_kernels(good, tmp_path):
+    nbdir, pid_file = _bad_and_slow(good, tmp_path, 3.0)
+    out = tmp_path / "out"
+    shutil.copytree(good[1], out)
+    before = _snapshot(out)
+    with pytest.raises(reports.ReportError) as info:
+        reports.run_reports(nbdir, out, jobs=2)
+    assert [(r.name, r.status) for r in info.value.runs] == [("01_bad", "failed"),
+                                                             ("02_slow", "ok")]
+    assert "01_bad" in str(info.value) and "cell 3" in str(info.value)
+    assert _snapshot(out) == before
+    assert _gone(int(pid_file.read_text()))
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]
+
+
+@pytest.mark.notebook
+def test_parallel_fail_fast_stops_the_other_kernel(good, tmp_path):
+    nbdir, pid_file = _bad_and_slow(good, tmp_path, 300.0)
+    # the bad notebook waits until the slow one's kernel runs, so both are running
+    nb = nbformat.read(nbdir / "01_bad.ipynb", as_version=4)
+    nb.cells[2].source = (f"import os, time\nwhile not os.path.exists({str(pid_file)!r}):\n"
+                          "    time.sleep(0.1)\nx = 1")
+    nbformat.write(nb, nbdir / "01_bad.ipynb")
+    start = time.monotonic()
+    with pytest.raises(reports.ReportError) as info:
+        reports.run_reports(nbdir, tmp_path / "out", jobs=2, fail_fast=True)
+    assert time.monotonic() - start < 90.0
+    assert [r.name for r in info.value.runs] == ["01_bad"]  # the stopped one is not a failure
+    assert _gone(int(pid_file.read_text()))
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.notebook
+def test_sigterm_with_two_kernels_running_stops_both(tmp_path):
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    pid_files = [_timed(nbdir, name, 300.0) for name in ("01_long", "02_long")]
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "manifest.json").write_text("{}")
+    (out / "old.html").write_text("previous report")
+    proc = subprocess.Popen([sys.executable, "-m", "navlib", "report", "--notebooks",
+                             str(nbdir), "--output", str(out), "--jobs", "2"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 90
+    while (not all(p.exists() and p.read_text() for p in pid_files)
+           and time.monotonic() < deadline):
+        time.sleep(0.2)
+    pids = [int(p.read_text()) for p in pid_files]
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM, stderr
+    assert "interrupted by SIGTERM" in stderr
+    assert all(_gone(pid) for pid in pids)
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "old.html"]
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.")]
+
+
+def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path, monkeypatch):
+    infos = reports.list_notebooks(good[0])
+    out, default = tmp_path / "out", tmp_path / "reports"
+    out.mkdir()
+    default.mkdir()
+    monkeypatch.setattr(reports, "default_output_dir", lambda: default)
+    order = lambda: [i.name for i in reports._queue_order(infos, out)]  # noqa: E731
+    assert order() == ["01_good", "02_other", "03_bad"]  # no manifest: name order
+    (default / "manifest.json").write_text(json.dumps({"notebooks": {
+        "01_good": {"seconds": 9.0}, "02_other": {"seconds": 1.0}, "03_bad": {"seconds": 5.0}}}))
+    assert order() == ["01_good", "03_bad", "02_other"]  # a new folder: the last make report
+    (out / "manifest.json").write_text(json.dumps({"notebooks": {
+        "01_good": {"seconds": 2.0}, "02_other": {"seconds": 30.0}}}))
+    assert order() == ["03_bad", "02_other", "01_good"]  # untimed first: it may be long
+
+
+def test_kernel_environment_shares_the_cores(monkeypatch):
+    for name in reports.BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(reports, "available_cpus", lambda: 4)
+    assert reports.kernel_environment(2) == dict.fromkeys(reports.BLAS_THREAD_VARIABLES, "2")
+    assert reports.kernel_environment(8)["OMP_NUM_THREADS"] == "1"
+    assert reports.kernel_environment(1, cache=False)["NAVLIB_NO_CACHE"] == "1"
+    monkeypatch.setenv("OMP_NUM_THREADS", "3")  # the user's own setting is kept
+    assert "OMP_NUM_THREADS" not in reports.kernel_environment(2)
+
+
+def test_progress_lines_stay_whole_when_notebooks_interleave(capsys):
+    from navlib.__main__ import _ProgressPrinter
+
+    def run(name, status, seconds=1.0):
+        failure = reports.CellFailure(2, "KernelStalled", "idle") if status == "restarting" \
+            else None
+        return reports.NotebookRun(name, status, seconds, {}, failure=failure)
+
+    printer = _ProgressPrinter()
+    printer(1, 3, "00_a", None)
+    printer(2, 3, "01_b", None)
+    printer(2, 3, "01_b", run("01_b", "ok", 2.0))
+    printer(3, 3, "02_c", None)
+    printer(1, 3, "00_a", run("00_a", "restarting"))
+    printer(1, 3, "00_a", run("00_a", "failed", 9.0))
+    printer(3, 3, "02_c", run("02_c", "ok", 3.0))
+    assert capsys.readouterr().err.splitlines() == [
+        "[1/3] 00_a ... running",
+        "[2/3] 01_b ... ok (2.0 s)",
+        "[3/3] 02_c ... running",
+        "[1/3] 00_a ... stalled at cell 2 (0-based): KernelStalled: idle; restarting the "
+        "kernel and re-running 00_a ... failed (9.0 s)",
+        "[3/3] 02_c ... ok (3.0 s)",
+    ]
+
+
+def test_jobs_option(good, tmp_path, capsys):
+    from navlib.__main__ import _parser
+
+    args = _parser().parse_args(["report"])
+    assert args.jobs is None and args.no_cache is False  # None: the number of CPUs
+    assert _parser().parse_args(["report", "--jobs", "3", "--no-cache"]).no_cache is True
+    assert main(["report", "--notebooks", str(good[0]), "--output", str(tmp_path / "o"),
+                 "--jobs", "0"]) == 2
+    assert "jobs: expected a whole number >= 1, got 0" in capsys.readouterr().err
+    proc = _cli("report", "--help", cwd=Path.cwd())
+    assert "--jobs N" in proc.stdout and "--no-cache" in proc.stdout

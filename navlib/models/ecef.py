@@ -34,7 +34,7 @@ from itertools import pairwise
 
 import numpy as np
 
-from navlib import earth, units
+from navlib import cache, earth, units
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
@@ -348,8 +348,10 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
     ``gnss_rate_hz`` apart (spec A8: 100 IMU steps per 1 Hz epoch). The build streams over
     blocks of epochs (at most :data:`STREAM_SAMPLES` trajectory samples at a time), so its
     memory does not grow with the flight's length: only the per-epoch ``F``, ``Q`` are kept.
-    Results are cached on the trajectory object's identity and the options, so that widgets
-    changing only the metric settings (eta, nu, segments) never rebuild the model.
+    Results are cached in memory on the trajectory object's identity and the options, so that
+    widgets changing only the metric settings (eta, nu, segments) never rebuild the model,
+    and on disk on the trajectory's content (:mod:`navlib.cache`), so that other notebooks
+    and later runs do not either.
 
     Parameters
     ----------
@@ -396,6 +398,16 @@ STREAM_SAMPLES = 20_000
 
 @lru_cache(maxsize=32)
 def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
+    """:func:`_chain` kept per trajectory object in memory (and on disk by its content)."""
+    discrete = _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s)
+    for arr in (discrete.F, discrete.Q, discrete.H, discrete.R, discrete.P0, discrete.t):
+        arr.flags.writeable = False  # shared by every caller of the cache
+    return discrete
+
+
+@cache.cached
+def _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
+    """The streamed build of :func:`ecef21_at_epochs` (arguments validated and frozen)."""
     if isinstance(sensors, tuple):
         sensors = dict(sensors)
     options = dict(key)
@@ -437,13 +449,10 @@ def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step
         Q.append(Qi)
         e0 = e1
     n_ep = epochs.size
-    discrete = DiscreteModel(t[epochs], np.concatenate(F), np.concatenate(Q),
-                             np.broadcast_to(parts["H"], (n_ep, 3, 21)),
-                             np.broadcast_to(parts["R"], (n_ep, 3, 3)), STATE_NAMES,
-                             ("gnss_x", "gnss_y", "gnss_z"), parts["P0"])
-    for arr in (discrete.F, discrete.Q, discrete.P0, discrete.t):
-        arr.flags.writeable = False  # shared by every caller of the cache
-    return discrete
+    return DiscreteModel(t[epochs], np.concatenate(F), np.concatenate(Q),
+                         np.broadcast_to(parts["H"], (n_ep, 3, 21)),
+                         np.broadcast_to(parts["R"], (n_ep, 3, 3)), STATE_NAMES,
+                         ("gnss_x", "gnss_y", "gnss_z"), parts["P0"])
 
 
 def _step_means(A, G, Qc, hold, decimated):

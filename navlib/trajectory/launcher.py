@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from navlib import earth
+from navlib import cache, earth
 from navlib._validation import finite_scalar, latitude_deg, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.trajectory._attitude import launch_frame, smoothstep, unit_and_rate
@@ -145,6 +145,7 @@ def _check(p):
     return out
 
 
+@cache.cached
 def launcher_ascent(**overrides) -> Trajectory:
     """Churchill launcher, endo-atmospheric ascent, exact 200 Hz IMU (spec launcher.md §4).
 

@@ -36,7 +36,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from navlib import earth
+from navlib import cache, earth
 from navlib._validation import finite_scalar, latitude_deg, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.trajectory._attitude import launch_frame, smoothstep, unit_and_rate
@@ -127,6 +127,7 @@ def _check(p):
     return out
 
 
+@cache.cached
 def sounding_rocket(**overrides) -> Trajectory:
     """VS30-like sounding-rocket flight, 0..86 s, exact 100 Hz IMU (spec excitability.md §3-4).
 
