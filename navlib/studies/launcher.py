@@ -879,17 +879,17 @@ def reading_markdown(result: Table2Result | None = None, fig1=None, evolution=No
 # --------------------------------------------------------------------------------------------
 # registration with the claims engine
 # --------------------------------------------------------------------------------------------
-TABLE2_STRIDE = 1
-"""Evaluation stride of the Table 2 claims in :func:`navlib.studies.all_claims`: every 200 Hz
-step, the paper's test and notebook 02's default, so that the two agree (the sliding-window
-test of :func:`navlib.observability.local_observability` makes it affordable). Every 20th
-or 40th step gives the same unobservable counts, match column and match counts, maximum
-condition orders of the full-rank rows up to 0.6 decade lower (the INS/GPS-only rows), and
-other rounding-noise digits for the numerically singular ones, which ``T2-RW-P``'s second
-check reads: at stride 40 (each stacked matrix factorised) every random-walk b_p row has
-log10 cond 16.9 or more and the claim is reproduced at every tolerance; at stride 1 (the
-sliding-window factors) some stay at 16.4, below ``17 - cond_tol`` for 0.25 and 0.5 decade,
-and the claim is partly reproduced there."""
+TABLE2_STRIDE = 40
+"""Evaluation stride of the Table 2 claims in :func:`navlib.studies.all_claims` (5 Hz, each
+O(k) still from consecutive 5 ms steps), as notebook 02's default stride 20 (10 Hz): both give
+the same unobservable counts, match column, match counts and claim verdicts at every tolerance
+of :data:`TOLERANCES`. The paper's every-step test (stride 1, the sliding-window path of
+:func:`navlib.observability.local_observability`) gives the same counts, full-rank maximum
+condition orders up to 0.6 decade higher (the INS/GPS-only rows), and other rounding-noise
+digits for the numerically singular rows, which ``T2-RW-P``'s second check reads: some
+random-walk b_p rows sit at log10 cond 16.4 there, below ``17 - cond_tol`` at 0.25 and 0.5
+decade, so that claim is only partly reproduced at stride 1. Stride 1 stays an option
+(``-p stride 1`` in notebook 02) until it costs less than the coarse grid (issue 14)."""
 TOLERANCE_CLAIMS = ("T2-table", "T2-att-noRT", "T2-att-RT", "T2-threshold", "T2-ins-gps")
 """Table 2 claims whose checks use the condition-order tolerance (the others count ranks)."""
 
