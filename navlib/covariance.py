@@ -44,10 +44,12 @@ __all__ = [
     "kalman_covariances",
     "normalized_eigen",
     "sigma_in_frame",
+    "symmetrize",
 ]
 
 
-def _sym(P):
+def symmetrize(P):
+    """The symmetric part ``(P + P') / 2`` of one matrix or a stack (..., n, n)."""
     return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
@@ -166,7 +168,7 @@ def _inputs(F, Q, H, R, P0, t, n_epochs, state_names, measurements=True, stacked
         m = H.shape[-2] if H.ndim >= 2 else -1
         H = _stack(H, count, (m, n), "H")
         R = _stack(R if R is not None else np.zeros((m, m)), count, (m, m), "R")
-    return F, Q, H, R, _sym(P0), t, _names(state_names, n)
+    return F, Q, H, R, symmetrize(P0), t, _names(state_names, n)
 
 
 def _initial(P0, n: int) -> np.ndarray:
@@ -217,7 +219,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float):
     for k in range(count):
         if k:
             P = F[k - 1] @ P @ F[k - 1].T + Q[k - 1]
-            P = _sym(P)
+            P = symmetrize(P)
         P_prior[:, k] = P
         if measured[k]:
             P, _ = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol, definite=r_definite[k])
@@ -392,7 +394,7 @@ def block_in_frame(P, states, C=None) -> np.ndarray:
     P = _covariances(P)
     block = P[:, idx[:, None], idx]
     C = _rotations(C, P.shape[0], idx.size, "C")
-    return block if C is None else _sym(C @ block @ np.swapaxes(C, 1, 2))
+    return block if C is None else symmetrize(C @ block @ np.swapaxes(C, 1, 2))
 
 
 def sigma_in_frame(P, states, C=None) -> np.ndarray:
@@ -686,7 +688,7 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
             raise NavlibInputError("P0: diagonal must be positive to normalise")
         Psn = Ps / d0[:, None] / d0[None, :]
     elif scale == "sqrtm":
-        w0, V0 = np.linalg.eigh(_sym(P0))
+        w0, V0 = np.linalg.eigh(symmetrize(P0))
         if w0[0] <= 0:
             raise NavlibInputError("P0: must be positive definite for scale='sqrtm'")
         inv_root = (V0 / np.sqrt(w0)) @ V0.T
@@ -696,7 +698,7 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     trace = np.trace(Psn, axis1=1, axis2=2)
     if np.any(trace <= 0):
         raise NavlibInputError("P: covariance with zero trace cannot be normalised")
-    Pn = _sym(order * Psn / trace[:, None, None])
+    Pn = symmetrize(order * Psn / trace[:, None, None])
     w, V = np.linalg.eigh(Pn)
     w, V = w[:, ::-1].copy(), V[:, :, ::-1].copy()
     # sign consistency of the sorted columns

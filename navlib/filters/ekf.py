@@ -20,9 +20,10 @@ import numpy as np
 import pandas as pd
 
 from navlib._validation import finite_array, finite_scalar
+from navlib.covariance import symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import _psd_sqrt, _sym, joseph_update
+from navlib.filters.kalman import _psd_sqrt, joseph_update
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
     Measurement,
@@ -319,7 +320,7 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
              finite_array(initial.velocity, "initial.velocity", (3,)),
              initial.attitude.as_matrix())
     n = len(es.state_names)
-    P = _sym(np.array(es.P0 if P0 is None else finite_array(P0, "P0", (n, n)), dtype=float))
+    P = symmetrize(np.array(es.P0 if P0 is None else finite_array(P0, "P0", (n, n)), dtype=float))
     params = {g: np.zeros(3) for g in es.parameters}
     for g, v in (initial_parameters or {}).items():
         if g not in params:
@@ -438,7 +439,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                     # the not-yet-fed-back estimate of the reset states
                     x_next[kept] = F[j][np.ix_(kept, kept)] @ x[kept]
                 x = x_next
-                P = _sym(F[j] @ P @ F[j].T + Q[j])
+                P = symmetrize(F[j] @ P @ F[j].T + Q[j])
         if rec:                                # corrected estimates at this window's updates
             j_up, dx, *rest = map(np.array, zip(*rec, strict=True))
             for key, value in zip(out, (es.correct(nominal.at(j_up), dx), dx[:, kept], *rest),
@@ -448,7 +449,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
         params = {g: p[0] for g, p in end.parameters.items()}
         J = es.reset_jacobian(x)
-        P = _sym(J @ P @ J.T)
+        P = symmetrize(J @ P @ J.T)
         x = np.where(es.reset, 0.0, x)
 
     post = out.pop("post")

@@ -11,6 +11,7 @@ import numpy as np
 from scipy import stats
 
 from navlib._validation import finite_scalar
+from navlib.covariance import symmetrize
 from navlib.errors import NavlibInputError
 
 _PINV_RTOL = 1e-12
@@ -19,13 +20,9 @@ _PINV_RTOL = 1e-12
 reproduce its posterior covariances."""
 
 
-def _sym(P):
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
-
-
 def _psd_sqrt(M) -> np.ndarray:
     """Batched symmetric square root ``L`` with ``L L' = M`` for PSD ``M`` (..., n, n)."""
-    w, V = np.linalg.eigh(_sym(M))
+    w, V = np.linalg.eigh(symmetrize(M))
     return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
 
 def definite_noise(R) -> np.ndarray:
@@ -69,7 +66,7 @@ def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) 
     """
     P_prior = np.asarray(P_prior, dtype=float)
     PHt = P_prior @ np.swapaxes(H, -1, -2)
-    S = _sym(H @ PHt + R)
+    S = symmetrize(H @ PHt + R)
     batch, m = S.shape[:-2], S.shape[-1]
     if m == 0:
         return Gains(PHt, S, np.zeros(batch, dtype=int))
@@ -106,7 +103,7 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
     IKH = np.eye(P_prior.shape[-1]) - gains.K @ H
     P_post = IKH @ P_prior @ np.swapaxes(IKH, -1, -2) \
         + gains.K @ R @ np.swapaxes(gains.K, -1, -2)
-    return _sym(P_post), gains
+    return symmetrize(P_post), gains
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = _PINV_RTOL) -> Gains:
@@ -153,7 +150,7 @@ def nees_basis(P, rtol: float = 1e-10):
     safe = np.where(active, d, 1.0)
     C = P / safe[:, :, None] / safe[:, None, :]
     C = np.where(active[:, :, None] & active[:, None, :], C, 0.0)
-    w, V = np.linalg.eigh(_sym(C))
+    w, V = np.linalg.eigh(symmetrize(C))
     keep = w > rtol * np.maximum(w[:, -1:], 0.0)
     inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
     return safe, active, V, inv_w, keep.sum(axis=1)

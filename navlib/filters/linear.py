@@ -27,13 +27,12 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from navlib._validation import finite_array
-from navlib.covariance import CovarianceResult, kalman_covariance
+from navlib.covariance import CovarianceResult, kalman_covariance, symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import (
     Gains,
     _psd_sqrt,
-    _sym,
     chi2_bounds,
     kalman_gains,
     nees_basis,
@@ -180,7 +179,7 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
         raise NavlibInputError("P0: the model has no default initial covariance; pass P0")
     n = F.shape[-1]
     P0 = finite_array(P0, "P0", (n, n))
-    return LinearSteps(np.asarray(t, dtype=float), F, Q, L, Gamma, H, R, _sym(P0), *names)
+    return LinearSteps(np.asarray(t, dtype=float), F, Q, L, Gamma, H, R, symmetrize(P0), *names)
 
 
 @dataclass(frozen=True, eq=False)

@@ -56,6 +56,9 @@ from navlib.units import DEG
 
 SOLUTIONS = ("ins_gps", "ins_gps_att", "ins_gps_rt", "ins_gps_att_rt")
 """The four navigation solutions (spec launcher.md §1)."""
+SOLUTION_LABELS = {"ins_gps": "INS/GPS", "ins_gps_att": "INS/GPS/att",
+                   "ins_gps_rt": "INS/GPS + RT", "ins_gps_att_rt": "INS/GPS/att + RT"}
+"""Display names of the :data:`SOLUTIONS` (tables, figure titles, claim texts)."""
 BIAS_MODELS = ("none", "markov", "random_walk")
 """Bias error models: neglected (no bias states), first-order Markov, random walk."""
 BIAS_LETTERS = ("G", "A", "P")

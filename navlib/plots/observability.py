@@ -10,9 +10,10 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
+from navlib.models.launcher import SOLUTION_LABELS
 from navlib.plots.figure import subplots
 from navlib.plots.trajectory import LAUNCHER_MARKERS, _mark_events
-from navlib.studies.launcher import SINGULAR_LOG10, SOLUTION_LABELS
+from navlib.studies.launcher import SINGULAR_LOG10
 
 UNACCEPTABLE_LOG10 = 10.0
 """cond > 1e10 is unacceptable in double precision (Beaudoin et al., after Judd [37])."""

@@ -11,8 +11,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from navlib.errors import NavlibInputError
+from navlib.models.launcher import SOLUTION_LABELS
 from navlib.plots.figure import subplots
-from navlib.studies.outliers import SOLUTION_LABELS
 from navlib.units import DEG
 
 _UNITS = {  # watch -> (label, factor applied to SI values)

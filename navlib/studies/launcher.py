@@ -26,7 +26,13 @@ import pandas as pd
 
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
-from navlib.models.launcher import BIAS_SETS, SOLUTIONS, launcher, simplified_gps_bias
+from navlib.models.launcher import (
+    BIAS_SETS,
+    SOLUTION_LABELS,
+    SOLUTIONS,
+    launcher,
+    simplified_gps_bias,
+)
 from navlib.observability import analyze, local_matrix, local_observability, observability_matrix
 from navlib.resources import data_dir
 from navlib.studies import claims as engine
@@ -35,9 +41,6 @@ from navlib.studies.claims import ClaimResult, check, claim
 DATA_DIR = data_dir()
 TABLE2_CSV = DATA_DIR / "beaudoin2018_table2.csv"
 
-SOLUTION_LABELS = {"ins_gps": "INS/GPS", "ins_gps_att": "INS/GPS + att.",
-                   "ins_gps_rt": "INS/GPS + RT", "ins_gps_att_rt": "INS/GPS + att. + RT"}
-"""Row-group labels of Table 2."""
 
 SINGULAR_LOG10 = 16.0
 """log10 cond at or above which a matrix counts as numerically singular (double precision;

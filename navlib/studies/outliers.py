@@ -41,7 +41,7 @@ from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.filters import LinearFilter, nees_values, prepare_linear, simulate_linear
 from navlib.filters.linear import recorded_epochs, unit_responses
-from navlib.models.launcher import SOLUTIONS, launcher
+from navlib.models.launcher import SOLUTION_LABELS, SOLUTIONS, launcher
 from navlib.outliers import PAPER_TESTS, Outlier, RecoveryScore, score_recovery
 from navlib.studies import claims as engine
 from navlib.studies.claims import Check, ClaimResult, check, claim, claims_frame
@@ -53,8 +53,6 @@ WATCHES = ("roll", "pitch", "yaw", "bp", "ref_roll")
 DEFAULTS = {"biases": "GAP", "bias_model": "markov", "window": 100.0, "averaging": 1.0}
 """Study defaults (module docstring)."""
 
-SOLUTION_LABELS = {"ins_gps": "INS/GPS", "ins_gps_att": "INS/GPS/att",
-                   "ins_gps_rt": "INS/GPS + RT", "ins_gps_att_rt": "INS/GPS/att + RT"}
 
 
 def default_trajectory(quick: bool = False):

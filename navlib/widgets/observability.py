@@ -18,10 +18,10 @@ import ipywidgets as widgets
 import numpy as np
 
 from navlib.errors import NavlibInputError
-from navlib.models.launcher import BIAS_MODELS, BIAS_SETS, SOLUTIONS, launcher
+from navlib.models.launcher import BIAS_MODELS, BIAS_SETS, SOLUTION_LABELS, SOLUTIONS, launcher
 from navlib.observability import analyze, local_matrix, local_observability
 from navlib.plots.observability import mission_figure, singular_values_figure
-from navlib.studies.launcher import SOLUTION_LABELS, describe_direction
+from navlib.studies.launcher import describe_direction
 from navlib.widgets.base import Panel, look
 
 _MODEL = ("solution", "biases", "bias_model", "variant")
