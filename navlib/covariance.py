@@ -50,7 +50,8 @@ __all__ = [
 
 def symmetrize(P):
     """The symmetric part ``(P + P') / 2`` of one matrix or a stack (..., n, n)."""
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
+    P = np.asarray(P)
+    return 0.5 * (P + P.swapaxes(-1, -2))
 
 
 def _names(state_names, n: int) -> tuple[str, ...]:
@@ -198,33 +199,71 @@ def _epochs_measured(measured, count: int, update_first: bool, has_h: bool) -> n
     return measured
 
 
-def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float):
+class FactoredNoise:
+    """Process noise ``Q_k = L_k L_k'`` held as its factor ``L`` (N-1, n, q) and formed a
+    slice of steps at a time (``noise[a:b]``), so a long high-rate model never holds the
+    whole ``Q`` stack (:func:`navlib.filters.linear.prepare_linear` with ``compact=True``)."""
+
+    def __init__(self, L):
+        self.L = np.asarray(L, dtype=float)
+
+    def __len__(self) -> int:
+        return self.L.shape[0]
+
+    def __getitem__(self, steps: slice) -> np.ndarray:
+        L = self.L[steps]
+        return L @ L.swapaxes(-1, -2)
+
+
+def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
+               gains: bool = False, block: int = 2048):
     """The Joseph-form recursion of :func:`kalman_covariance` for a stack of initial
-    covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: ``P_prior, P_post`` (B, N, n, n).
+    covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``.
 
     Every step is one stacked product or decomposition over the B members; each member
     goes through the very operations of its own recursion (stacked ``matmul``, ``inv`` and
     ``eigh`` treat each matrix alone), so its history is the same to the last bit. The
     steps stay sequential (the Riccati recursion); the noise test of every epoch's ``R`` is
-    one batched call before the loop.
+    one batched call before the loop. ``Q`` is read ``block`` steps at a time (an array or
+    a :class:`FactoredNoise`).
+
+    Returns ``(P_prior, P_post, Gains)``: ``P_prior`` (B, N, n, n) or None without
+    ``priors``, ``P_post`` (B, N, n, n), and with ``gains`` the
+    :class:`~navlib.filters.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
+    ``S_pinv`` and dof at epochs without update), else None. These are the gains
+    :func:`navlib.filters.kalman.kalman_gains` computes from the priors, to the bit.
     """
     count, (batch, n) = measured.size, P0.shape[:2]
+    update = None
     if H is not None:
-        from navlib.filters.kalman import definite_noise, joseph_update
+        from navlib.filters.kalman import Gains, definite_noise, joseph_update
 
         r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
-    P_prior = np.empty((batch, count, n, n))
+        update = measured.tolist()
+    P_prior = np.empty((batch, count, n, n)) if priors else None
     P_post = np.empty((batch, count, n, n))
+    if gains:
+        m = 0 if H is None else H.shape[-2]
+        K = np.zeros((batch, count, n, m))
+        S_pinv = np.zeros((batch, count, m, m))
+        dof = np.zeros((batch, count), dtype=int)
     P = P0
-    for k in range(count):
-        if k:
-            P = F[k - 1] @ P @ F[k - 1].T + Q[k - 1]
-            P = symmetrize(P)
-        P_prior[:, k] = P
-        if measured[k]:
-            P, _ = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol, definite=r_definite[k])
-        P_post[:, k] = P
-    return P_prior, P_post
+    for a in range(0, count, block):
+        b = min(count, a + block)
+        Q_block = Q[max(a - 1, 0):b - 1]
+        for k in range(a, b):
+            if k:
+                F_k = F[k - 1]
+                P = symmetrize(F_k @ P @ F_k.swapaxes(-1, -2) + Q_block[k - 1 - max(a - 1, 0)])
+            if priors:
+                P_prior[:, k] = P
+            if update is not None and update[k]:
+                P, gain = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol,
+                                        definite=r_definite[k])
+                if gains:
+                    K[:, k], S_pinv[:, k], dof[:, k] = gain.K, gain.S_pinv, gain.dof
+            P_post[:, k] = P
+    return P_prior, P_post, (Gains(K, S_pinv, dof) if gains else None)
 
 
 def kalman_covariances(F, Q=None, H=None, R=None, P0=None, *, update_first: bool = True,
@@ -261,7 +300,7 @@ def _run(F, Q, H, R, P0, update_first, measured, t, n_epochs, state_names, pinv_
                                        stacked=stacked)
     pinv_rtol = finite_scalar(pinv_rtol, "pinv_rtol", 0.0, 1.0)
     measured = _epochs_measured(measured, t.size, update_first, H is not None)
-    P_prior, P_post = _recursion(F, Q, H, R, P0, measured, pinv_rtol)
+    P_prior, P_post, _ = _recursion(F, Q, H, R, P0, measured, pinv_rtol)
     return [CovarianceResult(t, prior, post, measured, names)
             for prior, post in zip(P_prior, P_post, strict=True)]
 

@@ -65,15 +65,16 @@ def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) 
         :func:`definite_noise` of ``R`` when already known (computed otherwise).
     """
     P_prior = np.asarray(P_prior, dtype=float)
-    PHt = P_prior @ np.swapaxes(H, -1, -2)
+    H = np.asarray(H, dtype=float)
+    PHt = P_prior @ H.swapaxes(-1, -2)
     S = symmetrize(H @ PHt + R)
     batch, m = S.shape[:-2], S.shape[-1]
     if m == 0:
         return Gains(PHt, S, np.zeros(batch, dtype=int))
     definite = np.asarray(definite_noise(R) if definite is None else definite, dtype=bool)
-    if definite.all():
+    if bool(definite) if definite.ndim == 0 else definite.all():
         S_pinv, dof = np.linalg.inv(S), np.full(batch, m)
-    elif not definite.any():
+    elif definite.ndim == 0 or not definite.any():
         S_pinv, dof = _eigen_pinv(S, pinv_rtol)
     else:
         definite = np.broadcast_to(definite, batch)
@@ -88,7 +89,7 @@ def _eigen_pinv(S, rtol: float):
     w, V = np.linalg.eigh(S)
     keep = w > rtol * np.maximum(w[..., -1:], 0.0)
     inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
-    return (V * inv_w[..., None, :]) @ np.swapaxes(V, -1, -2), keep.sum(axis=-1)
+    return (V * inv_w[..., None, :]) @ V.swapaxes(-1, -2), keep.sum(axis=-1)
 
 
 def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None):
@@ -100,9 +101,9 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
     """
     P_prior = np.asarray(P_prior, dtype=float)
     gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol, definite=definite)
-    IKH = np.eye(P_prior.shape[-1]) - gains.K @ H
-    P_post = IKH @ P_prior @ np.swapaxes(IKH, -1, -2) \
-        + gains.K @ R @ np.swapaxes(gains.K, -1, -2)
+    K = gains.K
+    IKH = np.eye(P_prior.shape[-1]) - K @ H
+    P_post = IKH @ P_prior @ IKH.swapaxes(-1, -2) + K @ R @ K.swapaxes(-1, -2)
     return symmetrize(P_post), gains
 
 

@@ -27,14 +27,15 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from navlib._validation import finite_array
-from navlib.covariance import CovarianceResult, kalman_covariance, symmetrize
+from navlib.covariance import CovarianceResult, FactoredNoise, symmetrize
+from navlib.covariance import _recursion as _covariance_recursion
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import (
+    _PINV_RTOL,
     Gains,
     _psd_sqrt,
     chi2_bounds,
-    kalman_gains,
     nees_basis,
     nees_values,
 )
@@ -103,11 +104,6 @@ class LinearSteps:
         return len(self.state_names)
 
 
-def _noise_covariance(L) -> np.ndarray:
-    """``Q_k = L_k L_k'`` of the Euler form, (K, n, n)."""
-    return L @ np.swapaxes(L, 1, 2)
-
-
 def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
                  noise_names: Sequence[str] = (), with_q: bool = True) -> LinearSteps:
     """Per-step ``F, Q`` (and the noise factor / input) of a model for :func:`simulate_linear`.
@@ -147,7 +143,7 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
             F = np.eye(n) + A * dt[:, None, None]
             Gamma = G * dt[:, None, None]
             L = (G @ _psd_sqrt(Qc)) * np.sqrt(dt)[:, None, None]
-            Q = _noise_covariance(L) if with_q else None
+            Q = FactoredNoise(L)[:] if with_q else None
         else:
             F, Q = discretize_steps(A, G, Qc, dt, method="series")
             Gamma = _phi1_series(A, dt) @ G
@@ -392,13 +388,13 @@ def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measu
                    compact: bool = False) -> LinearFilter:
     """Discretise a model and run its Kalman covariance recursion once.
 
-    Parameters as in :func:`simulate_linear`. The covariance is
-    :func:`navlib.covariance.kalman_covariance` (Joseph form), the gains
-    :func:`kalman_gains` from its priors. BLAS runs on one thread here (:data:`_ONE_THREAD`).
+    Parameters as in :func:`simulate_linear`. The covariance is that of
+    :func:`navlib.covariance.kalman_covariance` (Joseph form), and the gains are those of
+    :func:`navlib.filters.kalman.kalman_gains` from its priors, both from one recursion
+    (:func:`_blockwise_covariance`). BLAS runs on one thread here (:data:`_ONE_THREAD`).
 
     ``compact=True`` keeps what :func:`simulate_linear` needs and drops the rest: the
-    recursion runs over blocks of epochs (:func:`_blockwise_covariance`, the same
-    posteriors and gains), the filter keeps no prior covariances
+    filter keeps no prior covariances
     (``covariance.P_prior`` is None) and no process noise (``steps.Q`` is None; the noise
     is sampled through ``steps.L``; the Euler ``Q`` is never formed whole). For a 28-state
     model at 200 Hz over 150 s that is about 0.8 GB held instead of 1.2 GB, and about
@@ -410,43 +406,28 @@ def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measu
                          noise_names=noise_names, with_q=not compact)
     mask = _measured_mask(steps.t.size, update_every, measured)
     with threadpool_limits(_ONE_THREAD):
-        if compact:
-            cov, gains = _blockwise_covariance(steps, mask)
-            return LinearFilter(replace(steps, Q=None), mask, gains, cov)
-        cov = kalman_covariance(steps.F, steps.Q, steps.H, steps.R, steps.P0, measured=mask,
-                                t=steps.t, state_names=steps.state_names)
-        gains = kalman_gains(cov.P_prior, steps.H, steps.R, mask)
+        cov, gains = _blockwise_covariance(steps, mask, priors=not compact)
+    if compact:
+        steps = replace(steps, Q=None)
     return LinearFilter(steps, mask, gains, cov)
 
 
-def _blockwise_covariance(steps: LinearSteps, mask, block: int = 2048):
-    """:func:`navlib.covariance.kalman_covariance` and :func:`kalman_gains` block by block.
+def _blockwise_covariance(steps: LinearSteps, mask, block: int = 2048, priors: bool = False):
+    """:func:`navlib.covariance.kalman_covariance` and its gains in one recursion.
 
-    Each block of epochs starts from the prior the previous block computed for its first
-    epoch (``P0`` of that block, updated there when measured), so every step does the same
-    arithmetic as one recursion over all epochs: the same posteriors and gains, with only
-    one block of priors (and of ``Q = L L'`` when ``steps.Q`` is None) held at a time.
-    Returns ``(CovarianceResult without priors, Gains)``.
+    The recursion (:func:`navlib.covariance._recursion`) keeps the gain of each update
+    (the :func:`navlib.filters.kalman.kalman_gains` of its prior, to the bit) and reads the
+    process noise ``block`` epochs at a time; when ``steps.Q`` is None it forms ``Q = L L'``
+    one block at a time (:class:`navlib.covariance.FactoredNoise`), and without ``priors`` it
+    keeps no prior covariances. Returns ``(CovarianceResult, Gains)``.
     """
-    N, n = steps.t.size, steps.n
-    m = steps.H.shape[-2]
-    P_post = np.empty((N, n, n))
-    K, S_pinv, dof = np.empty((N, n, m)), np.empty((N, m, m)), np.empty(N, dtype=int)
-    prior = steps.P0
-    for a in range(0, N, block):
-        b = min(N, a + block)
-        end = min(N - 1, b)                     # one epoch more: the next block's prior
-        Q = steps.Q[a:end] if steps.Q is not None else _noise_covariance(steps.L[a:end])
-        part = kalman_covariance(steps.F[a:end], Q, steps.H[a:end + 1],
-                                 steps.R[a:end + 1], prior, measured=mask[a:end + 1],
-                                 t=steps.t[a:end + 1], state_names=steps.state_names)
-        P_post[a:b] = part.P_post[:b - a]
-        g = kalman_gains(part.P_prior[:b - a], steps.H[a:b], steps.R[a:b], mask[a:b])
-        K[a:b], S_pinv[a:b], dof[a:b] = g.K, g.S_pinv, g.dof
-        if b < N:
-            prior = part.P_prior[b - a]
-    return (CovarianceResult(steps.t, None, P_post, mask.copy(), tuple(steps.state_names)),
-            Gains(K, S_pinv, dof))
+    noise = FactoredNoise(steps.L) if steps.Q is None else steps.Q
+    P_prior, P_post, gains = _covariance_recursion(
+        steps.F, noise, steps.H, steps.R, steps.P0[None], mask, _PINV_RTOL, priors=priors,
+        gains=True, block=block)
+    cov = CovarianceResult(steps.t, None if P_prior is None else P_prior[0], P_post[0],
+                           mask.copy(), tuple(steps.state_names))
+    return cov, Gains(gains.K[0], gains.S_pinv[0], gains.dof[0])
 
 
 def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
