@@ -247,7 +247,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
         K = np.zeros((batch, count, n, m))
         S_pinv = np.zeros((batch, count, m, m))
         dof = np.zeros((batch, count), dtype=int)
-    P = P0
+    P = P0[0] if batch == 1 else P0         # one member: plain matrices, fewer broadcasts
     for a in range(0, count, block):
         b = min(count, a + block)
         Q_block = Q[max(a - 1, 0):b - 1]
