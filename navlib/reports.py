@@ -92,12 +92,17 @@ class NotebookInfo:
     parameters : dict
         Name -> default source text of each assignment in the tagged ``parameters`` cell
         (empty when the notebook has no such cell).
+    after_others : bool
+        The notebook's metadata ``{"navlib": {"after_others": true}}``: it starts only when
+        every other notebook of the run has finished (a summary such as ``00_claims``, whose
+        studies then read what the others left in the disk cache, :mod:`navlib.cache`).
     """
 
     name: str
     path: Path
     title: str
     parameters: dict[str, str] = field(default_factory=dict)
+    after_others: bool = False
 
 
 @dataclass(frozen=True)
@@ -256,8 +261,9 @@ def list_notebooks(notebooks_dir) -> list[NotebookInfo]:
     for path in sorted(folder.iterdir()):
         if path.is_file() and NOTEBOOK_PATTERN.match(path.name):
             nb = _read_notebook(path)
+            after = bool(nb.metadata.get("navlib", {}).get("after_others", False))
             infos.append(NotebookInfo(path.stem, path.resolve(), _title(nb, path.stem),
-                                      _parameter_defaults(nb)))
+                                      _parameter_defaults(nb), after))
     return infos
 
 
@@ -765,7 +771,8 @@ def _remove_orphaned_staging(output: Path) -> None:
 def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[NotebookInfo]:
     """Longest first, by the ``seconds`` of the previous manifest in ``output`` or, when it
     has none (a new folder), in :func:`default_output_dir` (the last ``make report``);
-    notebooks it does not time come first, in name order (they may be long)."""
+    notebooks it does not time come first, in name order (they may be long). Notebooks
+    :attr:`~NotebookInfo.after_others` come last."""
     entries: dict = {}
     for folder in (output, default_output_dir()):
         entries = _load_manifest(folder).get("notebooks", {})
@@ -779,7 +786,32 @@ def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[Noteboo
         except (TypeError, KeyError, ValueError):
             return math.inf
 
-    return sorted(selected, key=lambda info: -seconds(info))  # stable: ties by name
+    return sorted(selected, key=lambda info: (info.after_others, -seconds(info)))  # stable
+
+
+class _Countdown:
+    """Notebooks of a run still to finish before those :attr:`NotebookInfo.after_others`
+    may start."""
+
+    def __init__(self, count: int):
+        self._count = count
+        self._lock = threading.Lock()
+        self._done = threading.Event()
+        if count <= 0:
+            self._done.set()
+
+    def count_down(self) -> None:
+        with self._lock:
+            self._count -= 1
+            if self._count <= 0:
+                self._done.set()
+
+    def wait(self, stopped: Callable[[], bool]) -> bool:
+        """Block until the count reaches zero (True) or ``stopped()`` (False)."""
+        while not self._done.wait(_EVENT_WAIT_S):
+            if stopped():
+                return False
+        return True
 
 
 def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], staging: Path,
@@ -798,12 +830,15 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
     pending = iter(list(enumerate(queue, start=1)))
     lock = threading.Lock()
     total = len(queue)
+    others = _Countdown(sum(not info.after_others for info in queue))
 
     def work():
         while not kernels.stopped:
             with lock:
                 position, info = next(pending, (0, None))
             if info is None:
+                return
+            if info.after_others and not others.wait(lambda: kernels.stopped):
                 return
             params = _parameters_for(info, settings.quick, settings.parameters)
 
@@ -820,6 +855,8 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
             if settings.fail_fast and run.status == "failed":
                 kernels.stop()  # before this worker could take the next notebook
             events.put((position, info.name, run))
+            if not info.after_others:
+                others.count_down()
 
     workers = [threading.Thread(target=work, name=f"report-worker-{k}", daemon=True)
                for k in range(settings.jobs)]

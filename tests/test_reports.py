@@ -442,3 +442,26 @@ def test_jobs_option(good, tmp_path, capsys):
     assert "jobs: expected a whole number >= 1, got 0" in capsys.readouterr().err
     proc = _cli("report", "--help", cwd=Path.cwd())
     assert "--jobs N" in proc.stdout and "--no-cache" in proc.stdout
+
+
+def test_a_notebook_after_others_starts_when_they_have_finished(tmp_path):
+    """00 (metadata navlib.after_others) reads what 01 and 02 wrote: with two workers it
+    would otherwise start beside 01, before 02 has written anything."""
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    stamp = f"import pathlib, time\nstamps = pathlib.Path({str(tmp_path)!r})\n"
+    _write(nbdir / "01_slow.ipynb", [("code", stamp + "time.sleep(3)\n"
+                                      "(stamps / '01').write_text(str(time.time()))")])
+    _write(nbdir / "02_fast.ipynb", [("code", stamp + "(stamps / '02').write_text('x')")])
+    _write(nbdir / "00_summary.ipynb", [("code", stamp + "assert (stamps / '01').exists()\n"
+                                         "assert (stamps / '02').exists()\n"
+                                         "(stamps / '00').write_text(str(time.time()))")])
+    nb = nbformat.read(nbdir / "00_summary.ipynb", as_version=4)
+    nb.metadata["navlib"] = {"after_others": True}
+    nbformat.write(nb, nbdir / "00_summary.ipynb")
+    infos = reports.list_notebooks(nbdir)
+    assert [i.after_others for i in infos] == [True, False, False]
+    assert [i.name for i in reports._queue_order(infos, tmp_path / "out")][-1] == "00_summary"
+    runs = reports.run_reports(nbdir, tmp_path / "out", jobs=2)
+    assert all(r.ok for r in runs)
+    assert float((tmp_path / "00").read_text()) >= float((tmp_path / "01").read_text())
