@@ -227,6 +227,14 @@ def salt(module: str) -> str:
     return digest.hexdigest()
 
 
+def _digest(parts: list) -> str:
+    digest = hashlib.sha256()
+    for part in parts:
+        digest.update(struct.pack("<Q", len(part)))
+        digest.update(part)
+    return digest.hexdigest()
+
+
 def key(fn: Callable, args: tuple, kwargs: dict) -> str:
     """Content hash of a call of ``fn``: its qualified name, its bound arguments and
     :func:`salt` of its module. Raises TypeError for an argument it cannot encode."""
@@ -234,11 +242,7 @@ def key(fn: Callable, args: tuple, kwargs: dict) -> str:
     bound.apply_defaults()
     parts = [f"{fn.__module__}.{fn.__qualname__};{salt(fn.__module__)};".encode()]
     _encode(dict(bound.arguments), parts)
-    digest = hashlib.sha256()
-    for part in parts:
-        digest.update(struct.pack("<Q", len(part)))
-        digest.update(part)
-    return digest.hexdigest()
+    return _digest(parts)
 
 
 # --------------------------------------------------------------------------- storage
@@ -354,3 +358,54 @@ def cached(fn: Callable) -> Callable:
         return value
 
     return wrapper
+
+
+# --------------------------------------------------------------------------- scopes
+
+
+class Scope:
+    """Entries of one computation context, item by item: for results a caller computes
+    several at a time but reads one by one (the outlier responses of a filter).
+
+    The context is ``module`` (its :func:`salt`), a ``label`` and ``values`` (encoded as
+    builder arguments, e.g. a trajectory and model options), hashed once; an item (any
+    encodable value) adds its own encoding. :meth:`get` and :meth:`put` are no-ops when the
+    cache is disabled or a value cannot be encoded, like a bypassed builder.
+    """
+
+    def __init__(self, module: str, label: str, *values):
+        self.label = label
+        parts = [f"{module}.{label};{salt(module)};".encode()]
+        try:
+            _encode(list(values), parts)
+        except _Unencodable:
+            self._digest = None
+        else:
+            self._digest = _digest(parts)
+
+    def _entry(self, item):
+        if self._digest is None or not enabled():
+            return None
+        parts = [self._digest.encode()]
+        try:
+            _encode(item, parts)
+        except _Unencodable:
+            return None
+        digest = _digest(parts)
+        return digest, cache_dir() / f"{self.label}-{digest[:32]}{_SUFFIX}"
+
+    def get(self, item) -> tuple[bool, object]:
+        """``(True, value)`` for an item kept before, else ``(False, None)``."""
+        entry = self._entry(item)
+        if entry is None:
+            _stats["bypassed"] += 1
+            return False, None
+        found, value = _load(entry[1], entry[0])
+        _stats["hits" if found else "misses"] += 1
+        return found, value
+
+    def put(self, item, value) -> None:
+        """Keep ``value`` for ``item`` (atomic write, as a builder's result)."""
+        entry = self._entry(item)
+        if entry is not None:
+            _store(entry[1].parent, entry[1], entry[0], value)

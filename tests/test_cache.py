@@ -9,6 +9,7 @@ from pathlib import Path
 
 import nbformat
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.spatial.transform import Rotation
 
@@ -266,3 +267,62 @@ def test_no_cache_reaches_the_kernels_and_forces_a_rebuild(cache_on, tmp_path):
     assert probe() == "no_cache=None hits=1 misses=0 bypassed=0"  # read back
     assert probe("--no-cache") == "no_cache=1 hits=0 misses=0 bypassed=1"  # rebuilt
     assert len(_entries(cache_on)) == 1
+
+
+def test_scope_keeps_items_apart_and_follows_its_context(cache_on):
+    traj = launcher_ascent(duration_s=5.0, rate_hz=20.0)
+    scope = cache.Scope("navlib.studies.outliers", "test", traj, {"a1_sign": 1.0})
+    assert scope.get(("x", 1)) == (False, None)
+    scope.put(("x", 1), np.arange(3.0))
+    found, value = scope.get(("x", 1))
+    assert found
+    _same(value, np.arange(3.0))
+    assert scope.get(("x", 2)) == (False, None)                  # another item
+    other = cache.Scope("navlib.studies.outliers", "test", traj, {"a1_sign": -1.0})
+    assert other.get(("x", 1)) == (False, None)                  # another context
+    assert cache.Scope("navlib.studies.outliers", "test", traj, {"f": print}).get(1) \
+        == (False, None)                                         # unencodable: bypassed
+
+
+def test_outlier_results_are_read_back_bitwise_without_preparing(cache_on, monkeypatch):
+    from navlib.outliers import Outlier
+    from navlib.studies import outliers as study
+
+    traj = launcher_ascent(duration_s=20.0, rate_hz=20.0)
+    requests = [(Outlier("gnss_vel_x", 10.0, 3.0), "roll"), (Outlier("gyro_x", 8.0, 0.1), "bp")]
+
+    def read(fresh):
+        got = fresh.unit_responses("ins_gps_rt", requests), fresh.summary("ins_gps_rt")
+        return got, fresh
+
+    (computed, summary), first = read(study.FilterCache(traj, a1_sign=-1.0))
+    assert first._items                                          # a filter was prepared
+    (loaded, summary_loaded), second = read(study.FilterCache(traj, a1_sign=-1.0))
+    assert not second._items                                     # read from the disk
+    for a, b in zip(computed, loaded, strict=True):
+        _same(a, b)
+    _same(summary, summary_loaded)
+    (_, _), third = read(study.FilterCache(traj, a1_sign=1.0))   # other model options
+    assert third._items
+    monkeypatch.setenv(cache.ENV_OFF, "1")
+    (uncached, _), _ = read(study.FilterCache(traj, a1_sign=-1.0))
+    for a, b in zip(computed, uncached, strict=True):
+        _same(a, b)
+
+
+def test_covariance_evolution_variants_are_read_back_bitwise(cache_on, monkeypatch):
+    from navlib.studies import launcher as study
+
+    traj = launcher_ascent(duration_s=10.0, rate_hz=20.0)
+    cases = dict(list(study.EVOLUTION_CASES.items())[:2])
+    kws = [{"sigma0_att": np.radians(0.03)}, {}]
+    baseline = study.covariance_evolution(traj, cases=cases)
+    before = cache.stats()
+    both = study._evolution_tables(traj, cases, False, kws)      # {} read, one built
+    assert cache.stats()["hits"] - before["hits"] == 1
+    assert len(list(cache_on.glob("covariance_evolution-*"))) == 2
+    with monkeypatch.context() as m:
+        m.setenv(cache.ENV_OFF, "1")
+        fresh = study._evolution_tables(traj, cases, False, kws)
+    for got, want in zip([*both, baseline], [*fresh, fresh[1]], strict=True):
+        pd.testing.assert_frame_equal(got, want, check_exact=True)

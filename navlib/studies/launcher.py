@@ -663,14 +663,30 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
     built once and every variant's recursion runs in one stacked recursion over the
     variants' P0 (:func:`navlib.covariance.kalman_covariances`, the same numbers as one
     recursion per variant)."""
-    from navlib.filters import linear_steps
-    from navlib.models.launcher import sensor_values
     from navlib.trajectory import launcher_ascent
 
     if trajectory is None:
         trajectory = launcher_ascent(duration_s=80.0, rate_hz=20.0) if quick \
             else launcher_ascent()
     cases = EVOLUTION_CASES if cases is None else dict(cases)
+    # each variant's table is also kept on disk (navlib.cache): notebook 02's baseline is
+    # the claims engine's, which then runs the recursions of its other variants only
+    kept = cache.Scope(__name__, "covariance_evolution", trajectory, cases)
+    tables = dict(enumerate(kept.get(kw) for kw in model_kws))
+    todo = [i for i, (found, _) in tables.items() if not found]
+    if todo:
+        built = _evolution_build(trajectory, cases, [model_kws[i] for i in todo])
+        for i, table in zip(todo, built, strict=True):
+            kept.put(model_kws[i], table)
+            tables[i] = (True, table)
+    return [table for _, table in tables.values()]
+
+
+def _evolution_build(trajectory, cases, model_kws) -> list[pd.DataFrame]:
+    """The tables of :func:`_evolution_tables`, computed."""
+    from navlib.filters import linear_steps
+    from navlib.models.launcher import sensor_values
+
     shared = {k: v for k, v in model_kws[0].items() if not k.startswith("sigma0_")}
     if any({k: v for k, v in kw.items() if not k.startswith("sigma0_")} != shared
            for kw in model_kws):  # pragma: no cover - internal use only

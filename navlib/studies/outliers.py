@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from navlib import cache as disk_cache
 from navlib._validation import finite_scalar
 from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
@@ -86,6 +87,10 @@ class FilterCache:
         self._items: dict = {}
         self._summaries: dict = {}
         self._responses: dict = {}
+        # summaries and unit responses also go to the disk cache (navlib.cache), keyed by
+        # the trajectory and the model options: the claims engine (notebook 00) reads
+        # those notebook 05 computed, and a second report reads them all
+        self._disk = disk_cache.Scope(__name__, "FilterCache", trajectory, model_options)
 
     def get(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
             ) -> LinearFilter:
@@ -98,7 +103,9 @@ class FilterCache:
             model = launcher(solution, biases, bias_model, self.trajectory,
                              **self.model_options)
             value = prepare_linear(model, compact=True)
-            self._summaries.setdefault(key, CovarianceSummary.of(value))
+            if key not in self._summaries:
+                self._summaries[key] = CovarianceSummary.of(value)
+                self._disk.put(("summary", key), self._summaries[key])
         self._items[key] = value
         return value
 
@@ -112,7 +119,11 @@ class FilterCache:
         """The :class:`CovarianceSummary` of one configuration (prepared when not known)."""
         key = (solution, biases, bias_model)
         if key not in self._summaries:
-            self.get(*key)
+            found, summary = self._disk.get(("summary", key))
+            if found:
+                self._summaries[key] = summary
+            else:
+                self.get(*key)
         return self._summaries[key]
 
     def unit_responses(self, solution: str, requests: Sequence[tuple[Outlier, str]], *,
@@ -130,6 +141,11 @@ class FilterCache:
         config = (solution, biases, bias_model)
         wanted = [(config, _unit(o), watch) for o, watch in requests]
         missing = [w for w in dict.fromkeys(wanted) if w not in self._responses]
+        for w in missing:
+            found, response = self._disk.get(("response", *w))
+            if found:
+                self._responses[w] = response
+        missing = [w for w in missing if w not in self._responses]
         if missing:
             units = list(dict.fromkeys(w[1] for w in missing))
             sim = unit_responses(self.get(*config), units)
@@ -141,6 +157,7 @@ class FilterCache:
                         i = units.index(w[1])
                         self._responses[w] = UnitResponse(sim.t, truth[:, i], est[:, i],
                                                           sigma, sim.applied[i])
+                        self._disk.put(("response", *w), self._responses[w])
         found = [self._responses[w].every(record_every) for w in wanted]
         while len(self._responses) > max(self.KEEP_RESPONSES, len(wanted)):
             self._responses.pop(next(iter(self._responses)))
