@@ -1,5 +1,8 @@
 """Table 2 regeneration, its claims and the Fig. 1 analogue (navlib.studies.launcher)."""
 
+import csv
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -7,6 +10,7 @@ import pytest
 from navlib import NavlibInputError
 from navlib.models.launcher import launcher
 from navlib.studies.launcher import (
+    TOLERANCES,
     configurations,
     describe_direction,
     fig1_claims,
@@ -192,3 +196,27 @@ def test_figure_builders_and_panel(result, short_ascent):
     panel.controls["bias_model"].value = "none"
     assert panel.model is not None and panel.result.n == 19
     plt.close("all")
+
+
+REFERENCE_5HZ = Path(__file__).parent / "data" / "table2_counts_5hz.csv"
+"""Unobservable counts, match counts and claim verdicts (at each tolerance) of Table 2 on the
+full ascent at stride 40 (5 Hz), the claims engine's grid before it moved to every step."""
+
+
+def _counts_and_verdicts(result) -> list[list[str]]:
+    rows = [[f"{r.solution}/{r.biases or '-'}/{r.bias_model}", "n_unobservable",
+             str(int(r.n_unobservable))] for r in result.frame.itertuples()]
+    for tol in TOLERANCES:
+        rows += [[f"match_count@{tol:g}", str(k), str(int(v))]
+                 for k, v in result.match_counts([tol]).items()]
+        rows += [[f"{c.claim_id}@{tol:g}", "verdict", c.verdict] for c in result.claims(tol)]
+    return rows
+
+
+def test_every_step_table_keeps_the_counts_and_verdicts_of_the_5hz_grid():
+    """The paper's every-step test (the default now) changes condition digits only: every
+    unobservable count, match count and claim verdict is the 5 Hz grid's."""
+    with REFERENCE_5HZ.open() as file:
+        want = list(csv.reader(file))[1:]
+    got = _counts_and_verdicts(table2(launcher_ascent(), stride=1))
+    assert got == want
