@@ -5,6 +5,7 @@ Joseph-form update, NEES/NIS consistency statistics (spec launcher.md §6.2-6.4;
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,7 +74,7 @@ def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) 
         return Gains(PHt, S, np.zeros(batch, dtype=int))
     definite = np.asarray(definite_noise(R) if definite is None else definite, dtype=bool)
     if bool(definite) if definite.ndim == 0 else definite.all():
-        S_pinv, dof = np.linalg.inv(S), np.full(batch, m)
+        S_pinv, dof = np.linalg.inv(S), np.full(batch, m) if batch else np.int64(m)
     elif definite.ndim == 0 or not definite.any():
         S_pinv, dof = _eigen_pinv(S, pinv_rtol)
     else:
@@ -92,6 +93,14 @@ def _eigen_pinv(S, rtol: float):
     return (V * inv_w[..., None, :]) @ V.swapaxes(-1, -2), keep.sum(axis=-1)
 
 
+@functools.cache
+def _identity(n: int) -> np.ndarray:
+    """The (read-only) n x n identity of :func:`joseph_update`, made once per size."""
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
 def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None):
     """Joseph-form measurement update ``P+ = (I - K H) P- (I - K H)' + K R K'`` with the
     gain of :func:`kalman_gain` (one epoch or a batch); returns ``(P_post, Gains)``.
@@ -102,7 +111,7 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
     P_prior = np.asarray(P_prior, dtype=float)
     gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol, definite=definite)
     K = gains.K
-    IKH = np.eye(P_prior.shape[-1]) - K @ H
+    IKH = _identity(P_prior.shape[-1]) - K @ H
     P_post = IKH @ P_prior @ IKH.swapaxes(-1, -2) + K @ R @ K.swapaxes(-1, -2)
     return symmetrize(P_post), gains
 
