@@ -140,7 +140,8 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
         dt = np.diff(t)
         Qc = np.asarray(model.Qc, dtype=float)
         if method == "euler":
-            F = np.eye(n) + A * dt[:, None, None]
+            F = A * dt[:, None, None]
+            F += np.eye(n)                   # in place: the same sums as eye + A dt
             Gamma = G * dt[:, None, None]
             L = (G @ _psd_sqrt(Qc)) * np.sqrt(dt)[:, None, None]
             Q = FactoredNoise(L)[:] if with_q else None
