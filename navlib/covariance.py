@@ -249,12 +249,12 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
         dof = np.zeros((batch, count), dtype=int)
     P = P0[0] if batch == 1 else P0         # one member: plain matrices, fewer broadcasts
     for a in range(0, count, block):
-        b = min(count, a + block)
-        Q_block = Q[max(a - 1, 0):b - 1]
+        b, q0 = min(count, a + block), max(a - 1, 0)
+        Q_block = Q[q0:b - 1]                # the steps into epochs a + 1 .. b - 1
         for k in range(a, b):
             if k:
                 F_k = F[k - 1]
-                P = symmetrize(F_k @ P @ F_k.swapaxes(-1, -2) + Q_block[k - 1 - max(a - 1, 0)])
+                P = symmetrize(F_k @ P @ F_k.swapaxes(-1, -2) + Q_block[k - 1 - q0])
             if priors:
                 P_prior[:, k] = P
             if update is not None and update[k]:
