@@ -250,7 +250,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     P = P0[0] if batch == 1 else P0         # one member: plain matrices, fewer broadcasts
     for a in range(0, count, block):
         b, q0 = min(count, a + block), max(a - 1, 0)
-        Q_block = Q[q0:b - 1]                # the steps into epochs a + 1 .. b - 1
+        Q_block = Q[q0:b - 1]                # the steps into this block's epochs
         for k in range(a, b):
             if k:
                 F_k = F[k - 1]
