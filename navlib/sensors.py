@@ -37,7 +37,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.signal import lfilter
 
 from navlib import units
 from navlib._validation import finite_array, finite_scalar, reject_unknown
@@ -375,6 +374,8 @@ def gauss_markov(t, sigma: float, tau: float, rng: np.random.Generator, n_axes: 
     drive = w.copy()
     drive[1:] *= np.sqrt(1.0 - a * a)[:, None]
     if t.size > 1 and np.allclose(a, a[0], rtol=1e-9, atol=0.0):
+        from scipy.signal import lfilter  # here: importing scipy.signal takes about 1 s
+
         x = lfilter([1.0], [1.0, -a[0]], drive, axis=0)
     else:
         x = np.empty_like(drive)
