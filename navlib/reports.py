@@ -92,17 +92,18 @@ class NotebookInfo:
     parameters : dict
         Name -> default source text of each assignment in the tagged ``parameters`` cell
         (empty when the notebook has no such cell).
-    after_others : bool
-        The notebook's metadata ``{"navlib": {"after_others": true}}``: it starts only when
-        every other notebook of the run has finished (a summary such as ``00_claims``, whose
-        studies then read what the others left in the disk cache, :mod:`navlib.cache`).
+    after : tuple of str
+        The notebook's metadata ``{"navlib": {"after": ["02", ...]}}`` (numbers or stems):
+        in a run that includes them it starts only when they have finished (the claims
+        summary ``00_claims`` after 02 and 05, whose results its studies then read from the
+        disk cache, :mod:`navlib.cache`); others run beside it meanwhile.
     """
 
     name: str
     path: Path
     title: str
     parameters: dict[str, str] = field(default_factory=dict)
-    after_others: bool = False
+    after: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -261,10 +262,24 @@ def list_notebooks(notebooks_dir) -> list[NotebookInfo]:
     for path in sorted(folder.iterdir()):
         if path.is_file() and NOTEBOOK_PATTERN.match(path.name):
             nb = _read_notebook(path)
-            after = bool(nb.metadata.get("navlib", {}).get("after_others", False))
+            after = nb.metadata.get("navlib", {}).get("after", ())
+            if isinstance(after, str) or not all(isinstance(a, str) for a in after):
+                raise NavlibInputError(f"notebook {path}: metadata navlib.after must be a "
+                                       f"list of notebook names or numbers, got {after!r}")
             infos.append(NotebookInfo(path.stem, path.resolve(), _title(nb, path.stem),
-                                      _parameter_defaults(nb), after))
+                                      _parameter_defaults(nb), tuple(after)))
     return infos
+
+
+def _dependencies(info: NotebookInfo, selected: Sequence[NotebookInfo]) -> set[str]:
+    """The notebooks of ``selected`` that ``info`` starts after (its ``after`` entries
+    matched as ``--only`` matches them; entries matching none are ignored)."""
+    names = set()
+    for entry in info.after:
+        key = Path(entry).name.removesuffix(".ipynb")
+        names.update(nb.name for nb in selected if nb.name != info.name and (
+            nb.name == key or (key.isdigit() and int(nb.name[:2]) == int(key))))
+    return names
 
 
 def select_notebooks(available: Sequence[NotebookInfo],
@@ -771,8 +786,8 @@ def _remove_orphaned_staging(output: Path) -> None:
 def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[NotebookInfo]:
     """Longest first, by the ``seconds`` of the previous manifest in ``output`` or, when it
     has none (a new folder), in :func:`default_output_dir` (the last ``make report``);
-    notebooks it does not time come first, in name order (they may be long). Notebooks
-    :attr:`~NotebookInfo.after_others` come last."""
+    notebooks it does not time come first, in name order (they may be long). A notebook
+    that starts :attr:`~NotebookInfo.after` others comes after them."""
     entries: dict = {}
     for folder in (output, default_output_dir()):
         entries = _load_manifest(folder).get("notebooks", {})
@@ -786,32 +801,41 @@ def _queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[Noteboo
         except (TypeError, KeyError, ValueError):
             return math.inf
 
-    return sorted(selected, key=lambda info: (info.after_others, -seconds(info)))  # stable
+    return sorted(selected, key=lambda info: (bool(_dependencies(info, selected)),
+                                              -seconds(info)))  # stable: ties by name
 
 
-class _Countdown:
-    """Notebooks of a run still to finish before those :attr:`NotebookInfo.after_others`
-    may start."""
+class _Pending:
+    """The queue of :func:`_run_all`: each worker takes the first notebook whose
+    :func:`_dependencies` have finished, waiting while none is ready."""
 
-    def __init__(self, count: int):
-        self._count = count
-        self._lock = threading.Lock()
-        self._done = threading.Event()
-        if count <= 0:
-            self._done.set()
+    def __init__(self, queue: Sequence[NotebookInfo]):
+        self._items = list(queue)
+        self._waits = {info.name: _dependencies(info, queue) for info in queue}
+        self._finished: set[str] = set()
+        self._running = self._started = 0
+        self._ready = threading.Condition()
 
-    def count_down(self) -> None:
-        with self._lock:
-            self._count -= 1
-            if self._count <= 0:
-                self._done.set()
+    def take(self, stopped: Callable[[], bool]):
+        """``(position, info)`` of the next notebook (position: its rank among the started
+        ones), or ``(0, None)`` when none is left or ``stopped()``. A notebook whose
+        dependencies can never finish (a cycle) is taken when nothing else runs."""
+        with self._ready:
+            while self._items and not stopped():
+                ready = [i for i, info in enumerate(self._items)
+                         if self._waits[info.name] <= self._finished]
+                if ready or not self._running:
+                    self._running += 1
+                    self._started += 1
+                    return self._started, self._items.pop(ready[0] if ready else 0)
+                self._ready.wait(_EVENT_WAIT_S)
+            return 0, None
 
-    def wait(self, stopped: Callable[[], bool]) -> bool:
-        """Block until the count reaches zero (True) or ``stopped()`` (False)."""
-        while not self._done.wait(_EVENT_WAIT_S):
-            if stopped():
-                return False
-        return True
+    def finished(self, info: NotebookInfo) -> None:
+        with self._ready:
+            self._running -= 1
+            self._finished.add(info.name)
+            self._ready.notify_all()
 
 
 def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], staging: Path,
@@ -827,18 +851,13 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
     """
     events: queue_module.SimpleQueue = queue_module.SimpleQueue()
     kernels = _Kernels()
-    pending = iter(list(enumerate(queue, start=1)))
-    lock = threading.Lock()
+    pending = _Pending(queue)
     total = len(queue)
-    others = _Countdown(sum(not info.after_others for info in queue))
 
     def work():
         while not kernels.stopped:
-            with lock:
-                position, info = next(pending, (0, None))
+            position, info = pending.take(lambda: kernels.stopped)
             if info is None:
-                return
-            if info.after_others and not others.wait(lambda: kernels.stopped):
                 return
             params = _parameters_for(info, settings.quick, settings.parameters)
 
@@ -855,8 +874,7 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
             if settings.fail_fast and run.status == "failed":
                 kernels.stop()  # before this worker could take the next notebook
             events.put((position, info.name, run))
-            if not info.after_others:
-                others.count_down()
+            pending.finished(info)
 
     workers = [threading.Thread(target=work, name=f"report-worker-{k}", daemon=True)
                for k in range(settings.jobs)]

@@ -445,23 +445,39 @@ def test_jobs_option(good, tmp_path, capsys):
 
 
 def test_a_notebook_after_others_starts_when_they_have_finished(tmp_path):
-    """00 (metadata navlib.after_others) reads what 01 and 02 wrote: with two workers it
-    would otherwise start beside 01, before 02 has written anything."""
+    """00 (metadata navlib.after: 01) reads what 01 wrote: with two workers it would
+    otherwise start beside 01; 02, which it does not wait for, runs beside 01."""
     nbdir = tmp_path / "notebooks"
     nbdir.mkdir()
     stamp = f"import pathlib, time\nstamps = pathlib.Path({str(tmp_path)!r})\n"
     _write(nbdir / "01_slow.ipynb", [("code", stamp + "time.sleep(3)\n"
                                       "(stamps / '01').write_text(str(time.time()))")])
-    _write(nbdir / "02_fast.ipynb", [("code", stamp + "(stamps / '02').write_text('x')")])
+    _write(nbdir / "02_fast.ipynb", [("code", stamp + "(stamps / '02').write_text("
+                                      "str(time.time()))")])
     _write(nbdir / "00_summary.ipynb", [("code", stamp + "assert (stamps / '01').exists()\n"
-                                         "assert (stamps / '02').exists()\n"
                                          "(stamps / '00').write_text(str(time.time()))")])
     nb = nbformat.read(nbdir / "00_summary.ipynb", as_version=4)
-    nb.metadata["navlib"] = {"after_others": True}
+    nb.metadata["navlib"] = {"after": ["01"]}
     nbformat.write(nb, nbdir / "00_summary.ipynb")
     infos = reports.list_notebooks(nbdir)
-    assert [i.after_others for i in infos] == [True, False, False]
+    assert [i.after for i in infos] == [("01",), (), ()]
     assert [i.name for i in reports._queue_order(infos, tmp_path / "out")][-1] == "00_summary"
     runs = reports.run_reports(nbdir, tmp_path / "out", jobs=2)
     assert all(r.ok for r in runs)
-    assert float((tmp_path / "00").read_text()) >= float((tmp_path / "01").read_text())
+    stamps = {n: float((tmp_path / n).read_text()) for n in ("00", "01", "02")}
+    assert stamps["00"] >= stamps["01"] > stamps["02"]
+    # without 01 in the run, 00 does not wait for it (and fails on its missing stamp)
+    (tmp_path / "01").unlink()
+    with pytest.raises(reports.ReportError):
+        reports.run_reports(nbdir, tmp_path / "out", only=["00", "02"], jobs=2)
+
+
+def test_bad_after_metadata_is_named(tmp_path):
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    _write(nbdir / "01_a.ipynb", [("code", "x = 1")])
+    nb = nbformat.read(nbdir / "01_a.ipynb", as_version=4)
+    nb.metadata["navlib"] = {"after": "02"}
+    nbformat.write(nb, nbdir / "01_a.ipynb")
+    with pytest.raises(NavlibInputError, match=r"navlib\.after"):
+        reports.list_notebooks(nbdir)
