@@ -113,12 +113,19 @@ def _prefix_products(q):
 # --- inter-sample reconstruction --------------------------------------------------------------
 
 
-def _interpolate(t, x, frac):
+def _interpolate(t, x, frac, lagrange=None):
     """Cubic Lagrange value of ``x`` at ``t_k + frac (t_{k+1} - t_k)`` for every interval k.
 
     Uses the four samples ``k-1 .. k+2`` (shifted inwards at the ends; fewer when N < 4).
-    Returns (N-1, 3).
+    ``lagrange``: :func:`_lagrange` of ``t, frac`` when already computed (signals on the
+    same clock share it). Returns (N-1, 3).
     """
+    idx, weights = _lagrange(t, frac) if lagrange is None else lagrange
+    return np.einsum("kj,kjd->kd", weights, x[idx])
+
+
+def _lagrange(t, frac):
+    """Sample indices (N-1, p) and weights (N-1, p) of :func:`_interpolate`."""
     n = len(t)
     p = min(4, n)
     start = np.clip(np.arange(n - 1) - 1, 0, n - p)
@@ -130,7 +137,7 @@ def _interpolate(t, x, frac):
         for m in range(p):
             if m != j:
                 weights[:, j] *= (target - nodes[:, m]) / (nodes[:, j] - nodes[:, m])
-    return np.einsum("kj,kjd->kd", weights, x[idx])
+    return idx, weights
 
 
 def _rotation_vector_rk4(w0, wm, w1, h):
@@ -440,11 +447,18 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
     v = finite_array(velocity0, "velocity0", (3,))
     if np.linalg.norm(r) < 1e5:
         raise NavlibInputError("position0: expected an ECEF position in m (|r| >= 100 km)")
-    q0 = _attitude_quat(attitude0)
+    return _integrate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
 
+
+def _integrate(t, f_b, w_ib_b, r, v, q0) -> StrapdownResult:
+    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): for
+    loops that propagate many short blocks from states they computed themselves (the
+    EKF's windows, :func:`navlib.filters.ekf`)."""
+    n = t.size
     h = np.diff(t)
-    w_mid = _interpolate(t, w_ib_b, 0.5)
-    f_mid = _interpolate(t, f_b, 0.5)
+    lagrange = _lagrange(t, 0.5)
+    w_mid = _interpolate(t, w_ib_b, 0.5, lagrange)
+    f_mid = _interpolate(t, f_b, 0.5, lagrange)
     phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
 
     # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments.

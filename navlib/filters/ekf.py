@@ -23,9 +23,10 @@ from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import _psd_sqrt, joseph_update
+from navlib.filters.kalman import _psd_sqrt, definite_noise, joseph_update
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
+    FixedDesign,
     Measurement,
     _epoch_index,
     _imu_arrays,
@@ -343,14 +344,15 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         names += meas.names
     events = {}            # IMU sample -> [(measurement, epoch)], in update order
     for meas in rows:
-        for i, k in enumerate(meas.index):
-            events.setdefault(int(k), []).append((meas, i))
+        for i, k in enumerate(meas.index.tolist()):
+            events.setdefault(k, []).append((meas, i))
     if not events:
         raise NavlibInputError("gnss: no measurements; give GNSS (or aiding) data")
     # windows: boundaries at update samples at least window_s apart (last sample closes)
     bounds = [0]
+    times = t.tolist()
     for k in sorted(events):
-        if k > bounds[-1] and t[k] - t[bounds[-1]] >= window_s - 1e-9:
+        if k > bounds[-1] and times[k] - times[bounds[-1]] >= window_s - 1e-9:
             bounds.append(k)
     if bounds[-1] != t.size - 1:
         bounds.append(t.size - 1)
@@ -388,8 +390,6 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     """The filter loop of :func:`ekf`: per window, nominal propagation, the error-state
     covariance along it, the updates, and feedback at the window end (from the window of
     a snapshot to resume, keeping one at another window, ``resume_point``)."""
-    from navlib import strapdown
-
     Qc = np.asarray(es.Qc, dtype=float)
     observers = {meas for epoch in events.values() for meas, _ in epoch if meas.wants_posterior}
     kept = np.flatnonzero(~es.reset)
@@ -403,6 +403,8 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    resume.state[3].copy())
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
+    epochs = _Epochs(events, rows, len(names))
+    loop = _Loop(es, kept, observers, _Prediction(x.size))
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
             continue
@@ -411,39 +413,14 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    np.column_stack([f_meas, w_meas])[:w0 + 1],
                                    (x.copy(), (r, v, C), dict(params), P.copy()),
                                    {key: list(value) for key, value in out.items()})
-        tw = t[w0:w1 + 1]
-        dt = (tw - tw[0])[:, None]
-        par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
-        f_c, w_c = es.compensate(par, f_meas[w0:w1 + 1], w_meas[w0:w1 + 1])
-        nav = strapdown.integrate(tw, f_c, w_c, r, v, C)
-        nominal = Nominal(tw, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c,
-                          par)
+        nominal = _window_nominal(es, t[w0:w1 + 1], f_meas[w0:w1 + 1], w_meas[w0:w1 + 1],
+                                  (r, v, C), params)
         A, G = es.jacobians(nominal)
-        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(tw), method=method)
-        rec = []                               # (local index, dx, P, sigma, innovation, NIS, dof)
-        for j in range(tw.size):
-            k = w0 + j
-            if k in events and (j > 0 or k == 0):
-                x, P, innov, nis, dof = _update(x, P, events[k], nominal, j, rows, len(names))
-                rec.append((j, x.copy(), P.copy() if keep_covariance else None,
-                            np.sqrt(np.clip(np.diag(P), 0, None)), innov, nis, dof))
-                if observers:                  # posterior navigation attitude
-                    C_post = es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
-                    for meas in observers:
-                        meas.observe(C_post)
-            if j < tw.size - 1:
-                x_next = F[j] @ x
-                if kept.size:
-                    # the closed loop drives the kept (RT) states with the error of the
-                    # corrected navigation, x[reset] - x_hat[reset]: no mean drive from
-                    # the not-yet-fed-back estimate of the reset states
-                    x_next[kept] = F[j][np.ix_(kept, kept)] @ x[kept]
-                x = x_next
-                P = symmetrize(F[j] @ P @ F[j].T + Q[j])
+        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(nominal.t), method=method)
+        x, P, rec = loop.window(x, P, F, Q, epochs.window(w0, w1, nominal), nominal)
         if rec:                                # corrected estimates at this window's updates
-            j_up, dx, *rest = map(np.array, zip(*rec, strict=True))
-            for key, value in zip(out, (es.correct(nominal.at(j_up), dx), dx[:, kept], *rest),
-                                  strict=True):
+            for key, value in zip(out, _records(rec, nominal, es, kept, keep_covariance,
+                                                len(names)), strict=True):
                 out[key].append(value)
         end = es.correct(nominal.at(slice(-1, None)), x[None])     # feedback at the window end
         r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
@@ -468,24 +445,175 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     )
 
 
-def _update(x, P, epoch, nominal, j, rows, m_all):
-    """Joseph update with the measurements of one epoch stacked; the innovation in the
-    model's measurement rows (NaN where not measured), NIS and its dof."""
-    parts = [meas.evaluate(i, nominal, j) for meas, i in epoch]
+def _window_nominal(es, t, f_meas, w_meas, state, params) -> Nominal:
+    """The nominal state over one window from ``state`` ``(r, v, C)`` at its start: the
+    parameter estimates decayed along it, the IMU compensated with them and the strapdown
+    mechanisation (the loop's own states, so without :func:`navlib.strapdown.integrate`'s
+    input checks)."""
+    from scipy.spatial.transform import Rotation
+
+    from navlib.strapdown import _integrate
+
+    r, v, C = state
+    dt = (t - t[0])[:, None]
+    par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
+    f_c, w_c = es.compensate(par, f_meas, w_meas)
+    nav = _integrate(t, f_c, w_c, r, v, Rotation.from_matrix(C).as_quat())
+    return Nominal(t, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c, par)
+
+
+class _Epochs:
+    """The update epochs of :func:`ekf` window by window.
+
+    What does not depend on the data is cached by the tuple of measurements updated
+    together at an epoch: their rows in the results and, when all have a fixed design
+    (:class:`~navlib.filters.measurements.FixedDesign`), their stacked ``H`` and ``R`` and
+    the definiteness of ``R`` (:func:`~navlib.filters.kalman.definite_noise`); their
+    innovations are evaluated once per window.
+    """
+
+    def __init__(self, events, rows, m_all):
+        self.events, self.rows, self.m_all = events, rows, m_all
+        self.samples = np.array(sorted(events))
+        self._designs = {}
+
+    def design(self, epoch):
+        """``(columns, fixed)`` of an epoch's measurements: their rows in the results and
+        ``(H, R, definite)``, or None when one of them is not a fixed design (or is updated
+        twice at the epoch)."""
+        key = tuple(meas for meas, _ in epoch)
+        if key not in self._designs:
+            fixed = (all(isinstance(meas, FixedDesign) for meas in key)
+                     and len(set(key)) == len(key))
+            self._designs[key] = (np.concatenate([self.rows[meas] for meas in key]),
+                                  _fixed_design(key) if fixed else None)
+        return self._designs[key]
+
+    def window(self, w0, w1, nominal):
+        """``[(j, epoch, columns, update)]`` of the window's epochs (its samples after
+        ``w0``, and ``w0`` for the first window) at sample ``j`` of ``nominal``: ``update``
+        is ``(z, H, R, definite)``, or None when the epoch's measurements are evaluated at
+        the update (:meth:`design`)."""
+        lo = np.searchsorted(self.samples, w0 + 1 if w0 else 0)
+        hi = np.searchsorted(self.samples, w1, side="right")
+        todo = [(k - w0, self.events[k]) for k in self.samples[lo:hi].tolist()]
+        batch = {}                             # measurement -> [(position, epoch, sample)]
+        for u, (j, epoch) in enumerate(todo):
+            if self.design(epoch)[1] is not None:
+                for meas, e in epoch:
+                    batch.setdefault(meas, []).append((u, e, j))
+        z = np.empty((len(todo), self.m_all))
+        for meas, items in batch.items():
+            u, e, j = np.array(items).T
+            z[u[:, None], self.rows[meas]] = meas.innovations(e, nominal, j)
+        plan = []
+        for u, (j, epoch) in enumerate(todo):
+            cols, fixed = self.design(epoch)
+            plan.append((j, epoch, cols, None if fixed is None else (z[u, cols], *fixed)))
+        return plan
+
+
+def _fixed_design(measurements):
+    """``(H, R, definite)`` of fixed-design measurements stacked (:meth:`_Epochs.design`)."""
+    _, H, R = _stacked([(np.zeros(len(meas.names)), meas.H, meas.R) for meas in measurements])
+    return H, R, definite_noise(R)
+
+
+class _Prediction:
+    """Covariance prediction ``symmetrize(F P F' + Q)`` into work arrays (the operations of
+    :func:`navlib.covariance.symmetrize` without the per-step allocations); the two result
+    arrays take turns, so a prior is never written over the matrix it comes from."""
+
+    def __init__(self, n):
+        self.FP, self.M = np.empty((n, n)), np.empty((n, n))
+        self.results = (np.empty((n, n)), np.empty((n, n)))
+        self.turn = 0
+
+    def __call__(self, P, F, FT, Q):
+        np.matmul(F, P, out=self.FP)
+        np.matmul(self.FP, FT, out=self.M)
+        self.M += Q
+        self.turn = 1 - self.turn
+        P_next = self.results[self.turn]
+        np.add(self.M, self.M.T, out=P_next)
+        P_next *= 0.5
+        return P_next
+
+
+class _Loop:
+    """Updates and propagation sample by sample over the windows of :func:`_run`."""
+
+    def __init__(self, es, kept, observers, predict):
+        self.es, self.kept, self.observers, self.predict = es, kept, observers, predict
+
+    def window(self, x, P, F, Q, plan, nominal):
+        """``x``, ``P`` at the window end and the records ``(j, x, P, innovation, columns,
+        NIS, dof)`` of its updates (``plan`` of :meth:`_Epochs.window`)."""
+        FT = np.swapaxes(F, 1, 2)
+        updates = {j: (epoch, cols, update) for j, epoch, cols, update in plan}
+        rec = []
+        for j in range(F.shape[0] + 1):
+            if j in updates:
+                epoch, cols, update = updates[j]
+                z, H, R, definite = update or _evaluated(epoch, nominal, j)
+                x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
+                rec.append((j, x, P, innov, cols, nis, dof))
+                if self.observers:             # posterior navigation attitude
+                    C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
+                    for meas in self.observers:
+                        meas.observe(C_post)
+            if j < F.shape[0]:
+                x_next = F[j] @ x
+                if self.kept.size:
+                    # the closed loop drives the kept (RT) states with the error of the
+                    # corrected navigation, x[reset] - x_hat[reset]: no mean drive from
+                    # the not-yet-fed-back estimate of the reset states
+                    x_next[self.kept] = F[j][np.ix_(self.kept, self.kept)] @ x[self.kept]
+                x = x_next
+                P = self.predict(P, F[j], FT[j], Q[j])
+        return x, P, rec
+
+
+def _records(rec, nominal, es, kept, keep_covariance, m_all):
+    """The results of one window's updates, in the order of ``out`` in :func:`_run`:
+    corrected nominal, kept states, covariances (None when not kept), sigma, innovations
+    in the model's rows (NaN where not measured), NIS and its dof."""
+    j_up, dx, P, innov, cols, nis, dof = zip(*rec, strict=True)
+    dx, P = np.array(dx), np.array(P)
+    full = np.full((len(rec), m_all), np.nan)
+    for u, (values, c) in enumerate(zip(innov, cols, strict=True)):
+        full[u, c] = values
+    sigma = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0, None))
+    return (es.correct(nominal.at(np.array(j_up)), dx), dx[:, kept],
+            P if keep_covariance else np.array([None] * len(rec)), sigma, full,
+            np.array(nis), np.array(dof))
+
+
+def _evaluated(epoch, nominal, j):
+    """``(z, H, R, None)`` of an epoch's measurements evaluated at sample ``j`` (the
+    definiteness of ``R`` left to the update)."""
+    return (*_stacked([meas.evaluate(i, nominal, j) for meas, i in epoch]), None)
+
+
+def _stacked(parts):
+    """``z``, ``H`` and block-diagonal ``R`` of the measurements of one epoch stacked."""
     if len(parts) == 1:
-        z, H, R = parts[0]
-    else:
-        z = np.concatenate([p[0] for p in parts])
-        H = np.concatenate([p[1] for p in parts])
-        R = np.zeros((z.size, z.size))
-        ends = np.cumsum([0] + [p[0].size for p in parts])
-        for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
-            R[a:b, a:b] = p[2]
+        return parts[0]
+    z = np.concatenate([p[0] for p in parts])
+    H = np.concatenate([p[1] for p in parts])
+    R = np.zeros((z.size, z.size))
+    ends = np.cumsum([0] + [p[0].size for p in parts])
+    for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
+        R[a:b, a:b] = p[2]
+    return z, H, R
+
+
+def _update(x, P, z, H, R, definite):
+    """Joseph update with the stacked measurements of one epoch (``definite``: of ``R``
+    when known); the posterior, the innovation, NIS and its dof."""
     innov = z - H @ x
-    P, gain = joseph_update(P, H, R)
-    full = np.full(m_all, np.nan)
-    full[np.concatenate([rows[meas] for meas, _ in epoch])] = innov
-    return x + gain.K @ innov, P, full, float(innov @ gain.S_pinv @ innov), int(gain.dof)
+    P, gain = joseph_update(P, H, R, definite=definite)
+    return x + gain.K @ innov, P, innov, float(innov @ gain.S_pinv @ innov), int(gain.dof)
 
 
 @dataclass(frozen=True, eq=False)
