@@ -173,9 +173,14 @@ def _attitude_increments(w0, wm, w1, h):
     return _rotation_vector_rk4(w0, wm, w1, h), _half_step_rotation_vector(w0, wm, w1, h)
 
 
-def _rotate_z(x, angle):
-    """Rotate vectors (..., 3) about ECEF z by ``angle`` (...,), rad."""
-    c, s = np.cos(angle), np.sin(angle)
+def _turn(angle):
+    """``(cos, sin)`` of rotation angles (...,), for :func:`_rotate_z`."""
+    return np.cos(angle), np.sin(angle)
+
+
+def _rotate_z(x, turn):
+    """Rotate vectors (..., 3) about ECEF z by the angles of ``turn`` (:func:`_turn`)."""
+    c, s = turn
     out = np.empty_like(x)
     out[..., 0] = c * x[..., 0] - s * x[..., 1]
     out[..., 1] = s * x[..., 0] + c * x[..., 1]
@@ -183,7 +188,30 @@ def _rotate_z(x, angle):
     return out
 
 
-def _translation(h, r0, v0, a, a_mid):
+@dataclass(frozen=True, eq=False)
+class _Steps:
+    """What :func:`_translation` needs of the steps ``h`` (M,) alone, the same at each
+    gravity iteration of a window: ``h/6``, ``h/24`` (M, 1) and the Coriolis rotations
+    ``R(t)'`` (``turn``) and ``R(t)`` (``back``) at the samples and mid-steps."""
+
+    h6: np.ndarray
+    h24: np.ndarray
+    turn: tuple
+    turn_mid: tuple
+    back: tuple
+    back_mid: tuple
+
+    @classmethod
+    def of(cls, h) -> _Steps:
+        s = np.concatenate([[0.0], np.cumsum(h)])
+        s_mid = s[:-1] + 0.5 * h
+        two_omega = 2.0 * _OMEGA
+        hh = h[:, None]
+        return cls(hh / 6.0, hh / 24.0, _turn(two_omega * s), _turn(two_omega * s_mid),
+                   _turn(-two_omega * s), _turn(-two_omega * s_mid))
+
+
+def _translation(h, r0, v0, a, a_mid, steps=None):
     """Position and velocity over consecutive steps for a known acceleration history.
 
     Solves ``dV/dt = a(t) - 2 Omega x V``, ``dP/dt = V`` with ``a`` (M+1, 3) at the sample
@@ -191,26 +219,24 @@ def _translation(h, r0, v0, a, a_mid):
     exact through ``V = R(t) U``, ``R(t) = exp(-2 S(Omega) t)``, ``dU/dt = R(t)^T a``; ``U``
     is integrated by Simpson's rule (exact for quadratic ``a``) and ``P`` by Simpson's rule
     on ``V`` (exact for cubic ``V``). Returns ``P``, ``V`` (M+1, 3) and the mid-step
-    positions (M, 3), which only serve to evaluate gravity there.
+    positions (M, 3), which only serve to evaluate gravity there. ``steps``:
+    :meth:`_Steps.of` ``h`` when already computed.
     """
-    s = np.concatenate([[0.0], np.cumsum(h)])
-    s_mid = s[:-1] + 0.5 * h
-    two_omega = 2.0 * _OMEGA
-    at = _rotate_z(a, two_omega * s)
-    at_mid = _rotate_z(a_mid, two_omega * s_mid)
-    hh = h[:, None]
-    du = hh / 6.0 * (at[:-1] + 4.0 * at_mid + at[1:])
+    steps = _Steps.of(h) if steps is None else steps
+    at = _rotate_z(a, steps.turn)
+    at_mid = _rotate_z(a_mid, steps.turn_mid)
+    du = steps.h6 * (at[:-1] + 4.0 * at_mid + at[1:])
     u = np.empty_like(a)
     u[0] = 0.0
     np.cumsum(du, axis=0, out=u[1:])
-    u_mid = u[:-1] + hh / 24.0 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
-    v = _rotate_z(u + v0, -two_omega * s)
-    v_mid = _rotate_z(u_mid + v0, -two_omega * s_mid)
-    dr = hh / 6.0 * (v[:-1] + 4.0 * v_mid + v[1:])
+    u_mid = u[:-1] + steps.h24 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
+    v = _rotate_z(u + v0, steps.back)
+    v_mid = _rotate_z(u_mid + v0, steps.back_mid)
+    dr = steps.h6 * (v[:-1] + 4.0 * v_mid + v[1:])
     r = np.empty_like(a)
     r[0] = 0.0
     np.cumsum(dr, axis=0, out=r[1:])
-    r_mid = r[:-1] + hh / 24.0 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
+    r_mid = r[:-1] + steps.h24 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
     return r + r0, v, r_mid + r0
 
 
@@ -231,14 +257,15 @@ def _translation_window(h, r0, v0, f_e, f_e_mid):
     """
     g = np.broadcast_to(earth.normal_gravity_ecef(r0), f_e.shape)
     g_mid = g[:-1]
+    steps = _Steps.of(h)
     previous = None
     for _ in range(_PICARD_MAX_ITER):
-        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid)
+        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid, steps)
         if previous is not None and np.max(np.abs(r - previous)) < _PICARD_TOL_M:
             return r, v
         previous = r
-        g = earth.normal_gravity_ecef(r)
-        g_mid = earth.normal_gravity_ecef(r_mid)
+        g_all = earth.normal_gravity_ecef(np.concatenate([r, r_mid]))   # row by row
+        g, g_mid = g_all[:r.shape[0]], g_all[r.shape[0]:]
     raise NavlibInputError(
         f"t: the gravity iteration did not converge within {_PICARD_MAX_ITER} passes over "
         f"{h.sum():.3g} s; sample steps this long ({h.max():.3g} s) are not supported"

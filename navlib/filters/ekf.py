@@ -45,6 +45,7 @@ FAMILIES = tuple(_MODELS)
 (:func:`navlib.models.launcher`) and España's 21-state ECEF model
 (:func:`navlib.models.ecef21`)."""
 _AXES = ("x", "y", "z")
+_EYE3 = np.eye(3)
 
 
 def _error_model(model, t, solution, biases, bias_model, options, gnss_velocity_sigma,
@@ -450,15 +451,13 @@ def _window_nominal(es, t, f_meas, w_meas, state, params) -> Nominal:
     parameter estimates decayed along it, the IMU compensated with them and the strapdown
     mechanisation (the loop's own states, so without :func:`navlib.strapdown.integrate`'s
     input checks)."""
-    from scipy.spatial.transform import Rotation
-
     from navlib.strapdown import _integrate
 
     r, v, C = state
     dt = (t - t[0])[:, None]
     par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
     f_c, w_c = es.compensate(par, f_meas, w_meas)
-    nav = _integrate(t, f_c, w_c, r, v, Rotation.from_matrix(C).as_quat())
+    nav = _integrate(t, f_c, w_c, r, v, _as_quat(C))
     return Nominal(t, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c, par)
 
 
@@ -783,6 +782,10 @@ def _snapshot_to_resume(resume, outliers, clocks) -> EKFSnapshot | None:
 
 
 def _as_quat(C) -> np.ndarray:
+    """``Rotation.from_matrix(C).as_quat()`` of one attitude matrix, without scipy's
+    orthogonality check and projection when ``C`` is a rotation to 1e-13 (far inside
+    scipy's own tolerance, so scipy would not project it either: the same quaternion)."""
     from scipy.spatial.transform import Rotation
 
-    return Rotation.from_matrix(C).as_quat()
+    valid = bool(np.max(np.abs(C @ C.T - _EYE3)) < 1e-13 and np.linalg.det(C) > 0)
+    return Rotation.from_matrix(C, assume_valid=valid).as_quat()
