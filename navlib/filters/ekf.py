@@ -404,8 +404,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    resume.state[3].copy())
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
-    epochs = _Epochs(events, rows, len(names))
-    loop = _Loop(es, kept, observers, _Prediction(x.size))
+    loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)), _Prediction(x.size))
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
             continue
@@ -418,13 +417,17 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                   (r, v, C), params)
         A, G = es.jacobians(nominal)
         F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(nominal.t), method=method)
-        x, P, rec = loop.window(x, P, F, Q, epochs.window(w0, w1, nominal), nominal)
+        x, P, rec = loop.window(x, P, F, Q, w0, nominal)
+        end = None
         if rec:                                # corrected estimates at this window's updates
-            for key, value in zip(out, _records(rec, nominal, es, kept, keep_covariance,
-                                                len(names)), strict=True):
+            results = _records(rec, nominal, es, kept, keep_covariance, len(names))
+            for key, value in zip(out, results, strict=True):
                 out[key].append(value)
-        end = es.correct(nominal.at(slice(-1, None)), x[None])     # feedback at the window end
-        r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
+            if rec[-1][0] == F.shape[0]:       # the last update is the window end's state
+                end = results[0].at(slice(-1, None))
+        if end is None:
+            end = es.correct(nominal.at(slice(-1, None)), x[None])
+        r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]   # feedback at the window end
         params = {g: p[0] for g, p in end.parameters.items()}
         J = es.reset_jacobian(x)
         P = symmetrize(J @ P @ J.T)
@@ -462,54 +465,53 @@ def _window_nominal(es, t, f_meas, w_meas, state, params) -> Nominal:
 
 
 class _Epochs:
-    """The update epochs of :func:`ekf` window by window.
+    """The update epochs of :func:`ekf` and what does not depend on the data.
 
-    What does not depend on the data is cached by the tuple of measurements updated
-    together at an epoch: their rows in the results and, when all have a fixed design
+    Cached by the tuple of measurements updated together at an epoch: their rows in the
+    results and, when all have a fixed design
     (:class:`~navlib.filters.measurements.FixedDesign`), their stacked ``H`` and ``R`` and
-    the definiteness of ``R`` (:func:`~navlib.filters.kalman.definite_noise`); their
-    innovations are evaluated once per window.
+    the definiteness of ``R`` (:func:`~navlib.filters.kalman.definite_noise`); the
+    innovations of fixed designs are evaluated once per window (:meth:`innovations`).
+
+    Attributes
+    ----------
+    at : dict
+        IMU sample -> ``(epoch, columns, fixed)``: the epoch's ``(measurement, index)``
+        pairs, their result rows and ``(H, R, definite)`` or None when one of them is not
+        a fixed design (or is updated twice at the epoch; it is then evaluated at the
+        update).
     """
 
     def __init__(self, events, rows, m_all):
-        self.events, self.rows, self.m_all = events, rows, m_all
-        self.samples = np.array(sorted(events))
-        self._designs = {}
+        self.rows, self.m_all = rows, m_all
+        designs, self.at = {}, {}
+        for k, epoch in events.items():
+            key = tuple(meas for meas, _ in epoch)
+            if key not in designs:
+                fixed = (all(isinstance(meas, FixedDesign) for meas in key)
+                         and len(set(key)) == len(key))
+                designs[key] = (np.concatenate([rows[meas] for meas in key]),
+                                _fixed_design(key) if fixed else None)
+            self.at[k] = (epoch, *designs[key])
+        self._fixed = {}                       # measurement -> (samples, epochs) by sample
+        for meas in rows:
+            if isinstance(meas, FixedDesign):
+                order = np.argsort(meas.index, kind="stable")
+                self._fixed[meas] = (meas.index[order], order)
 
-    def design(self, epoch):
-        """``(columns, fixed)`` of an epoch's measurements: their rows in the results and
-        ``(H, R, definite)``, or None when one of them is not a fixed design (or is updated
-        twice at the epoch)."""
-        key = tuple(meas for meas, _ in epoch)
-        if key not in self._designs:
-            fixed = (all(isinstance(meas, FixedDesign) for meas in key)
-                     and len(set(key)) == len(key))
-            self._designs[key] = (np.concatenate([self.rows[meas] for meas in key]),
-                                  _fixed_design(key) if fixed else None)
-        return self._designs[key]
-
-    def window(self, w0, w1, nominal):
-        """``[(j, epoch, columns, update)]`` of the window's epochs (its samples after
-        ``w0``, and ``w0`` for the first window) at sample ``j`` of ``nominal``: ``update``
-        is ``(z, H, R, definite)``, or None when the epoch's measurements are evaluated at
-        the update (:meth:`design`)."""
-        lo = np.searchsorted(self.samples, w0 + 1 if w0 else 0)
-        hi = np.searchsorted(self.samples, w1, side="right")
-        todo = [(k - w0, self.events[k]) for k in self.samples[lo:hi].tolist()]
-        batch = {}                             # measurement -> [(position, epoch, sample)]
-        for u, (j, epoch) in enumerate(todo):
-            if self.design(epoch)[1] is not None:
-                for meas, e in epoch:
-                    batch.setdefault(meas, []).append((u, e, j))
-        z = np.empty((len(todo), self.m_all))
-        for meas, items in batch.items():
-            u, e, j = np.array(items).T
-            z[u[:, None], self.rows[meas]] = meas.innovations(e, nominal, j)
-        plan = []
-        for u, (j, epoch) in enumerate(todo):
-            cols, fixed = self.design(epoch)
-            plan.append((j, epoch, cols, None if fixed is None else (z[u, cols], *fixed)))
-        return plan
+    def innovations(self, w0, nominal) -> np.ndarray:
+        """Innovations of the fixed-design measurements at the epochs of the window that
+        starts at sample ``w0`` (its samples after ``w0``, and ``w0`` for the first
+        window), (samples, m_all): row ``j`` for sample ``j`` of ``nominal``, in each
+        measurement's result rows (rows not measured left unset)."""
+        z = np.empty((nominal.t.size, self.m_all))
+        for meas, (samples, order) in self._fixed.items():
+            lo = np.searchsorted(samples, w0 + 1 if w0 else 0)
+            hi = np.searchsorted(samples, w0 + nominal.t.size - 1, side="right")
+            if hi > lo:
+                j = samples[lo:hi] - w0
+                z[j[:, None], self.rows[meas]] = meas.innovations(order[lo:hi], nominal, j)
+        return z
 
 
 def _fixed_design(measurements):
@@ -542,19 +544,23 @@ class _Prediction:
 class _Loop:
     """Updates and propagation sample by sample over the windows of :func:`_run`."""
 
-    def __init__(self, es, kept, observers, predict):
-        self.es, self.kept, self.observers, self.predict = es, kept, observers, predict
+    def __init__(self, es, kept, observers, epochs, predict):
+        self.es, self.kept, self.observers = es, kept, observers
+        self.epochs, self.predict = epochs, predict
 
-    def window(self, x, P, F, Q, plan, nominal):
-        """``x``, ``P`` at the window end and the records ``(j, x, P, innovation, columns,
-        NIS, dof)`` of its updates (``plan`` of :meth:`_Epochs.window`)."""
+    def window(self, x, P, F, Q, w0, nominal):
+        """``x``, ``P`` at the end of the window that starts at sample ``w0`` and the
+        records ``(j, x, P, innovation, columns, NIS, dof)`` of its updates."""
         FT = np.swapaxes(F, 1, 2)
-        updates = {j: (epoch, cols, update) for j, epoch, cols, update in plan}
+        z_fixed = self.epochs.innovations(w0, nominal)
+        at = self.epochs.at
         rec = []
         for j in range(F.shape[0] + 1):
-            if j in updates:
-                epoch, cols, update = updates[j]
-                z, H, R, definite = update or _evaluated(epoch, nominal, j)
+            item = at.get(w0 + j) if j or not w0 else None
+            if item is not None:
+                epoch, cols, fixed = item
+                z, H, R, definite = ((z_fixed[j, cols], *fixed) if fixed is not None
+                                     else _evaluated(epoch, nominal, j))
                 x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
                 rec.append((j, x, P, innov, cols, nis, dof))
                 if self.observers:             # posterior navigation attitude
@@ -580,8 +586,11 @@ def _records(rec, nominal, es, kept, keep_covariance, m_all):
     j_up, dx, P, innov, cols, nis, dof = zip(*rec, strict=True)
     dx, P = np.array(dx), np.array(P)
     full = np.full((len(rec), m_all), np.nan)
-    for u, (values, c) in enumerate(zip(innov, cols, strict=True)):
-        full[u, c] = values
+    groups = {}                                # updates with the same rows (cached arrays)
+    for u, c in enumerate(cols):
+        groups.setdefault(id(c), (c, []))[1].append(u)
+    for c, us in groups.values():
+        full[np.ix_(us, c)] = np.array([innov[u] for u in us])
     sigma = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0, None))
     return (es.correct(nominal.at(np.array(j_up)), dx), dx[:, kept],
             P if keep_covariance else np.array([None] * len(rec)), sigma, full,
