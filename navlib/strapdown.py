@@ -125,19 +125,44 @@ def _interpolate(t, x, frac, lagrange=None):
 
 
 def _lagrange(t, frac):
-    """Sample indices (N-1, p) and weights (N-1, p) of :func:`_interpolate`."""
-    n = len(t)
+    """Sample indices (N-1, p) and weights (..., N-1, p) of :func:`_interpolate` for times
+    ``t`` (..., N) (several blocks of one length at once, the same numbers as one by one)."""
+    n = t.shape[-1]
     p = min(4, n)
     start = np.clip(np.arange(n - 1) - 1, 0, n - p)
     idx = start[:, None] + np.arange(p)  # (N-1, p)
-    nodes = t[idx]
-    target = t[:-1] + frac * np.diff(t)
-    weights = np.ones((n - 1, p))
+    nodes = t[..., idx]
+    target = t[..., :-1] + frac * np.diff(t, axis=-1)
+    weights = np.ones((*t.shape[:-1], n - 1, p))
     for j in range(p):
         for m in range(p):
             if m != j:
-                weights[:, j] *= (target - nodes[:, m]) / (nodes[:, j] - nodes[:, m])
+                weights[..., j] *= ((target - nodes[..., m])
+                                    / (nodes[..., j] - nodes[..., m]))
     return idx, weights
+
+
+def _clock(t):
+    """What :func:`_integrate` needs of the sample times (..., N) alone: the mid-step
+    :func:`_lagrange` weights and the Earth rotations since ``t[0]`` at the samples and
+    mid-steps (several blocks of one length at once, the same numbers as one by one)."""
+    t0 = t[..., :1]
+    return (_lagrange(t, 0.5), _earth_quat(t - t0),
+            _earth_quat(t[..., :-1] + 0.5 * np.diff(t, axis=-1) - t0))
+
+
+def _block_clocks(t, bounds) -> list:
+    """:func:`_clock` of each block ``t[b0:b1 + 1]`` of consecutive ``bounds``, computed
+    for all blocks of one length at once."""
+    b0 = np.asarray(bounds[:-1])
+    sizes = np.diff(bounds) + 1
+    clocks = [None] * b0.size
+    for n in np.unique(sizes).tolist():
+        sel = np.flatnonzero(sizes == n)
+        (idx, weights), earth, earth_mid = _clock(t[b0[sel, None] + np.arange(n)])
+        for w, i in enumerate(sel.tolist()):
+            clocks[i] = (idx, weights[w]), earth[w], earth_mid[w]
+    return clocks
 
 
 def _rotation_vector_rk4(w0, wm, w1, h):
@@ -477,26 +502,25 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
     return _integrate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
 
 
-def _integrate(t, f_b, w_ib_b, r, v, q0) -> StrapdownResult:
+def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
     """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): for
     loops that propagate many short blocks from states they computed themselves (the
-    EKF's windows, :func:`navlib.filters.ekf`)."""
+    EKF's windows, :func:`navlib.filters.ekf`, with their :func:`_block_clocks`)."""
     n = t.size
     h = np.diff(t)
-    lagrange = _lagrange(t, 0.5)
+    lagrange, earth, earth_mid = _clock(t) if clock is None else clock
     w_mid = _interpolate(t, w_ib_b, 0.5, lagrange)
     f_mid = _interpolate(t, f_b, 0.5, lagrange)
     phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
 
-    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments.
+    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments; the
+    # samples (n) and mid-steps (n - 1) rotated together
     body = _body_products(phi)
-    q = _quat_mul(_earth_quat(t - t[0]), _quat_mul(q0, body))
-    q_mid = _quat_mul(
-        _earth_quat(t[:-1] + 0.5 * h - t[0]),
-        _quat_mul(q0, _quat_mul(body[:-1], _quat_from_rotvec(phi_half))),
-    )
-    f_e = _quat_rotate(q, f_b)
-    f_e_mid = _quat_rotate(q_mid, f_mid)
+    half = _quat_mul(body[:-1], _quat_from_rotvec(phi_half))
+    both = _quat_mul(np.concatenate([earth, earth_mid]),
+                     _quat_mul(q0, np.concatenate([body, half])))
+    f_e_both = _quat_rotate(both, np.concatenate([f_b, f_mid]))
+    q, f_e, f_e_mid = both[:n], f_e_both[:n], f_e_both[n:]
 
     position = np.empty((n, 3))
     velocity = np.empty((n, 3))

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import symmetrize
 from navlib.discretize import discretize_steps
@@ -405,6 +406,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
     loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)), _Prediction(x.size))
+    clocks = strapdown._block_clocks(t, bounds)
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
             continue
@@ -414,7 +416,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    (x.copy(), (r, v, C), dict(params), P.copy()),
                                    {key: list(value) for key, value in out.items()})
         nominal = _window_nominal(es, t[w0:w1 + 1], f_meas[w0:w1 + 1], w_meas[w0:w1 + 1],
-                                  (r, v, C), params)
+                                  (r, v, C), params, clocks[i])
         A, G = es.jacobians(nominal)
         F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(nominal.t), method=method)
         x, P, rec = loop.window(x, P, F, Q, w0, nominal)
@@ -449,18 +451,16 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     )
 
 
-def _window_nominal(es, t, f_meas, w_meas, state, params) -> Nominal:
+def _window_nominal(es, t, f_meas, w_meas, state, params, clock) -> Nominal:
     """The nominal state over one window from ``state`` ``(r, v, C)`` at its start: the
     parameter estimates decayed along it, the IMU compensated with them and the strapdown
     mechanisation (the loop's own states, so without :func:`navlib.strapdown.integrate`'s
-    input checks)."""
-    from navlib.strapdown import _integrate
-
+    input checks; ``clock``: the window's in ``strapdown._block_clocks``)."""
     r, v, C = state
     dt = (t - t[0])[:, None]
     par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
     f_c, w_c = es.compensate(par, f_meas, w_meas)
-    nav = _integrate(t, f_c, w_c, r, v, _as_quat(C))
+    nav = strapdown._integrate(t, f_c, w_c, r, v, _as_quat(C), clock)
     return Nominal(t, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c, par)
 
 
@@ -700,7 +700,6 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     EKFRun
     """
     from navlib import sensors as sensor_lib
-    from navlib import strapdown
     from navlib.outliers import inject
 
     outliers = as_outliers(outliers)
