@@ -54,13 +54,15 @@ def bortz_coefficient(angle):
     """
     a = np.asarray(angle, dtype=float)
     small = np.abs(a) < 0.2
-    a_safe = np.where(small, 1.0, a)
-    half = 0.5 * a_safe
-    exact = (1.0 - half / np.tan(half)) / a_safe**2
     a2 = a * a
     series = 1.0 / 12.0 + a2 * (
         1.0 / 720.0 + a2 * (1.0 / 30240.0 + a2 * (1.0 / 1209600.0 + a2 / 47900160.0))
     )
+    if small.all():                # per-sample IMU increments: no closed form needed
+        return np.asarray(series)
+    a_safe = np.where(small, 1.0, a)
+    half = 0.5 * a_safe
+    exact = (1.0 - half / np.tan(half)) / a_safe**2
     return np.where(small, series, exact)
 
 

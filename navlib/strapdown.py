@@ -443,10 +443,11 @@ def _attitude_quat(attitude0) -> np.ndarray:
     )
 
 
-def _body_products(phi):
-    body = np.empty((phi.shape[0] + 1, 4))
+def _body_products(dq):
+    """The chain ``B_k`` (N + 1, 4) of body increments ``dq`` (N, 4), ``B_0 = 1``."""
+    body = np.empty((dq.shape[0] + 1, 4))
     body[0] = (0.0, 0.0, 0.0, 1.0)
-    body[1:] = _prefix_products(_quat_from_rotvec(phi))
+    body[1:] = _prefix_products(dq)
     return body
 
 
@@ -462,7 +463,7 @@ def body_attitude(t, w_ib_b) -> Rotation:
     w_ib_b = finite_array(w_ib_b, "w_ib_b", (t.size, 3))
     h = np.diff(t)
     phi, _ = _attitude_increments(w_ib_b[:-1], _interpolate(t, w_ib_b, 0.5), w_ib_b[1:], h)
-    return Rotation.from_quat(_body_products(phi))
+    return Rotation.from_quat(_body_products(_quat_from_rotvec(phi)))
 
 
 def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResult:
@@ -515,8 +516,9 @@ def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
 
     # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments; the
     # samples (n) and mid-steps (n - 1) rotated together
-    body = _body_products(phi)
-    half = _quat_mul(body[:-1], _quat_from_rotvec(phi_half))
+    dq = _quat_from_rotvec(np.concatenate([phi, phi_half]))
+    body = _body_products(dq[:n - 1])
+    half = _quat_mul(body[:-1], dq[n - 1:])
     both = _quat_mul(np.concatenate([earth, earth_mid]),
                      _quat_mul(q0, np.concatenate([body, half])))
     f_e_both = _quat_rotate(both, np.concatenate([f_b, f_mid]))
