@@ -111,8 +111,11 @@ def exp_so3(phi) -> np.ndarray:
     theta2 = np.sum(phi * phi, axis=-1)
     theta = np.sqrt(theta2)
     small = theta < 1e-4
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    if small.all():                # feedback corrections: series only, nothing to mask
+        a, b = 1.0 - theta2 / 6.0, 0.5 - theta2 / 24.0
+    else:
+        safe = np.where(small, 1.0, theta)
+        a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+        b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
     K = skew(phi)
     return np.eye(3) + a[..., None, None] * K + b[..., None, None] * (K @ K)

@@ -217,23 +217,21 @@ def _rotate_z(x, turn):
 class _Steps:
     """What :func:`_translation` needs of the steps ``h`` (M,) alone, the same at each
     gravity iteration of a window: ``h/6``, ``h/24`` (M, 1) and the Coriolis rotations
-    ``R(t)'`` (``turn``) and ``R(t)`` (``back``) at the samples and mid-steps."""
+    ``R(t)'`` (``turn``) and ``R(t)`` (``back``) at the samples and then the mid-steps
+    (2M + 1,), which are rotated together."""
 
     h6: np.ndarray
     h24: np.ndarray
     turn: tuple
-    turn_mid: tuple
     back: tuple
-    back_mid: tuple
 
     @classmethod
     def of(cls, h) -> _Steps:
         s = np.concatenate([[0.0], np.cumsum(h)])
-        s_mid = s[:-1] + 0.5 * h
+        s_both = np.concatenate([s, s[:-1] + 0.5 * h])
         two_omega = 2.0 * _OMEGA
         hh = h[:, None]
-        return cls(hh / 6.0, hh / 24.0, _turn(two_omega * s), _turn(two_omega * s_mid),
-                   _turn(-two_omega * s), _turn(-two_omega * s_mid))
+        return cls(hh / 6.0, hh / 24.0, _turn(two_omega * s_both), _turn(-two_omega * s_both))
 
 
 def _translation(h, r0, v0, a, a_mid, steps=None):
@@ -248,15 +246,16 @@ def _translation(h, r0, v0, a, a_mid, steps=None):
     :meth:`_Steps.of` ``h`` when already computed.
     """
     steps = _Steps.of(h) if steps is None else steps
-    at = _rotate_z(a, steps.turn)
-    at_mid = _rotate_z(a_mid, steps.turn_mid)
+    m = h.shape[0] + 1
+    both = _rotate_z(np.concatenate([a, a_mid]), steps.turn)
+    at, at_mid = both[:m], both[m:]
     du = steps.h6 * (at[:-1] + 4.0 * at_mid + at[1:])
     u = np.empty_like(a)
     u[0] = 0.0
     np.cumsum(du, axis=0, out=u[1:])
     u_mid = u[:-1] + steps.h24 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
-    v = _rotate_z(u + v0, steps.back)
-    v_mid = _rotate_z(u_mid + v0, steps.back_mid)
+    both = _rotate_z(np.concatenate([u, u_mid]) + v0, steps.back)
+    v, v_mid = both[:m], both[m:]
     dr = steps.h6 * (v[:-1] + 4.0 * v_mid + v[1:])
     r = np.empty_like(a)
     r[0] = 0.0
