@@ -360,14 +360,19 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         bounds.append(t.size - 1)
     return _run(es, t, f_meas, w_meas, start, params, P, events, bounds,
                 "euler" if method == "euler" else "series", keep_covariance, rows, names,
-                _resume_point(t, f_meas, w_meas, bounds, events, snapshot_before, resume))
+                _resume_point(t, f_meas, w_meas, bounds, rows, snapshot_before, resume))
 
 
-def _resume_point(t, f_meas, w_meas, bounds, events, snapshot_before, resume):
+def _observers(measurements) -> set:
+    """The measurements with epochs that watch the filter's posterior."""
+    return {meas for meas in measurements if meas.wants_posterior and meas.index.size}
+
+
+def _resume_point(t, f_meas, w_meas, bounds, rows, snapshot_before, resume):
     """``(window to snapshot or None, snapshot to resume from or None)`` of :func:`ekf`."""
     if snapshot_before is None and resume is None:
         return None, None
-    if any(meas.wants_posterior for epoch in events.values() for meas, _ in epoch):
+    if _observers(rows):
         raise NavlibInputError("snapshot_before, resume: not with measurements that watch "
                                "the posterior (closed-loop reference trajectory)")
     window = None
@@ -393,7 +398,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     covariance along it, the updates, and feedback at the window end (from the window of
     a snapshot to resume, keeping one at another window, ``resume_point``)."""
     Qc = np.asarray(es.Qc, dtype=float)
-    observers = {meas for epoch in events.values() for meas, _ in epoch if meas.wants_posterior}
+    observers = _observers(rows)
     kept = np.flatnonzero(~es.reset)
     x = np.zeros(len(es.state_names))          # error-state mean (kept states persist)
     r, v, C = start
