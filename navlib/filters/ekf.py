@@ -558,14 +558,19 @@ class _Loop:
         records ``(j, x, P, innovation, columns, NIS, dof)`` of its updates."""
         FT = np.swapaxes(F, 1, 2)
         z_fixed = self.epochs.innovations(w0, nominal)
+        by_rows = {}                           # the innovations in the rows of each pattern
         at = self.epochs.at
         rec = []
         for j in range(F.shape[0] + 1):
             item = at.get(w0 + j) if j or not w0 else None
             if item is not None:
                 epoch, cols, fixed = item
-                z, H, R, definite = ((z_fixed[j, cols], *fixed) if fixed is not None
-                                     else _evaluated(epoch, nominal, j))
+                if fixed is not None:
+                    if id(cols) not in by_rows:
+                        by_rows[id(cols)] = z_fixed[:, cols]
+                    z, H, R, definite = by_rows[id(cols)][j], *fixed
+                else:
+                    z, H, R, definite = _evaluated(epoch, nominal, j)
                 x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
                 rec.append((j, x, P, innov, cols, nis, dof))
                 if self.observers:             # posterior navigation attitude
@@ -573,14 +578,15 @@ class _Loop:
                     for meas in self.observers:
                         meas.observe(C_post)
             if j < F.shape[0]:
-                x_next = F[j] @ x
+                Fj = F[j]
+                x_next = Fj @ x
                 if self.kept.size:
                     # the closed loop drives the kept (RT) states with the error of the
                     # corrected navigation, x[reset] - x_hat[reset]: no mean drive from
                     # the not-yet-fed-back estimate of the reset states
-                    x_next[self.kept] = F[j][np.ix_(self.kept, self.kept)] @ x[self.kept]
+                    x_next[self.kept] = Fj[np.ix_(self.kept, self.kept)] @ x[self.kept]
                 x = x_next
-                P = self.predict(P, F[j], FT[j], Q[j])
+                P = self.predict(P, Fj, FT[j], Q[j])
         return x, P, rec
 
 
