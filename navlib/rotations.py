@@ -54,13 +54,15 @@ def bortz_coefficient(angle):
     """
     a = np.asarray(angle, dtype=float)
     small = np.abs(a) < 0.2
-    a_safe = np.where(small, 1.0, a)
-    half = 0.5 * a_safe
-    exact = (1.0 - half / np.tan(half)) / a_safe**2
     a2 = a * a
     series = 1.0 / 12.0 + a2 * (
         1.0 / 720.0 + a2 * (1.0 / 30240.0 + a2 * (1.0 / 1209600.0 + a2 / 47900160.0))
     )
+    if small.all():                # per-sample IMU increments: no closed form needed
+        return np.asarray(series)
+    a_safe = np.where(small, 1.0, a)
+    half = 0.5 * a_safe
+    exact = (1.0 - half / np.tan(half)) / a_safe**2
     return np.where(small, series, exact)
 
 
@@ -109,8 +111,11 @@ def exp_so3(phi) -> np.ndarray:
     theta2 = np.sum(phi * phi, axis=-1)
     theta = np.sqrt(theta2)
     small = theta < 1e-4
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    if small.all():                # feedback corrections: series only, nothing to mask
+        a, b = 1.0 - theta2 / 6.0, 0.5 - theta2 / 24.0
+    else:
+        safe = np.where(small, 1.0, theta)
+        a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+        b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
     K = skew(phi)
     return np.eye(3) + a[..., None, None] * K + b[..., None, None] * (K @ K)

@@ -113,24 +113,56 @@ def _prefix_products(q):
 # --- inter-sample reconstruction --------------------------------------------------------------
 
 
-def _interpolate(t, x, frac):
+def _interpolate(t, x, frac, lagrange=None):
     """Cubic Lagrange value of ``x`` at ``t_k + frac (t_{k+1} - t_k)`` for every interval k.
 
     Uses the four samples ``k-1 .. k+2`` (shifted inwards at the ends; fewer when N < 4).
-    Returns (N-1, 3).
+    ``lagrange``: :func:`_lagrange` of ``t, frac`` when already computed (signals on the
+    same clock share it). Returns (N-1, 3).
     """
-    n = len(t)
+    idx, weights = _lagrange(t, frac) if lagrange is None else lagrange
+    return np.einsum("kj,kjd->kd", weights, x[idx])
+
+
+def _lagrange(t, frac):
+    """Sample indices (N-1, p) and weights (..., N-1, p) of :func:`_interpolate` for times
+    ``t`` (..., N) (several blocks of one length at once, the same numbers as one by one)."""
+    n = t.shape[-1]
     p = min(4, n)
     start = np.clip(np.arange(n - 1) - 1, 0, n - p)
     idx = start[:, None] + np.arange(p)  # (N-1, p)
-    nodes = t[idx]
-    target = t[:-1] + frac * np.diff(t)
-    weights = np.ones((n - 1, p))
+    nodes = t[..., idx]
+    target = t[..., :-1] + frac * np.diff(t, axis=-1)
+    weights = np.ones((*t.shape[:-1], n - 1, p))
     for j in range(p):
         for m in range(p):
             if m != j:
-                weights[:, j] *= (target - nodes[:, m]) / (nodes[:, j] - nodes[:, m])
-    return np.einsum("kj,kjd->kd", weights, x[idx])
+                weights[..., j] *= ((target - nodes[..., m])
+                                    / (nodes[..., j] - nodes[..., m]))
+    return idx, weights
+
+
+def _clock(t):
+    """What :func:`_integrate` needs of the sample times (..., N) alone: the mid-step
+    :func:`_lagrange` weights and the Earth rotations since ``t[0]`` at the samples and
+    mid-steps (several blocks of one length at once, the same numbers as one by one)."""
+    t0 = t[..., :1]
+    return (_lagrange(t, 0.5), _earth_quat(t - t0),
+            _earth_quat(t[..., :-1] + 0.5 * np.diff(t, axis=-1) - t0))
+
+
+def _block_clocks(t, bounds) -> list:
+    """:func:`_clock` of each block ``t[b0:b1 + 1]`` of consecutive ``bounds``, computed
+    for all blocks of one length at once."""
+    b0 = np.asarray(bounds[:-1])
+    sizes = np.diff(bounds) + 1
+    clocks = [None] * b0.size
+    for n in np.unique(sizes).tolist():
+        sel = np.flatnonzero(sizes == n)
+        (idx, weights), earth, earth_mid = _clock(t[b0[sel, None] + np.arange(n)])
+        for w, i in enumerate(sel.tolist()):
+            clocks[i] = (idx, weights[w]), earth[w], earth_mid[w]
+    return clocks
 
 
 def _rotation_vector_rk4(w0, wm, w1, h):
@@ -166,9 +198,14 @@ def _attitude_increments(w0, wm, w1, h):
     return _rotation_vector_rk4(w0, wm, w1, h), _half_step_rotation_vector(w0, wm, w1, h)
 
 
-def _rotate_z(x, angle):
-    """Rotate vectors (..., 3) about ECEF z by ``angle`` (...,), rad."""
-    c, s = np.cos(angle), np.sin(angle)
+def _turn(angle):
+    """``(cos, sin)`` of rotation angles (...,), for :func:`_rotate_z`."""
+    return np.cos(angle), np.sin(angle)
+
+
+def _rotate_z(x, turn):
+    """Rotate vectors (..., 3) about ECEF z by the angles of ``turn`` (:func:`_turn`)."""
+    c, s = turn
     out = np.empty_like(x)
     out[..., 0] = c * x[..., 0] - s * x[..., 1]
     out[..., 1] = s * x[..., 0] + c * x[..., 1]
@@ -176,7 +213,28 @@ def _rotate_z(x, angle):
     return out
 
 
-def _translation(h, r0, v0, a, a_mid):
+@dataclass(frozen=True, eq=False)
+class _Steps:
+    """What :func:`_translation` needs of the steps ``h`` (M,) alone, the same at each
+    gravity iteration of a window: ``h/6``, ``h/24`` (M, 1) and the Coriolis rotations
+    ``R(t)'`` (``turn``) and ``R(t)`` (``back``) at the samples and then the mid-steps
+    (2M + 1,), which are rotated together."""
+
+    h6: np.ndarray
+    h24: np.ndarray
+    turn: tuple
+    back: tuple
+
+    @classmethod
+    def of(cls, h) -> _Steps:
+        s = np.concatenate([[0.0], np.cumsum(h)])
+        s_both = np.concatenate([s, s[:-1] + 0.5 * h])
+        two_omega = 2.0 * _OMEGA
+        hh = h[:, None]
+        return cls(hh / 6.0, hh / 24.0, _turn(two_omega * s_both), _turn(-two_omega * s_both))
+
+
+def _translation(h, r0, v0, a, a_mid, steps=None):
     """Position and velocity over consecutive steps for a known acceleration history.
 
     Solves ``dV/dt = a(t) - 2 Omega x V``, ``dP/dt = V`` with ``a`` (M+1, 3) at the sample
@@ -184,26 +242,25 @@ def _translation(h, r0, v0, a, a_mid):
     exact through ``V = R(t) U``, ``R(t) = exp(-2 S(Omega) t)``, ``dU/dt = R(t)^T a``; ``U``
     is integrated by Simpson's rule (exact for quadratic ``a``) and ``P`` by Simpson's rule
     on ``V`` (exact for cubic ``V``). Returns ``P``, ``V`` (M+1, 3) and the mid-step
-    positions (M, 3), which only serve to evaluate gravity there.
+    positions (M, 3), which only serve to evaluate gravity there. ``steps``:
+    :meth:`_Steps.of` ``h`` when already computed.
     """
-    s = np.concatenate([[0.0], np.cumsum(h)])
-    s_mid = s[:-1] + 0.5 * h
-    two_omega = 2.0 * _OMEGA
-    at = _rotate_z(a, two_omega * s)
-    at_mid = _rotate_z(a_mid, two_omega * s_mid)
-    hh = h[:, None]
-    du = hh / 6.0 * (at[:-1] + 4.0 * at_mid + at[1:])
+    steps = _Steps.of(h) if steps is None else steps
+    m = h.shape[0] + 1
+    both = _rotate_z(np.concatenate([a, a_mid]), steps.turn)
+    at, at_mid = both[:m], both[m:]
+    du = steps.h6 * (at[:-1] + 4.0 * at_mid + at[1:])
     u = np.empty_like(a)
     u[0] = 0.0
     np.cumsum(du, axis=0, out=u[1:])
-    u_mid = u[:-1] + hh / 24.0 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
-    v = _rotate_z(u + v0, -two_omega * s)
-    v_mid = _rotate_z(u_mid + v0, -two_omega * s_mid)
-    dr = hh / 6.0 * (v[:-1] + 4.0 * v_mid + v[1:])
+    u_mid = u[:-1] + steps.h24 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
+    both = _rotate_z(np.concatenate([u, u_mid]) + v0, steps.back)
+    v, v_mid = both[:m], both[m:]
+    dr = steps.h6 * (v[:-1] + 4.0 * v_mid + v[1:])
     r = np.empty_like(a)
     r[0] = 0.0
     np.cumsum(dr, axis=0, out=r[1:])
-    r_mid = r[:-1] + hh / 24.0 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
+    r_mid = r[:-1] + steps.h24 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
     return r + r0, v, r_mid + r0
 
 
@@ -224,14 +281,15 @@ def _translation_window(h, r0, v0, f_e, f_e_mid):
     """
     g = np.broadcast_to(earth.normal_gravity_ecef(r0), f_e.shape)
     g_mid = g[:-1]
+    steps = _Steps.of(h)
     previous = None
     for _ in range(_PICARD_MAX_ITER):
-        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid)
+        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid, steps)
         if previous is not None and np.max(np.abs(r - previous)) < _PICARD_TOL_M:
             return r, v
         previous = r
-        g = earth.normal_gravity_ecef(r)
-        g_mid = earth.normal_gravity_ecef(r_mid)
+        g_all = earth.normal_gravity_ecef(np.concatenate([r, r_mid]))   # row by row
+        g, g_mid = g_all[:r.shape[0]], g_all[r.shape[0]:]
     raise NavlibInputError(
         f"t: the gravity iteration did not converge within {_PICARD_MAX_ITER} passes over "
         f"{h.sum():.3g} s; sample steps this long ({h.max():.3g} s) are not supported"
@@ -384,10 +442,11 @@ def _attitude_quat(attitude0) -> np.ndarray:
     )
 
 
-def _body_products(phi):
-    body = np.empty((phi.shape[0] + 1, 4))
+def _body_products(dq):
+    """The chain ``B_k`` (N + 1, 4) of body increments ``dq`` (N, 4), ``B_0 = 1``."""
+    body = np.empty((dq.shape[0] + 1, 4))
     body[0] = (0.0, 0.0, 0.0, 1.0)
-    body[1:] = _prefix_products(_quat_from_rotvec(phi))
+    body[1:] = _prefix_products(dq)
     return body
 
 
@@ -403,7 +462,7 @@ def body_attitude(t, w_ib_b) -> Rotation:
     w_ib_b = finite_array(w_ib_b, "w_ib_b", (t.size, 3))
     h = np.diff(t)
     phi, _ = _attitude_increments(w_ib_b[:-1], _interpolate(t, w_ib_b, 0.5), w_ib_b[1:], h)
-    return Rotation.from_quat(_body_products(phi))
+    return Rotation.from_quat(_body_products(_quat_from_rotvec(phi)))
 
 
 def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResult:
@@ -440,22 +499,29 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
     v = finite_array(velocity0, "velocity0", (3,))
     if np.linalg.norm(r) < 1e5:
         raise NavlibInputError("position0: expected an ECEF position in m (|r| >= 100 km)")
-    q0 = _attitude_quat(attitude0)
+    return _integrate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
 
+
+def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
+    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): for
+    loops that propagate many short blocks from states they computed themselves (the
+    EKF's windows, :func:`navlib.filters.ekf`, with their :func:`_block_clocks`)."""
+    n = t.size
     h = np.diff(t)
-    w_mid = _interpolate(t, w_ib_b, 0.5)
-    f_mid = _interpolate(t, f_b, 0.5)
+    lagrange, earth, earth_mid = _clock(t) if clock is None else clock
+    w_mid = _interpolate(t, w_ib_b, 0.5, lagrange)
+    f_mid = _interpolate(t, f_b, 0.5, lagrange)
     phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
 
-    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments.
-    body = _body_products(phi)
-    q = _quat_mul(_earth_quat(t - t[0]), _quat_mul(q0, body))
-    q_mid = _quat_mul(
-        _earth_quat(t[:-1] + 0.5 * h - t[0]),
-        _quat_mul(q0, _quat_mul(body[:-1], _quat_from_rotvec(phi_half))),
-    )
-    f_e = _quat_rotate(q, f_b)
-    f_e_mid = _quat_rotate(q_mid, f_mid)
+    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments; the
+    # samples (n) and mid-steps (n - 1) rotated together
+    dq = _quat_from_rotvec(np.concatenate([phi, phi_half]))
+    body = _body_products(dq[:n - 1])
+    half = _quat_mul(body[:-1], dq[n - 1:])
+    both = _quat_mul(np.concatenate([earth, earth_mid]),
+                     _quat_mul(q0, np.concatenate([body, half])))
+    f_e_both = _quat_rotate(both, np.concatenate([f_b, f_mid]))
+    q, f_e, f_e_mid = both[:n], f_e_both[:n], f_e_both[n:]
 
     position = np.empty((n, 3))
     velocity = np.empty((n, 3))

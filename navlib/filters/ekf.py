@@ -19,13 +19,15 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import _psd_sqrt, joseph_update
+from navlib.filters.kalman import _psd_sqrt, definite_noise, joseph_update
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
+    FixedDesign,
     Measurement,
     _epoch_index,
     _imu_arrays,
@@ -44,6 +46,7 @@ FAMILIES = tuple(_MODELS)
 (:func:`navlib.models.launcher`) and España's 21-state ECEF model
 (:func:`navlib.models.ecef21`)."""
 _AXES = ("x", "y", "z")
+_EYE3 = np.eye(3)
 
 
 def _error_model(model, t, solution, biases, bias_model, options, gnss_velocity_sigma,
@@ -343,27 +346,33 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
         names += meas.names
     events = {}            # IMU sample -> [(measurement, epoch)], in update order
     for meas in rows:
-        for i, k in enumerate(meas.index):
-            events.setdefault(int(k), []).append((meas, i))
+        for i, k in enumerate(meas.index.tolist()):
+            events.setdefault(k, []).append((meas, i))
     if not events:
         raise NavlibInputError("gnss: no measurements; give GNSS (or aiding) data")
     # windows: boundaries at update samples at least window_s apart (last sample closes)
     bounds = [0]
+    times = t.tolist()
     for k in sorted(events):
-        if k > bounds[-1] and t[k] - t[bounds[-1]] >= window_s - 1e-9:
+        if k > bounds[-1] and times[k] - times[bounds[-1]] >= window_s - 1e-9:
             bounds.append(k)
     if bounds[-1] != t.size - 1:
         bounds.append(t.size - 1)
     return _run(es, t, f_meas, w_meas, start, params, P, events, bounds,
                 "euler" if method == "euler" else "series", keep_covariance, rows, names,
-                _resume_point(t, f_meas, w_meas, bounds, events, snapshot_before, resume))
+                _resume_point(t, f_meas, w_meas, bounds, rows, snapshot_before, resume))
 
 
-def _resume_point(t, f_meas, w_meas, bounds, events, snapshot_before, resume):
+def _observers(measurements) -> set:
+    """The measurements with epochs that watch the filter's posterior."""
+    return {meas for meas in measurements if meas.wants_posterior and meas.index.size}
+
+
+def _resume_point(t, f_meas, w_meas, bounds, rows, snapshot_before, resume):
     """``(window to snapshot or None, snapshot to resume from or None)`` of :func:`ekf`."""
     if snapshot_before is None and resume is None:
         return None, None
-    if any(meas.wants_posterior for epoch in events.values() for meas, _ in epoch):
+    if _observers(rows):
         raise NavlibInputError("snapshot_before, resume: not with measurements that watch "
                                "the posterior (closed-loop reference trajectory)")
     window = None
@@ -388,10 +397,8 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     """The filter loop of :func:`ekf`: per window, nominal propagation, the error-state
     covariance along it, the updates, and feedback at the window end (from the window of
     a snapshot to resume, keeping one at another window, ``resume_point``)."""
-    from navlib import strapdown
-
     Qc = np.asarray(es.Qc, dtype=float)
-    observers = {meas for epoch in events.values() for meas, _ in epoch if meas.wants_posterior}
+    observers = _observers(rows)
     kept = np.flatnonzero(~es.reset)
     x = np.zeros(len(es.state_names))          # error-state mean (kept states persist)
     r, v, C = start
@@ -403,6 +410,8 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    resume.state[3].copy())
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
+    loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)), _Prediction(x.size))
+    clocks = strapdown._block_clocks(t, bounds)
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
             continue
@@ -411,42 +420,21 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    np.column_stack([f_meas, w_meas])[:w0 + 1],
                                    (x.copy(), (r, v, C), dict(params), P.copy()),
                                    {key: list(value) for key, value in out.items()})
-        tw = t[w0:w1 + 1]
-        dt = (tw - tw[0])[:, None]
-        par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
-        f_c, w_c = es.compensate(par, f_meas[w0:w1 + 1], w_meas[w0:w1 + 1])
-        nav = strapdown.integrate(tw, f_c, w_c, r, v, C)
-        nominal = Nominal(tw, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c,
-                          par)
+        nominal = _window_nominal(es, t[w0:w1 + 1], f_meas[w0:w1 + 1], w_meas[w0:w1 + 1],
+                                  (r, v, C), params, clocks[i])
         A, G = es.jacobians(nominal)
-        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(tw), method=method)
-        rec = []                               # (local index, dx, P, sigma, innovation, NIS, dof)
-        for j in range(tw.size):
-            k = w0 + j
-            if k in events and (j > 0 or k == 0):
-                x, P, innov, nis, dof = _update(x, P, events[k], nominal, j, rows, len(names))
-                rec.append((j, x.copy(), P.copy() if keep_covariance else None,
-                            np.sqrt(np.clip(np.diag(P), 0, None)), innov, nis, dof))
-                if observers:                  # posterior navigation attitude
-                    C_post = es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
-                    for meas in observers:
-                        meas.observe(C_post)
-            if j < tw.size - 1:
-                x_next = F[j] @ x
-                if kept.size:
-                    # the closed loop drives the kept (RT) states with the error of the
-                    # corrected navigation, x[reset] - x_hat[reset]: no mean drive from
-                    # the not-yet-fed-back estimate of the reset states
-                    x_next[kept] = F[j][np.ix_(kept, kept)] @ x[kept]
-                x = x_next
-                P = symmetrize(F[j] @ P @ F[j].T + Q[j])
+        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(nominal.t), method=method)
+        x, P, rec = loop.window(x, P, F, Q, w0, nominal)
+        end = None
         if rec:                                # corrected estimates at this window's updates
-            j_up, dx, *rest = map(np.array, zip(*rec, strict=True))
-            for key, value in zip(out, (es.correct(nominal.at(j_up), dx), dx[:, kept], *rest),
-                                  strict=True):
+            results = _records(rec, nominal, es, kept, keep_covariance, len(names))
+            for key, value in zip(out, results, strict=True):
                 out[key].append(value)
-        end = es.correct(nominal.at(slice(-1, None)), x[None])     # feedback at the window end
-        r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]
+            if rec[-1][0] == F.shape[0]:       # the last update is the window end's state
+                end = results[0].at(slice(-1, None))
+        if end is None:
+            end = es.correct(nominal.at(slice(-1, None)), x[None])
+        r, v, C = end.position[0], end.velocity[0], end.C_b_e[0]   # feedback at the window end
         params = {g: p[0] for g, p in end.parameters.items()}
         J = es.reset_jacobian(x)
         P = symmetrize(J @ P @ J.T)
@@ -468,24 +456,183 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
     )
 
 
-def _update(x, P, epoch, nominal, j, rows, m_all):
-    """Joseph update with the measurements of one epoch stacked; the innovation in the
-    model's measurement rows (NaN where not measured), NIS and its dof."""
-    parts = [meas.evaluate(i, nominal, j) for meas, i in epoch]
+def _window_nominal(es, t, f_meas, w_meas, state, params, clock) -> Nominal:
+    """The nominal state over one window from ``state`` ``(r, v, C)`` at its start: the
+    parameter estimates decayed along it, the IMU compensated with them and the strapdown
+    mechanisation (the loop's own states, so without :func:`navlib.strapdown.integrate`'s
+    input checks; ``clock``: the window's in ``strapdown._block_clocks``)."""
+    r, v, C = state
+    dt = (t - t[0])[:, None]
+    par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
+    f_c, w_c = es.compensate(par, f_meas, w_meas)
+    nav = strapdown._integrate(t, f_c, w_c, r, v, _as_quat(C), clock)
+    return Nominal(t, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c, par)
+
+
+class _Epochs:
+    """The update epochs of :func:`ekf` and what does not depend on the data.
+
+    Cached by the tuple of measurements updated together at an epoch: their rows in the
+    results and, when all have a fixed design
+    (:class:`~navlib.filters.measurements.FixedDesign`), their stacked ``H`` and ``R`` and
+    the definiteness of ``R`` (:func:`~navlib.filters.kalman.definite_noise`); the
+    innovations of fixed designs are evaluated once per window (:meth:`innovations`).
+
+    Attributes
+    ----------
+    at : dict
+        IMU sample -> ``(epoch, columns, fixed)``: the epoch's ``(measurement, index)``
+        pairs, their result rows and ``(H, R, definite)`` or None when one of them is not
+        a fixed design (or is updated twice at the epoch; it is then evaluated at the
+        update).
+    """
+
+    def __init__(self, events, rows, m_all):
+        self.rows, self.m_all = rows, m_all
+        designs, self.at = {}, {}
+        for k, epoch in events.items():
+            key = tuple(meas for meas, _ in epoch)
+            if key not in designs:
+                fixed = (all(isinstance(meas, FixedDesign) for meas in key)
+                         and len(set(key)) == len(key))
+                designs[key] = (np.concatenate([rows[meas] for meas in key]),
+                                _fixed_design(key) if fixed else None)
+            self.at[k] = (epoch, *designs[key])
+        self._fixed = {}                       # measurement -> (samples, epochs) by sample
+        for meas in rows:
+            if isinstance(meas, FixedDesign):
+                order = np.argsort(meas.index, kind="stable")
+                self._fixed[meas] = (meas.index[order], order)
+
+    def innovations(self, w0, nominal) -> np.ndarray:
+        """Innovations of the fixed-design measurements at the epochs of the window that
+        starts at sample ``w0`` (its samples after ``w0``, and ``w0`` for the first
+        window), (samples, m_all): row ``j`` for sample ``j`` of ``nominal``, in each
+        measurement's result rows (rows not measured left unset)."""
+        z = np.empty((nominal.t.size, self.m_all))
+        for meas, (samples, order) in self._fixed.items():
+            lo = np.searchsorted(samples, w0 + 1 if w0 else 0)
+            hi = np.searchsorted(samples, w0 + nominal.t.size - 1, side="right")
+            if hi > lo:
+                j = samples[lo:hi] - w0
+                z[j[:, None], self.rows[meas]] = meas.innovations(order[lo:hi], nominal, j)
+        return z
+
+
+def _fixed_design(measurements):
+    """``(H, R, definite)`` of fixed-design measurements stacked (:meth:`_Epochs.design`)."""
+    _, H, R = _stacked([(np.zeros(len(meas.names)), meas.H, meas.R) for meas in measurements])
+    return H, R, definite_noise(R)
+
+
+class _Prediction:
+    """Covariance prediction ``symmetrize(F P F' + Q)`` into work arrays (the operations of
+    :func:`navlib.covariance.symmetrize` without the per-step allocations); the two result
+    arrays take turns, so a prior is never written over the matrix it comes from."""
+
+    def __init__(self, n):
+        self.FP, self.M = np.empty((n, n)), np.empty((n, n))
+        self.results = (np.empty((n, n)), np.empty((n, n)))
+        self.turn = 0
+
+    def __call__(self, P, F, FT, Q):
+        np.matmul(F, P, out=self.FP)
+        np.matmul(self.FP, FT, out=self.M)
+        self.M += Q
+        self.turn = 1 - self.turn
+        P_next = self.results[self.turn]
+        np.add(self.M, self.M.T, out=P_next)
+        P_next *= 0.5
+        return P_next
+
+
+class _Loop:
+    """Updates and propagation sample by sample over the windows of :func:`_run`."""
+
+    def __init__(self, es, kept, observers, epochs, predict):
+        self.es, self.kept, self.observers = es, kept, observers
+        self.epochs, self.predict = epochs, predict
+
+    def window(self, x, P, F, Q, w0, nominal):
+        """``x``, ``P`` at the end of the window that starts at sample ``w0`` and the
+        records ``(j, x, P, innovation, columns, NIS, dof)`` of its updates."""
+        FT = np.swapaxes(F, 1, 2)
+        z_fixed = self.epochs.innovations(w0, nominal)
+        by_rows = {}                           # the innovations in the rows of each pattern
+        at = self.epochs.at
+        rec = []
+        for j in range(F.shape[0] + 1):
+            item = at.get(w0 + j) if j or not w0 else None
+            if item is not None:
+                epoch, cols, fixed = item
+                if fixed is not None:
+                    if id(cols) not in by_rows:
+                        by_rows[id(cols)] = z_fixed[:, cols]
+                    z, H, R, definite = by_rows[id(cols)][j], *fixed
+                else:
+                    z, H, R, definite = _evaluated(epoch, nominal, j)
+                x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
+                rec.append((j, x, P, innov, cols, nis, dof))
+                if self.observers:             # posterior navigation attitude
+                    C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
+                    for meas in self.observers:
+                        meas.observe(C_post)
+            if j < F.shape[0]:
+                Fj = F[j]
+                x_next = Fj @ x
+                if self.kept.size:
+                    # the closed loop drives the kept (RT) states with the error of the
+                    # corrected navigation, x[reset] - x_hat[reset]: no mean drive from
+                    # the not-yet-fed-back estimate of the reset states
+                    x_next[self.kept] = Fj[np.ix_(self.kept, self.kept)] @ x[self.kept]
+                x = x_next
+                P = self.predict(P, Fj, FT[j], Q[j])
+        return x, P, rec
+
+
+def _records(rec, nominal, es, kept, keep_covariance, m_all):
+    """The results of one window's updates, in the order of ``out`` in :func:`_run`:
+    corrected nominal, kept states, covariances (None when not kept), sigma, innovations
+    in the model's rows (NaN where not measured), NIS and its dof."""
+    j_up, dx, P, innov, cols, nis, dof = zip(*rec, strict=True)
+    dx, P = np.array(dx), np.array(P)
+    full = np.full((len(rec), m_all), np.nan)
+    groups = {}                                # updates with the same rows (cached arrays)
+    for u, c in enumerate(cols):
+        groups.setdefault(id(c), (c, []))[1].append(u)
+    for c, us in groups.values():
+        full[np.ix_(us, c)] = np.array([innov[u] for u in us])
+    sigma = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0, None))
+    return (es.correct(nominal.at(np.array(j_up)), dx), dx[:, kept],
+            P if keep_covariance else np.array([None] * len(rec)), sigma, full,
+            np.array(nis), np.array(dof))
+
+
+def _evaluated(epoch, nominal, j):
+    """``(z, H, R, None)`` of an epoch's measurements evaluated at sample ``j`` (the
+    definiteness of ``R`` left to the update)."""
+    return (*_stacked([meas.evaluate(i, nominal, j) for meas, i in epoch]), None)
+
+
+def _stacked(parts):
+    """``z``, ``H`` and block-diagonal ``R`` of the measurements of one epoch stacked."""
     if len(parts) == 1:
-        z, H, R = parts[0]
-    else:
-        z = np.concatenate([p[0] for p in parts])
-        H = np.concatenate([p[1] for p in parts])
-        R = np.zeros((z.size, z.size))
-        ends = np.cumsum([0] + [p[0].size for p in parts])
-        for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
-            R[a:b, a:b] = p[2]
+        return parts[0]
+    z = np.concatenate([p[0] for p in parts])
+    H = np.concatenate([p[1] for p in parts])
+    R = np.zeros((z.size, z.size))
+    ends = np.cumsum([0] + [p[0].size for p in parts])
+    for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
+        R[a:b, a:b] = p[2]
+    return z, H, R
+
+
+def _update(x, P, z, H, R, definite):
+    """Joseph update with the stacked measurements of one epoch (``definite``: of ``R``
+    when known); the posterior, the innovation, NIS and its dof."""
     innov = z - H @ x
-    P, gain = joseph_update(P, H, R)
-    full = np.full(m_all, np.nan)
-    full[np.concatenate([rows[meas] for meas, _ in epoch])] = innov
-    return x + gain.K @ innov, P, full, float(innov @ gain.S_pinv @ innov), int(gain.dof)
+    P, gain = joseph_update(P, H, R, definite=definite)
+    return x + gain.K @ innov, P, innov, float(innov @ gain.S_pinv @ innov), int(gain.dof)
 
 
 @dataclass(frozen=True, eq=False)
@@ -564,7 +711,6 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     EKFRun
     """
     from navlib import sensors as sensor_lib
-    from navlib import strapdown
     from navlib.outliers import inject
 
     outliers = as_outliers(outliers)
@@ -655,6 +801,10 @@ def _snapshot_to_resume(resume, outliers, clocks) -> EKFSnapshot | None:
 
 
 def _as_quat(C) -> np.ndarray:
+    """``Rotation.from_matrix(C).as_quat()`` of one attitude matrix, without scipy's
+    orthogonality check and projection when ``C`` is a rotation to 1e-13 (far inside
+    scipy's own tolerance, so scipy would not project it either: the same quaternion)."""
     from scipy.spatial.transform import Rotation
 
-    return Rotation.from_matrix(C).as_quat()
+    valid = bool(np.max(np.abs(C @ C.T - _EYE3)) < 1e-13 and np.linalg.det(C) > 0)
+    return Rotation.from_matrix(C, assume_valid=valid).as_quat()

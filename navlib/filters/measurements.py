@@ -6,7 +6,10 @@ attitude series).
 A measurement is built with the error model (:class:`navlib.models.base.ErrorStateModel`),
 whose ``measurements`` name the kinds it uses with their rows and sigma, and its data on the
 IMU clock (``index``: IMU sample of each epoch). The filter calls
-:meth:`Measurement.evaluate` at each epoch; a new measurement is one new subclass.
+:meth:`Measurement.evaluate` at each epoch; a new measurement is one new subclass. A
+:class:`FixedDesign` measurement (``H`` and ``R`` the same at every epoch: GNSS, attitude
+sensor) also gives the innovations of many epochs at once (:meth:`FixedDesign.innovations`),
+which the filter evaluates once per propagation window, where the nominal state is fixed.
 """
 
 from __future__ import annotations
@@ -75,7 +78,20 @@ class Measurement(ABC):
         ``nominal`` (:class:`navlib.models.base.Nominal`)."""
 
 
-class GnssPosition(Measurement):
+class FixedDesign(Measurement):
+    """A measurement whose ``H`` and ``R`` (:attr:`H`, :attr:`R`) do not depend on the epoch
+    or the nominal state; only the innovations do, given for many epochs at once."""
+
+    @abstractmethod
+    def innovations(self, i, nominal, j) -> np.ndarray:
+        """Innovations ``z`` (K, m) of epochs ``i`` (K,) at samples ``j`` (K,) of ``nominal``
+        (the same numbers as epoch by epoch)."""
+
+    def evaluate(self, i, nominal, j):
+        return self.innovations(np.array([i]), nominal, np.array([j]))[0], self.H, self.R
+
+
+class GnssPosition(FixedDesign):
     """ECEF GNSS position (m): ``z = nav_sign (r_gnss - r_hat)``, minus the nominal GNSS bias
     estimate when the model has one (``bp``: ``H = [I, I]``, Beaudoin et al. 2018 eq. 2)."""
 
@@ -86,14 +102,14 @@ class GnssPosition(Measurement):
         if "bp" in groups:
             self.H[:, groups["bp"]] = np.eye(3)
 
-    def evaluate(self, i, nominal, j):
+    def innovations(self, i, nominal, j):
         z = self.nav_sign * (self.values[i] - nominal.position[j])
         if "bp" in nominal.parameters:
             z = z - nominal.parameters["bp"][j]
-        return z, self.H, self.R
+        return z
 
 
-class GnssVelocity(Measurement):
+class GnssVelocity(FixedDesign):
     """ECEF GNSS velocity (m/s): ``z = nav_sign (v_gnss - v_hat)``, ``H = I`` on velocity."""
 
     kind = "gnss_vel"
@@ -101,8 +117,8 @@ class GnssVelocity(Measurement):
     def _design(self, groups):
         self.H[:, groups["velocity"]] = np.eye(3)
 
-    def evaluate(self, i, nominal, j):
-        return self.nav_sign * (self.values[i] - nominal.velocity[j]), self.H, self.R
+    def innovations(self, i, nominal, j):
+        return self.nav_sign * (self.values[i] - nominal.velocity[j])
 
 
 def _ecef_attitude_error(model, kind):
@@ -111,7 +127,7 @@ def _ecef_attitude_error(model, kind):
                                f"{model.name} model uses {model.attitude_frame!r}")
 
 
-class AttitudeSensor(Measurement):
+class AttitudeSensor(FixedDesign):
     """Body -> ECEF attitude sensor (Beaudoin et al. 2018 eq. 3): ``z = rotvec(C_att C_hat')``,
     ECEF axes, ``H = I`` on the attitude error ``psi``."""
 
@@ -124,8 +140,8 @@ class AttitudeSensor(Measurement):
     def _design(self, groups):
         self.H[:, groups["attitude"]] = np.eye(3)
 
-    def evaluate(self, i, nominal, j):
-        return log_so3(self.values[i] @ nominal.C_b_e[j].T), self.H, self.R
+    def innovations(self, i, nominal, j):
+        return log_so3(self.values[i] @ np.swapaxes(nominal.C_b_e[j], -1, -2))
 
 
 class ReferenceAttitude(Measurement):
