@@ -486,3 +486,12 @@ def test_ekf_takes_a_new_measurement_as_one_object(short_launcher):
                        rows=MeasurementRows(("vx", "vy", "vz"), 0.2))
     with pytest.raises(NavlibInputError, match="IMU sample"):
         filters.ekf(imu, gnss, initial=init, model=es, measurements=[bad])
+
+
+def test_a_diverged_ekf_state_is_a_clear_error():
+    from navlib.filters.ekf import _window_nominal
+
+    t = np.arange(3) * 0.01
+    state = (np.array([np.nan, 0.0, 0.0]), np.zeros(3), np.eye(3))
+    with pytest.raises(NavlibInputError, match=r"diverged.*t = 0\.000 s"):
+        _window_nominal(None, t, np.zeros((3, 3)), np.zeros((3, 3)), state, {}, None)

@@ -462,6 +462,10 @@ def _window_nominal(es, t, f_meas, w_meas, state, params, clock) -> Nominal:
     mechanisation (the loop's own states, so without :func:`navlib.strapdown.integrate`'s
     input checks; ``clock``: the window's in ``strapdown._block_clocks``)."""
     r, v, C = state
+    if not (np.isfinite(r).all() and np.isfinite(v).all() and np.isfinite(C).all()):
+        raise NavlibInputError(f"ekf: the filter diverged: its navigation state is not finite "
+                               f"at t = {t[0]:.3f} s (check the sensors and the initial "
+                               "covariance)")
     dt = (t - t[0])[:, None]
     par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
     f_c, w_c = es.compensate(par, f_meas, w_meas)
