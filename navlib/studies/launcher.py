@@ -964,17 +964,26 @@ which every "GPS improves / barely improves" ratio is read. Quick mode: the base
 _EVO_CACHE: dict = {}
 
 
+def evolution_grid(quick: bool = False) -> dict[float, pd.DataFrame]:
+    """:func:`covariance_evolution` at each initial attitude sigma of :data:`EVOLUTION_GRID`
+    (deg -> table; quick mode: the baseline only), from one stacked recursion per case.
+
+    The claims engine judges the evolution claims on these tables; notebook 02 shows them,
+    and their tables are kept in the disk cache, so a report computes them once.
+    """
+    from navlib.models.launcher import ASSUMED
+
+    base = float(np.degrees(ASSUMED["sigma0_att"]))
+    values = (base,) if quick else EVOLUTION_GRID["sigma0_att_deg"]
+    kws = [{} if np.isclose(v, base) else {"sigma0_att": np.radians(v)} for v in values]
+    return dict(zip(values, _evolution_tables(None, None, quick, kws), strict=True))
+
+
 def _evolution_variants(quick: bool) -> dict:
     if quick not in _EVO_CACHE:
         _EVO_CACHE.clear()
-        from navlib.models.launcher import ASSUMED
-
-        base = float(np.degrees(ASSUMED["sigma0_att"]))
-        values = (base,) if quick else EVOLUTION_GRID["sigma0_att_deg"]
-        kws = [{} if np.isclose(v, base) else {"sigma0_att": np.radians(v)} for v in values]
-        tables = _evolution_tables(None, None, quick, kws)
         _EVO_CACHE[quick] = {v: evolution_claims(table)
-                             for v, table in zip(values, tables, strict=True)}
+                             for v, table in evolution_grid(quick).items()}
     return _EVO_CACHE[quick]
 
 
