@@ -395,10 +395,13 @@ def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path, monkeyp
 
 
 def test_kernel_environment_shares_the_cores(monkeypatch):
-    for name in reports.BLAS_THREAD_VARIABLES:
+    for name in (*reports.BLAS_THREAD_VARIABLES, *reports.MALLOC_VARIABLES):
         monkeypatch.delenv(name, raising=False)
     monkeypatch.setattr(reports, "available_cpus", lambda: 4)
-    assert reports.kernel_environment(2) == dict.fromkeys(reports.BLAS_THREAD_VARIABLES, "2")
+    assert reports.kernel_environment(2) == {
+        **dict.fromkeys(reports.BLAS_THREAD_VARIABLES, "2"), **reports.MALLOC_VARIABLES}
+    monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "0")
+    assert "MALLOC_TRIM_THRESHOLD_" not in reports.kernel_environment(2)
     assert reports.kernel_environment(8)["OMP_NUM_THREADS"] == "1"
     assert reports.kernel_environment(1, cache=False)["NAVLIB_NO_CACHE"] == "1"
     monkeypatch.setenv("OMP_NUM_THREADS", "3")  # the user's own setting is kept
