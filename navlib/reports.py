@@ -271,15 +271,19 @@ def list_notebooks(notebooks_dir) -> list[NotebookInfo]:
     return infos
 
 
+def _matching(entry, available: Sequence[NotebookInfo]) -> list[str]:
+    """Names of the notebooks an ``--only`` entry selects (stem, ``NN`` prefix, file name
+    or path)."""
+    key = Path(str(entry)).name.removesuffix(".ipynb")
+    return [nb.name for nb in available
+            if nb.name == key or (key.isdigit() and int(nb.name[:2]) == int(key))]
+
+
 def _dependencies(info: NotebookInfo, selected: Sequence[NotebookInfo]) -> set[str]:
     """The notebooks of ``selected`` that ``info`` starts after (its ``after`` entries
-    matched as ``--only`` matches them; entries matching none are ignored)."""
-    names = set()
-    for entry in info.after:
-        key = Path(entry).name.removesuffix(".ipynb")
-        names.update(nb.name for nb in selected if nb.name != info.name and (
-            nb.name == key or (key.isdigit() and int(nb.name[:2]) == int(key))))
-    return names
+    matched as ``--only`` entries; entries matching none are ignored)."""
+    return {name for entry in info.after for name in _matching(entry, selected)
+            if name != info.name}
 
 
 def select_notebooks(available: Sequence[NotebookInfo],
@@ -293,9 +297,7 @@ def select_notebooks(available: Sequence[NotebookInfo],
     only = [only] if isinstance(only, str) else list(only)
     wanted: set[str] = set()
     for entry in only:
-        key = Path(str(entry)).name.removesuffix(".ipynb")
-        hits = [nb.name for nb in available
-                if nb.name == key or (key.isdigit() and int(nb.name[:2]) == int(key))]
+        hits = _matching(entry, available)
         if not hits:
             names = ", ".join(nb.name for nb in available) or "(none)"
             raise NavlibInputError(
@@ -433,8 +435,8 @@ come from the heap and freed memory up to 1 GiB stays there, so the next array o
 recursion or a study reuses it instead of a fresh ``mmap`` whose pages fault in again (the
 default returns every array above 32 MB to the system). On the 2-core reference machine a
 page fault of a fresh array cost about 0.2 ms: notebook 05 spent 33 of its 108 s in the
-kernel (system time) by default and 10 of 82 s with these (peak 1.67 -> 1.77 GB). Other
-C libraries ignore them."""
+kernel (system time) by default and 10 of 82 s with these, for about 0.2 GB more peak
+memory (1.98 GB in the report kernel). Other C libraries ignore them."""
 
 
 def available_cpus() -> int:
