@@ -669,8 +669,8 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
         trajectory = launcher_ascent(duration_s=80.0, rate_hz=20.0) if quick \
             else launcher_ascent()
     cases = EVOLUTION_CASES if cases is None else dict(cases)
-    # each variant's table is also kept on disk (navlib.cache): notebook 02's baseline is
-    # the claims engine's, which then runs the recursions of its other variants only
+    # each variant's table is also kept on disk (navlib.cache): the claims engine reads
+    # the tables notebook 02 computed (evolution_grid), a variant missing there is built
     kept = cache.Scope(__name__, "covariance_evolution", trajectory, cases)
     tables = dict(enumerate(kept.get(kw) for kw in model_kws))
     todo = [i for i, (found, _) in tables.items() if not found]
