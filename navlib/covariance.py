@@ -207,12 +207,32 @@ class FactoredNoise:
     def __init__(self, L):
         self.L = np.asarray(L, dtype=float)
 
-    def __len__(self) -> int:
-        return self.L.shape[0]
-
     def __getitem__(self, steps: slice) -> np.ndarray:
         L = self.L[steps]
         return L @ L.swapaxes(-1, -2)
+
+
+class Prediction:
+    """Covariance prediction ``symmetrize(F P F' + Q)`` into work arrays: the operations of
+    :func:`symmetrize` without allocations per step, for one matrix or a stack of ``shape``
+    (F and Q one matrix). The two result arrays take turns, so a prior is never written
+    over the matrix it comes from; a caller keeping a result past the next call copies it.
+    Used by :func:`_recursion` and the EKF (:mod:`navlib.filters.ekf`)."""
+
+    def __init__(self, shape):
+        self.FP, self.M = np.empty(shape), np.empty(shape)
+        self.results = (np.empty(shape), np.empty(shape))
+        self.turn = 0
+
+    def __call__(self, P, F, FT, Q):
+        np.matmul(F, P, out=self.FP)
+        np.matmul(self.FP, FT, out=self.M)
+        self.M += Q
+        self.turn = 1 - self.turn
+        P_next = self.results[self.turn]
+        np.add(self.M, self.M.swapaxes(-1, -2), out=P_next)
+        P_next *= 0.5
+        return P_next
 
 
 def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
@@ -248,13 +268,14 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
         S_pinv = np.zeros((batch, count, m, m))
         dof = np.zeros((batch, count), dtype=int)
     P = P0[0] if batch == 1 else P0         # one member: plain matrices, fewer broadcasts
+    predict = Prediction(P.shape)
     for a in range(0, count, block):
         b, q0 = min(count, a + block), max(a - 1, 0)
         Q_block = Q[q0:b - 1]                # the steps into this block's epochs
         for k in range(a, b):
             if k:
                 F_k = F[k - 1]
-                P = symmetrize(F_k @ P @ F_k.swapaxes(-1, -2) + Q_block[k - 1 - q0])
+                P = predict(P, F_k, F_k.swapaxes(-1, -2), Q_block[k - 1 - q0])
             if priors:
                 P_prior[:, k] = P
             if update is not None and update[k]:

@@ -21,7 +21,7 @@ import pandas as pd
 
 from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
-from navlib.covariance import symmetrize
+from navlib.covariance import Prediction, symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import _psd_sqrt, definite_noise, joseph_update
@@ -410,7 +410,8 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    resume.state[3].copy())
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
-    loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)), _Prediction(x.size))
+    loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)),
+                 Prediction((x.size, x.size)))
     clocks = strapdown._block_clocks(t, bounds)
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
@@ -527,27 +528,6 @@ def _fixed_design(measurements):
     """``(H, R, definite)`` of fixed-design measurements stacked (:meth:`_Epochs.design`)."""
     _, H, R = _stacked([(np.zeros(len(meas.names)), meas.H, meas.R) for meas in measurements])
     return H, R, definite_noise(R)
-
-
-class _Prediction:
-    """Covariance prediction ``symmetrize(F P F' + Q)`` into work arrays (the operations of
-    :func:`navlib.covariance.symmetrize` without the per-step allocations); the two result
-    arrays take turns, so a prior is never written over the matrix it comes from."""
-
-    def __init__(self, n):
-        self.FP, self.M = np.empty((n, n)), np.empty((n, n))
-        self.results = (np.empty((n, n)), np.empty((n, n)))
-        self.turn = 0
-
-    def __call__(self, P, F, FT, Q):
-        np.matmul(F, P, out=self.FP)
-        np.matmul(self.FP, FT, out=self.M)
-        self.M += Q
-        self.turn = 1 - self.turn
-        P_next = self.results[self.turn]
-        np.add(self.M, self.M.T, out=P_next)
-        P_next *= 0.5
-        return P_next
 
 
 class _Loop:
