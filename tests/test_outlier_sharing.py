@@ -107,6 +107,22 @@ def test_compact_preparation_is_the_same_filter(flight, solution):
     np.testing.assert_array_equal(a.nees, b.nees)
 
 
+@pytest.mark.parametrize("update_every", [1, 3])
+def test_recursion_gains_are_those_of_the_priors(flight, update_every):
+    """The gains prepare_linear keeps from its covariance recursion are kalman_gains of the
+    recorded priors, to the bit (S^+ at the update epochs: elsewhere it is not kept)."""
+    from navlib.filters import kalman_gains
+
+    model = launcher("ins_gps_att_rt", "GAP", "markov", flight)   # singular R: pseudo-inverse
+    full = prepare_linear(model, update_every=update_every)
+    want = kalman_gains(full.covariance.P_prior, full.steps.H, full.steps.R, full.measured)
+    np.testing.assert_array_equal(full.gains.K, want.K)
+    np.testing.assert_array_equal(full.gains.dof, want.dof)
+    measured = full.measured
+    np.testing.assert_array_equal(full.gains.S_pinv[measured], want.S_pinv[measured])
+    assert not full.gains.S_pinv[~measured].any()
+
+
 def test_simulation_without_nees(prepared):
     sim = simulate_linear(prepared, runs=2, seed=0, nees=False)
     assert sim.nees is None and sim.nees_dof is None
