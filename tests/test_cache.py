@@ -326,3 +326,28 @@ def test_covariance_evolution_variants_are_read_back_bitwise(cache_on, monkeypat
         fresh = study._evolution_tables(traj, cases, False, kws)
     for got, want in zip([*both, baseline], [*fresh, fresh[1]], strict=True):
         pd.testing.assert_frame_equal(got, want, check_exact=True)
+
+
+def test_claims_reading_of_a_sensitivity_variant_prepares_no_filter(cache_on, monkeypatch):
+    """Notebook 05's sensitivity variant keeps the T4 divergence response it does not
+    report, so the claims engine's study of the same model (notebook 00, a1_sign = -1,
+    divergence reported) reads everything from the disk."""
+    from navlib.studies import outliers as study
+
+    traj = launcher_ascent(duration_s=20.0, rate_hz=20.0)
+    options = dict(time=8.0, window=5.0)
+    study.assumption_sensitivity({"text's A1": {"a1_sign": -1.0}}, traj, **options)
+
+    def no_preparation(*args, **kwargs):
+        raise AssertionError("a filter was prepared")
+
+    with monkeypatch.context() as m:
+        m.setattr(study, "prepare_linear", no_preparation)
+        st, _ = study.study_claims(study.FilterCache(traj, a1_sign=-1.0), shapes=("spike",),
+                                   **options)
+    assert ("T4", "ins_gps_att_rt", "divergence") in st.responses
+    monkeypatch.setenv(cache.ENV_OFF, "1")
+    fresh, _ = study.study_claims(study.FilterCache(traj, a1_sign=-1.0), shapes=("spike",),
+                                  **options)
+    for key, response in fresh.responses.items():
+        np.testing.assert_array_equal(st.responses[key].induced, response.induced)
