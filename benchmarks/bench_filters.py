@@ -7,6 +7,12 @@
   the launcher mission (150 s at 200 Hz, INS/GPS/att + RT with G, A, P Markov biases: 28
   states, 12 measurements at every sample), from building the error model to the last run:
   discretisation, the shared covariance recursion and gains, the 100 runs. Goal 30 s.
+* ``filters.linear_runs_prepared`` and ``filters.linear_unit_responses``: the simulation
+  alone, on a filter already prepared (notebook 05, issue 14): the ``nominal`` cell's 100
+  runs of INS/GPS/att (GAP Markov biases, 18 states, 9 measurements at every 200 Hz
+  sample, 30001 epochs, ``a1_sign=+1``) and the noise-free unit responses of that filter to
+  the paper's outliers (T2-T4 spike and step, from 50 s). Goals 0.93 s and 0.16 s: half the
+  1.85 s and 0.31 s of the step-by-step loop before issue 14 (2 cores, load 0.5).
 
 * ``filters.ekf_outlier_study``: the closed-loop EKF runs of notebook 05 (issue 14): the
   launcher error-state EKF at every 200 Hz sample with 0.1 s feedback windows, GAP Markov
@@ -81,6 +87,27 @@ def _linear_mc():
     return filters.simulate_linear(model, runs=100, seed=0)
 
 
+@cache
+def _outlier_filter():
+    from navlib.studies import outliers as ostudy
+
+    cache = ostudy.FilterCache(_launcher(), size=1, a1_sign=1.0)
+    return cache.get("ins_gps_att", "GAP", "markov")
+
+
+def _linear_runs_prepared():
+    return filters.simulate_linear(_outlier_filter(), runs=100, seed=0)
+
+
+def _linear_unit_responses():
+    from navlib.filters.linear import unit_responses
+    from navlib.outliers import PAPER_TESTS
+
+    units = [test.outlier(shape) for test in PAPER_TESTS.values()
+             for shape in ("spike", "step") if "ins_gps_att" in test.solutions]
+    return unit_responses(_outlier_filter(), units)
+
+
 def cases() -> list[Case]:
     out = [
         Case("filters.ekf_rocket", "86 s @ 100 Hz, 21 states, 1 Hz GNSS", _ekf_rocket, 1.0),
@@ -88,5 +115,9 @@ def cases() -> list[Case]:
              _ekf_outlier_study, 11.7, repeat=1, warmup=False),
         Case("filters.linear_mc_launcher", "100 runs x 30001 steps, 28 states", _linear_mc,
              30.0, repeat=1, warmup=False),
+        Case("filters.linear_runs_prepared", "100 runs x 30001 steps, 18 states",
+             _linear_runs_prepared, 0.93),
+        Case("filters.linear_unit_responses", "4 responses x 20001 steps, 18 states",
+             _linear_unit_responses, 0.16),
     ]
     return out

@@ -20,6 +20,7 @@ IMU outliers enter as a known input on the matching noise channel,
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -143,7 +144,8 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
             F = A * dt[:, None, None]
             F += np.eye(n)                   # in place: the same sums as eye + A dt
             Gamma = G * dt[:, None, None]
-            L = (G @ _psd_sqrt(Qc)) * np.sqrt(dt)[:, None, None]
+            L = G @ _psd_sqrt(Qc)
+            L *= np.sqrt(dt)[:, None, None]  # in place: one (N-1, n, q) array, not two
             Q = FactoredNoise(L)[:] if with_q else None
         else:
             F, Q = discretize_steps(A, G, Qc, dt, method="series")
@@ -665,44 +667,216 @@ def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, app
     )
 
 
+_CHUNK = 256
+"""Steps per block of :func:`_recursion`: its noise is drawn a block at a time (this fixes
+the random stream), and the block's truth, measurements and NIS are formed together."""
+
+
 def _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot, out):
     """Steps ``k0 ..`` of :func:`_simulate`, writing into ``out`` (truth, estimate and
-    innovation at the recorded epochs, NIS at the updates)."""
-    truth_rec, est_rec, innov_rec, nis = out
-    steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
-    F, L, H, R = steps.F, steps.L, steps.H, steps.R
-    N, runs, m, q = steps.t.size, x.shape[0], H.shape[-2], L.shape[-1]
-    noise = rng is not None
-    R_sqrt = _psd_sqrt(R[:1]) if np.all(R == R[:1]) else _psd_sqrt(R)
-    const_R = R_sqrt.shape[0] == 1
-    chunk = 256
-    K_all, S_pinv = gains.K, gains.S_pinv
-    for c0 in range(0, N, chunk):
-        c1 = min(N, c0 + chunk)
-        if noise:
-            xi = rng.standard_normal((c1 - c0, runs, q))
-            nu_noise = rng.standard_normal((c1 - c0, runs, m))
-        for k in range(max(c0, k0), c1):
-            if mask[k]:
-                Hk = H[k]
-                z = x @ Hk.T + z_add[k]
-                if noise:
-                    z += nu_noise[k - c0] @ (R_sqrt[0] if const_R else R_sqrt[k]).T
-                innov = z - x_hat @ Hk.T
-                x_hat = x_hat + innov @ K_all[k].T
-                nis[upd_slot[k]] = np.sum((innov @ S_pinv[k]) * innov, axis=1)
-                if slot[k] >= 0:
-                    innov_rec[slot[k]] = innov
-            if slot[k] >= 0:
-                truth_rec[slot[k]] = x
-                est_rec[slot[k]] = x_hat
-            if k < N - 1:
-                Fk = F[k].T
-                x = x @ Fk
-                if noise:
-                    x += xi[k - c0] @ L[k].T
-                if x_input is not None:
-                    x += x_input[k]
-                x_hat = x_hat @ Fk
+    innovation at the recorded epochs, NIS at the updates).
+
+    A block of :data:`_CHUNK` steps at a time: the true errors first (they do not depend on
+    the estimate), then their measurements and noise in batched products, then the filter
+    step by step, then the NIS and the recorded epochs in batched products. Every product
+    and sum is the one a step-by-step loop forms (the same operands, one step's
+    ``(R, n) @ (n, n)`` product per slice, the same order of additions), into preallocated
+    work arrays: the numbers are those of the plain loop, to the bit (issue 14).
+    """
+    steps = prepared.steps
+    runs, m = x.shape[0], steps.H.shape[-2]
+    N = steps.t.size
+    R_sqrt = _psd_sqrt(steps.R[:1]) if np.all(steps.R == steps.R[:1]) else _psd_sqrt(steps.R)
+    work = _Work.of(runs, steps.n, m)
+    current = (x, x_hat)
+    blocks = _noise_blocks(rng, N, (runs, steps.L.shape[-1]), (runs, m))
+    for c0, draws in zip(range(0, N, _CHUNK), blocks, strict=True):
+        c1 = min(N, c0 + _CHUNK)
+        if c1 > k0:
+            block = _Block(c0, max(c0, k0), c1, N)
+            np.copyto(work.truth[block.j0], current[0])
+            np.copyto(work.prior[block.j0], current[1])
+            _truth_block(steps, block, work, draws, x_input)
+            meas = _measure_block(prepared, block, work, draws, z_add, R_sqrt)
+            _filter_block(prepared, block, work, meas)
+            _record_block(prepared, block, work, meas, slot, upd_slot, out)
+            current = (work.truth[c1 - c0], work.prior[c1 - c0])
         if progress is not None:
             progress(c1, N)
+
+
+def _noise_blocks(rng, N: int, shape_w, shape_v):
+    """The noise draws ``(xi, nu)``, ``(c, *shape_w)`` and ``(c, *shape_v)``, of each block
+    of :func:`_recursion` (None for each without ``rng``).
+
+    Drawn in the order of the plain loop (``xi`` then ``nu`` of each block, so the random
+    stream is the same), into two alternating pairs of arrays, the next block on a worker
+    thread while the caller runs the current one (``Generator.standard_normal`` releases
+    the GIL while it fills; the draws of a 100-run batch cost about as much as its
+    filter). No more is drawn than the blocks need.
+    """
+    starts = range(0, N, _CHUNK)
+    if rng is None:
+        yield from (None for _ in starts)
+        return
+    pairs = [(np.empty((_CHUNK, *shape_w)), np.empty((_CHUNK, *shape_v))) for _ in range(2)]
+
+    def draw(i: int):
+        size = min(N, starts[i] + _CHUNK) - starts[i]
+        xi, nu = (a[:size] for a in pairs[i % 2])
+        rng.standard_normal(out=xi)
+        rng.standard_normal(out=nu)
+        return xi, nu
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending = pool.submit(draw, 0)
+        for i in range(len(starts)):
+            draws = pending.result()
+            if i + 1 < len(starts):
+                pending = pool.submit(draw, i + 1)
+            yield draws
+
+
+@dataclass(frozen=True)
+class _Work:
+    """Work arrays of :func:`_recursion`, by step of a block: ``truth`` and ``prior``
+    (estimate before the update) one step longer than the block, ``post`` (estimate after
+    an update) and ``noise`` (the process noise over the step); ``z``, ``innov`` and
+    ``product`` (a measurement noise or ``innov S^+``) by update of the block; ``hx`` and
+    ``gain_step`` for one step."""
+
+    truth: np.ndarray
+    prior: np.ndarray
+    post: np.ndarray
+    noise: np.ndarray
+    z: np.ndarray
+    innov: np.ndarray
+    product: np.ndarray
+    hx: np.ndarray
+    gain_step: np.ndarray
+
+    @classmethod
+    def of(cls, runs: int, n: int, m: int) -> _Work:
+        states, measured = (_CHUNK, runs, n), (_CHUNK, runs, m)
+        return cls(np.empty((_CHUNK + 1, runs, n)), np.empty((_CHUNK + 1, runs, n)),
+                   np.empty(states), np.empty(states), np.empty(measured),
+                   np.empty(measured), np.empty(measured), np.empty((runs, m)),
+                   np.empty((runs, n)))
+
+
+@dataclass(frozen=True)
+class _Block:
+    """Steps ``k0 .. k1-1`` of the block starting at ``c0`` (work index ``j = k - c0``),
+    of ``N`` in all; ``j0``, ``j1`` their work indices and ``moves`` the steps that
+    propagate (all but the last of the run)."""
+
+    c0: int
+    k0: int
+    k1: int
+    N: int
+
+    @property
+    def j0(self) -> int:
+        return self.k0 - self.c0
+
+    @property
+    def j1(self) -> int:
+        return self.k1 - self.c0
+
+    @property
+    def moves(self) -> slice:
+        return slice(self.k0, min(self.k1, self.N - 1))
+
+
+def _rows(index: np.ndarray):
+    """``index`` (ascending) as a slice when it is evenly spaced (a view instead of a
+    copy), else itself."""
+    if index.size < 2:
+        return slice(int(index[0]), int(index[0]) + 1) if index.size else index
+    step = int(index[1] - index[0])
+    if step > 0 and np.all(np.diff(index) == step):
+        return slice(int(index[0]), int(index[-1]) + 1, step)
+    return index
+
+
+def _truth_block(steps: LinearSteps, block: _Block, work: _Work, draws, x_input) -> None:
+    """True errors ``x_{k+1} = x_k F_k' (+ xi_k L_k') (+ u_k)`` of a block, into
+    ``work.truth`` (``work.truth[j0]`` holds ``x_{k0}``)."""
+    moves = block.moves
+    FT = steps.F[moves].swapaxes(-1, -2)
+    j0, x = block.j0, work.truth
+    noise = None
+    if draws is not None:
+        noise = np.matmul(draws[0][j0:j0 + FT.shape[0]], steps.L[moves].swapaxes(-1, -2),
+                          out=work.noise[:FT.shape[0]])
+    for i in range(FT.shape[0]):
+        j = j0 + i
+        np.dot(x[j], FT[i], out=x[j + 1])
+        if noise is not None:
+            np.add(x[j + 1], noise[i], out=x[j + 1])
+        if x_input is not None:
+            np.add(x[j + 1], x_input[moves.start + i], out=x[j + 1])
+
+
+def _measure_block(prepared: LinearFilter, block: _Block, work: _Work, draws, z_add,
+                   R_sqrt) -> np.ndarray:
+    """Measurements ``z_k = x_k H_k' + z_add_k (+ nu_k R_k^(1/2)')`` at the block's
+    updates, into ``work.z`` (one row per update); returns the updates' work indices."""
+    steps = prepared.steps
+    meas = np.flatnonzero(prepared.measured[block.k0:block.k1]) + block.j0
+    if meas.size:
+        z, k, j = work.z[:meas.size], _rows(meas + block.c0), _rows(meas)
+        np.matmul(work.truth[j], steps.H[k].swapaxes(-1, -2), out=z)
+        add = z_add[k]
+        np.add(z, add[:, None, :] if add.ndim == 2 else add, out=z)
+        if draws is not None:
+            Rs = R_sqrt[0].T if R_sqrt.shape[0] == 1 else R_sqrt[k].swapaxes(-1, -2)
+            np.add(z, np.matmul(draws[1][j], Rs, out=work.product[:meas.size]), out=z)
+    return meas
+
+
+def _filter_block(prepared: LinearFilter, block: _Block, work: _Work, meas) -> None:
+    """The filter over a block: at an update ``x^+ = x^- + (z - x^- H') K'``, then
+    ``x^-_{k+1} = x^+ F'`` (``work.prior[j0]`` holds the prior at ``k0``)."""
+    steps = prepared.steps
+    j0, j1 = block.j0, block.j1
+    update = np.full(j1 - j0, -1)
+    update[meas - j0] = np.arange(meas.size)
+    moves = block.moves
+    HT = steps.H[block.k0:block.k1].swapaxes(-1, -2)
+    KT = prepared.gains.K[block.k0:block.k1].swapaxes(-1, -2)
+    FT = steps.F[moves].swapaxes(-1, -2)
+    last = moves.stop - block.c0
+    prior, post, innov, z = work.prior, work.post, work.innov, work.z
+    hx, gain_step = work.hx, work.gain_step
+    for i, p in enumerate(update.tolist()):
+        j = j0 + i
+        estimate = prior[j]
+        if p >= 0:
+            np.dot(estimate, HT[i], out=hx)
+            np.subtract(z[p], hx, out=innov[p])
+            np.dot(innov[p], KT[i], out=gain_step)
+            estimate = np.add(estimate, gain_step, out=post[j])
+        if j < last:
+            np.dot(estimate, FT[i], out=prior[j + 1])
+
+
+def _record_block(prepared: LinearFilter, block: _Block, work: _Work, meas, slot, upd_slot,
+                  out) -> None:
+    """NIS ``(z - x^- H') S^+ (z - x^- H')'`` at the block's updates and the recorded
+    truth, estimate and innovation of the block into ``out``."""
+    truth_rec, est_rec, innov_rec, nis = out
+    c0 = block.c0
+    if meas.size:
+        innov = work.innov[:meas.size]
+        weighted = np.matmul(innov, prepared.gains.S_pinv[_rows(meas + c0)],
+                             out=work.product[:meas.size])
+        nis[_rows(upd_slot[meas + c0])] = np.sum(np.multiply(weighted, innov, out=weighted),
+                                                 axis=2)
+        kept = slot[meas + c0] >= 0
+        innov_rec[_rows(slot[meas[kept] + c0])] = innov[_rows(np.flatnonzero(kept))]
+    rec = np.flatnonzero(slot[block.k0:block.k1] >= 0) + block.j0
+    truth_rec[_rows(slot[rec + c0])] = work.truth[_rows(rec)]
+    updated = prepared.measured[rec + c0]
+    for pick, source in ((updated, work.post), (~updated, work.prior)):
+        est_rec[_rows(slot[rec[pick] + c0])] = source[_rows(rec[pick])]
