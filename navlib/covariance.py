@@ -236,7 +236,7 @@ class Prediction:
 
 
 def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
-               gains: bool = False, block: int = 2048):
+               gains: bool = False, block: int = 2048, keep=None):
     """The Joseph-form recursion of :func:`kalman_covariance` for a stack of initial
     covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``.
 
@@ -248,7 +248,9 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     a :class:`FactoredNoise`).
 
     Returns ``(P_prior, P_post, Gains)``: ``P_prior`` (B, N, n, n) or None without
-    ``priors``, ``P_post`` (B, N, n, n), and with ``gains`` the
+    ``priors``, ``P_post`` (B, N, n, n), or (B, K, n, n) at the K epochs ``keep`` (indices in
+    ascending order, negative ones from the end: a reader of a few epochs holds no
+    history), and with ``gains`` the
     :class:`~navlib.filters.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
     ``S_pinv`` and dof at epochs without update), else None. These are the gains
     :func:`navlib.filters.kalman.kalman_gains` computes from the priors, to the bit.
@@ -261,7 +263,11 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
         r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
         update = measured.tolist()
     P_prior = np.empty((batch, count, n, n)) if priors else None
-    P_post = np.empty((batch, count, n, n))
+    kept = range(count) if keep is None else np.asarray(keep, dtype=int) % max(count, 1)
+    slot = np.full(count, -1)
+    slot[kept] = np.arange(len(kept))
+    slot = slot.tolist()
+    P_post = np.empty((batch, len(kept), n, n))
     if gains:
         m = 0 if H is None else H.shape[-2]
         K = np.zeros((batch, count, n, m))
@@ -283,7 +289,8 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
                                         definite=r_definite[k])
                 if gains:
                     K[:, k], S_pinv[:, k], dof[:, k] = gain.K, gain.S_pinv, gain.dof
-            P_post[:, k] = P
+            if slot[k] >= 0:
+                P_post[:, slot[k]] = P
     return P_prior, P_post, (Gains(K, S_pinv, dof) if gains else None)
 
 

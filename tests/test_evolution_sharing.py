@@ -29,3 +29,25 @@ def test_evolution_claims_unchanged_quick():
     direct = study.evolution_claims(study.covariance_evolution(quick=True))
     assert [(c.claim_id, c.verdict, c.ours) for c in claims] == \
         [(c.claim_id, c.verdict, c.ours) for c in direct]
+
+
+def test_rows_equal_those_of_the_full_public_recursion():
+    """The evolution keeps the posteriors of the first and the last epoch only, with Q
+    formed a block at a time: its rows equal those read off the whole histories of
+    :func:`navlib.covariance.kalman_covariances`, to the bit, for each aiding."""
+    from navlib.covariance import kalman_covariances
+    from navlib.filters import linear_steps
+    from navlib.models.launcher import launcher
+
+    traj = launcher_ascent(duration_s=20.0, rate_hz=10.0)
+    C_e_b = np.swapaxes(traj.attitude.as_matrix(), 1, 2)
+    steps = linear_steps(launcher("ins_gps_att", "GAP", "markov", traj))
+    P0s = [steps.P0, 4.0 * steps.P0]
+    for aiding in ("kf", "ins_only", "ideal"):
+        case = ("case", "ins_gps_att", "GAP", "markov", aiding, 1.0)
+        H, R = (None, None) if aiding == "ins_only" else \
+            (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
+        covs = kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t)
+        want = [study._evolution_row(*case, steps.state_names, cov.P_post[[0, -1]], C_e_b)
+                for cov in covs]
+        assert study._evolution_rows(case, steps, P0s, C_e_b) == want

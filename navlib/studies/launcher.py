@@ -703,7 +703,8 @@ def _evolution_build(trajectory, cases, model_kws) -> list[pd.DataFrame]:
         if key not in steps_cache:
             steps_cache.clear()
             config = (solution, biases, bias_model)
-            steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra))
+            steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra),
+                                 with_q=False)
             steps_cache[key] = (steps, [steps.P0, *(
                 _variant_P0(config, trajectory, {**kw, **extra}) for kw in model_kws[1:])])
         case = (name, solution, biases, bias_model, aiding, factor)
@@ -726,24 +727,32 @@ def _variant_P0(config: tuple, trajectory, model_kw: dict) -> np.ndarray:
 
 def _evolution_rows(case: tuple, steps, P0s, C_e_b) -> list[dict]:
     """The rows of one case (name, solution, biases, bias model, aiding, gyro factor) for
-    every initial covariance of ``P0s``, from one stacked recursion (its histories are
-    released on return)."""
-    from navlib.covariance import kalman_covariances
+    every initial covariance of ``P0s``, from one stacked recursion.
+
+    The recursion of :func:`navlib.covariance.kalman_covariances` (an update at every epoch,
+    epoch 0 included, the default pseudo-inverse cut-off) with ``Q = L L'`` formed a block at
+    a time, keeping the posteriors of the first and the last epoch only, the two a row
+    reads: the same numbers, to the bit, without the (B, N, n, n) histories.
+    """
+    from navlib.covariance import FactoredNoise, _recursion, symmetrize
+    from navlib.filters.kalman import _PINV_RTOL
 
     aiding = case[4]
     H, R = (None, None) if aiding == "ins_only" else \
         (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
-    covs = kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t,
-                              state_names=steps.state_names)
-    return [_evolution_row(*case, cov, C_e_b) for cov in covs]
+    measured = np.full(steps.t.size, H is not None)
+    _, ends, _ = _recursion(steps.F, FactoredNoise(steps.L), H, R, symmetrize(np.stack(P0s)),
+                            measured, _PINV_RTOL, priors=False, keep=[0, -1])
+    return [_evolution_row(*case, steps.state_names, P, C_e_b) for P in ends]
 
 
-def _evolution_row(name, solution, biases, bias_model, aiding, factor, cov, C_e_b) -> dict:
-    """One row of :func:`covariance_evolution` from the case's covariance history."""
+def _evolution_row(name, solution, biases, bias_model, aiding, factor, state_names, ends,
+                   C_e_b) -> dict:
+    """One row of :func:`covariance_evolution` from the case's posterior covariances at
+    the first and the last epoch, ``ends`` (2, n, n)."""
     from navlib.covariance import sigma_in_frame
 
-    names = list(cov.state_names)
-    ends = cov.P_post[[0, -1]]  # the row reads the first and the last epoch only
+    names = list(state_names)
     psi = [names.index(f"psi_{a}") for a in "xyz"]
     att = sigma_in_frame(ends, psi, C_e_b[[0, -1]])
     row = {"case": name, "solution": solution, "biases": biases, "bias_model": bias_model,
