@@ -248,8 +248,8 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     a :class:`FactoredNoise`).
 
     Returns ``(P_prior, P_post, Gains)``: ``P_prior`` (B, N, n, n) or None without
-    ``priors``, ``P_post`` (B, N, n, n), or (B, K, n, n) at the K epochs ``keep`` (indices in
-    ascending order, negative ones from the end: a reader of a few epochs holds no
+    ``priors``, ``P_post`` (B, N, n, n), or (B, K, n, n) at the K distinct epochs ``keep``
+    in ascending order (negative indices from the end: a reader of a few epochs holds no
     history), and with ``gains`` the
     :class:`~navlib.filters.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
     ``S_pinv`` and dof at epochs without update), else None. These are the gains
@@ -263,7 +263,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
         r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
         update = measured.tolist()
     P_prior = np.empty((batch, count, n, n)) if priors else None
-    kept = range(count) if keep is None else np.asarray(keep, dtype=int) % max(count, 1)
+    kept = range(count) if keep is None else np.unique(np.asarray(keep, dtype=int) % max(count, 1))
     slot = np.full(count, -1)
     slot[kept] = np.arange(len(kept))
     slot = slot.tolist()
