@@ -659,10 +659,10 @@ def covariance_evolution(trajectory=None, cases=None, *, quick: bool = False,
 
 def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.DataFrame]:
     """:func:`covariance_evolution` for several ``model_kw`` that differ only in the initial
-    sigmas (``sigma0_*``, which enter P0 alone): the per-step F, Q, H, R of each case are
+    sigmas (``sigma0_*``, which enter P0 alone): the per-step F, L, H, R of each case are
     built once and every variant's recursion runs in one stacked recursion over the
-    variants' P0 (:func:`navlib.covariance.kalman_covariances`, the same numbers as one
-    recursion per variant)."""
+    variants' P0 (the recursion of :func:`navlib.covariance.kalman_covariances`, the same
+    numbers as one recursion per variant; :func:`_evolution_rows`)."""
     from navlib.trajectory import launcher_ascent
 
     if trajectory is None:

@@ -460,7 +460,7 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 window: float = DEFAULTS["window"], record_every: int | None = None,
                 cache: FilterCache | None = None, divergence: bool = True,
                 time: float | None = None, reuse: OutlierStudy | None = None,
-                keep_divergence: bool = False, **model_options) -> OutlierStudy:
+                **model_options) -> OutlierStudy:
     """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
 
     Parameters
@@ -477,13 +477,11 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
     record_every : int, optional
         Default: keep epochs about 20 ms apart.
     divergence : bool
-        Also compute the T4 launcher-divergence response (Fig. 13).
-    keep_divergence : bool
-        Without ``divergence``: still compute that response, in the recursion of the other
-        responses of its filter, and keep it in ``cache`` (and the disk cache) without
-        reporting it, for a later study of the same model that reports it (the claims
-        engine's ``a1_sign = -1`` reading after :func:`assumption_sensitivity`), which
-        then prepares no filter.
+        Also report the T4 launcher-divergence response (Fig. 13). It is computed either
+        way, in the recursion of the other responses of its filter, and kept in ``cache``
+        (and the disk cache): a later study of the same model that reports it (the claims
+        engine's ``a1_sign = -1`` reading after :func:`assumption_sensitivity`) then
+        prepares no filter.
     time : float, optional
         Outlier time, s (default the paper's 50 s).
     reuse : OutlierStudy, optional
@@ -526,7 +524,7 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
     for sol, tids in jobs.items():
         requests = [(PAPER_TESTS[tid].outlier(shape, time=time), PAPER_TESTS[tid].watch)
                     for tid in tids for shape in shapes if (tid, sol, shape) not in same]
-        if "T4" in tids and sol == "ins_gps_att_rt" and (divergence or keep_divergence):
+        if "T4" in tids and sol == "ins_gps_att_rt":
             requests.append((PAPER_TESTS["T4"].outlier("spike", time=time), "ref_roll"))
         if requests:              # one recursion for all of this filter's responses
             cache.unit_responses(sol, requests, biases=biases,
@@ -1047,7 +1045,7 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
         for other in pool:
             _adopt(variant_cache, other)
         st = paper_tests(cache=variant_cache, shapes=("spike",), tests=tests, window=window,
-                         time=time, divergence=False, keep_divergence=True, **study_kw, **kw)
+                         time=time, divergence=False, **study_kw, **kw)
         variant_cache.release()
         pool = [*pool[:1 if cache is not None else 0], variant_cache]
         claim = {c.claim_id: c.verdict for c in st.claims}
