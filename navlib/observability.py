@@ -30,6 +30,7 @@ import pandas as pd
 
 from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
+from navlib.resolution import relative_resolution
 
 VARIANTS = ("time_varying", "frozen")
 
@@ -102,11 +103,6 @@ def observability_matrix(F, H, n_rows: int | None = None) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # analysis of one matrix
 # --------------------------------------------------------------------------------------------
-def _default_rtol(shape) -> float:
-    """numpy.linalg.matrix_rank's default: max(M, N) * eps, relative to sigma_max."""
-    return max(shape) * np.finfo(float).eps
-
-
 def _condition(s: np.ndarray, n: int) -> np.ndarray:
     """2-norm condition number sigma_max / sigma_min over the last axis (inf when singular).
 
@@ -252,7 +248,7 @@ def _state_names(state_names, n: int) -> tuple:
 
 def _rtol(rtol, shape) -> float:
     if rtol is None:
-        return _default_rtol(shape)
+        return relative_resolution(shape)
     return finite_scalar(rtol, "rtol", low=0.0, high=1.0)
 
 
@@ -691,7 +687,7 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
             f"window: {window} block rows need at least {window + 1} epochs for variant "
             f"{variant!r}; the model has {n_epochs}"
         )
-    tol = rtol if rtol is not None else _default_rtol((window * m, n))
+    tol = rtol if rtol is not None else relative_resolution((window * m, n))
     tol = finite_scalar(tol, "rtol", low=0.0, high=1.0)
     steps = np.arange(0, n_eval, stride)
     if _sliding(variant, stride, window, m, n):  # whole blocks of the sliding window

@@ -1,11 +1,12 @@
 """Compare :func:`navlib.studies.all_claims` with its stored reference (or write one).
 
-The reference ``tests/data/claims_reference.csv`` holds, per claim of the studies below, the
-strings the notebooks show: ``claim_id, ours, verdict, basis, robustness, checks``
-(robustness as ``repr`` of the float, so it compares exactly). It was written at the commit
-before the shared-build changes of issue 14 (``--write``); a full-mode comparison takes
-about a minute, too long for the test suite, which checks the shared-build paths against
-the unshared ones on reduced sets instead (tests/test_claims_sharing.py)::
+The reference ``tests/regression/data/claims_reference.csv`` holds, per claim of the studies
+below, the strings the notebooks show: ``claim_id, ours, verdict, basis, robustness, checks``
+(robustness as ``repr`` of the float). It was written at the commit before the robustness
+sets shared their builds (``--write``); a full-mode comparison takes about a minute, too
+long for the test suite, which compares quick mode (tests/regression/test_claims_golden.py)
+and checks the shared-build paths against the unshared ones on reduced sets
+(tests/test_claims_sharing.py)::
 
     python scripts/claims_reference.py            # compare, exit 1 on any difference
     python scripts/claims_reference.py --write    # (re)write the reference
@@ -20,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
+DATA = Path(__file__).resolve().parents[1] / "tests" / "regression" / "data"
 STUDIES = ("rocket", "covariance", "ssac")
 """The studies whose robustness sets share builds (issue 14)."""
 FIELDS = ("claim_id", "ours", "verdict", "basis", "robustness", "checks")
@@ -55,15 +56,12 @@ def write_rows(path: Path, rows: list[dict]) -> None:
 
 
 def differences(reference: list[dict], current: list[dict]) -> list[str]:
-    """One line per claim or field that differs (empty: identical tables)."""
-    ref = {r["claim_id"]: r for r in reference}
-    cur = {r["claim_id"]: r for r in current}
-    out = [f"{k}: missing" for k in ref if k not in cur]
-    out += [f"{k}: not in the reference" for k in cur if k not in ref]
-    for k in ref.keys() & cur.keys():
-        out += [f"{k}.{f}: {ref[k][f]!r} -> {cur[k][f]!r}" for f in FIELDS
-                if ref[k][f] != cur[k][f]]
-    return sorted(out)
+    """One line per claim or field that differs: words exactly, numbers to one unit of their
+    last printed digit (``tests/regression/golden.py``; empty: the same tables)."""
+    sys.path.insert(0, str(DATA.parent))
+    from golden import rows_differences
+
+    return rows_differences(current, reference, key="claim_id")
 
 
 def main(argv: list[str]) -> int:

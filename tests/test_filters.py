@@ -300,68 +300,6 @@ def test_noise_free_response_matches_a_hand_recursion(short_launcher):
     assert prepared.nees_basis(resp.index) is prepared.nees_basis(resp.index)
 
 
-# Final navigation errors (pos_x..z m, vel_x..z m/s, att_x..z rad) and mean NIS of simulated
-# EKF runs, captured from commit ef4a730 (the filter before it moved onto the error-state
-# protocol and the measurement classes, issue 10, with the attitude-reset covariance Jacobian
-# of that commit): the refactor must not move the numbers (18 configurations were compared
-# bitwise equal). Change them only with a deliberate change of the filter, and say why.
-_EKF_SNAPSHOT = {
-    "launcher att_rt GAP markov": (
-        dict(solution="ins_gps_att_rt", biases="GAP", seed=1),
-        [0.33751374325947836, -0.391440880484879, -1.0047765327617526, -0.0062639306863800925,
-         0.014306494809616765, 0.039649500524859604, 8.190922756225869e-06,
-         -1.1593769741030629e-05, -2.198413269555753e-05], 11.950601325173567),
-    "launcher GAP random walk": (
-        dict(solution="ins_gps", biases="GAP", bias_model="random_walk", seed=3),
-        [1.1045492415432818, 1.6486932220868766, -0.4236349733546376, -0.006794521069305226,
-         -0.014815713058645485, 0.015168274440000573, 0.0004954818483836951,
-         0.0002808729102583675, -0.0010955993353470748], 6.301059605029233),
-    "launcher att_rt outliers": (
-        dict(solution="ins_gps_att_rt", biases="GA", seed=7,
-             outliers=[Outlier("gyro_x", 5.0, 0.01), Outlier("att_y", 8.0, 0.05)]),
-        [0.23915161297190934, -0.16458232747390866, -0.030917230993509293,
-         0.04910277946702912, 0.031041229050835284, -0.006003366158083168,
-         1.8141760386393568e-05, 0.0001651832421403004, -0.00026851554404214287],
-        12.290861164397821),
-    "ecef21": (
-        dict(model="ecef21", sensors="motionpak_tactical", seed=1,
-             model_options={"sensors": "motionpak_tactical"}),
-        [-0.04844780173152685, -0.46478814259171486, 0.8383820111630484,
-         -0.015623651292116847, -0.03605669366334041, 0.046900878338249186,
-         0.22401245040419232, -0.08953890954304045, -0.034688536752755614], 2.927279428381619),
-    "ecef21 body attitude": (
-        dict(model="ecef21", sensors="motionpak_tactical", seed=2,
-             model_options={"sensors": "motionpak_tactical", "attitude_error": "body"}),
-        [2.6929621398448944, -1.362143391277641, 0.8676653756992891, 0.1629895890894204,
-         -0.07431464022488399, 0.011767158239052833, 0.0018196698200303775,
-         -0.0010626856780364396, -0.0005840536425840392], 2.747767367785697),
-    "ecef21 GNSS velocity": (
-        dict(model="ecef21", sensors="motionpak_tactical", seed=3, gnss_velocity_sigma=0.2,
-             model_options={"sensors": "motionpak_tactical"}),
-        [0.49899641424417496, -0.33237233897671103, -0.7107805780833587, 0.05270739669435898,
-         -0.008843363575465446, 0.003962551095497702, 0.0914776763211603,
-         -0.03432303955514515, -0.014926301793450584], 4.060955823918659),
-}
-
-
-@pytest.mark.parametrize("case", list(_EKF_SNAPSHOT))
-def test_ekf_numbers_unchanged(case, short_launcher, rocket):
-    """Regression: the EKF's final errors and mean NIS equal those of the pre-protocol
-    filter to 1e-9 relative (launcher solutions with Markov / random-walk biases, the RT
-    closed loop, outliers; ecef21 with ECEF and body attitude errors, GNSS velocity)."""
-    kw, final, nis = _EKF_SNAPSHOT[case]
-    trajectory = rocket if kw.get("model") == "ecef21" else short_launcher
-    extra = {} if kw.get("model") == "ecef21" else {"gnss_rate_hz": 20.0}
-    run = filters.simulate_ekf(trajectory, **kw, **extra)
-    cols = [f"{g}_{a}" for g in ("pos", "vel", "att") for a in "xyz"]
-    got = run.errors[cols].to_numpy()[-1]
-    final = np.array(final)
-    for group in (slice(0, 3), slice(3, 6), slice(6, 9)):
-        np.testing.assert_allclose(got[group], final[group], rtol=0,
-                                   atol=1e-9 * np.abs(final[group]).max())
-    assert np.mean(run.result.nis) == pytest.approx(nis, rel=1e-9)
-
-
 def test_launcher_error_state_is_the_builder_model(short_launcher):
     """The launcher's error-state model has the builder's states, noise, P0 and measurement
     rows, and its Jacobians along a trajectory are the builder's A and G; the layout finds

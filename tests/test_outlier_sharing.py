@@ -4,6 +4,7 @@ kept responses and covariance summaries, and the EKF run resumed from a snapshot
 
 import numpy as np
 import pytest
+from paths import assert_same_numbers
 
 from navlib import NavlibInputError
 from navlib.filters import linear, prepare_linear, simulate_ekf, simulate_linear
@@ -37,7 +38,7 @@ def test_scaled_unit_response_equals_a_direct_run(prepared, outlier):
     for name in ("truth", "estimate"):
         np.testing.assert_allclose(outlier.magnitude * getattr(unit, name),
                                    getattr(direct, name), rtol=0, atol=1e-12 * scale)
-    np.testing.assert_array_equal(unit.P, direct.P)
+    assert_same_numbers(unit.P, direct.P, "P")
     assert unit.applied == direct.applied == (True,)
 
 
@@ -68,7 +69,7 @@ def test_study_response_is_the_scaled_unit_response(flight):
     truth, est, sigma = direct.project(rows)
     np.testing.assert_allclose(r.induced, (est - truth)[:, 0], rtol=0,
                                atol=1e-12 * np.abs(r.induced).max())
-    np.testing.assert_array_equal(r.sigma, sigma)
+    assert_same_numbers(r.sigma, sigma, "sigma")
     np.testing.assert_array_equal(r.t, direct.t)
 
 
@@ -93,33 +94,33 @@ def test_compact_preparation_is_the_same_filter(flight, solution):
     full = prepare_linear(model)
     compact = prepare_linear(model, compact=True)
     assert compact.covariance.P_prior is None and compact.steps.Q is None
-    np.testing.assert_array_equal(compact.covariance.P_post, full.covariance.P_post)
+    assert_same_numbers(compact.covariance.P_post, full.covariance.P_post, "P_post")
     for name in ("K", "S_pinv", "dof"):
-        np.testing.assert_array_equal(getattr(compact.gains, name),
-                                      getattr(full.gains, name))
+        assert_same_numbers(getattr(compact.gains, name), getattr(full.gains, name), name)
     for block in (7, 800):            # 801 epochs: a last block of one epoch
         cov, gains = linear._blockwise_covariance(full.steps, full.measured, block=block)
-        np.testing.assert_array_equal(cov.P_post, full.covariance.P_post)
-        np.testing.assert_array_equal(gains.K, full.gains.K)
+        assert_same_numbers(cov.P_post, full.covariance.P_post, f"P_post, block {block}")
+        assert_same_numbers(gains.K, full.gains.K, f"K, block {block}")
     a = simulate_linear(compact, runs=4, seed=2, outliers=Outlier("gyro_x", 10.0, 0.01))
     b = simulate_linear(full, runs=4, seed=2, outliers=Outlier("gyro_x", 10.0, 0.01))
-    np.testing.assert_array_equal(a.estimate, b.estimate)
-    np.testing.assert_array_equal(a.nees, b.nees)
+    assert_same_numbers(a.estimate, b.estimate, "estimate")
+    assert_same_numbers(a.nees, b.nees, "nees")
 
 
 @pytest.mark.parametrize("update_every", [1, 3])
 def test_recursion_gains_are_those_of_the_priors(flight, update_every):
     """The gains prepare_linear keeps from its covariance recursion are kalman_gains of the
-    recorded priors, to the bit (S^+ at the update epochs: elsewhere it is not kept)."""
+    recorded priors (S^+ at the update epochs: elsewhere it is not kept; two paths, compared
+    at ``paths.CROSS_PATH_RTOL``)."""
     from navlib.filters import kalman_gains
 
     model = launcher("ins_gps_att_rt", "GAP", "markov", flight)   # singular R: pseudo-inverse
     full = prepare_linear(model, update_every=update_every)
     want = kalman_gains(full.covariance.P_prior, full.steps.H, full.steps.R, full.measured)
-    np.testing.assert_array_equal(full.gains.K, want.K)
+    assert_same_numbers(full.gains.K, want.K, "K")
     np.testing.assert_array_equal(full.gains.dof, want.dof)
     measured = full.measured
-    np.testing.assert_array_equal(full.gains.S_pinv[measured], want.S_pinv[measured])
+    assert_same_numbers(full.gains.S_pinv[measured], want.S_pinv[measured], "S_pinv")
     assert not full.gains.S_pinv[~measured].any()
 
 

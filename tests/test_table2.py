@@ -198,7 +198,7 @@ def test_figure_builders_and_panel(result, short_ascent):
     plt.close("all")
 
 
-REFERENCE_5HZ = Path(__file__).parent / "data" / "table2_counts_5hz.csv"
+REFERENCE_5HZ = Path(__file__).parent / "regression" / "data" / "table2_counts_5hz.csv"
 """Unobservable counts, match counts and claim verdicts (at each tolerance) of Table 2 on the
 full ascent at stride 40 (5 Hz), the claims engine's grid before it moved to every step."""
 

@@ -36,6 +36,7 @@ from navlib.errors import NavlibInputError
 from navlib.models.base import LinearModel
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, STATES_15, ssac
 from navlib.observability import analyze, observability_matrix
+from navlib.resolution import format_resolved, relative_resolution
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim, claims_frame, not_evaluated
 
@@ -168,8 +169,10 @@ def observability_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M
                         rtol: float = RANK_RTOL) -> pd.DataFrame:
     """Rank of O for the 15-, 12- and 10-state models next to the paper's (ssac.md §3.1).
 
-    Columns: ``n_states, rank, n_unobservable, paper_rank, match, sigma_last`` (smallest
-    singular value counted), ``sigma_next`` (the first one below the tolerance),
+    Columns: ``n_states, rank, n_unobservable, paper_rank, match, sigma_max, sigma_last``
+    (smallest singular value counted), ``sigma_next`` (the first one below the tolerance),
+    ``resolution`` (relative numerical resolution of O's singular values,
+    :func:`navlib.resolution.relative_resolution`),
     ``rank_abs_1e-3`` (the rank an absolute 1e-3 tolerance would give), ``null_residual``
     (largest ``|O v| / (|O| |v|)`` over the analytic vectors) and ``null_angle_deg``
     (largest principal angle between the numerical null space and the analytic vectors).
@@ -188,11 +191,33 @@ def observability_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M
         rows.append({
             "n_states": n, "rank": res.rank, "n_unobservable": res.n_unobservable,
             "paper_rank": PAPER_RANKS[n], "match": res.rank == PAPER_RANKS[n],
-            "sigma_last": s[res.rank - 1], "sigma_next": s[res.rank] if res.rank < s.size
-            else 0.0, "rank_abs_1e-3": int(np.sum(s > 1e-3)),
+            "sigma_max": s[0], "sigma_last": s[res.rank - 1],
+            "sigma_next": s[res.rank] if res.rank < s.size else 0.0,
+            "resolution": relative_resolution(O.shape), "rank_abs_1e-3": int(np.sum(s > 1e-3)),
             "null_residual": float(residual.max()), "null_angle_deg": float(angle),
         })
     return pd.DataFrame(rows)
+
+
+def observability_summary(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
+                          rtol: float = RANK_RTOL) -> pd.DataFrame:
+    """:func:`observability_table` as a report shows it: ``sigma_next`` and
+    ``null_residual`` below the numerical resolution of O, and ``null_angle_deg`` below the
+    angle that resolution allows (Wedin's bound), printed as a bound ("< 1e-14 of the
+    largest"), not as round-off digits (:mod:`navlib.resolution`)."""
+    table = observability_table(lat_deg, alt_m, rtol)
+    shown = table.drop(columns=["sigma_max", "resolution"])
+    shown["sigma_next"] = [format_resolved(r.sigma_next, r.sigma_max, r.resolution, ".2g")
+                           for r in table.itertuples()]
+    shown["null_residual"] = [format_resolved(r.null_residual, 1.0, r.resolution, ".2g",
+                                              of="|O| |v|") for r in table.itertuples()]
+    # Wedin: a perturbation of relative size `resolution` tilts the null space by up to
+    # resolution * sigma_max / sigma_last radians
+    shown["null_angle_deg"] = [
+        format_resolved(r.null_angle_deg, 1.0, np.degrees(r.resolution * r.sigma_max
+                                                          / r.sigma_last), ".2g", of=None)
+        for r in table.itertuples()]
+    return shown
 
 
 def null_space_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
@@ -678,7 +703,9 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
             f"SSAC-rank{n}", f"rank of O for the {n}-state ZVU model",
             f"rank {PAPER_RANKS[n]} ({paper_modes})",
             f"rank {row['rank']} ({row['n_unobservable']} modes); smallest kept sigma "
-            f"{row['sigma_last']:.2g}, next {row['sigma_next']:.1g}; an absolute 1e-3 "
+            f"{row['sigma_last']:.2g}, next "
+            f"{format_resolved(row['sigma_next'], row['sigma_max'], row['resolution'], '.1g')}"
+            f"; an absolute 1e-3 "
             f"tolerance would give {row['rank_abs_1e-3']}",
             [check("rank of O", int(row["rank"]), "==", PAPER_RANKS[n], True)],
             assumption=f"{assume_model}; relative rank tolerance {RANK_RTOL:g}"))

@@ -7,7 +7,7 @@ flattens every table, Markdown text and widget status the notebook shows into ro
 outlier study (:func:`navlib.studies.outliers._variants`: baseline and robustness set).
 Numbers are written with 17 significant digits, text as it is.
 
-``python tests/outlier_tables.py`` rewrites the reference files in ``tests/data/``
+``python tests/outlier_tables.py`` rewrites the reference files in ``tests/regression/data/``
 (only ever at a commit whose results are the reference).
 """
 
@@ -20,8 +20,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from golden import text_differences
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
 NOTEBOOK = ROOT / "notebooks" / "05_outlier_sensitivity.ipynb"
 COLUMNS = ["item", "row", "column", "value"]
@@ -97,26 +98,53 @@ def claim_values(quick: bool) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
-def differences(got: pd.DataFrame, want: pd.DataFrame, rtol: float = 1e-9) -> list[str]:
-    """Rows that differ: text exactly, numbers to ``rtol`` (also numbers inside text, e.g.
-    a claim's "retained 0.93": compared after formatting, so exactly)."""
-    out = []
-    if list(got[["item", "row", "column"]].itertuples(index=False)) != list(
-            want[["item", "row", "column"]].itertuples(index=False)):
+def _numbers(frame: pd.DataFrame) -> pd.Series:
+    return pd.to_numeric(frame.value, errors="coerce")
+
+
+def _scales(want: pd.DataFrame) -> np.ndarray:
+    """Per row: the largest |number| of its item and column in ``want`` (the scale a number
+    near zero is compared on)."""
+    numbers = _numbers(want).abs()
+    finite = numbers.where(np.isfinite(numbers))
+    return finite.groupby([want["item"], want["column"]]).transform("max").to_numpy()
+
+
+def _same_rows(got: pd.DataFrame, want: pd.DataFrame) -> bool:
+    return list(got[["item", "row", "column"]].itertuples(index=False)) == list(
+        want[["item", "row", "column"]].itertuples(index=False))
+
+
+def differences(got: pd.DataFrame, want: pd.DataFrame, rtol: float) -> list[str]:
+    """Rows that differ: numbers by more than ``rtol`` times the largest |number| of their
+    item and column, text with :func:`golden.text_differences` (words exactly, numbers in it
+    to their printed precision)."""
+    if not _same_rows(got, want):
         return ["the tables have different rows: "
                 f"{len(got)} now, {len(want)} in the reference"]
-    for g, w, key in zip(got.value, want.value,
-                         want[["item", "row", "column"]].itertuples(index=False), strict=True):
+    out = []
+    keys = want[["item", "row", "column"]].itertuples(index=False)
+    for g, w, scale, key in zip(got.value, want.value, _scales(want), keys, strict=True):
         try:
             a, b = float(g), float(w)
         except ValueError:
-            if g != w:
-                out.append(f"{tuple(key)}: {g!r} != {w!r}")
+            out += [f"{tuple(key)}: {d}" for d in text_differences(g, w)]
             continue
         if not (a == b or (math.isnan(a) and math.isnan(b))
-                or abs(a - b) <= rtol * max(abs(a), abs(b))):
+                or abs(a - b) <= rtol * max(abs(a), abs(b), scale)):
             out.append(f"{tuple(key)}: {a!r} != {b!r}")
     return out
+
+
+def spread(got: pd.DataFrame, want: pd.DataFrame) -> float:
+    """Largest relative distance of the numbers (on the scale of :func:`differences`); inf
+    when the rows or a text differ beyond its printed precision."""
+    if not _same_rows(got, want) or differences(got, want, rtol=math.inf):
+        return math.inf
+    a, b = _numbers(got).to_numpy(), _numbers(want).to_numpy()
+    scale = np.fmax(np.fmax(np.abs(a), np.abs(b)), _scales(want))
+    both = np.isfinite(a) & np.isfinite(b) & (scale > 0)
+    return float(np.max(np.abs(a - b)[both] / scale[both], initial=0.0))
 
 
 def reference(name: str) -> pd.DataFrame:
