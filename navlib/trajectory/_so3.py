@@ -28,14 +28,19 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import BSpline
-from scipy.linalg import solveh_banded
-from scipy.spatial.transform import Slerp
+from scipy.linalg import cho_solve_banded, cholesky_banded
+from scipy.spatial.transform import Rotation, Slerp
+from threadpoolctl import threadpool_limits
 
-from navlib.rotations import exp_so3, log_so3
+from navlib.strapdown import _quat_from_rotvec, _quat_mul, _quat_rotate
 
 _STEP = 1e-6
 """Rotation (rad) of the finite-difference Jacobian of the fit (its fixed point is exact:
 only the residuals decide where Gauss-Newton stops)."""
+_ONE_THREAD = 1
+"""BLAS threads of the banded Cholesky factorisation: with bandwidth 17 OpenBLAS's blocked
+code starts threads that only synchronise, and on the loaded 2-core machine one
+factorisation of a 4-minute record took 0.4-6 s instead of a few milliseconds."""
 
 
 def basis(x, knots, k, nu):
@@ -76,6 +81,21 @@ def _local(x, knots, k, order):
     return s, out
 
 
+def _qlog(q):
+    """Rotation vectors of unit quaternions (..., 4), scalar last (angle in [0, pi])."""
+    q = np.where(q[..., 3:] < 0.0, -q, q)
+    v = q[..., :3]
+    n = np.linalg.norm(v, axis=-1)
+    big = n > 1e-12
+    scale = np.where(big, 2.0 * np.arctan2(n, q[..., 3]) / np.where(big, n, 1.0),
+                     2.0 / q[..., 3])
+    return scale[..., None] * v
+
+
+def _qconj(q):
+    return q * np.array([-1.0, -1.0, -1.0, 1.0])
+
+
 class SO3Spline:
     """Cumulative B-spline ``C(t)`` on SO(3) of degree ``k`` (module docstring).
 
@@ -85,8 +105,9 @@ class SO3Spline:
         Clamped knot vector (end knots repeated ``k + 1`` times).
     k : int
         Degree (5: body rate C^3, angular acceleration C^2).
-    control : ndarray (m, 3, 3)
-        Control rotations, ``m = knots.size - k - 1``.
+    control : ndarray (m, 4)
+        Control rotations as unit quaternions (scalar last, scipy's order),
+        ``m = knots.size - k - 1``.
     """
 
     def __init__(self, knots, k, control):
@@ -98,34 +119,35 @@ class SO3Spline:
         """``d_i = log(C_{i-1}^T C_i)`` (m, 3), ``d_0 = 0``."""
         c = self.control if control is None else control
         d = np.zeros((c.shape[0], 3))
-        d[1:] = log_so3(np.swapaxes(c[:-1], -1, -2) @ c[1:])
+        d[1:] = _qlog(_quat_mul(_qconj(c[:-1]), c[1:]))
         return d
 
     def _chain(self, s, lam, control, dlam=None, d2lam=None):
         d = self.increments(control)
-        C = control[s]
+        q = control[s]
         w = np.zeros((s.size, 3)) if dlam is not None else None
         alpha = np.zeros((s.size, 3)) if d2lam is not None else None
         for j in range(self.k):
             dj = d[s + j + 1]
-            A = exp_so3(lam[:, j, None] * dj)
-            C = C @ A
+            A = _quat_from_rotvec(lam[:, j, None] * dj)
+            q = _quat_mul(q, A)
             if w is None:
                 continue
-            At = np.swapaxes(A, -1, -2)
+            At = _qconj(A)
             rate = dlam[:, j, None] * dj
-            w_turned = np.einsum("nij,nj->ni", At, w)
+            w_turned = _quat_rotate(At, w)
             if alpha is not None:
-                alpha = (np.einsum("nij,nj->ni", At, alpha) + np.cross(w_turned, rate)
+                alpha = (_quat_rotate(At, alpha) + np.cross(w_turned, rate)
                          + d2lam[:, j, None] * dj)
             w = w_turned + rate
-        return C, w, alpha
+        return q / np.linalg.norm(q, axis=1, keepdims=True), w, alpha
 
     def evaluate(self, t, order=1):
         """Attitude (N, 3, 3) and, for ``order`` >= 1, the body rate ``omega`` (N, 3) with
         ``dC/dt = C S(omega)``; for ``order`` = 2 also the angular acceleration (N, 3)."""
         s, lams = _local(np.asarray(t, dtype=float), self.knots, self.k, order)
-        C, w, alpha = self._chain(s, lams[0], self.control, *lams[1:])
+        q, w, alpha = self._chain(s, lams[0], self.control, *lams[1:])
+        C = Rotation.from_quat(q).as_matrix()
         return (C, *(v for v in (w, alpha) if v is not None))
 
     @classmethod
@@ -155,34 +177,35 @@ class SO3Spline:
         t = np.asarray(t, dtype=float)
         m = knots.size - k - 1
         greville = np.convolve(knots[1:-1], np.ones(k) / k, mode="valid")[:m]
-        control = Slerp(t, attitude)(np.clip(greville, t[0], t[-1])).as_matrix()
+        control = Slerp(t, attitude)(np.clip(greville, t[0], t[-1])).as_quat()
         spline = cls(knots, k, control)
         s, (lam,) = _local(t, knots, k, 0)
-        C_n = attitude.as_matrix()
+        q_n = attitude.as_quat()
 
         def residual(ctrl):
-            C, _, _ = spline._chain(s, lam, ctrl)
-            return log_so3(np.swapaxes(C, -1, -2) @ C_n)
+            q, _, _ = spline._chain(s, lam, ctrl)
+            return _qlog(_quat_mul(_qconj(q), q_n))
 
         r = residual(control)
         width = 3 * (k + 1)
         J = np.empty((t.size, 3, width))
         colour = np.arange(m) % (k + 1)
         offset = (np.arange(k + 1)[:, None] - s[None, :]) % (k + 1)   # (colour, sample)
+        rows = np.arange(t.size)
         for c in range(k + 1):
             chosen = colour == c
             for a in range(3):
                 step = np.zeros(3)
                 step[a] = _STEP
                 ctrl = control.copy()
-                ctrl[chosen] = ctrl[chosen] @ exp_so3(step)
-                col = 3 * offset[c] + a
-                J[np.arange(t.size), :, col] = (residual(ctrl) - r) / _STEP
-        ab = _banded_normal(J, s, 3 * m)
+                ctrl[chosen] = _quat_mul(ctrl[chosen], _quat_from_rotvec(step))
+                J[rows, :, 3 * offset[c] + a] = (residual(ctrl) - r) / _STEP
+        with threadpool_limits(_ONE_THREAD):
+            factor = cholesky_banded(_banded_normal(J, s, 3 * m))
         for _ in range(iterations):
             g = _gradient(J, r, s, 3 * m)
-            delta = -solveh_banded(ab, g).reshape(m, 3)
-            control = control @ exp_so3(delta)
+            delta = -cho_solve_banded((factor, False), g).reshape(m, 3)
+            control = _quat_mul(control, _quat_from_rotvec(delta))
             r = residual(control)
             if np.abs(delta).max() < 1e-12:
                 break
@@ -201,7 +224,7 @@ def _banded_normal(J, s, n):
     whose columns start at ``3 s``."""
     w = J.shape[2]
     first, s_u = _groups(s)
-    blocks = np.add.reduceat(np.einsum("nri,nrj->nij", J, J), first, axis=0)
+    blocks = np.add.reduceat(np.swapaxes(J, 1, 2) @ J, first, axis=0)
     ab = np.zeros((w, n))
     start = 3 * s_u
     for p in range(w):

@@ -9,17 +9,27 @@ the fitted position and attitude to the last digit of the integrator.
 
 Method (:func:`fit_flight_data`)
 --------------------------------
-1. **Initial attitude.** ``initial_attitude`` if given; else the autopilot's own attitude
-   when the reader attached it (``imu.attrs["attitude"]``: PX4 ``vehicle_attitude``,
-   ArduPilot ``ATT``; ``use_logged_attitude=True``), interpolated to the first sample;
-   else accelerometer levelling on the median specific force of the quietest rest window
-   of ``level_s`` (:func:`_quiet_window`: thresholds from the ``preset``'s white noise plus
-   ``vibration_allowance_mps2``; the first ``level_search_s`` seconds are preferred, and
-   the gyros carry a later window's attitude back to the start, so a record may start in
-   the air) plus a heading: ``heading_deg`` (azimuth of the body x axis) if given, else a
-   coarse closed-form estimate that turns the IMU specific force about the vertical onto
-   the GNSS-derived one (velocity differences when GNSS velocity is given, else second
-   differences of the positions, against IMU averages over the same windows).
+1. **Initial attitude** (docs/assumptions.md, "fit — levelling from a short pre-launch
+   window"), the first source that applies: the user's (``initial_attitude``, a body ->
+   ECEF rotation, or ``initial_attitude_deg=(yaw, pitch, roll)`` of the body against the
+   local NED frame); the autopilot's own attitude when the reader attached it
+   (``imu.attrs["attitude"]``: PX4 ``vehicle_attitude``, ArduPilot ``ATT``;
+   ``use_logged_attitude=True``), interpolated to the first sample (it carries a heading,
+   which levelling cannot); accelerometer levelling on the median specific force of the
+   quietest rest window of ``level_s`` (:func:`_quiet_window`: thresholds from the
+   ``preset``'s white noise plus ``vibration_allowance_mps2``; the first
+   ``level_search_s`` seconds are preferred, and the gyros carry a later window's attitude
+   back to the start, so a record may start in the air), or failing that of the shortest
+   window that levels to ``level_tilt_deg`` with the preset's noise (:func:`min_level_s`:
+   0.1 s at 100 Hz for a MEMS IMU, so the 0.3 s an AltOS log keeps before boost will do);
+   the body-x elevation from the logger's tilt (``imu.attrs["tilt"]``, AltOS); the
+   launch-rail elevation ``launch_elevation_deg``. Levelling, tilt and rail leave the
+   heading free: ``heading_deg`` or ``launch_azimuth_deg`` (azimuth of the body x axis) if
+   given, else a coarse closed-form estimate that turns the IMU specific force about the
+   vertical onto the GNSS-derived one (velocity differences when GNSS velocity is given,
+   else second differences of the positions, against IMU averages over the same
+   windows); tilt and rail take the body y axis horizontal (roll 0). The source is
+   recorded in the residuals (``initial_attitude_source``, ``initial_attitude_note``).
 2. **Attitude history.** The gyros are integrated with
    :func:`navlib.strapdown.body_attitude` (the fourth-order attitude chain of
    :func:`navlib.strapdown.integrate`, with Earth rate), giving ``C_b_e`` at every sample.
@@ -80,7 +90,9 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   IMU minus the fitted trajectory's exact IMU, with their maxima
   ``specific_force_max_mps2`` and ``angular_rate_max_rad_s`` (norms);
 * ``heading_deg`` (body-x azimuth at the start) and ``heading_source``
-  (``keyword``, ``initial_attitude``, ``log`` or ``estimated``); ``n_imu``, ``n_gnss``,
+  (``keyword``, ``initial_attitude``, ``log`` or ``estimated``);
+  ``initial_attitude_source`` (``user``, ``log``, ``level``, ``tilt`` or ``rail``) and
+  ``initial_attitude_note`` (the same in words, for reports); ``n_imu``, ``n_gnss``,
   ``n_knots``, ``imu_rate_hz``;
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
@@ -142,6 +154,7 @@ GNSS_VELOCITY_COLUMNS = ("vx", "vy", "vz")
 _K = 5                      # quintic splines: C^4 position, C^2 specific force
 _MIN_GNSS = 4
 _MIN_IMU = 20
+_VERTICAL_SIN2 = np.sin(1.0 * DEG) ** 2   # body x within 1 deg of the vertical below this
 _MIN_HORIZONTAL_F = 0.3     # m/s^2, RMS needed to estimate the heading
 _HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
 SAMPLES_PER_KNOT = 2
@@ -154,6 +167,10 @@ MAX_TURN_PER_KNOT_RAD = 1.5
 """Largest rotation of the body within one knot interval of the attitude spline, rad: its
 control rotations then differ by well under pi (the cumulative spline's increments are
 principal logarithms) and a tumble or fast spin gets denser knots."""
+ATTITUDE_SAMPLES_PER_KNOT = 6
+"""About this many attitude samples per knot interval enter the attitude spline's fit (every
+n-th of a denser interval): the samples are integrated gyro readings, smooth at that scale,
+and the Gauss-Newton cost grows with their number (a 250 Hz record has 25 per 0.1 s)."""
 MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
@@ -292,6 +309,20 @@ def _knots(t, spacing, turn=None):
     return np.r_[np.full(_K + 1, t0), keep, np.full(_K + 1, t1)]
 
 
+def _thin(t, knots, per_interval):
+    """Indices of the samples kept for a fit on ``knots``: in each knot interval with ``c``
+    samples, every ``max(1, c // per_interval)``-th one (the first and last sample always)."""
+    inner = knots[_K + 1:-_K - 1]
+    interval = np.searchsorted(inner, t, side="right")
+    first = np.searchsorted(interval, np.arange(inner.size + 1), side="left")
+    count = np.diff(np.r_[first, t.size])
+    stride = np.maximum(count // per_interval, 1)
+    pos = np.arange(t.size) - first[interval]
+    keep = pos % stride[interval] == 0
+    keep[[0, -1]] = True
+    return np.flatnonzero(keep)
+
+
 def _basis(x, knots, nu):
     """Sparse (N, m) matrix of the ``nu``-th derivatives of the quintic B-spline basis."""
     return basis(x, knots, _K, nu)
@@ -308,30 +339,20 @@ def _banded(N):
 
 # --- attitude ----------------------------------------------------------------------------
 
-def _level(f_b, gamma_e, C_n_e, heading):
-    """Body -> ECEF attitude from the mean specific force at rest and a body-x azimuth.
+def _level(f_b, gamma_e, C_n_e):
+    """Body -> ECEF attitude from the mean specific force at rest, heading still free.
 
-    TRIAD with the down direction exact: ``-f/|f|`` maps onto ``gamma/|gamma|``; the body x
-    axis is then placed at azimuth ``heading`` in the geodetic NED frame ``C_n_e`` (normal
-    gravity and the ellipsoid normal differ by a few microradians).
+    TRIAD with the down direction exact: ``-f/|f|`` maps onto ``gamma/|gamma|``; the
+    horizontal part of the body x axis (of the body y axis when x is within 1 deg of the
+    vertical, as on a vertical launch rail) then points North of the geodetic NED frame
+    ``C_n_e``. The caller turns the result about the vertical to the heading.
     """
     d_b = -f_b / np.linalg.norm(f_b)
     z_e = gamma_e / np.linalg.norm(gamma_e)
-    if 1.0 - d_b[0] ** 2 < np.sin(1.0 * DEG) ** 2:
-        raise NavlibInputError(
-            "heading_deg: the body x axis is within 1 deg of the vertical at the start, so "
-            "its azimuth is undefined; pass initial_attitude instead")
-    # x_e = cos(e) h + sin(e) D with h the horizontal unit at ``heading``, x_e . z_e = d_b[0]
-    h = C_n_e[:, 0] * np.cos(heading) + C_n_e[:, 1] * np.sin(heading)
-    a, b = h @ z_e, C_n_e[:, 2] @ z_e
-    phase = np.arctan2(b, a)
-    elev = phase + np.arccos(np.clip(d_b[0] / np.hypot(a, b), -1.0, 1.0))
-    if np.cos(elev) < 0.0:
-        elev = phase - np.arccos(np.clip(d_b[0] / np.hypot(a, b), -1.0, 1.0))
-    x_e = np.cos(elev) * h + np.sin(elev) * C_n_e[:, 2]
-    t2_b = np.cross(d_b, [1.0, 0.0, 0.0])
+    ref = np.eye(3)[0 if 1.0 - d_b[0] ** 2 >= _VERTICAL_SIN2 else 1]
+    t2_b = np.cross(d_b, ref)
     t2_b /= np.linalg.norm(t2_b)
-    t2_e = np.cross(z_e, x_e)
+    t2_e = np.cross(z_e, C_n_e[:, 0])
     t2_e /= np.linalg.norm(t2_e)
     T_b = np.column_stack([d_b, t2_b, np.cross(d_b, t2_b)])
     T_e = np.column_stack([z_e, t2_e, np.cross(z_e, t2_e)])
@@ -649,7 +670,7 @@ def _start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relati
                                    "initial_attitude_deg") from None
         att0 = Rotation.from_matrix(C_n_e) * Rotation.from_euler("ZYX", [0.0, elevation, 0.0])
         return att0, kind, note, {}
-    att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e, 0.0)
+    att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e)
     # attitude at the window start, carried back to t[0] through the gyro history
     E_q, R_q = earth_turn[k0], relative[k0]
     att0 = E_q.inv() * att_q * R_q.inv() * E_q
@@ -701,7 +722,14 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
         IMU sample of the overlap; replaces levelling and heading),
         ``use_logged_attitude=True`` (start from ``imu.attrs["attitude"]`` when present),
+        ``initial_attitude_deg=None`` (yaw, pitch, roll of the body against the local NED
+        frame at the first sample, deg; replaces levelling and heading),
+        ``launch_elevation_deg=None``, ``launch_azimuth_deg=None`` (launch-rail angles of
+        the body x axis, deg: the azimuth sets the heading of any source that leaves it
+        free, the elevation is used when neither levelling nor a logged tilt is possible),
         ``level_s=1`` (length of the rest window used for levelling),
+        ``level_tilt_deg=0.1`` (tilt accuracy that sets the shortest levelling window
+        tried when no ``level_s`` window is at rest, :func:`min_level_s`),
         ``level_tolerance=0.05`` (accepted relative difference between its median |f| and
         normal gravity: consumer MEMS scale factors reach a few percent),
         ``level_search_s=60`` (windows starting this long after the start are preferred),
@@ -724,8 +752,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     NavlibInputError
         Missing or non-finite columns, non-increasing times, too few samples,
         non-overlapping spans, an IMU rate below ``MIN_IMU_RATE_HZ``, a hole longer than
-        ``max_bridge_s``, no rest window to level in (without ``initial_attitude`` or a
-        logged attitude), a heading that cannot be estimated, unknown options.
+        ``max_bridge_s``, no rest window to level in (without ``initial_attitude``, a
+        logged attitude or tilt, or ``launch_elevation_deg``), a heading that cannot be
+        estimated, unknown options.
     """
     p = _options(options)
     imu_cols = _columns(imu, "imu", IMU_COLUMNS)
@@ -780,11 +809,18 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
                 "ZYX", p["initial_attitude_deg"] * DEG)
         note = "user (initial_attitude" + ("_deg" if p["initial_attitude"] is None else "") + ")"
     elif logged is not None:
-        att0, source, kind, note = logged, "log", "log", "logger attitude"
+        att0, source, kind = logged, "log", "log"
+        note = "logger attitude (the autopilot's own attitude estimate logged at the start)"
     else:
         att0, kind, note, level_info = _start_attitude(
             imu, t, f_b, w_b, p, gamma0, C_n_e, (t_g, P_g, V_g), earth_turn, relative)
         if azimuth_deg is not None:
+            x_down = att0.apply([1.0, 0.0, 0.0]) @ (gamma0 / np.linalg.norm(gamma0))
+            if 1.0 - x_down**2 < _VERTICAL_SIN2:
+                raise NavlibInputError(
+                    "heading_deg: the body x axis is within 1 deg of the vertical at the "
+                    "start, so its azimuth (heading_deg, launch_azimuth_deg) is undefined; "
+                    "pass initial_attitude_deg instead")
             down = gamma0 / np.linalg.norm(gamma0)
             turn = azimuth_deg * DEG - _heading_of(att0, C_n_e)
             att0 = Rotation.from_rotvec(down * turn) * att0
@@ -816,7 +852,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     rate_norm = np.linalg.norm(w_b, axis=1)
     turn = np.r_[0.0, np.cumsum(0.5 * (rate_norm[1:] + rate_norm[:-1]) * np.diff(t))]
     att_knots = _knots(t, p["attitude_knot_spacing_s"], turn)
-    C_b_e, w_eb_b = SO3Spline.fit(t, attitude, att_knots, _K).evaluate(t)
+    used = _thin(t, att_knots, ATTITUDE_SAMPLES_PER_KNOT)
+    C_b_e, w_eb_b = SO3Spline.fit(t[used], attitude[used], att_knots, _K).evaluate(t)
 
     # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
     f_e = np.einsum("nij,nj->ni", C_b_e, f_b - correction.bias)
