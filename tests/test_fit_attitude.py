@@ -6,6 +6,8 @@ loops) must be fitted with an exact IMU, and a rocket record must start from a 0
 pre-launch window, from the logger's tilt or from the launch-rail angles the user gives.
 """
 
+import re
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -92,14 +94,15 @@ def looping_flight():
 
 def rail_rocket(rest_s):
     """A rocket on a rail at 85 deg elevation, 120 deg azimuth, resting ``rest_s`` before a
-    boost along the rail with a spin-up to 2 rev/s (body y horizontal: roll 0)."""
+    2 s boost at 60 m/s^2 (reached in 0.05 s) along the rail, then decelerating, with a
+    spin-up to 2 rev/s (body y horizontal: roll 0)."""
     elevation, azimuth = np.radians(85.0), np.radians(120.0)
     u = np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
                   -np.sin(elevation)])
 
     def velocity(t):
-        speed = 120.0 * _step(t, rest_s, 3.0) - 40.0 * _step(t, rest_s + 3.0, 6.0)
-        return speed[:, None] * u
+        thrust = 60.0 * _step(t, rest_s, 0.05) * (1.0 - _step(t, rest_s + 2.0, 0.2))
+        return _integral(t, thrust - 12.0 * _step(t, rest_s + 2.0, 0.5))[:, None] * u
 
     def rates(t):
         spin = 4.0 * np.pi * _step(t, rest_s + 0.5, 2.0)
@@ -127,12 +130,15 @@ def _euler_deg(traj, k=0):
     return np.degrees(Rotation.from_matrix(C_b_n).as_euler("ZYX"))
 
 
-def _compare(fit, truth, k=0):
-    """Attitude, position, rate and specific-force errors against ``truth`` from sample k."""
-    att = (fit.attitude.inv() * truth.attitude[k:]).magnitude()
-    d_p = np.linalg.norm(fit.position - truth.position[k:], axis=1)
-    d_w = np.linalg.norm(fit.angular_rate - truth.angular_rate[k:], axis=1)
-    d_f = np.linalg.norm(fit.specific_force - truth.specific_force[k:], axis=1)
+def _compare(fit, truth):
+    """Attitude, position, rate and specific-force errors against ``truth`` at the fit's
+    samples (the fit spans the overlap of the IMU and GNSS records)."""
+    k = np.searchsorted(truth.t, fit.t)
+    assert np.array_equal(truth.t[k], fit.t)
+    att = (fit.attitude.inv() * truth.attitude[k]).magnitude()
+    d_p = np.linalg.norm(fit.position - truth.position[k], axis=1)
+    d_w = np.linalg.norm(fit.angular_rate - truth.angular_rate[k], axis=1)
+    d_f = np.linalg.norm(fit.specific_force - truth.specific_force[k], axis=1)
     return att, d_p, d_w, d_f
 
 
@@ -215,18 +221,20 @@ def test_short_pre_launch_window_levels_the_start():
     res = fit.parameters["fit_residuals"]
     assert res["initial_attitude_source"] == "level"
     assert res["level"]["short"] and 0.25 <= res["level"]["window_s"] <= 0.3
-    assert res["initial_attitude_note"].startswith("levelled from 0.29 s short pre-launch")
+    assert re.match(r"levelled from 0\.(29|30) s short pre-launch window",
+                    res["initial_attitude_note"])
     assert res["heading_deg"] == pytest.approx(120.0, abs=0.5)
     att, d_p, _, _ = _compare(fit, truth)
-    assert att[0] < np.radians(0.2) and np.median(att) < np.radians(0.2)
+    # within what the accelerometer-bias prior of the preset (0.1 m/s^2: 0.6 deg) leaves
+    assert att[0] < np.radians(0.6) and np.median(att) < np.radians(0.6)
     assert d_p.max() < 0.5
 
 
 def test_logger_tilt_starts_a_record_in_flight():
     truth = rail_rocket(rest_s=0.3)
-    k = int(np.searchsorted(truth.t, 1.0))                 # in the boost: no rest at all
     imu, gnss = _records(truth)
-    imu, gnss = imu[imu.t >= 1.0].reset_index(drop=True), gnss[gnss.t >= 1.0]
+    imu = imu[imu.t >= 1.0].reset_index(drop=True)       # in the boost: no rest at all
+    gnss = gnss[gnss.t >= 1.0]
     with pytest.raises(NavlibInputError, match="launch_elevation_deg"):
         fit_flight_data(imu, gnss, launch_azimuth_deg=120.0)
     imu.attrs["tilt"] = pd.DataFrame({"t": truth.t[::10], "tilt": np.radians(5.0)})
@@ -235,13 +243,12 @@ def test_logger_tilt_starts_a_record_in_flight():
     assert res["initial_attitude_source"] == "tilt"
     assert res["initial_attitude_note"] == ("logger tilt (5.0 deg from vertical), azimuth 120 "
                                             "deg given, roll about body x 0")
-    att, d_p, _, _ = _compare(fit, truth, k)
+    att, d_p, _, _ = _compare(fit, truth)
     assert att.max() < 1e-3 and d_p.max() < 0.05
 
 
 def test_launch_rail_angles_start_a_record_in_flight():
     truth = rail_rocket(rest_s=0.3)
-    k = int(np.searchsorted(truth.t, 1.0))
     imu, gnss = _records(truth)
     imu, gnss = imu[imu.t >= 1.0], gnss[gnss.t >= 1.0]
     fit = fit_flight_data(imu, gnss, launch_elevation_deg=85.0, launch_azimuth_deg=120.0,
@@ -249,7 +256,7 @@ def test_launch_rail_angles_start_a_record_in_flight():
     res = fit.parameters["fit_residuals"]
     assert res["initial_attitude_source"] == "rail"
     assert res["initial_attitude_note"].startswith("launch rail 85 deg elevation, azimuth 120")
-    att, d_p, _, _ = _compare(fit, truth, k)
+    att, d_p, _, _ = _compare(fit, truth)
     assert att.max() < 1e-3 and d_p.max() < 0.05
 
 
