@@ -7,6 +7,7 @@ pre-launch window, from the logger's tilt or from the launch-rail angles the use
 """
 
 import re
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -127,7 +128,9 @@ def _records(traj, *, sigma_f=0.0, sigma_w=0.0, gnss_hz=5.0, seed=3):
 def _euler_deg(traj, k=0):
     """Yaw, pitch, roll (deg) of the body against NED at sample ``k``."""
     C_b_n = C_N_E.T @ traj.attitude[k].as_matrix()
-    return np.degrees(Rotation.from_matrix(C_b_n).as_euler("ZYX"))
+    with warnings.catch_warnings():     # pitch 90 deg: scipy warns, the angles stay exact
+        warnings.simplefilter("ignore", UserWarning)
+        return np.degrees(Rotation.from_matrix(C_b_n).as_euler("ZYX"))
 
 
 def _compare(fit, truth):

@@ -456,26 +456,31 @@ def min_level_s(preset, rate_hz, tilt_deg):
 
 
 def _quiet_window(t, f_b, w_b, g, p, gnss=None):
-    """The rest window to level in: :func:`_rest_window` over windows of ``level_s``, else
-    over the shortest window :func:`min_level_s` allows (a short pre-launch record), with
-    the GNSS looked at before the window only and the window grown over the run of
-    neighbouring windows that are at rest too. Returns sample indices and a description."""
-    try:
-        return _rest_window(t, f_b, w_b, g, p, gnss, p["level_s"], short=False)
-    except NavlibInputError as exc:
-        rate = 1.0 / float(np.median(np.diff(t)))
-        length = min_level_s(p["preset"], rate, p["level_tilt_deg"])
-        if length >= p["level_s"]:
-            raise
-        try:
-            return _rest_window(t, f_b, w_b, g, p, gnss, length, short=True)
-        except NavlibInputError:
-            raise NavlibInputError(f"{exc}; nor any window of {length:.3g} s, the shortest "
-                                   f"that levels to level_tilt_deg={p['level_tilt_deg']:g} "
-                                   "with this preset's noise") from None
+    """The rest window to level in (:func:`_rest_window`), tried in this order: a window of
+    ``level_s`` within the first ``level_search_s``; a window of the shortest length
+    :func:`min_level_s` allows there (a short pre-launch record: the GNSS is looked at
+    before the window only, and the window grows over the run of neighbouring windows at
+    rest); a window of ``level_s`` later; a short one later (a later window's attitude is
+    carried back by the gyros, through all the flight's rotation, so an early short
+    window is preferred to it). Returns sample indices and a description."""
+    rate = 1.0 / float(np.median(np.diff(t)))
+    short_s = min_level_s(p["preset"], rate, p["level_tilt_deg"])
+    tries = [(p["level_s"], False)] + ([(short_s, True)] if short_s < p["level_s"] else [])
+    first = None
+    for early in (True, False):
+        for length, short in tries:
+            try:
+                return _rest_window(t, f_b, w_b, g, p, gnss, length, short, early)
+            except NavlibInputError as exc:
+                if first is None and not early:
+                    first = exc
+    tail = (f"; nor any window of {short_s:.3g} s, the shortest that levels to "
+            f"level_tilt_deg={p['level_tilt_deg']:g} with this preset's noise"
+            if len(tries) > 1 else "")
+    raise NavlibInputError(f"{first}{tail}") from None
 
 
-def _rest_window(t, f_b, w_b, g, p, gnss, length, short):
+def _rest_window(t, f_b, w_b, g, p, gnss, length, short, early_only):
     """The quietest window of ``length`` s in which the vehicle stands still (or hovers).
 
     Windows of ``length`` start every ``length / 2``. A window qualifies when its median
@@ -489,7 +494,8 @@ def _rest_window(t, f_b, w_b, g, p, gnss, length, short):
     vehicle would tilt the levelled attitude; ``short``: only the epochs up to the window's
     end, since a launch follows a short pre-launch window at once). Of the qualifying
     windows within the first ``level_search_s`` the one with the smallest spread is taken,
-    else the quietest later one (the gyros carry its attitude back to the start); with
+    else (unless ``early_only``) the quietest later one (the gyros carry its attitude back
+    to the start); with
     ``short`` it grows over the neighbouring qualifying windows. Returns sample indices
     ``k0, k1`` and a description.
     """
@@ -522,7 +528,7 @@ def _rest_window(t, f_b, w_b, g, p, gnss, length, short):
                                           until=starts[i] + length if short else None)
         good &= ~(accel > REST_ACCEL_MPS2)
     early = good & (starts <= t[0] + p["level_search_s"])
-    pool = early if early.any() else good
+    pool = early if early.any() or early_only else good
     if not pool.any():
         best = int(np.argmin(np.abs(np.linalg.norm(mean, axis=1) - g) / g
                              + spread / max(spread_max, 1e-12)))
