@@ -224,7 +224,14 @@ def _banded_normal(J, s, n):
     whose columns start at ``3 s``."""
     w = J.shape[2]
     first, s_u = _groups(s)
-    blocks = np.add.reduceat(np.swapaxes(J, 1, 2) @ J, first, axis=0)
+    # each knot interval's rows stacked (zero-padded) into one matrix: one product per
+    # interval instead of one per sample
+    count = np.diff(np.r_[first, s.size])
+    stacked = np.zeros((first.size, count.max(), 3, w))
+    row = np.arange(s.size) - np.repeat(first, count)
+    stacked[np.repeat(np.arange(first.size), count), row] = J
+    stacked = stacked.reshape(first.size, -1, w)
+    blocks = np.swapaxes(stacked, 1, 2) @ stacked
     ab = np.zeros((w, n))
     start = 3 * s_u
     for p in range(w):
