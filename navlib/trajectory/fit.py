@@ -495,8 +495,8 @@ def _rest_window(t, f_b, w_b, g, p, gnss, length, short, early_only):
     end, since a launch follows a short pre-launch window at once). Of the qualifying
     windows within the first ``level_search_s`` the one with the smallest spread is taken,
     else (unless ``early_only``) the quietest later one (the gyros carry its attitude back
-    to the start); with
-    ``short`` it grows over the neighbouring qualifying windows. Returns sample indices
+    to the start); with ``short`` it grows over the neighbouring qualifying windows.
+    Returns sample indices
     ``k0, k1`` and a description.
     """
     rate = 1.0 / float(np.median(np.diff(t)))
