@@ -93,10 +93,11 @@ def looping_flight():
     return _flight(22.0, velocity, rates, [0.0, 0.0, 0.0], name="two loops")
 
 
-def rail_rocket(rest_s):
+def rail_rocket(rest_s, roll_deg=0.0, pitch_over_deg=0.0):
     """A rocket on a rail at 85 deg elevation, 120 deg azimuth, resting ``rest_s`` before a
     2 s boost at 60 m/s^2 (reached in 0.05 s) along the rail, then decelerating, with a
-    spin-up to 2 rev/s (body y horizontal: roll 0)."""
+    spin-up to 2 rev/s; ``roll_deg`` about the body x axis on the rail (0: body y
+    horizontal) and a pitch-over by ``pitch_over_deg`` between 3 and 8 s after launch."""
     elevation, azimuth = np.radians(85.0), np.radians(120.0)
     u = np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
                   -np.sin(elevation)])
@@ -107,9 +108,11 @@ def rail_rocket(rest_s):
 
     def rates(t):
         spin = 4.0 * np.pi * _step(t, rest_s + 0.5, 2.0)
-        return np.column_stack([np.zeros_like(t), np.zeros_like(t), spin])
+        pitch = -np.radians(pitch_over_deg) / 5.0 * smoothstep((t - rest_s - 3.0) / 5.0)[1]
+        return np.column_stack([np.zeros_like(t), pitch, spin])
 
-    return _flight(rest_s + 10.0, velocity, rates, [azimuth, elevation, 0.0], name="rail")
+    return _flight(rest_s + 10.0, velocity, rates, [azimuth, elevation, np.radians(roll_deg)],
+                   name="rail")
 
 
 def _records(traj, *, sigma_f=0.0, sigma_w=0.0, gnss_hz=5.0, seed=3):
@@ -244,8 +247,10 @@ def test_logger_tilt_starts_a_record_in_flight():
     fit = fit_flight_data(imu, gnss, launch_azimuth_deg=120.0, sigma_position_m=0.01)
     res = fit.parameters["fit_residuals"]
     assert res["initial_attitude_source"] == "tilt"
-    assert res["initial_attitude_note"] == ("logger tilt (5.0 deg from vertical), azimuth 120 "
-                                            "deg given, roll about body x 0")
+    note = re.fullmatch(r"logger tilt \(5\.0 deg from vertical\), azimuth 120 deg given, "
+                        r"roll about body x estimated from GNSS \((-?[\d.]+) deg\)",
+                        res["initial_attitude_note"])
+    assert abs(float(note.group(1))) < 1.0                  # the truth has body y horizontal
     att, d_p, _, _ = _compare(fit, truth)
     assert att.max() < 1e-3 and d_p.max() < 0.05
 
@@ -261,6 +266,22 @@ def test_launch_rail_angles_start_a_record_in_flight():
     assert res["initial_attitude_note"].startswith("launch rail 85 deg elevation, azimuth 120")
     att, d_p, _, _ = _compare(fit, truth)
     assert att.max() < 1e-3 and d_p.max() < 0.05
+
+
+def test_roll_on_the_rail_is_estimated_once_the_rocket_pitches_over():
+    """The rail gives the body x axis; the roll about it shows once that axis turns away
+    from the specific force (a 20 deg pitch-over), and the GNSS fixes it."""
+    truth = rail_rocket(rest_s=0.3, roll_deg=30.0, pitch_over_deg=20.0)
+    imu, gnss = _records(truth)
+    imu, gnss = imu[imu.t >= 1.0], gnss[gnss.t >= 1.0]
+    fit = fit_flight_data(imu, gnss, launch_elevation_deg=85.0, launch_azimuth_deg=120.0,
+                          sigma_position_m=0.01)
+    note = fit.parameters["fit_residuals"]["initial_attitude_note"]
+    roll = float(re.search(r"roll about body x estimated from GNSS \((-?[\d.]+) deg\)",
+                           note).group(1))
+    assert roll == pytest.approx(30.0, abs=2.0)
+    att, d_p, _, _ = _compare(fit, truth)
+    assert np.degrees(att.max()) < 0.5 and d_p.max() < 0.05
 
 
 @pytest.mark.parametrize("options, match", [

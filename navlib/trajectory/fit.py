@@ -28,7 +28,9 @@ Method (:func:`fit_flight_data`)
    given, else a coarse closed-form estimate that turns the IMU specific force about the
    vertical onto the GNSS-derived one (velocity differences when GNSS velocity is given,
    else second differences of the positions, against IMU averages over the same
-   windows); tilt and rail take the body y axis horizontal (roll 0). The source is
+   windows); tilt and rail then turn the attitude about the start's body x axis by the
+   same closed form (roll 0, body y horizontal, when the specific force never leaves
+   that axis). The source is
    recorded in the residuals (``initial_attitude_source``, ``initial_attitude_note``).
 2. **Attitude history.** The gyros are integrated with
    :func:`navlib.strapdown.body_attitude` (the fourth-order attitude chain of
@@ -656,8 +658,8 @@ def _start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relati
     """Initial attitude (body -> ECEF at ``t[0]``, heading still free) without a user's or
     logger's full attitude: levelled in a rest window (:func:`_quiet_window`), else the
     body-x elevation from the logger's tilt (``imu.attrs["tilt"]``), else from
-    ``launch_elevation_deg``; for the last two the body y axis is taken horizontal (roll 0)
-    and the azimuth is set by the caller. Returns the attitude, the source (``level``,
+    ``launch_elevation_deg``; for the last two the body y axis is horizontal (roll 0) and
+    the caller sets the azimuth and estimates the roll. Returns the attitude, the source (``level``,
     ``tilt`` or ``rail``), its description and the levelling window (empty unless level).
     """
     try:
@@ -839,8 +841,16 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         attitude = Rotation.from_rotvec(axis_e * delta) * attitude
         source = "estimated"
     if kind in ("tilt", "rail"):
+        # the roll about the start's body x axis: the same closed form about that axis
+        x_e = earth_turn.apply(attitude[0].apply([1.0, 0.0, 0.0]))
+        try:
+            delta = _coarse_heading(t, attitude.apply(f_b), x_e, t_g, P_g, V_g)
+            attitude = Rotation.from_rotvec(x_e * delta) * attitude
+            roll = f"roll about body x estimated from GNSS ({np.degrees(delta):.1f} deg)"
+        except NavlibInputError:
+            roll = "roll about body x 0 (the specific force never leaves that axis)"
         note += (", azimuth " + ("estimated from GNSS" if azimuth_deg is None else
-                                 f"{azimuth_deg:g} deg given") + ", roll about body x 0")
+                                 f"{azimuth_deg:g} deg given") + ", " + roll)
 
     # 3: position spline and attitude correction --------------------------------------
     knots = _knots(t, p["knot_spacing_s"])
