@@ -193,6 +193,18 @@ def test_fit_follows_vertical_tumbling_and_looping_attitudes(make):
     assert closure.position_m < 1.0 and closure.attitude_rad < 1e-4
 
 
+def test_vertical_rocket_is_levelled_and_its_heading_estimated():
+    """Body x exactly vertical on the pad: levelling keeps the tilt exact and the heading
+    (a turn about the vertical) comes from the parachute drift the GNSS sees."""
+    truth = rocket_with_parachute()
+    imu, gnss = _records(truth)
+    fit = fit_flight_data(imu, gnss, sigma_position_m=0.01)
+    res = fit.parameters["fit_residuals"]
+    assert res["initial_attitude_source"] == "level" and res["heading_source"] == "estimated"
+    att, d_p, _, _ = _compare(fit, truth)
+    assert att.max() < 2e-4 and d_p.max() < 0.01
+
+
 def test_noisy_tumbling_descent_residuals_at_noise_level():
     truth = rocket_with_parachute()
     sigma_f, sigma_w = 0.05, 2e-3
@@ -227,7 +239,7 @@ def test_short_pre_launch_window_levels_the_start():
     res = fit.parameters["fit_residuals"]
     assert res["initial_attitude_source"] == "level"
     assert res["level"]["short"] and 0.25 <= res["level"]["window_s"] <= 0.3
-    assert re.match(r"levelled from 0\.(29|30) s short pre-launch window",
+    assert re.match(r"levelled from 0\.(29|30) s pre-launch window",
                     res["initial_attitude_note"])
     assert res["heading_deg"] == pytest.approx(120.0, abs=0.5)
     att, d_p, _, _ = _compare(fit, truth)

@@ -682,7 +682,7 @@ def _start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relati
     # attitude at the window start, carried back to t[0] through the gyro history
     E_q, R_q = earth_turn[k0], relative[k0]
     att0 = E_q.inv() * att_q * R_q.inv() * E_q
-    where = "short pre-launch" if info["short"] else "rest"
+    where = "pre-launch" if info["short"] else "rest"
     note = (f"levelled from {info['window_s']:.2f} s {where} window "
             f"({info['t_start']:.6g}..{info['t_end']:.6g} s)")
     return att0, "level", note, info
