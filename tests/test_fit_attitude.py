@@ -188,9 +188,11 @@ def test_fit_follows_vertical_tumbling_and_looping_attitudes(make):
     assert d_p.max() < 0.05
     assert np.median(d_w) < 1e-4 and d_w.max() < 0.02
     assert np.median(d_f) < 0.01
-    # the kinematics of the fitted trajectory close (bounds of test_fit_flight_data)
+    # the kinematics of the fitted trajectory close (the bounds of the rocket's closure in
+    # test_strapdown and test_fit_flight_data)
     closure = strapdown.closure_error(fit)
     assert closure.position_m < 1.0 and closure.attitude_rad < 1e-4
+    assert closure.velocity_m_s < 0.05
 
 
 def test_vertical_rocket_is_levelled_and_its_heading_estimated():
