@@ -82,7 +82,8 @@ refuses the record, naming the rate and the minimum.
 Observability caveat: accelerometers and GNSS see the attitude only through the direction
 of the specific force, so a rotation about that direction (on the pad: the heading; for a
 near-vertical rocket also in flight) is determined only by how that direction changes over
-the record. Give ``heading_deg`` or ``initial_attitude`` when they are known.
+the record. Give ``heading_deg`` (or ``launch_azimuth_deg``), ``initial_attitude`` or
+``initial_attitude_deg`` when they are known.
 
 Residuals (``trajectory.parameters["fit_residuals"]``)
 -----------------------------------------------------
