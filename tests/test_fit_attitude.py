@@ -16,6 +16,7 @@ from scipy.interpolate import make_interp_spline
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, earth, strapdown
+from navlib.studies.assess import assess_flight
 from navlib.trajectory import fit as fit_mod
 from navlib.trajectory import fit_flight_data
 from navlib.trajectory._attitude import smoothstep, zyx_attitude
@@ -310,3 +311,17 @@ def test_bad_start_options(options, match):
     imu, gnss = _records(rail_rocket(rest_s=0.3))
     with pytest.raises(NavlibInputError, match=match):
         fit_flight_data(imu, gnss, **options)
+
+
+def test_assessment_notes_name_the_initial_attitude_source():
+    truth = rail_rocket(rest_s=0.3)
+    imu, gnss = _records(truth, sigma_f=0.02, sigma_w=2e-4)
+    result = assess_flight(imu, gnss, preset="pixhawk_mems",
+                           fit_options={"launch_azimuth_deg": 120.0})
+    assert any(re.match(r"initial attitude: levelled from 0\.(29|30) s pre-launch window", n)
+               for n in result.notes)
+    imu, gnss = imu[imu.t >= 1.0], gnss[gnss.t >= 1.0]
+    result = assess_flight(imu, gnss, preset="pixhawk_mems", fit_options={
+        "launch_elevation_deg": 85.0, "launch_azimuth_deg": 120.0})
+    assert any(n.startswith("initial attitude: launch rail 85 deg elevation, azimuth 120 deg "
+                            "given") for n in result.notes)
