@@ -13,12 +13,18 @@
   Goal 0.5 s.
 * ``trajectory.simulate_imu_rocket``: corrupt the rocket IMU with the MotionPak-class
   preset (all error sources active). Goal 0.1 s.
+* ``trajectory.fit_rocket``: :func:`navlib.trajectory.fit_flight_data` on the rocket's exact
+  IMU (8601 samples, 2 Hz spin) and 1 Hz GNSS positions with GNSS velocity, heading given:
+  levelling, gyro chain, position spline with attitude correction, attitude spline on SO(3),
+  exact IMU. Goal 3 s.
 
 The trajectories are built once outside the strapdown and simulation timings.
 """
 
 from __future__ import annotations
 
+import numpy as np
+import pandas as pd
 from _harness import Case
 from _harness import launcher_flight as _launcher
 from _harness import rocket_flight as _rocket
@@ -53,6 +59,16 @@ def _blocks_1hz():
     return state
 
 
+def _fit_rocket():
+    traj = _rocket()
+    g = traj.at_rate(1.0)
+    imu = pd.DataFrame(np.column_stack([traj.t, traj.specific_force, traj.angular_rate]),
+                       columns=["t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z"])
+    gnss = pd.DataFrame(np.column_stack([traj.t[g], traj.position[g], traj.velocity[g]]),
+                        columns=["t", "x", "y", "z", "vx", "vy", "vz"])
+    return trajectories.fit_flight_data(imu, gnss, heading_deg=100.0)
+
+
 def cases() -> list[Case]:
     motionpak = sensors.load_preset("motionpak_tactical")
     return [
@@ -65,4 +81,5 @@ def cases() -> list[Case]:
         Case("trajectory.strapdown_blocks_1hz", "86 x 101 samples", _blocks_1hz, 0.5),
         Case("trajectory.simulate_imu_rocket", "8601 samples",
              lambda: sensors.simulate_imu(_rocket(), motionpak, seed=0), 0.1),
+        Case("trajectory.fit_rocket", "8601 samples, 1 Hz GNSS", _fit_rocket, 3.0, repeat=2),
     ]

@@ -243,8 +243,8 @@ def _fit(imu, gnss, fit_options: dict, heading_fallback_deg):
     try:
         return fit_flight_data(imu, gnss, **fit_options), notes
     except NavlibInputError as exc:
-        given = fit_options.get("heading_deg") is not None or \
-            fit_options.get("initial_attitude") is not None
+        given = any(fit_options.get(k) is not None for k in (
+            "heading_deg", "initial_attitude", "initial_attitude_deg", "launch_azimuth_deg"))
         if given or heading_fallback_deg is None or not str(exc).startswith("heading_deg:"):
             raise
         notes.append(f"initial heading not observable from the motion ({exc}); assumed "
@@ -595,9 +595,9 @@ def _fit_notes(trajectory) -> list[str]:
     bridged holes with their bounds)."""
     res = trajectory.parameters.get("fit_residuals", {})
     out = []
-    if res.get("heading_source") == "log":
-        out.append("initial attitude: the autopilot's own attitude estimate logged at the "
-                   f"start (heading {res.get('heading_deg', float('nan')):.1f} deg)")
+    if res.get("initial_attitude_note"):
+        out.append(f"initial attitude: {res['initial_attitude_note']} (heading "
+                   f"{res.get('heading_deg', float('nan')):.1f} deg)")
     level = res.get("level") or {}
     if level:
         out.append(f"levelled over {level['t_start']:.6g}..{level['t_end']:.6g} s (the quietest"

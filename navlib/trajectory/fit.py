@@ -9,17 +9,29 @@ the fitted position and attitude to the last digit of the integrator.
 
 Method (:func:`fit_flight_data`)
 --------------------------------
-1. **Initial attitude.** ``initial_attitude`` if given; else the autopilot's own attitude
-   when the reader attached it (``imu.attrs["attitude"]``: PX4 ``vehicle_attitude``,
-   ArduPilot ``ATT``; ``use_logged_attitude=True``), interpolated to the first sample;
-   else accelerometer levelling on the median specific force of the quietest rest window
-   of ``level_s`` (:func:`_quiet_window`: thresholds from the ``preset``'s white noise plus
-   ``vibration_allowance_mps2``; the first ``level_search_s`` seconds are preferred, and
-   the gyros carry a later window's attitude back to the start, so a record may start in
-   the air) plus a heading: ``heading_deg`` (azimuth of the body x axis) if given, else a
-   coarse closed-form estimate that turns the IMU specific force about the vertical onto
-   the GNSS-derived one (velocity differences when GNSS velocity is given, else second
-   differences of the positions, against IMU averages over the same windows).
+1. **Initial attitude** (docs/assumptions.md, "fit — levelling from a short pre-launch
+   window"), the first source that applies: the user's (``initial_attitude``, a body ->
+   ECEF rotation, or ``initial_attitude_deg=(yaw, pitch, roll)`` of the body against the
+   local NED frame); the autopilot's own attitude when the reader attached it
+   (``imu.attrs["attitude"]``: PX4 ``vehicle_attitude``, ArduPilot ``ATT``;
+   ``use_logged_attitude=True``), interpolated to the first sample (it carries a heading,
+   which levelling cannot); accelerometer levelling on the median specific force of the
+   quietest rest window of ``level_s`` (:func:`_quiet_window`: thresholds from the
+   ``preset``'s white noise plus ``vibration_allowance_mps2``; the first
+   ``level_search_s`` seconds are preferred, and the gyros carry a later window's attitude
+   back to the start, so a record may start in the air), or failing that of the shortest
+   window that levels to ``level_tilt_deg`` with the preset's noise (:func:`min_level_s`:
+   0.1 s at 100 Hz for a MEMS IMU, so the 0.3 s an AltOS log keeps before boost will do);
+   the body-x elevation from the logger's tilt (``imu.attrs["tilt"]``, AltOS); the
+   launch-rail elevation ``launch_elevation_deg``. Levelling, tilt and rail leave the
+   heading free: ``heading_deg`` or ``launch_azimuth_deg`` (azimuth of the body x axis) if
+   given, else a coarse closed-form estimate that turns the IMU specific force about the
+   vertical onto the GNSS-derived one (velocity differences when GNSS velocity is given,
+   else second differences of the positions, against IMU averages over the same
+   windows); tilt and rail then turn the attitude about the start's body x axis by the
+   same closed form (roll 0, body y horizontal, when the specific force never leaves
+   that axis). The source is
+   recorded in the residuals (``initial_attitude_source``, ``initial_attitude_note``).
 2. **Attitude history.** The gyros are integrated with
    :func:`navlib.strapdown.body_attitude` (the fourth-order attitude chain of
    :func:`navlib.strapdown.integrate`, with Earth rate), giving ``C_b_e`` at every sample.
@@ -45,13 +57,14 @@ Method (:func:`fit_flight_data`)
    vibration weighs as noise), so a transient the spline cannot follow does not bend the
    attitude. The normal equations of
    the spline are banded (one Cholesky factorisation serves the three axes).
-4. **Attitude spline.** The corrected attitude samples are written as yaw/pitch/roll in a
-   fixed frame adapted to the flight (its x axis along the mean direction of the body axis
-   that moves least, its z axis along the direction that axis never visits), so pitch
-   stays far from +-90 deg; yaw and roll are unwrapped, which handles any amount of spin.
-   Each angle gets a quintic least-squares spline with knots every
-   ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``; banded normal equations). The
-   body rate follows from the analytic Euler kinematics.
+4. **Attitude spline.** The corrected attitude samples are fitted by a cumulative quintic
+   B-spline on SO(3) (:class:`navlib.trajectory._so3.SO3Spline`; docs/assumptions.md,
+   "fit — attitude spline on SO(3)"): no yaw/pitch/roll, so no attitude is singular and a
+   vertical ascent, a loop, a tumble or a parachute descent are all fitted alike. Knots
+   every ``attitude_knot_spacing_s`` (default: ``knot_spacing_s``), closer where the body
+   turns by more than ``MAX_TURN_PER_KNOT_RAD`` in one interval; the control rotations
+   minimise the squared rotation angle between spline and samples (Gauss-Newton). The
+   body rate is the spline's analytic one.
 5. The position is refitted with the smooth attitude, and the exact IMU is derived.
 
 Holes and rates
@@ -69,7 +82,8 @@ refuses the record, naming the rate and the minimum.
 Observability caveat: accelerometers and GNSS see the attitude only through the direction
 of the specific force, so a rotation about that direction (on the pad: the heading; for a
 near-vertical rocket also in flight) is determined only by how that direction changes over
-the record. Give ``heading_deg`` or ``initial_attitude`` when they are known.
+the record. Give ``heading_deg`` (or ``launch_azimuth_deg``), ``initial_attitude`` or
+``initial_attitude_deg`` when they are known.
 
 Residuals (``trajectory.parameters["fit_residuals"]``)
 -----------------------------------------------------
@@ -79,7 +93,9 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   IMU minus the fitted trajectory's exact IMU, with their maxima
   ``specific_force_max_mps2`` and ``angular_rate_max_rad_s`` (norms);
 * ``heading_deg`` (body-x azimuth at the start) and ``heading_source``
-  (``keyword``, ``initial_attitude``, ``log`` or ``estimated``); ``n_imu``, ``n_gnss``,
+  (``keyword``, ``initial_attitude``, ``log`` or ``estimated``);
+  ``initial_attitude_source`` (``user``, ``log``, ``level``, ``tilt`` or ``rail``) and
+  ``initial_attitude_note`` (the same in words, for reports); ``n_imu``, ``n_gnss``,
   ``n_knots``, ``imu_rate_hz``;
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
@@ -104,9 +120,9 @@ from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.io import check_overlap
-from navlib.trajectory._attitude import zyx_attitude
+from navlib.trajectory._so3 import SO3Spline, basis
 from navlib.trajectory.base import Trajectory, build_trajectory
-from navlib.units import DEG
+from navlib.units import DEG, G0
 
 FIT_DEFAULTS = {
     "knot_spacing_s": 0.1,
@@ -117,6 +133,10 @@ FIT_DEFAULTS = {
     "heading_deg": None,
     "initial_attitude": None,
     "level_s": 1.0,
+    "level_tilt_deg": 0.1,
+    "initial_attitude_deg": None,
+    "launch_elevation_deg": None,
+    "launch_azimuth_deg": None,
     "level_tolerance": 0.05,
     "level_search_s": 60.0,
     "preset": None,
@@ -137,7 +157,7 @@ GNSS_VELOCITY_COLUMNS = ("vx", "vy", "vz")
 _K = 5                      # quintic splines: C^4 position, C^2 specific force
 _MIN_GNSS = 4
 _MIN_IMU = 20
-_MAX_PITCH = 80.0 * DEG     # adapted-frame pitch limit (Euler singularity at 90 deg)
+_VERTICAL_SIN2 = np.sin(1.0 * DEG) ** 2   # body x within 1 deg of the vertical below this
 _MIN_HORIZONTAL_F = 0.3     # m/s^2, RMS needed to estimate the heading
 _HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
 SAMPLES_PER_KNOT = 2
@@ -146,6 +166,14 @@ MAX_KNOT_SPACING_S = 0.5
 """Longest knot interval the fit accepts: a quintic B-spline follows features about two knot
 intervals long, so 0.5 s intervals still resolve the ~1 Hz manoeuvres of aircraft and
 multicopters (and the 0.5 s de-spin of the sounding rocket)."""
+MAX_TURN_PER_KNOT_RAD = 1.5
+"""Largest rotation of the body within one knot interval of the attitude spline, rad: its
+control rotations then differ by well under pi (the cumulative spline's increments are
+principal logarithms) and a tumble or fast spin gets denser knots."""
+ATTITUDE_SAMPLES_PER_KNOT = 6
+"""About this many attitude samples per knot interval enter the attitude spline's fit (every
+n-th of a denser interval): the samples are integrated gyro readings, smooth at that scale,
+and the Gauss-Newton cost grows with their number (a 250 Hz record has 25 per 0.1 s)."""
 MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
@@ -161,6 +189,9 @@ HOLE_FACTOR = 10.0
 REST_ACCEL_MPS2 = 0.5
 """Largest GNSS-derived acceleration around a levelling window, m/s^2 (the segmentation's
 rest acceleration: 0.5 m/s^2 tilts the levelled attitude by 3 deg)."""
+MIN_LEVEL_SAMPLES = 10
+"""Fewest samples of a levelling window: enough to judge the rest by the spread of the
+specific force (its standard deviation from 10 samples is good to about 25 %)."""
 REST_RATE_DEG_S = 3.0
 """Largest mean angular rate of a levelling window, deg/s (the segmentation's rest rate)."""
 
@@ -192,6 +223,7 @@ def _options(options):
     p = {**FIT_DEFAULTS, **options}
     for key in ("knot_spacing_s", "sigma_position_m", "sigma_velocity_mps",
                 "sigma_specific_force_mps2", "level_s", "level_tolerance", "attitude_prior_deg",
+                "level_tilt_deg",
                 "correction_knot_spacing_s", "level_search_s",
                 "max_bridge_s"):
         p[key] = finite_scalar(p[key], key, 0.0, low_open=True)
@@ -222,6 +254,21 @@ def _options(options):
     if iterations != int(iterations):
         raise NavlibInputError(f"iterations: expected an integer, got {p['iterations']!r}")
     p["iterations"] = int(iterations)
+    if p["launch_elevation_deg"] is not None:
+        p["launch_elevation_deg"] = finite_scalar(p["launch_elevation_deg"],
+                                                  "launch_elevation_deg", -90.0, 90.0)
+    if p["launch_azimuth_deg"] is not None:
+        p["launch_azimuth_deg"] = finite_scalar(p["launch_azimuth_deg"], "launch_azimuth_deg",
+                                                -360.0, 360.0)
+        if p["heading_deg"] is not None and p["heading_deg"] != p["launch_azimuth_deg"]:
+            raise NavlibInputError(
+                f"launch_azimuth_deg: {p['launch_azimuth_deg']:g} differs from heading_deg="
+                f"{p['heading_deg']:g} (both are the body-x azimuth at the start); give one")
+    if p["initial_attitude_deg"] is not None:
+        if p["initial_attitude"] is not None:
+            raise NavlibInputError("initial_attitude_deg: give it or initial_attitude, not both")
+        p["initial_attitude_deg"] = finite_array(p["initial_attitude_deg"],
+                                                 "initial_attitude_deg (yaw, pitch, roll)", (3,))
     q0 = p["initial_attitude"]
     if q0 is not None:
         if isinstance(q0, Rotation):
@@ -237,17 +284,25 @@ def _options(options):
 
 # --- B-spline machinery ------------------------------------------------------------------
 
-def _knots(t, spacing):
+def _knots(t, spacing, turn=None):
     """Clamped quintic knot vector on ``[t[0], t[-1]]``, interior knots about ``spacing`` apart.
 
     Knots come from a uniform grid; a knot is dropped when fewer than ``SAMPLES_PER_KNOT``
     samples ``t`` would lie between it and the previous knot kept (or after it), so holes
     in the record and low rates merge knot intervals instead of leaving coefficients
-    without data (the normal equations stay definite).
+    without data (the normal equations stay definite). With ``turn`` (the cumulative
+    rotation angle of the body at ``t``, rad) the grid is uniform in
+    ``(t - t[0]) / spacing + turn / MAX_TURN_PER_KNOT_RAD`` instead, so no knot interval
+    turns the body by more than ``MAX_TURN_PER_KNOT_RAD`` (the attitude spline).
     """
     t0, t1 = float(t[0]), float(t[-1])
-    n_int = max(int(np.ceil((t1 - t0) / spacing - 1e-9)), 1)
-    grid = np.linspace(t0, t1, n_int + 1)[1:-1]
+    if turn is None:
+        n_int = max(int(np.ceil((t1 - t0) / spacing - 1e-9)), 1)
+        grid = np.linspace(t0, t1, n_int + 1)[1:-1]
+    else:
+        u = (t - t0) / spacing + (turn - turn[0]) / MAX_TURN_PER_KNOT_RAD
+        n_int = max(int(np.ceil(u[-1] - 1e-9)), 1)
+        grid = np.interp(np.linspace(0.0, u[-1], n_int + 1)[1:-1], u, t)
     below = np.searchsorted(t, grid, side="left")     # samples before each candidate knot
     keep, last = [], 0
     for knot, count in zip(grid, below, strict=True):
@@ -257,23 +312,23 @@ def _knots(t, spacing):
     return np.r_[np.full(_K + 1, t0), keep, np.full(_K + 1, t1)]
 
 
-def _basis(x, knots, nu):
-    """Sparse (N, m) matrix of the ``nu``-th derivatives of the quintic B-spline basis.
+def _thin(t, knots, per_interval):
+    """Indices of the samples kept for a fit on ``knots``: in each knot interval with ``c``
+    samples, every ``max(1, c // per_interval)``-th one (the first and last sample always)."""
+    inner = knots[_K + 1:-_K - 1]
+    interval = np.searchsorted(inner, t, side="right")
+    first = np.searchsorted(interval, np.arange(inner.size + 1), side="left")
+    count = np.diff(np.r_[first, t.size])
+    stride = np.maximum(count // per_interval, 1)
+    pos = np.arange(t.size) - first[interval]
+    keep = pos % stride[interval] == 0
+    keep[[0, -1]] = True
+    return np.flatnonzero(keep)
 
-    Derivatives come from the lower-degree basis through the standard recursion
-    ``B'_{i,k} = k B_{i,k-1}/(t_{i+k}-t_i) - k B_{i+1,k-1}/(t_{i+k+1}-t_{i+1})``.
-    """
-    x = np.minimum(x, np.nextafter(knots[-1], -np.inf))  # the last interval is half-open
-    out = BSpline.design_matrix(x, knots, _K - nu)
-    for d in range(_K - nu + 1, _K + 1):
-        m = knots.size - d - 1
-        i = np.arange(m)
-        den0, den1 = knots[i + d] - knots[i], knots[i + d + 1] - knots[i + 1]
-        a = np.where(den0 > 0, d / np.where(den0 > 0, den0, 1.0), 0.0)
-        b = np.where(den1 > 0, -d / np.where(den1 > 0, den1, 1.0), 0.0)
-        M = sp.csr_array((np.r_[a, b], (np.r_[i, i + 1], np.r_[i, i])), shape=(m + 1, m))
-        out = out @ M
-    return sp.csr_array(out)
+
+def _basis(x, knots, nu):
+    """Sparse (N, m) matrix of the ``nu``-th derivatives of the quintic B-spline basis."""
+    return basis(x, knots, _K, nu)
 
 
 def _banded(N):
@@ -287,30 +342,20 @@ def _banded(N):
 
 # --- attitude ----------------------------------------------------------------------------
 
-def _level(f_b, gamma_e, C_n_e, heading):
-    """Body -> ECEF attitude from the mean specific force at rest and a body-x azimuth.
+def _level(f_b, gamma_e, C_n_e):
+    """Body -> ECEF attitude from the mean specific force at rest, heading still free.
 
-    TRIAD with the down direction exact: ``-f/|f|`` maps onto ``gamma/|gamma|``; the body x
-    axis is then placed at azimuth ``heading`` in the geodetic NED frame ``C_n_e`` (normal
-    gravity and the ellipsoid normal differ by a few microradians).
+    TRIAD with the down direction exact: ``-f/|f|`` maps onto ``gamma/|gamma|``; the
+    horizontal part of the body x axis (of the body y axis when x is within 1 deg of the
+    vertical, as on a vertical launch rail) then points North of the geodetic NED frame
+    ``C_n_e``. The caller turns the result about the vertical to the heading.
     """
     d_b = -f_b / np.linalg.norm(f_b)
     z_e = gamma_e / np.linalg.norm(gamma_e)
-    if 1.0 - d_b[0] ** 2 < np.sin(1.0 * DEG) ** 2:
-        raise NavlibInputError(
-            "heading_deg: the body x axis is within 1 deg of the vertical at the start, so "
-            "its azimuth is undefined; pass initial_attitude instead")
-    # x_e = cos(e) h + sin(e) D with h the horizontal unit at ``heading``, x_e . z_e = d_b[0]
-    h = C_n_e[:, 0] * np.cos(heading) + C_n_e[:, 1] * np.sin(heading)
-    a, b = h @ z_e, C_n_e[:, 2] @ z_e
-    phase = np.arctan2(b, a)
-    elev = phase + np.arccos(np.clip(d_b[0] / np.hypot(a, b), -1.0, 1.0))
-    if np.cos(elev) < 0.0:
-        elev = phase - np.arccos(np.clip(d_b[0] / np.hypot(a, b), -1.0, 1.0))
-    x_e = np.cos(elev) * h + np.sin(elev) * C_n_e[:, 2]
-    t2_b = np.cross(d_b, [1.0, 0.0, 0.0])
+    ref = np.eye(3)[0 if 1.0 - d_b[0] ** 2 >= _VERTICAL_SIN2 else 1]
+    t2_b = np.cross(d_b, ref)
     t2_b /= np.linalg.norm(t2_b)
-    t2_e = np.cross(z_e, x_e)
+    t2_e = np.cross(z_e, C_n_e[:, 0])
     t2_e /= np.linalg.norm(t2_e)
     T_b = np.column_stack([d_b, t2_b, np.cross(d_b, t2_b)])
     T_e = np.column_stack([z_e, t2_e, np.cross(z_e, t2_e)])
@@ -372,11 +417,15 @@ def _white_sigmas(preset, rate):
             float(np.max(noise["arw_rad_sqrt_s"])) * root)
 
 
-def _gnss_acceleration(tc, t_g, P_g, V_g, half_s):
+def _gnss_acceleration(tc, t_g, P_g, V_g, half_s, until=None):
     """Norm of the GNSS-derived acceleration around ``tc``: the slope of a straight line
     through the GNSS velocities within ``half_s`` (or the curvature of a parabola through
     the positions within ``5 half_s``: position noise needs the longer baseline); NaN when
-    fewer than 3 epochs lie there."""
+    fewer than 3 epochs lie there. ``until``: only epochs up to that time count."""
+    if until is not None:
+        sel = t_g <= until
+        t_g, P_g = t_g[sel], P_g[sel]
+        V_g = None if V_g is None else V_g[sel]
     if V_g is not None:
         sel = np.abs(t_g - tc) <= half_s
         if sel.sum() < 3:
@@ -391,10 +440,53 @@ def _gnss_acceleration(tc, t_g, P_g, V_g, half_s):
     return float(np.linalg.norm(2.0 * curv))
 
 
-def _quiet_window(t, f_b, w_b, g, p, gnss=None):
-    """The quietest window of ``level_s`` in which the vehicle stands still (or hovers).
+def min_level_s(preset, rate_hz, tilt_deg):
+    """Shortest rest window that levels to ``tilt_deg`` (1 sigma) at ``rate_hz``, s.
 
-    Windows of ``level_s`` start every ``level_s / 2``. A window qualifies when its median
+    Levelling takes the median specific force of the window; its tilt error from white
+    accelerometer noise of ``sigma_f`` per sample (the ``preset``'s density times
+    ``sqrt(rate_hz)``) is ``sqrt(pi / 2) sigma_f / (g sqrt(n))`` for ``n`` samples (the
+    median's efficiency is 2/pi), so ``n >= (pi / 2) (sigma_f / (g tilt))^2``; at least
+    ``MIN_LEVEL_SAMPLES`` samples are kept to judge the rest (docs/assumptions.md,
+    "fit — levelling from a short pre-launch window"). For the ``pixhawk_mems`` preset at
+    100 Hz and 0.1 deg this is the 10-sample floor, 0.1 s: the 0.3 s an AltOS log keeps
+    before boost is enough. The accelerometer bias limits the tilt as well (0.1 m/s^2 is
+    0.6 deg) whatever the window; the fit's attitude correction absorbs part of it.
+    """
+    sigma_f, _ = _white_sigmas(preset, rate_hz)
+    n = np.pi / 2.0 * (sigma_f / (G0 * tilt_deg * DEG)) ** 2
+    return max(int(np.ceil(n)), MIN_LEVEL_SAMPLES) / rate_hz
+
+
+def _quiet_window(t, f_b, w_b, g, p, gnss=None):
+    """The rest window to level in (:func:`_rest_window`), tried in this order: a window of
+    ``level_s`` within the first ``level_search_s``; a window of the shortest length
+    :func:`min_level_s` allows there (a short pre-launch record: the GNSS is looked at
+    before the window only, and the window grows over the run of neighbouring windows at
+    rest); a window of ``level_s`` later; a short one later (a later window's attitude is
+    carried back by the gyros, through all the flight's rotation, so an early short
+    window is preferred to it). Returns sample indices and a description."""
+    rate = 1.0 / float(np.median(np.diff(t)))
+    short_s = min_level_s(p["preset"], rate, p["level_tilt_deg"])
+    tries = [(p["level_s"], False)] + ([(short_s, True)] if short_s < p["level_s"] else [])
+    first = None
+    for early in (True, False):
+        for length, short in tries:
+            try:
+                return _rest_window(t, f_b, w_b, g, p, gnss, length, short, early)
+            except NavlibInputError as exc:
+                if first is None and not early:
+                    first = exc
+    tail = (f"; nor any window of {short_s:.3g} s, the shortest that levels to "
+            f"level_tilt_deg={p['level_tilt_deg']:g} with this preset's noise"
+            if len(tries) > 1 else "")
+    raise NavlibInputError(f"{first}{tail}") from None
+
+
+def _rest_window(t, f_b, w_b, g, p, gnss, length, short, early_only):
+    """The quietest window of ``length`` s in which the vehicle stands still (or hovers).
+
+    Windows of ``length`` start every ``length / 2``. A window qualifies when its median
     specific force has a norm within ``level_tolerance`` of gravity ``g``, its spread (the
     RMS over the axes of the standard deviation of ``f``) is below ``3 sigma_f +
     vibration_allowance_mps2`` (``sigma_f`` the preset's per-sample white noise: motor
@@ -402,20 +494,23 @@ def _quiet_window(t, f_b, w_b, g, p, gnss=None):
     its mean angular rate is below ``REST_RATE_DEG_S`` (plus three sigmas of the gyro
     white noise averaged over the window) and the GNSS sees no acceleration above
     ``REST_ACCEL_MPS2`` around it (:func:`_gnss_acceleration`; a turning or accelerating
-    vehicle would tilt the levelled attitude). Of the qualifying windows within the first
-    ``level_search_s`` the one with the smallest spread is taken, else the quietest later
-    one (the gyros carry its attitude back to the start). Returns sample indices
+    vehicle would tilt the levelled attitude; ``short``: only the epochs up to the window's
+    end, since a launch follows a short pre-launch window at once). Of the qualifying
+    windows within the first ``level_search_s`` the one with the smallest spread is taken,
+    else (unless ``early_only``) the quietest later one (the gyros carry its attitude back
+    to the start); with ``short`` it grows over the neighbouring qualifying windows.
+    Returns sample indices
     ``k0, k1`` and a description.
     """
     rate = 1.0 / float(np.median(np.diff(t)))
     sigma_f, sigma_w = _white_sigmas(p["preset"], rate)
-    starts = np.arange(t[0], max(t[-1] - p["level_s"], t[0]) + 1e-12, 0.5 * p["level_s"])
+    starts = np.arange(t[0], max(t[-1] - length, t[0]) + 1e-12, 0.5 * length)
     k0 = np.searchsorted(t, starts, side="left")
-    k1 = np.searchsorted(t, starts + p["level_s"], side="right")
+    k1 = np.searchsorted(t, starts + length, side="right")
     ok = k1 - k0 >= 3
     k0, k1, starts = k0[ok], k1[ok], starts[ok]
     if k0.size == 0:
-        raise NavlibInputError(f"imu: fewer than 3 samples in every level_s={p['level_s']:g} s "
+        raise NavlibInputError(f"imu: fewer than 3 samples in every level_s={length:g} s "
                                "window; raise level_s or pass initial_attitude")
     c1 = np.r_[np.zeros((1, 3)), np.cumsum(f_b, axis=0)]
     c2 = np.r_[np.zeros((1, 3)), np.cumsum(f_b**2, axis=0)]
@@ -430,17 +525,18 @@ def _quiet_window(t, f_b, w_b, g, p, gnss=None):
     good = gravity_ok & (spread <= spread_max) & (mean_rate <= rate_max)
     accel = np.full(starts.size, np.nan)
     if gnss is not None:
-        half = max(p["level_s"], 2.0)
+        half = max(length, 2.0)
         for i in np.flatnonzero(good):
-            accel[i] = _gnss_acceleration(starts[i] + 0.5 * p["level_s"], *gnss, half)
+            accel[i] = _gnss_acceleration(starts[i] + 0.5 * length, *gnss, half,
+                                          until=starts[i] + length if short else None)
         good &= ~(accel > REST_ACCEL_MPS2)
     early = good & (starts <= t[0] + p["level_search_s"])
-    pool = early if early.any() else good
+    pool = early if early.any() or early_only else good
     if not pool.any():
         best = int(np.argmin(np.abs(np.linalg.norm(mean, axis=1) - g) / g
                              + spread / max(spread_max, 1e-12)))
         raise NavlibInputError(
-            f"imu: no window of level_s={p['level_s']:g} s where the vehicle is at rest, so "
+            f"imu: no window of level_s={length:g} s where the vehicle is at rest, so "
             f"the initial attitude cannot be levelled; the closest, at t = {starts[best]:.6g} "
             f"s, has mean |f| = {np.linalg.norm(mean[best]):.3f} m/s^2 (gravity {g:.3f}, "
             f"level_tolerance={p['level_tolerance']:g}), spread {spread[best]:.3f} m/s^2 "
@@ -450,12 +546,19 @@ def _quiet_window(t, f_b, w_b, g, p, gnss=None):
             f"{np.degrees(mean_rate[best]):.3g} deg/s (limit {np.degrees(rate_max[best]):.3g}),"
             f" and no window passing these has a GNSS acceleration below {REST_ACCEL_MPS2:g} "
             "m/s^2; pass initial_attitude, or a log with the autopilot's attitude")
-    i = int(np.flatnonzero(pool)[np.argmin(spread[pool])])
-    info = {"t_start": float(t[k0[i]]), "t_end": float(t[k1[i] - 1]),
-            "spread_mps2": float(spread[i]), "spread_limit_mps2": float(spread_max),
-            "mean_rate_deg_s": float(np.degrees(mean_rate[i])),
-            "gnss_accel_mps2": float(accel[i])}
-    return int(k0[i]), int(k1[i]), info
+    i = j = int(np.flatnonzero(pool)[np.argmin(spread[pool])])
+    if short:                      # the whole run of overlapping windows at rest
+        while i > 0 and good[i - 1]:
+            i -= 1
+        while j + 1 < good.size and good[j + 1]:
+            j += 1
+    seen = accel[i:j + 1][np.isfinite(accel[i:j + 1])]
+    info = {"t_start": float(t[k0[i]]), "t_end": float(t[k1[j] - 1]),
+            "spread_mps2": float(spread[i:j + 1].max()), "spread_limit_mps2": float(spread_max),
+            "mean_rate_deg_s": float(np.degrees(mean_rate[i:j + 1].max())),
+            "gnss_accel_mps2": float(seen.max()) if seen.size else float("nan"),
+            "window_s": float(t[k1[j] - 1] - t[k0[i]]), "short": short}
+    return int(k0[i]), int(k1[j]), info
 
 
 def _logged_attitude(imu, t0, C_n_e):
@@ -552,35 +655,56 @@ def _triangle_pairs(t, f_e, t_g, P_g, c_f, c_1):
     return gnss_f, imu_f
 
 
-def _adapted_euler(attitude):
-    """Fixed frame, body-axis permutation and unwrapped yaw/pitch/roll of an attitude history.
-
-    Tries the three cyclic relabellings of the body axes and keeps the one whose pointing
-    axis stays farthest from the adapted frame's pole.
+def _start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relative):
+    """Initial attitude (body -> ECEF at ``t[0]``, heading still free) without a user's or
+    logger's full attitude: levelled in a rest window (:func:`_quiet_window`), else the
+    body-x elevation from the logger's tilt (``imu.attrs["tilt"]``), else from
+    ``launch_elevation_deg``; for the last two the body y axis is horizontal (roll 0) and
+    the caller sets the azimuth and estimates the roll. Returns the attitude, the source (``level``,
+    ``tilt`` or ``rail``), its description and the levelling window (empty unless level).
     """
-    C_b_e = attitude.as_matrix()
-    best = None
-    for shift in range(3):
-        P = np.roll(np.eye(3), shift, axis=0)   # body -> relabelled body, P e_shift = e_x
-        C = C_b_e @ P.T
-        x_e = C[:, :, 0]
-        _, v = np.linalg.eigh(x_e.T @ x_e)
-        x_L, z_L = v[:, 2], v[:, 0]
-        if np.sum(x_e @ x_L) < 0:
-            x_L = -x_L
-        C_L_e = np.column_stack([x_L, np.cross(z_L, x_L), z_L])
-        pitch = np.abs(np.arcsin(np.clip(x_e @ z_L, -1.0, 1.0))).max()
-        if best is None or pitch < best[0]:
-            best = (pitch, P, C_L_e, C)
-    pitch, P, C_L_e, C = best
-    if pitch > _MAX_PITCH:
-        raise NavlibInputError(
-            f"imu: every body axis sweeps within {90 - np.degrees(pitch):.1f} deg of a pole of "
-            "the best fixed frame; this attitude history has no regular yaw/pitch/roll form")
-    angles = Rotation.from_matrix(np.einsum("ji,njk->nik", C_L_e, C)).as_euler("ZYX")
-    angles[:, 0] = np.unwrap(angles[:, 0])
-    angles[:, 2] = np.unwrap(angles[:, 2])
-    return C_L_e, P, angles
+    try:
+        k0, k1, info = _quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p, gnss)
+    except NavlibInputError as exc:
+        tilt = _logged_tilt(imu, t[0])
+        if tilt is not None:
+            elevation, kind = 0.5 * np.pi - tilt, "tilt"
+            note = f"logger tilt ({np.degrees(tilt):.1f} deg from vertical)"
+        elif p["launch_elevation_deg"] is not None:
+            elevation, kind = p["launch_elevation_deg"] * DEG, "rail"
+            note = f"launch rail {p['launch_elevation_deg']:g} deg elevation"
+        else:
+            raise NavlibInputError(f"{exc}; the log has no tilt either: give "
+                                   "launch_elevation_deg (and launch_azimuth_deg) or "
+                                   "initial_attitude_deg") from None
+        att0 = Rotation.from_matrix(C_n_e) * Rotation.from_euler("ZYX", [0.0, elevation, 0.0])
+        return att0, kind, note, {}
+    att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e)
+    # attitude at the window start, carried back to t[0] through the gyro history
+    E_q, R_q = earth_turn[k0], relative[k0]
+    att0 = E_q.inv() * att_q * R_q.inv() * E_q
+    where = "pre-launch" if info["short"] else "rest"
+    note = (f"levelled from {info['window_s']:.2f} s {where} window "
+            f"({info['t_start']:.6g}..{info['t_end']:.6g} s)")
+    return att0, "level", note, info
+
+
+def _logged_tilt(imu, t0):
+    """Body-x angle from the vertical (rad) at ``t0`` from the tilt a reader attached
+    (``imu.attrs["tilt"]``: ``t, tilt`` in rad), or None (no tilt within 1 s)."""
+    tilt = imu.attrs.get("tilt") if hasattr(imu, "attrs") else None
+    if not isinstance(tilt, pd.DataFrame) or not {"t", "tilt"} <= set(tilt.columns):
+        return None
+    t = tilt["t"].to_numpy(dtype=float)
+    a = tilt["tilt"].to_numpy(dtype=float)
+    ok = np.isfinite(t) & np.isfinite(a)
+    if not ok.any():
+        return None
+    t, a = t[ok], a[ok]
+    k = int(np.argmin(np.abs(t - t0)))
+    if abs(t[k] - t0) > 1.0:
+        return None
+    return float(np.clip(a[k], 0.0, np.pi))
 
 
 # --- the fit -----------------------------------------------------------------------------
@@ -607,7 +731,14 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
         IMU sample of the overlap; replaces levelling and heading),
         ``use_logged_attitude=True`` (start from ``imu.attrs["attitude"]`` when present),
+        ``initial_attitude_deg=None`` (yaw, pitch, roll of the body against the local NED
+        frame at the first sample, deg; replaces levelling and heading),
+        ``launch_elevation_deg=None``, ``launch_azimuth_deg=None`` (launch-rail angles of
+        the body x axis, deg: the azimuth sets the heading of any source that leaves it
+        free, the elevation is used when neither levelling nor a logged tilt is possible),
         ``level_s=1`` (length of the rest window used for levelling),
+        ``level_tilt_deg=0.1`` (tilt accuracy that sets the shortest levelling window
+        tried when no ``level_s`` window is at rest, :func:`min_level_s`),
         ``level_tolerance=0.05`` (accepted relative difference between its median |f| and
         normal gravity: consumer MEMS scale factors reach a few percent),
         ``level_search_s=60`` (windows starting this long after the start are preferred),
@@ -630,8 +761,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     NavlibInputError
         Missing or non-finite columns, non-increasing times, too few samples,
         non-overlapping spans, an IMU rate below ``MIN_IMU_RATE_HZ``, a hole longer than
-        ``max_bridge_s``, no rest window to level in (without ``initial_attitude`` or a
-        logged attitude), a heading that cannot be estimated, unknown options.
+        ``max_bridge_s``, no rest window to level in (without ``initial_attitude``, a
+        logged attitude or tilt, or ``launch_elevation_deg``), a heading that cannot be
+        estimated, unknown options.
     """
     p = _options(options)
     imu_cols = _columns(imu, "imu", IMU_COLUMNS)
@@ -674,32 +806,52 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
     earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
     relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
+    user = p["initial_attitude"] is not None or p["initial_attitude_deg"] is not None
     logged = _logged_attitude(imu, t[0], C_n_e) if (
-        p["initial_attitude"] is None and p["use_logged_attitude"]) else None
+        not user and p["use_logged_attitude"]) else None
     level_info = {}
-    if p["initial_attitude"] is not None:
-        att0, source = p["initial_attitude"], "initial_attitude"
+    azimuth_deg = p["heading_deg"] if p["heading_deg"] is not None else p["launch_azimuth_deg"]
+    if user:
+        att0, source, kind = p["initial_attitude"], "initial_attitude", "user"
+        if att0 is None:
+            att0 = Rotation.from_matrix(C_n_e) * Rotation.from_euler(
+                "ZYX", p["initial_attitude_deg"] * DEG)
+        note = "user (initial_attitude" + ("_deg" if p["initial_attitude"] is None else "") + ")"
     elif logged is not None:
-        att0, source = logged, "log"
+        att0, source, kind = logged, "log", "log"
+        note = "logger attitude (the autopilot's own attitude estimate logged at the start)"
     else:
-        k0, k1, level_info = _quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p,
-                                           (t_g, P_g, V_g))
-        att_q = _level(np.median(f_b[k0:k1], axis=0), gamma0, C_n_e, 0.0)
-        # attitude at the window start, carried back to t[0] through the gyro history,
-        # then turned about the vertical to the heading asked for at t[0]
-        E_q, R_q = earth_turn[k0], relative[k0]
-        att0 = E_q.inv() * att_q * R_q.inv() * E_q
-        heading = 0.0 if p["heading_deg"] is None else p["heading_deg"] * DEG
-        down = gamma0 / np.linalg.norm(gamma0)
-        att0 = Rotation.from_rotvec(down * (heading - _heading_of(att0, C_n_e))) * att0
+        att0, kind, note, level_info = _start_attitude(
+            imu, t, f_b, w_b, p, gamma0, C_n_e, (t_g, P_g, V_g), earth_turn, relative)
+        if azimuth_deg is not None:
+            x_down = att0.apply([1.0, 0.0, 0.0]) @ (gamma0 / np.linalg.norm(gamma0))
+            if 1.0 - x_down**2 < _VERTICAL_SIN2:
+                raise NavlibInputError(
+                    "heading_deg: the body x axis is within 1 deg of the vertical at the "
+                    "start, so its azimuth (heading_deg, launch_azimuth_deg) is undefined; "
+                    "pass initial_attitude_deg instead")
+            down = gamma0 / np.linalg.norm(gamma0)
+            turn = azimuth_deg * DEG - _heading_of(att0, C_n_e)
+            att0 = Rotation.from_rotvec(down * turn) * att0
         source = "keyword"
     attitude = earth_turn * att0 * earth_turn.inv() * relative
     # the vertical about which a heading change turns, carried along with the Earth
     axis_e = earth_turn.apply(gamma0 / np.linalg.norm(gamma0))
-    if source == "keyword" and p["heading_deg"] is None:
+    if source == "keyword" and azimuth_deg is None:
         delta = _coarse_heading(t, attitude.apply(f_b), axis_e, t_g, P_g, V_g)
         attitude = Rotation.from_rotvec(axis_e * delta) * attitude
         source = "estimated"
+    if kind in ("tilt", "rail"):
+        # the roll about the start's body x axis: the same closed form about that axis
+        x_e = earth_turn.apply(attitude[0].apply([1.0, 0.0, 0.0]))
+        try:
+            delta = _coarse_heading(t, attitude.apply(f_b), x_e, t_g, P_g, V_g)
+            attitude = Rotation.from_rotvec(x_e * delta) * attitude
+            roll = f"roll about body x estimated from GNSS ({np.degrees(delta):.1f} deg)"
+        except NavlibInputError:
+            roll = "roll about body x 0 (the specific force never leaves that axis)"
+        note += (", azimuth " + ("estimated from GNSS" if azimuth_deg is None else
+                                 f"{azimuth_deg:g} deg given") + ", " + roll)
 
     # 3: position spline and attitude correction --------------------------------------
     knots = _knots(t, p["knot_spacing_s"])
@@ -713,19 +865,12 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         rows.robust_weights(coef, f_e, eps)
         attitude = Rotation.from_rotvec(eps) * attitude
 
-    # 4: smooth attitude -----------------------------------------------------------------
-    C_L_e, perm, angles = _adapted_euler(attitude)
-    att_knots = _knots(t, p["attitude_knot_spacing_s"])
-    B = _basis(t, att_knots, 0)
-    ab = _banded(sp.csr_array(B.T @ B))
-    rhs = B.T @ angles
-    att_coef = solveh_banded(ab, rhs)
-    att_coef = att_coef + solveh_banded(ab, rhs - B.T @ (B @ att_coef))   # refinement step
-    ang, dang = B @ att_coef, _basis(t, att_knots, 1) @ att_coef
-    C_r_e, w_er_r = zyx_attitude(C_L_e, ang[:, 0], ang[:, 1], ang[:, 2],
-                                 dang[:, 0], dang[:, 1], dang[:, 2])
-    C_b_e = C_r_e @ perm                      # relabelled body -> body: C_b_e = C_r_e P
-    w_eb_b = w_er_r @ perm                    # omega_b = P^T omega_r
+    # 4: smooth attitude on SO(3) --------------------------------------------------------
+    rate_norm = np.linalg.norm(w_b, axis=1)
+    turn = np.r_[0.0, np.cumsum(0.5 * (rate_norm[1:] + rate_norm[:-1]) * np.diff(t))]
+    att_knots = _knots(t, p["attitude_knot_spacing_s"], turn)
+    used = _thin(t, att_knots, ATTITUDE_SAMPLES_PER_KNOT)
+    C_b_e, w_eb_b = SO3Spline.fit(t[used], attitude[used], att_knots, _K).evaluate(t)
 
     # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
     f_e = np.einsum("nij,nj->ni", C_b_e, f_b - correction.bias)
@@ -738,13 +883,14 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     residuals = _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g)
     residuals.update({
         "heading_deg": float(np.degrees(_heading_of(attitude_fit[0], C_n_e))),
-        "heading_source": source, "n_imu": int(t.size), "n_gnss": int(t_g.size),
+        "heading_source": source, "initial_attitude_source": kind,
+        "initial_attitude_note": note, "n_imu": int(t.size), "n_gnss": int(t_g.size),
         "n_knots": int(knots.size - 2 * _K), "imu_rate_hz": rate,
         "imu_holes": _hole_bounds(t, f_b, w_b, holes), "level": level_info,
         "sigma_specific_force_used_mps2": float(rows.sigma_f),
         "accel_bias_mps2": [float(b) for b in correction.bias],
     })
-    params = {k: v for k, v in p.items() if k != "initial_attitude"}
+    params = {k: v for k, v in p.items() if k not in ("initial_attitude", "initial_attitude_deg")}
     params["fit_residuals"] = residuals
     return Trajectory(t=traj.t, position=traj.position, velocity=traj.velocity,
                       attitude=traj.attitude, specific_force=traj.specific_force,
