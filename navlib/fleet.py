@@ -32,7 +32,7 @@ from navlib.errors import NavlibInputError
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "flight_page", "parse_log",
            "write_fleet"]
 
-SUMMARY_COLUMNS = ("log", "status", "error", "duration_s", "n_segments", "phases",
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
                    "excitable", "sensible", "warnings", "seconds", "page")
 """Columns of ``summary.csv``, in order."""
 KINDS = ("ulog", "dataflash", "csv")
@@ -108,7 +108,8 @@ def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
              "about the linearised model along the fitted trajectory under the stated preset "
              "and thresholds.</p>",
              "<h2>Assumed</h2>", pd.DataFrame([{k: result.options.get(k) for k in (
-                 "preset", "gnss_rate_hz", "gnss_sigma_m", "heading_deg")}]).to_html(index=False),
+                 "vehicle", "preset", "gnss_rate_hz", "gnss_sigma_m", "heading_deg")}]
+                                               ).to_html(index=False),
              "<h2>Inputs</h2>", result.inputs.to_html(index=False),
              "<h2>Segments and estimable states</h2>", result.summary().to_html(index=False)]
     notes = [*warning_texts, *result.notes]
@@ -153,7 +154,8 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
             texts = [f"{w.category.__name__}: {w.message}" for w in caught]
             page = flight_page(log, result, texts)
             seg = result.segment_table
-            row.update(status="ok", duration_s=float(seg.t_end.max() - seg.t_start.min()),
+            row.update(status="ok", vehicle=result.vehicle,
+                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
                        n_segments=len(seg),
                        phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
                                         for r in seg.itertuples(index=False)),

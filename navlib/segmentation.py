@@ -50,13 +50,14 @@ Vehicles (``docs/assumptions.md`` V1-V2). The table above is the *kinematic* lab
 (``vehicle=None``). Given a vehicle class of :data:`VEHICLES` (or one recognised by
 :func:`recognise_vehicle`), the phases take that vehicle's words, :data:`VEHICLE_PHASES`:
 
-* ``rocket``: the kinematic labels, then the flight's order: every window before the first
-  ``powered`` one (the launch) is ``rest`` (a rocket on its pad stands, whatever the fit's
-  noise suggests); from the launch to the apogee (the highest point above the start)
-  ``powered`` and ``free_fall`` stay, anything else is ``coast``; after the apogee every
-  window is ``descent`` except kinematic ``rest`` (landed). A record with no powered window
-  keeps ``rest`` only where the kinematic rest holds and is ``coast`` elsewhere before the
-  apogee.
+* ``rocket``: the kinematic labels, then the flight's order. The launch is the start of the
+  powered run that lifts the vehicle ``hover_height_m`` above its first position (or the
+  moment it gets there, unpowered); every window before it is ``rest`` (a rocket on its pad
+  stands, whatever the fit's noise suggests); from the launch to the apogee (the highest
+  point) ``powered`` and ``free_fall`` stay and anything else is ``coast``; after the apogee
+  every window is ``descent`` except kinematic ``rest`` (landed). A record that never rises
+  that far is ``rest`` throughout, or ``descent`` outside kinematic rest when it ends
+  ``hover_height_m`` lower than it starts (recorded from mid-descent).
 * ``multicopter``, ``fixed-wing``, ``ground``: with ``v_up`` the vertical speed (up of the
   first position), ``v_h`` the horizontal speed and ``height`` the height above the
   flight's lowest point, in priority order ``rest`` (kinematic rest; a multicopter also
@@ -353,20 +354,23 @@ def _with_hysteresis(strict: np.ndarray, relaxed: dict[str, np.ndarray]) -> np.n
     return out
 
 
-def _rocket_sequence(labels: np.ndarray, height: np.ndarray) -> np.ndarray:
+def _rocket_sequence(labels: np.ndarray, height: np.ndarray, rise_m: float) -> np.ndarray:
     """Rocket words from the kinematic labels and the flight's order (module docstring)."""
     out = labels.copy()
-    powered = np.flatnonzero(labels == "powered")
-    launch = int(powered[0]) if powered.size else 0
+    rise = np.flatnonzero(height - height[0] >= rise_m)
+    if rise.size == 0:   # never rose: on the pad throughout, or recorded from mid-descent
+        falling = height[0] - height[-1] > rise_m
+        out[labels != "rest"] = "descent" if falling else "rest"
+        return out
+    launch = int(rise[0])
+    while launch > 0 and labels[launch - 1] == "powered":
+        launch -= 1
     out[:launch] = "rest"
     apogee = launch + int(np.argmax(height[launch:]))
-    keep = ("powered", "free_fall") if powered.size else ("powered", "free_fall", "rest")
     ascent = out[launch:apogee + 1]
-    ascent[~np.isin(ascent, keep)] = "coast"
-    out[launch:apogee + 1] = ascent
+    ascent[~np.isin(ascent, ("powered", "free_fall"))] = "coast"
     after = out[apogee + 1:]
     after[after != "rest"] = "descent"
-    out[apogee + 1:] = after
     return out
 
 
@@ -445,7 +449,7 @@ def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segm
     relaxed["cruise"] = strict == "cruise"
     labels = _with_hysteresis(strict, relaxed)
     if vehicle == "rocket":
-        labels = _rocket_sequence(labels, w["height"].to_numpy())
+        labels = _rocket_sequence(labels, w["height"].to_numpy(), p["hover_height_m"])
     t_start, t_end = w["t_start"].to_numpy(), w["t_end"].to_numpy()
     runs = _merge_short(_runs(labels), t_start, t_end, p["min_duration_s"])
     final = labels.copy()
