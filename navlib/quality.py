@@ -97,11 +97,11 @@ def _spans_text(spans: list[tuple[float, float]], shown: int = 3) -> str:
 
 
 def _finding(check: str, channel: str, t_hit: np.ndarray, total: int, join_s: float,
-             what: str, count_word: str) -> dict:
+             what: str, count_word: str, after: str = "") -> dict:
     spans = _spans(np.sort(t_hit), join_s)
     fraction = t_hit.size / total
     message = (f"{what}: {t_hit.size} {count_word} ({100.0 * fraction:.2g} %) at "
-               f"{_spans_text(spans)}")
+               f"{_spans_text(spans)}{after}")
     return {"check": check, "channel": channel, "n": int(t_hit.size), "fraction": fraction,
             "t_first": float(t_hit.min()), "t_last": float(t_hit.max()),
             "spans": spans, "message": message}
@@ -184,21 +184,21 @@ def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = No
             x = imu[channel].to_numpy(dtype=float)
             if limit is not None:
                 hit = np.abs(x) >= limit * (1.0 - p["limit_tolerance"])
-                what = (f"{sensor} {channel} at its +-{limit / factor:.4g} {unit} limit "
-                        f"(range from {source})")
+                what = f"{sensor} {channel} at its +-{limit / factor:.4g} {unit} limit"
+                after = f" (range from {source})"
                 check = "saturation"
             else:
                 flat = _flat_top(x, floor, p)
                 if flat is None:
                     continue
                 hit, value = flat
-                what = (f"{sensor} {channel} flat at {value / factor:.4g} {unit} (a repeated "
-                        f"extreme: range not known, taken as its limit)")
+                what = f"{sensor} {channel} flat at {value / factor:.4g} {unit}"
+                after = " (a repeated extreme: the range is not known, taken as its limit)"
                 check = "flat top"
             if hit.any():
                 saturated |= hit
                 rows.append(_finding(check, channel, t[hit], t.size, p["span_join_s"], what,
-                                     "samples"))
+                                     "samples", after + "; dropped, the fit bridges them"))
     return saturated, _frame(rows)
 
 
