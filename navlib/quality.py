@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.ndimage import maximum_filter1d
 
 from navlib import earth
 from navlib._validation import finite_scalar, reject_unknown
@@ -317,9 +318,42 @@ def _jerk_bound(imu, p: dict) -> tuple[np.ndarray, np.ndarray]:
     return t, bound
 
 
+def _leave_one_out(t: np.ndarray, P: np.ndarray, window: float):
+    """Residual of each fix from the least-squares quadratic in time through the other fixes
+    within ``+-window`` (NaN without one on each side and four in all), the half-width ``h``
+    used, and the neighbour offsets with their validity (for the local-maximum test)."""
+    n = t.size
+    dt = float(np.median(np.diff(t))) if n > 1 else window
+    m = max(int(np.ceil(window / max(dt, 1e-9))), 1)
+    m = min(m, max(n - 1, 1))
+    offsets = np.r_[-m:0, 1:m + 1]
+    j = np.arange(n)[:, None] + offsets[None, :]
+    inside = (j >= 0) & (j < n)
+    j = np.clip(j, 0, n - 1)
+    tau = t[j] - t[:, None]
+    valid = inside & (np.abs(tau) <= window)
+    before = np.count_nonzero(valid & (offsets < 0), axis=1)
+    after = np.count_nonzero(valid & (offsets > 0), axis=1)
+    ok = (before >= 1) & (after >= 1) & (before + after >= 4)
+    wv = valid.astype(float)
+    powers = np.stack([np.ones_like(tau), tau, tau**2], axis=-1) * wv[..., None]
+    AtA = np.einsum("nki,nkj->nij", powers, powers)
+    dP = P[j] - P[:, None, :]
+    Aty = np.einsum("nki,nkc->nic", powers, dP)
+    residual = np.full(n, np.nan)
+    if ok.any():
+        coef = np.linalg.solve(AtA[ok], Aty[ok])
+        residual[ok] = np.linalg.norm(coef[:, 0, :], axis=1)
+    h = np.max(np.abs(tau) * wv, axis=1)
+    return residual, h, j, valid
+
+
 def _jumps(imu, gnss, keep: np.ndarray, sigma: float, p: dict) -> tuple[np.ndarray, list]:
     t_all = gnss["t"].to_numpy(dtype=float)
     idx = np.flatnonzero(keep)
+    bad = np.zeros(t_all.size, dtype=bool)
+    if idx.size < 5:
+        return bad, []
     t = t_all[idx]
     P = gnss[list(_XYZ)].to_numpy(dtype=float)[idx]
     if "sigma" in gnss.columns:
@@ -327,42 +361,25 @@ def _jumps(imu, gnss, keep: np.ndarray, sigma: float, p: dict) -> tuple[np.ndarr
         s = np.where(np.isfinite(s) & (s > 0), s, sigma)
     else:
         s = np.full(t.size, sigma)
-    t_i, jerk = _jerk_bound(imu, p)
     window = p["jump_window_s"]
-    excess = np.full(t.size, -np.inf)
-    residual = np.zeros(t.size)
-    for k in range(t.size):
-        lo = np.searchsorted(t, t[k] - window)
-        hi = np.searchsorted(t, t[k] + window, side="right")
-        nb = np.r_[lo:k, k + 1:hi]
-        if k - lo < 1 or hi - k - 1 < 1 or nb.size < 4:
-            continue
-        tau = t[nb] - t[k]
-        A = np.column_stack([np.ones_like(tau), tau, tau**2])
-        coef, *_ = np.linalg.lstsq(A, P[nb] - P[k], rcond=None)
-        residual[k] = float(np.linalg.norm(coef[0]))
-        h = float(np.max(np.abs(tau)))
-        inside = (t_i >= t[k] - h) & (t_i <= t[k] + h)
-        j = float(jerk[inside].max()) if inside.any() else 0.0
-        bound = max(p["jump_min_m"], p["jump_sigmas"] * s[k]) + j * h**3 / 6.0
-        excess[k] = residual[k] - bound
-    bad = np.zeros(t_all.size, dtype=bool)
-    rows = []
-    for k in np.flatnonzero(excess > 0):
-        lo = np.searchsorted(t, t[k] - window)
-        hi = np.searchsorted(t, t[k] + window, side="right")
-        if residual[k] < residual[lo:hi].max():
-            continue  # a neighbour of a larger jump, whose prediction the jump spoils
-        bad[idx[k]] = True
-        rows.append(float(t[k]))
-    if not rows:
+    residual, h, j, valid = _leave_one_out(t, P, window)
+    # the IMU's jerk bound, its largest value within +-window of each fix
+    t_i, jerk = _jerk_bound(imu, p)
+    rate = 1.0 / float(np.median(np.diff(t_i)))
+    widest = maximum_filter1d(jerk, size=2 * int(np.ceil(window * rate)) + 1, mode="nearest")
+    k_i = np.clip(np.searchsorted(t_i, t), 0, t_i.size - 1)
+    bound = np.maximum(p["jump_min_m"], p["jump_sigmas"] * s) + widest[k_i] * h**3 / 6.0
+    filled = np.nan_to_num(residual, nan=-np.inf)
+    neighbour_max = np.max(np.where(valid, filled[j], -np.inf), axis=1)
+    # a jump is the largest residual of its window (its neighbours' predictions it spoils)
+    hit = np.isfinite(residual) & (residual > bound) & (filled >= neighbour_max)
+    if not hit.any():
         return bad, []
-    hit = np.array(rows)
-    big = residual[np.isin(t, hit)].max()
-    finding = _finding("gnss jump", "position", hit, t_all.size, window,
-                       f"GNSS position jumps the IMU cannot explain (up to {big:.3g} m off the "
-                       f"path through the neighbouring fixes)", "fixes")
-    finding["message"] += "; excluded"
+    bad[idx[hit]] = True
+    finding = _finding("gnss jump", "position", t[hit], t_all.size, window,
+                       f"GNSS position jumps the IMU cannot explain (up to "
+                       f"{residual[hit].max():.3g} m off the path through the neighbouring "
+                       "fixes)", "fixes", "; excluded")
     return bad, [finding]
 
 
