@@ -63,7 +63,9 @@ Vehicles (``docs/assumptions.md`` V1-V2). The table above is the *kinematic* lab
   flight's lowest point, in priority order ``rest`` (kinematic rest; a multicopter also
   below ``hover_height_m``), ``hover`` (multicopter only: ``height >= hover_height_m``,
   ``v_h < hover_speed_m_s``, ``|v_up| < climb_rate_m_s``), ``climb`` (``v_up >
-  climb_rate_m_s``), ``descent`` (``v_up < -climb_rate_m_s``; neither for ``ground``),
+  climb_rate_m_s``, or below ``hover_speed_m_s`` horizontally an upward acceleration over
+  ``rest_accel_m_s2`` while rising: a vertical take-off), ``descent`` (the same downwards;
+  neither for ``ground``),
   ``turn`` (the kinematic turn) and ``cruise``. No rocket word (powered, coast, free fall)
   is ever given to these vehicles.
 
@@ -153,7 +155,7 @@ _LOG_VEHICLES = (("arducopter", "multicopter"), ("copter", "multicopter"),
 SEGMENT_COLUMNS = ("phase", "t_start", "t_end")
 _FAMILY = {"free_fall": "unpowered", "coast": "unpowered"}
 _FEATURES = ("speed", "accel", "f_norm", "gravity", "f_along", "f_lateral", "rate",
-             "rate_across", "path_rate", "v_up", "v_h", "height", "sideslip")
+             "rate_across", "path_rate", "v_up", "v_h", "a_up", "height", "sideslip")
 _TIME_TOL = 1e-6
 
 
@@ -229,7 +231,8 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         ``rate`` ``|omega_eb|``, ``rate_across`` its part off the roll axis (the body axis
         closest to ``u``) and ``path_rate`` ``|V x a| / |V|^2`` (rad/s; 0 below
         ``turn_speed_m_s``); ``v_up`` and ``v_h`` the vertical and horizontal speed (m/s,
-        up of the first position's ellipsoid normal), ``height`` the height above the
+        up of the first position's ellipsoid normal), ``a_up`` the vertical acceleration
+        (m/s^2), ``height`` the height above the
         flight's lowest point (m) and ``sideslip`` the horizontal angle between the body
         x axis and the velocity (rad, in [0, pi]; 0 below ``turn_speed_m_s`` or with the
         body x axis within 5 deg of vertical).
@@ -281,6 +284,7 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         "path_rate": path_rate,
         "v_up": v_up,
         "v_h": np.sqrt(np.maximum(speed**2 - v_up**2, 0.0)),
+        "a_up": a_e @ up,
         "height": height - height.min(),
         "sideslip": sideslip,
     })
@@ -321,8 +325,13 @@ def _conditions(w: pd.DataFrame, p: dict, relax: float,
         coast = (w["f_lateral"] < p["coast_lateral_m_s2"] * wider) & unpowered
         return {"rest": rest.to_numpy(), "powered": powered.to_numpy(), "turn": turn.to_numpy(),
                 "free_fall": free_fall.to_numpy(), "coast": coast.to_numpy()}
-    climb = w["v_up"] > p["climb_rate_m_s"] * narrower
-    descent = w["v_up"] < -p["climb_rate_m_s"] * narrower
+    # a vertical take-off or landing starts with an acceleration before it has the speed
+    slow = w["v_h"] < p["hover_speed_m_s"] * wider
+    pushed = w["a_up"].abs() > p["rest_accel_m_s2"] * narrower
+    climb = (w["v_up"] > p["climb_rate_m_s"] * narrower) | (
+        slow & pushed & (w["a_up"] > 0) & (w["v_up"] > 0))
+    descent = (w["v_up"] < -p["climb_rate_m_s"] * narrower) | (
+        slow & pushed & (w["a_up"] < 0) & (w["v_up"] < 0))
     low = w["height"] < p["hover_height_m"] * wider
     hover = ((w["height"] >= p["hover_height_m"] * narrower)
              & (w["v_h"] < p["hover_speed_m_s"] * wider)
