@@ -260,33 +260,55 @@ def _frozen(imu, gnss, p: dict) -> tuple[np.ndarray, list[dict]]:
     return bad, rows
 
 
+def _baro_coverage(t: np.ndarray, t_b: np.ndarray, h_g_all: np.ndarray, h_b: np.ndarray,
+                   p: dict) -> list[dict]:
+    """A finding when the barometer covers less than ``baro_min_coverage`` of the GNSS span:
+    the altitudes are compared only where both exist, and the spans of the two records
+    must not be read as a disagreement."""
+    span = t[-1] - t[0]
+    covered = max(0.0, min(t[-1], t_b[-1]) - max(t[0], t_b[0])) if t_b.size else 0.0
+    if span <= 0 or covered >= p["baro_min_coverage"] * span:
+        return []
+    outside = (t < t_b[0]) | (t > t_b[-1]) if t_b.size else np.ones(t.size, dtype=bool)
+    where = f"{t_b[0]:.1f}-{t_b[-1]:.1f} s" if t_b.size else "no time"
+    return [{
+        "check": "gnss altitude", "channel": "barometer coverage",
+        "n": int(np.count_nonzero(outside)), "fraction": float(np.mean(outside)),
+        "t_first": float(t[0]), "t_last": float(t[-1]), "spans": [(float(t[0]), float(t[-1]))],
+        "message": (f"the barometer record covers only {where} of the GNSS span "
+                    f"{t[0]:.1f}-{t[-1]:.1f} s ({100 * covered / span:.2g} %): the GNSS altitude "
+                    f"(spanning {np.ptp(h_g_all):.3g} m over the flight) is checked against it "
+                    f"there only (barometer spanning {np.ptp(h_b) if h_b.size else 0:.3g} m); "
+                    "their whole spans are not comparable")}]
+
+
 def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]:
     baro = imu.attrs.get("baro")
+    t = gnss["t"].to_numpy(dtype=float)
+    bad = np.zeros(t.size, dtype=bool)
     if baro is None:
-        return np.zeros(len(gnss), dtype=bool), []
+        return bad, []
     if not isinstance(baro, pd.DataFrame) or not {"t", "alt_m"} <= set(baro.columns):
         raise NavlibInputError("imu.attrs['baro']: expected a DataFrame with columns t, alt_m")
     t_b = baro["t"].to_numpy(dtype=float)
     h_b = baro["alt_m"].to_numpy(dtype=float)
     ok = np.isfinite(t_b) & np.isfinite(h_b)
     t_b, h_b = t_b[ok], h_b[ok]
-    t = gnss["t"].to_numpy(dtype=float)
+    _, _, h_g_all = earth.ecef_to_geodetic(gnss[list(_XYZ)].to_numpy(dtype=float))
+    rows = _baro_coverage(t, t_b, h_g_all, h_b, p)
     inside = keep & (t >= t_b[0]) & (t <= t_b[-1]) if t_b.size >= 2 else np.zeros_like(keep)
-    bad = np.zeros(t.size, dtype=bool)
     if np.count_nonzero(inside) < 3:
-        return bad, []
-    _, _, h_g = earth.ecef_to_geodetic(gnss[list(_XYZ)].to_numpy(dtype=float)[inside])
+        return bad, rows
+    h_g = h_g_all[inside]
     h_bi = np.interp(t[inside], t_b, h_b)
     d = h_g - h_bi
     d = d - np.median(d)
     limit = p["baro_tolerance_m"] + p["baro_tolerance_fraction"] * np.abs(h_bi - h_b[0])
     off = np.abs(d) > limit
     if not off.any():
-        return bad, []
+        return bad, rows
     idx = np.flatnonzero(inside)[off]
     n_in = int(np.count_nonzero(inside))
-    span_g = float(np.ptp(h_g))
-    span_b = float(np.ptp(h_bi))
     excluded = off.sum() <= p["baro_max_excluded_fraction"] * n_in
     if excluded:
         bad[idx] = True
@@ -296,11 +318,10 @@ def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]
     row = _finding("gnss altitude", "altitude", t[idx], t.size, 5.0,
                    f"GNSS altitude disagrees with the barometer by up to "
                    f"{np.abs(d).max():.3g} m after removing their median offset (GNSS "
-                   f"altitude spans {span_g:.3g} m, barometer {span_b:.3g} m; tolerance "
-                   f"{p['baro_tolerance_m']:g} m + {p['baro_tolerance_fraction']:g} x height)",
-                   "fixes")
-    row["message"] += f"; {action}"
-    return bad, [row]
+                   f"altitude spans {np.ptp(h_g):.3g} m, barometer {np.ptp(h_bi):.3g} m where "
+                   f"both exist; tolerance {p['baro_tolerance_m']:g} m + "
+                   f"{p['baro_tolerance_fraction']:g} x height)", "fixes", f"; {action}")
+    return bad, [*rows, row]
 
 
 def _jerk_bound(imu, p: dict) -> tuple[np.ndarray, np.ndarray]:

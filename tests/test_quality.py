@@ -255,3 +255,16 @@ def test_assessment_excludes_a_frozen_span(recs):
     assert len(result.gnss_residuals) == len(gnss) - (n - 1)
     assert result.gnss_residuals["d3"].max() < 15.0          # the fit follows the fresh fixes
     assert result.vehicle == "multicopter"
+
+
+def test_a_short_barometer_record_is_said_not_taken_for_a_disagreement(truth, recs):
+    imu, gnss = recs
+    short = _with_baro(imu, truth)
+    baro = short.attrs["baro"]
+    short.attrs["baro"] = baro[baro["t"] <= 14.0]
+    climbing = _drift(gnss, 20.0, 1.0)                       # 70 m after the barometer ends
+    bad, found = gnss_faults(short, climbing, 2.0)
+    assert not bad.any()
+    assert found["channel"].tolist() == ["barometer coverage"]
+    assert "covers only 0.0-14.0 s of the GNSS span 0.0-90.0 s (16 %)" in \
+        found["message"].iloc[0]
