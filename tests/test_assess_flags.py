@@ -91,6 +91,28 @@ def test_bad_split_value_fails_with_exit_status_2(tmp_path, capsys):
     assert "-p eta: the value came as 2 shell words" in capsys.readouterr().err
 
 
+def test_saturation_reaches_the_warnings_column_and_the_thresholds_the_cli(tmp_path):
+    """A flat-topped roll gyro in the sample flight: warned with its times in summary.csv;
+    with max_fraction lowered through -p (JSON over several words) the flight is refused."""
+    imu = pd.read_csv(SAMPLE / "imu.csv")
+    column = next(c for c in imu.columns if c.startswith("w_x"))
+    k = int(np.searchsorted(imu.iloc[:, 0].to_numpy(), 30.0))
+    imu.loc[k:k + 7, column] = 1500.0 * np.pi / 180.0
+    path = tmp_path / "imu.csv"
+    imu.to_csv(path, index=False)
+    log = f"{path},{SAMPLE / 'gnss.csv'}"
+    assert main(["assess", log, "--output", str(tmp_path / "a"), "--scheduler",
+                 "synchronous"]) == 0
+    row = pd.read_csv(tmp_path / "a" / "summary.csv", keep_default_na=False).iloc[0]
+    assert "gyro w_x flat at 1500 deg/s: 8 samples (0.093 %) at 30.0-30.1 s" in row.warnings
+    assert main(["assess", log, "--output", str(tmp_path / "b"), "--scheduler",
+                 "synchronous", "-p", "quality_thresholds", '{"saturation":',
+                 '{"max_fraction":', "0.0005}}"]) == 1
+    row = pd.read_csv(tmp_path / "b" / "summary.csv", keep_default_na=False).iloc[0]
+    assert row.status == "failed"
+    assert "0.093 % of the samples are saturated, more than the 0.05 %" in row.error
+
+
 # --------------------------------------------------------------------------- shared logs
 
 
