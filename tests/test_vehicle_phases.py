@@ -54,8 +54,13 @@ def test_every_vehicle_has_rest_and_only_rockets_have_rocket_words():
         assert bool(ROCKET_ONLY & set(words)) == (vehicle == "rocket")
 
 
+@pytest.fixture(scope="module")
+def plane():
+    return vehicles.plane()
+
+
 @pytest.mark.parametrize("make, expected", [("car", "ground"), ("hover", "multicopter"),
-                                            ("parachute", "rocket")])
+                                            ("parachute", "rocket"), ("plane", "fixed-wing")])
 def test_recognised_from_kinematics(make, expected, request):
     vehicle, reason = recognise_vehicle(request.getfixturevalue(make))
     assert vehicle == expected
@@ -85,6 +90,14 @@ def test_multicopter_hover(hover):
     assert [p for p, _, _ in phases] == ["rest", "climb", "hover", "descent", "rest"]
     _, start, end = phases[2]
     assert 14.0 < start < 17.0 and 39.0 < end < 42.0          # hovers 16-40 s
+
+
+def test_fixed_wing_climbs_turns_and_descends(plane):
+    phases = _phases(segment_flight(plane, vehicle="fixed-wing"))
+    assert [p for p, _, _ in phases] == ["rest", "cruise", "climb", "cruise", "turn", "cruise",
+                                         "descent", "cruise"]
+    assert phases[2][1] == pytest.approx(20.0, abs=1.0)       # climbs 20-35 s
+    assert phases[6][1] == pytest.approx(80.0, abs=1.0)       # descends 80-95 s
 
 
 def test_rocket_descent_after_apogee(parachute):

@@ -85,3 +85,24 @@ def parachute_rocket(duration_s=60.0, rate_hz=100.0):
     C_b_n = np.repeat(Rotation.from_euler("y", 90.0, degrees=True).as_matrix()[None], t.size,
                       axis=0)
     return _build(t, p, vel, acc, C_b_n, np.zeros((t.size, 3)), "parachute rocket")
+
+
+def plane(duration_s=120.0, rate_hz=50.0, speed_m_s=20.0):
+    """Stands 10 s, rolls and takes off reaching ``speed_m_s`` by 20 s, climbs 52 m at a
+    20 % grade (20-35 s), flies level, turns 180 deg left over 50-65 s, descends 52 m at
+    the same grade (80-95 s) and flies on; level body, nose along the track."""
+    grid = np.arange(0.0, duration_s + 0.5, 0.01)
+    speed = speed_m_s * _step((grid - 10.0) / 10.0)[0]
+    climb = 0.2 * speed_m_s * (_step((grid - 20.0) / 2.0)[0] - _step((grid - 33.0) / 2.0)[0]
+                               - _step((grid - 80.0) / 2.0)[0] + _step((grid - 93.0) / 2.0)[0])
+    heading = -np.pi * _step((grid - 50.0) / 15.0)[0]
+    horizontal = np.sqrt(np.maximum(speed**2 - climb**2, 0.0))
+    v = np.column_stack([horizontal * np.cos(heading), horizontal * np.sin(heading), -climb])
+    p = np.concatenate([[np.zeros(3)], np.cumsum(0.5 * (v[1:] + v[:-1]) * 0.01, axis=0)])
+    spl = make_interp_spline(grid[::5], p[::5], k=5)
+    t = np.arange(round(duration_s * rate_hz) + 1) / rate_hz
+    s, ds = _step((t - 50.0) / 15.0)
+    w = np.zeros((t.size, 3))
+    w[:, 2] = -np.pi * ds / 15.0
+    C_b_n = Rotation.from_euler("z", (-np.pi * s)[:, None]).as_matrix()
+    return _build(t, spl(t), spl(t, 1), spl(t, 2), C_b_n, w, "plane")
