@@ -5,6 +5,7 @@ from __future__ import annotations
 import types
 
 import numpy as np
+import pandas as pd
 import pytest
 import vehicles
 
@@ -17,6 +18,7 @@ from navlib.segmentation import (
     segment_flight,
     vehicle_from_log,
 )
+from navlib.studies.assess import assess_flight
 from navlib.trajectory import sounding_rocket
 
 ROCKET_ONLY = {"powered", "coast", "free_fall"}
@@ -148,3 +150,8 @@ def test_check_vehicle():
             check_vehicle(bad)
     with pytest.raises(NavlibInputError, match="vehicle"):
         segment_flight(vehicles.hover(duration_s=5.0), vehicle="boat")
+    imu = pd.DataFrame({k: np.zeros(3) for k in ("t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z")})
+    imu["t"] = [0.0, 1.0, 2.0]
+    gnss = pd.DataFrame({"t": [0.0, 1.0, 2.0], "x": 6.4e6, "y": 0.0, "z": 0.0})
+    with pytest.raises(NavlibInputError, match="vehicle: expected one of"):
+        assess_flight(imu, gnss, vehicle="boat")
