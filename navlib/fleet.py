@@ -7,7 +7,9 @@ Public contract (spec ``api.md``, "Scale")::
 Each ``LOG`` is a PX4 ``.ulg`` file, an ArduPilot DataFlash ``.bin`` file (read with
 ``navlib.io.read_dataflash``) or an ``imu.csv,gnss.csv`` pair; each
 flight goes through :func:`navlib.studies.assess.assess_flight` as one task
-(:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords. :func:`assess_logs` returns one
+(:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords (a ULog's ``MAV_TYPE`` parameter
+is attached as ``imu.attrs["mav_type"]`` so the vehicle class comes from the log,
+:func:`navlib.segmentation.vehicle_from_log`). :func:`assess_logs` returns one
 row per flight and :func:`write_fleet` writes ``DIR/summary.csv`` plus one HTML page per
 assessed flight (tables and the figures of notebook 07 as embedded PNG). A flight that fails
 (unreadable log, too short, a fit that does not converge...) gets ``status = failed`` and its
@@ -66,11 +68,25 @@ def _assess_keywords() -> tuple[str, ...]:
                  ("imu", "gnss"))
 
 
+def _mav_type(path: Path) -> int | None:
+    """The ``MAV_TYPE`` parameter of a PX4 ULog (the vehicle type), or None."""
+    from pyulog import ULog  # optional dependency, imported where read_ulog needs it too
+
+    try:
+        value = ULog(str(path), []).initial_parameters.get("MAV_TYPE")
+    except Exception:  # a log read_ulog accepted but whose header pyulog cannot re-read
+        return None
+    return None if value is None else int(value)
+
+
 def _read(kind: str, paths: tuple[Path, ...]):
     from navlib import io
 
     if kind == "ulog":
-        return io.read_ulog(paths[0])
+        imu, gnss = io.read_ulog(paths[0])
+        if imu.attrs.get("mav_type") is None:
+            imu.attrs["mav_type"] = _mav_type(paths[0])
+        return imu, gnss
     if kind == "csv":
         return io.read_imu_csv(paths[0]), io.read_gnss_csv(paths[1])
     return io.read_dataflash(paths[0])

@@ -89,6 +89,7 @@ from navlib.errors import NavlibInputError
 from navlib.units import DEG
 
 __all__ = [
+    "MAV_TYPES",
     "PHASES",
     "RECOGNITION_DEFAULTS",
     "SEGMENT_DEFAULTS",
@@ -148,6 +149,13 @@ RECOGNITION_DEFAULTS = {
     "sideways_min_s": 2.0,
 }
 """Thresholds of :func:`recognise_vehicle` (``docs/assumptions.md`` V1; engineering choices)."""
+MAV_TYPES = {1: "fixed-wing", 2: "multicopter", 3: "multicopter", 4: "multicopter",
+             9: "rocket", 10: "ground", 11: "ground", 13: "multicopter", 14: "multicopter",
+             15: "multicopter", 19: "multicopter", 20: "multicopter", 21: "multicopter",
+             22: "multicopter", 23: "multicopter", 24: "fixed-wing", 29: "multicopter"}
+"""MAVLink ``MAV_TYPE`` -> vehicle class (fixed wing; quad-, coaxial, helicopter, hexa-,
+octo-, tricopter, dodecarotor; rocket; ground rover, surface boat; VTOLs, which take off as
+rotorcraft; parafoil as fixed-wing)."""
 _LOG_VEHICLES = (("arducopter", "multicopter"), ("copter", "multicopter"),
                  ("heli", "multicopter"), ("arduplane", "fixed-wing"), ("plane", "fixed-wing"),
                  ("rover", "ground"), ("ardurover", "ground"))
@@ -503,6 +511,9 @@ def vehicle_from_log(attrs: Mapping) -> tuple[str | None, str]:
         return given.strip().lower(), "the log names it"
     if attrs.get("flight_states") is not None:
         return "rocket", "an Altus Metrum AltOS flight-computer log"
+    mav_type = attrs.get("mav_type")
+    if isinstance(mav_type, int | np.integer) and int(mav_type) in MAV_TYPES:
+        return MAV_TYPES[int(mav_type)], f"the log's MAV_TYPE {int(mav_type)}"
     banner = str(attrs.get("hardware") or "").lower()
     if str(attrs.get("autopilot", "")).lower() == "ardupilot" and banner:
         for word, vehicle in _LOG_VEHICLES:

@@ -165,3 +165,16 @@ def test_octocopter_speaks_multicopter_and_checks_its_gnss_altitude():
     assert any("GNSS altitude disagrees with the barometer" in t
                or "the barometer record covers only" in t for t in texts)
     assert "gnss altitude" in set(result.quality["check"])
+
+
+def test_px4_vehicle_type_from_the_log_in_a_fleet(tmp_path):
+    """The PX4 SITL log barely moves (kinematics would say ground); its MAV_TYPE 2 says
+    quadrotor, and the fleet row says multicopter."""
+    path = _shared(SHARED / "px4" / "sample_px4_events.ulg")
+    assert main(["assess", str(path), "--output", str(tmp_path), "--scheduler",
+                 "synchronous"]) == 0
+    row = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False).iloc[0]
+    assert row.vehicle == "multicopter"
+    phases = [p.rsplit(" ", 2)[0] for p in row.phases.split("; ")]
+    assert set(phases) <= set(VEHICLE_PHASES["multicopter"])
+    assert "MAV_TYPE 2" in (tmp_path / row.page).read_text()

@@ -133,6 +133,10 @@ def test_rocket_on_the_pad_is_at_rest(rocket):
     ({"autopilot": "ardupilot", "hardware": "ArduPlane V3.8.2-dev (8178ab40)"}, "fixed-wing"),
     ({"autopilot": "ardupilot", "hardware": "ArduRover V4.2.0"}, "ground"),
     ({"vehicle": "Fixed-Wing"}, "fixed-wing"),
+    ({"autopilot": "px4", "mav_type": 14}, "multicopter"),
+    ({"autopilot": "px4", "mav_type": 1}, "fixed-wing"),
+    ({"autopilot": "px4", "mav_type": 10}, "ground"),
+    ({"autopilot": "px4", "mav_type": 6}, None),               # a ground control station
     ({"autopilot": "px4", "hardware": "PX4FMU_V4PRO"}, None),
     ({}, None),
 ])
