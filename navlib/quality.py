@@ -134,20 +134,20 @@ def _ranges(imu: pd.DataFrame, spec) -> dict[str, tuple[float | None, str]]:
     return out
 
 
-def _flat_top(x: np.ndarray, floor: float, p: dict) -> tuple[np.ndarray, float] | None:
-    """Samples of the channel ``x`` at a repeated extreme (module docstring), and the
-    extreme, or None."""
+def _flat_top(x: np.ndarray, floor: float, p: dict) -> tuple[np.ndarray, list[float]] | None:
+    """Samples of the channel ``x`` at a repeated extreme (module docstring) and the
+    extremes, or None."""
     median = float(np.median(x))
     sigma = 1.4826 * float(np.median(np.abs(x - median)))
-    best = None
+    hit = np.zeros(x.size, dtype=bool)
+    values = []
     for extreme in (float(x.max()), float(x.min())):
-        hit = x == extreme
-        excursion = abs(extreme - median)
-        if (np.count_nonzero(hit) >= p["flat_top_min_samples"] and abs(extreme) >= floor
-                and excursion >= p["flat_top_min_excursion_sigma"] * sigma):
-            best = hit if best is None else best | hit
-            best_value = extreme
-    return None if best is None else (best, best_value)
+        at = x == extreme
+        if (np.count_nonzero(at) >= p["flat_top_min_samples"] and abs(extreme) >= floor
+                and abs(extreme - median) >= p["flat_top_min_excursion_sigma"] * sigma):
+            hit |= at
+            values.append(extreme)
+    return (hit, values) if values else None
 
 
 def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = None
@@ -192,8 +192,9 @@ def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = No
                 flat = _flat_top(x, floor, p)
                 if flat is None:
                     continue
-                hit, value = flat
-                what = f"{sensor} {channel} flat at {value / factor:.4g} {unit}"
+                hit, values = flat
+                at = " and ".join(f"{v / factor:.4g}" for v in values)
+                what = f"{sensor} {channel} flat at {at} {unit}"
                 after = " (a repeated extreme: the range is not known, taken as its limit)"
                 check = "flat top"
             if hit.any():
@@ -315,7 +316,7 @@ def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]
     action = ("excluded" if excluded else
               f"kept: more than {100 * p['baro_max_excluded_fraction']:.3g} % of the fixes "
               "disagree, so which sensor is wrong cannot be told")
-    row = _finding("gnss altitude", "altitude", t[idx], t.size, 5.0,
+    row = _finding("gnss altitude", "altitude", t[idx], t.size, p["span_join_s"],
                    f"GNSS altitude disagrees with the barometer by up to "
                    f"{np.abs(d).max():.3g} m after removing their median offset (GNSS "
                    f"altitude spans {np.ptp(h_g):.3g} m, barometer {np.ptp(h_bi):.3g} m where "

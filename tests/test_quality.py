@@ -91,6 +91,10 @@ def test_flat_top_without_a_known_range(recs):
     assert np.count_nonzero(saturated) == 8
     assert found["check"].tolist() == ["flat top"]
     assert "flat at 2000 deg/s" in found["message"].iloc[0]
+    both, _ = _clip(clipped, 60.0, 3, value=-LIMIT)
+    saturated, found = imu_saturation(both)
+    assert np.count_nonzero(saturated) == 11
+    assert "flat at 2000 and -2000 deg/s: 11 samples" in found["message"].iloc[0]
     # a value repeated at a small extreme is quantisation, not a clip
     low, _ = _clip(imu, 40.0, 8, value=float(imu["w_x"].max()) + 0.1)
     assert not imu_saturation(low)[0].any()
