@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -272,3 +273,23 @@ def test_a_short_barometer_record_is_said_not_taken_for_a_disagreement(truth, re
     assert found["channel"].tolist() == ["barometer coverage"]
     assert "covers only 0.0-14.0 s of the GNSS span 0.0-90.0 s (16 %)" in \
         found["message"].iloc[0]
+
+
+def test_sounding_rocket_with_a_frozen_receiver_keeps_its_phases():
+    """The case of issue 23: a receiver repeating one position for 26 s with a valid fix near
+    apogee gave a second "powered" phase. Found by the spin the gyros read, dropped, and the
+    phases are the paper's again; with the check switched off they are not."""
+    from navlib import io
+
+    sample = Path(__file__).resolve().parents[1] / "data" / "sample_flight"
+    imu, gnss = io.read_imu_csv(sample / "imu.csv"), io.read_gnss_csv(sample / "gnss.csv")
+    frozen, _ = _frozen(gnss.drop(columns=["vx", "vy", "vz"]), 50.0, 76.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = assess_flight(imu, frozen)
+        blind = assess_flight(imu, frozen,
+                              quality_thresholds={"gnss": {"frozen_min_duration_s": 1e6}})
+    assert any("GNSS position frozen for 26 s at 50.0-76.0 s" in str(w.message)
+               and "the gyros read" in str(w.message) for w in caught)
+    assert result.segment_table["phase"].tolist() == ["rest", "powered", "coast", "free_fall"]
+    assert blind.segment_table["phase"].tolist().count("powered") > 1
