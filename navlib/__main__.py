@@ -98,8 +98,7 @@ def _add_assess(sub) -> None:
                           "what the log says, else recognised from the kinematics")
     ass.add_argument("--initial-attitude", default=None, metavar="YAW,PITCH,ROLL",
                      help="initial attitude in degrees, body to local North-East-Down "
-                          "(fit option initial_attitude_deg); write --initial-attitude=-30,80,0 "
-                          "when the first number is negative")
+                          "(fit option initial_attitude_deg), e.g. --initial-attitude -30,80,0")
     ass.add_argument("--launch-elevation", type=float, default=None, metavar="DEG",
                      help="launch-rail elevation above the horizon, degrees (fit option "
                           "launch_elevation_deg)")
@@ -311,9 +310,22 @@ def _report(args) -> int:
     return 0
 
 
+def _negative_angles(argv: list[str]) -> list[str]:
+    """``--initial-attitude -30,80,0`` as ``--initial-attitude=-30,80,0``: argparse would
+    take a value starting with a minus sign for an option."""
+    out = []
+    for word in argv:
+        if out and out[-1] == "--initial-attitude" and word[:2].startswith("-") and \
+                word[1:2].isdigit():
+            out[-1] = f"--initial-attitude={word}"
+        else:
+            out.append(word)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m navlib``; returns the exit status."""
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_negative_angles(sys.argv[1:] if argv is None else list(argv)))
     try:
         if args.command == "report":
             return _report(args)

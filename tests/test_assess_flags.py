@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from navlib import fleet, io
-from navlib.__main__ import _parser, assess_options, main
+from navlib.__main__ import _negative_angles, _parser, assess_options, main
 from navlib.errors import NavlibInputError
 from navlib.segmentation import VEHICLE_PHASES
 from navlib.studies.assess import assess_flight
@@ -24,7 +24,8 @@ SHARED = Path("/work/shared/data")
 
 
 def _options(*words):
-    return assess_options(_parser().parse_args(["assess", "a.ulg", "--output", "out", *words]))
+    argv = _negative_angles(["assess", "a.ulg", "--output", "out", *words])
+    return assess_options(_parser().parse_args(argv))
 
 
 def test_flags_map_onto_assess_keywords_and_fit_options():
@@ -36,6 +37,9 @@ def test_flags_map_onto_assess_keywords_and_fit_options():
                                    "launch_elevation_deg": 84.0,
                                    "launch_azimuth_deg": 100.0}}
     assert _options() == {}
+    # a negative yaw as its own word, which argparse alone takes for an option
+    assert _options("--initial-attitude", "-30,80,0")["fit_options"] == {
+        "initial_attitude_deg": (-30.0, 80.0, 0.0)}
 
 
 def test_p_value_over_several_words_is_joined():
