@@ -315,8 +315,7 @@ def _negative_angles(argv: list[str]) -> list[str]:
     take a value starting with a minus sign for an option."""
     out = []
     for word in argv:
-        if out and out[-1] == "--initial-attitude" and word[:2].startswith("-") and \
-                word[1:2].isdigit():
+        if out and out[-1] == "--initial-attitude" and word[:1] == "-" and word[1:2].isdigit():
             out[-1] = f"--initial-attitude={word}"
         else:
             out.append(word)
