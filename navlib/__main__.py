@@ -1,6 +1,8 @@
 """Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]
 [--jobs N] [--no-cache]``
-``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``
+``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [--preset NAME]
+[--vehicle CLASS] [--initial-attitude YAW,PITCH,ROLL] [--launch-elevation DEG]
+[--launch-azimuth DEG] [-p key value ...]``
 and ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
@@ -16,6 +18,7 @@ from pathlib import Path
 
 from navlib import reports
 from navlib.errors import NavlibInputError
+from navlib.segmentation import VEHICLES
 
 _TRACEBACK_LINES = 12
 
@@ -85,18 +88,93 @@ def _add_assess(sub) -> None:
     ass.add_argument("--output", type=Path, required=True, metavar="DIR",
                      help="folder for summary.csv and the flight pages")
     _add_scheduler(ass)
-    ass.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
+    ass.add_argument("--preset", default=None, metavar="NAME_OR_FILE",
+                     help="sensor preset (data/sensors/*.toml name or a .toml file); default: "
+                          "the Pixhawk-class preset for PX4/ArduPilot logs, else "
+                          "motionpak_tactical")
+    ass.add_argument("--vehicle", default=None, choices=VEHICLES,
+                     help="vehicle class, naming the phases (rockets: rest/powered/coast/"
+                          "descent; others: rest/hover/climb/descent/turn/cruise); default: "
+                          "what the log says, else recognised from the kinematics")
+    ass.add_argument("--initial-attitude", default=None, metavar="YAW,PITCH,ROLL",
+                     help="initial attitude in degrees, body to local North-East-Down "
+                          "(fit option initial_attitude_deg), e.g. --initial-attitude -30,80,0")
+    ass.add_argument("--launch-elevation", type=float, default=None, metavar="DEG",
+                     help="launch-rail elevation above the horizon, degrees (fit option "
+                          "launch_elevation_deg)")
+    ass.add_argument("--launch-azimuth", type=float, default=None, metavar="DEG",
+                     help="launch-rail azimuth from North, degrees (fit option "
+                          "launch_azimuth_deg)")
+    ass.add_argument("-p", "--parameter", nargs="+", action="append", default=[],
                      metavar=("KEY", "VALUE"),
-                     help="a keyword of assess_flight (preset, eta, nu, gnss_rate_hz, ...); "
-                          "VALUE parsed as JSON or a Python literal, else a string")
+                     help="a keyword of assess_flight (eta, nu, gnss_rate_hz, fit_options, "
+                          "segment_options, quality_thresholds, ...); VALUE parsed as JSON or a "
+                          "Python literal, else a string; a JSON value may be split over "
+                          "several shell words (they are joined with spaces)")
+
+
+def _parameter_words(key: str, words: list[str]):
+    """The value of ``-p KEY WORD [WORD ...]``: the words joined with spaces, parsed."""
+    if not words:
+        raise NavlibInputError(f"-p {key}: no value given (write: -p {key} VALUE)")
+    value = reports.parse_parameter_value(" ".join(words))
+    if len(words) > 1 and isinstance(value, str):
+        raise NavlibInputError(
+            f"-p {key}: the value came as {len(words)} shell words {words} that do not join "
+            "into one JSON or Python value; quote it as one word, and give each -p one "
+            "KEY and one VALUE")
+    return value
+
+
+def assess_options(args) -> dict:
+    """The :func:`navlib.studies.assess.assess_flight` keywords of an ``assess`` command
+    line: the ``-p`` pairs with ``--preset``, ``--vehicle`` and the fit options
+    ``initial_attitude_deg`` (yaw, pitch, roll), ``launch_elevation_deg`` and
+    ``launch_azimuth_deg`` of the flags merged in (a keyword given both ways is refused)."""
+    options = {}
+    for key, *words in args.parameter:
+        if key in options:
+            raise NavlibInputError(f"-p {key}: given twice")
+        options[key] = _parameter_words(key, words)
+    fit_options = options.get("fit_options") or {}
+    if not isinstance(fit_options, dict):
+        raise NavlibInputError(f"-p fit_options: expected a JSON object, got {fit_options!r}")
+    fit_options = dict(fit_options)
+    flags = {}
+    if args.initial_attitude is not None:
+        parts = args.initial_attitude.split(",")
+        try:
+            angles = tuple(float(x) for x in parts)
+        except ValueError:
+            angles = ()
+        if len(angles) != 3:
+            raise NavlibInputError(f"--initial-attitude: expected YAW,PITCH,ROLL in degrees "
+                                   f"(three numbers), got {args.initial_attitude!r}")
+        flags["initial_attitude_deg"] = angles
+    if args.launch_elevation is not None:
+        flags["launch_elevation_deg"] = args.launch_elevation
+    if args.launch_azimuth is not None:
+        flags["launch_azimuth_deg"] = args.launch_azimuth
+    for key, value in flags.items():
+        if key in fit_options:
+            raise NavlibInputError(f"fit_options: {key} given both in -p fit_options and as "
+                                   "a flag")
+        fit_options[key] = value
+    if fit_options:
+        options["fit_options"] = fit_options
+    for key in ("preset", "vehicle"):
+        value = getattr(args, key)
+        if value is not None:
+            if key in options:
+                raise NavlibInputError(f"--{key}: also given as -p {key}; give it once")
+            options[key] = value
+    return options
 
 
 def _assess(args) -> int:
     from navlib import fleet
 
-    options = {}
-    for key, text in args.parameter:
-        options[key] = reports.parse_parameter_value(text)
+    options = assess_options(args)
     table, pages = fleet.assess_logs(args.logs, options, scheduler=args.scheduler,
                                      progress=True)
     path = fleet.write_fleet(table, pages, args.output)
@@ -232,9 +310,21 @@ def _report(args) -> int:
     return 0
 
 
+def _negative_angles(argv: list[str]) -> list[str]:
+    """``--initial-attitude -30,80,0`` as ``--initial-attitude=-30,80,0``: argparse would
+    take a value starting with a minus sign for an option."""
+    out = []
+    for word in argv:
+        if out and out[-1] == "--initial-attitude" and word[:1] == "-" and word[1:2].isdigit():
+            out[-1] = f"--initial-attitude={word}"
+        else:
+            out.append(word)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m navlib``; returns the exit status."""
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_negative_angles(sys.argv[1:] if argv is None else list(argv)))
     try:
         if args.command == "report":
             return _report(args)

@@ -7,7 +7,9 @@ Public contract (spec ``api.md``, "Scale")::
 Each ``LOG`` is a PX4 ``.ulg`` file, an ArduPilot DataFlash ``.bin`` file (read with
 ``navlib.io.read_dataflash``) or an ``imu.csv,gnss.csv`` pair; each
 flight goes through :func:`navlib.studies.assess.assess_flight` as one task
-(:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords. :func:`assess_logs` returns one
+(:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords (a ULog's ``MAV_TYPE`` parameter
+is attached as ``imu.attrs["mav_type"]`` so the vehicle class comes from the log,
+:func:`navlib.segmentation.vehicle_from_log`). :func:`assess_logs` returns one
 row per flight and :func:`write_fleet` writes ``DIR/summary.csv`` plus one HTML page per
 assessed flight (tables and the figures of notebook 07 as embedded PNG). A flight that fails
 (unreadable log, too short, a fit that does not converge...) gets ``status = failed`` and its
@@ -32,7 +34,7 @@ from navlib.errors import NavlibInputError
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "flight_page", "parse_log",
            "write_fleet"]
 
-SUMMARY_COLUMNS = ("log", "status", "error", "duration_s", "n_segments", "phases",
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
                    "excitable", "sensible", "warnings", "seconds", "page")
 """Columns of ``summary.csv``, in order."""
 KINDS = ("ulog", "dataflash", "csv")
@@ -66,11 +68,25 @@ def _assess_keywords() -> tuple[str, ...]:
                  ("imu", "gnss"))
 
 
+def _mav_type(path: Path) -> int | None:
+    """The ``MAV_TYPE`` parameter of a PX4 ULog (the vehicle type), or None."""
+    from pyulog import ULog  # optional dependency, imported where read_ulog needs it too
+
+    try:
+        value = ULog(str(path), []).initial_parameters.get("MAV_TYPE")
+    except Exception:  # a log read_ulog accepted but whose header pyulog cannot re-read
+        return None
+    return None if value is None else int(value)
+
+
 def _read(kind: str, paths: tuple[Path, ...]):
     from navlib import io
 
     if kind == "ulog":
-        return io.read_ulog(paths[0])
+        imu, gnss = io.read_ulog(paths[0])
+        if imu.attrs.get("mav_type") is None:
+            imu.attrs["mav_type"] = _mav_type(paths[0])
+        return imu, gnss
     if kind == "csv":
         return io.read_imu_csv(paths[0]), io.read_gnss_csv(paths[1])
     return io.read_dataflash(paths[0])
@@ -108,7 +124,8 @@ def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
              "about the linearised model along the fitted trajectory under the stated preset "
              "and thresholds.</p>",
              "<h2>Assumed</h2>", pd.DataFrame([{k: result.options.get(k) for k in (
-                 "preset", "gnss_rate_hz", "gnss_sigma_m", "heading_deg")}]).to_html(index=False),
+                 "vehicle", "preset", "gnss_rate_hz", "gnss_sigma_m", "heading_deg")}]
+                                               ).to_html(index=False),
              "<h2>Inputs</h2>", result.inputs.to_html(index=False),
              "<h2>Segments and estimable states</h2>", result.summary().to_html(index=False)]
     notes = [*warning_texts, *result.notes]
@@ -153,7 +170,8 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
             texts = [f"{w.category.__name__}: {w.message}" for w in caught]
             page = flight_page(log, result, texts)
             seg = result.segment_table
-            row.update(status="ok", duration_s=float(seg.t_end.max() - seg.t_start.min()),
+            row.update(status="ok", vehicle=result.vehicle,
+                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
                        n_segments=len(seg),
                        phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
                                         for r in seg.itertuples(index=False)),

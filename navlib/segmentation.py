@@ -46,6 +46,29 @@ threshold relaxed by the factor ``hysteresis``
 merged into a neighbour (the longer one, or one of the same family: a short free fall next
 to a coast joins it).
 
+Vehicles (``docs/assumptions.md`` V1-V2). The table above is the *kinematic* labelling
+(``vehicle=None``). Given a vehicle class of :data:`VEHICLES` (or one recognised by
+:func:`recognise_vehicle`), the phases take that vehicle's words, :data:`VEHICLE_PHASES`:
+
+* ``rocket``: the kinematic labels, then the flight's order. The launch is the start of the
+  powered run that lifts the vehicle ``hover_height_m`` above its first position (or the
+  moment it gets there, unpowered); every window before it is ``rest`` (a rocket on its pad
+  stands, whatever the fit's noise suggests); from the launch to the apogee (the highest
+  point) ``powered`` and ``free_fall`` stay and anything else is ``coast``; after the apogee
+  every window is ``descent`` except kinematic ``rest`` (landed). A record that never rises
+  that far is ``rest`` throughout, or ``descent`` outside kinematic rest when it ends
+  ``hover_height_m`` lower than it starts (recorded from mid-descent).
+* ``multicopter``, ``fixed-wing``, ``ground``: with ``v_up`` the vertical speed (up of the
+  first position), ``v_h`` the horizontal speed and ``height`` the height above the
+  flight's lowest point, in priority order ``rest`` (kinematic rest; a multicopter also
+  below ``hover_height_m``), ``hover`` (multicopter only: ``height >= hover_height_m``,
+  ``v_h < hover_speed_m_s``, ``|v_up| < climb_rate_m_s``), ``climb`` (``v_up >
+  climb_rate_m_s``, or below ``hover_speed_m_s`` horizontally an upward acceleration over
+  ``rest_accel_m_s2`` while rising: a vertical take-off), ``descent`` (the same downwards;
+  neither for ``ground``),
+  ``turn`` (the kinematic turn) and ``cruise``. No rocket word (powered, coast, free fall)
+  is ever given to these vehicles.
+
 The result is an editable table (:meth:`Segmentation.to_frame`: ``phase, t_start, t_end``);
 :func:`segments_table` turns a user's edit (a DataFrame, a list of boundaries or of
 ``(t_start, t_end)`` / ``(phase, t_start, t_end)`` entries) back into that table.
@@ -66,12 +89,19 @@ from navlib.errors import NavlibInputError
 from navlib.units import DEG
 
 __all__ = [
+    "MAV_TYPES",
     "PHASES",
+    "RECOGNITION_DEFAULTS",
     "SEGMENT_DEFAULTS",
+    "VEHICLES",
+    "VEHICLE_PHASES",
     "Segmentation",
+    "check_vehicle",
     "flight_features",
+    "recognise_vehicle",
     "segment_flight",
     "segments_table",
+    "vehicle_from_log",
 ]
 
 PHASES = ("rest", "powered", "turn", "free_fall", "coast", "cruise")
@@ -90,13 +120,50 @@ SEGMENT_DEFAULTS = {
     "resolution_s": 0.1,
     "hysteresis": 0.25,
     "min_duration_s": 2.0,
+    "climb_rate_m_s": 1.0,
+    "hover_height_m": 2.0,
+    "hover_speed_m_s": 1.0,
 }
 """Default thresholds of :func:`segment_flight` (engineering choices, not from a paper)."""
+
+VEHICLES = ("rocket", "multicopter", "fixed-wing", "ground")
+"""Vehicle classes whose phases :func:`segment_flight` names (module docstring)."""
+VEHICLE_PHASES = {
+    "rocket": ("rest", "powered", "coast", "free_fall", "descent"),
+    "multicopter": ("rest", "hover", "climb", "descent", "turn", "cruise"),
+    "fixed-wing": ("rest", "climb", "descent", "turn", "cruise"),
+    "ground": ("rest", "turn", "cruise"),
+}
+"""The phase words of each vehicle class, in priority order (the last is the fallback)."""
+RECOGNITION_DEFAULTS = {
+    "rocket_accel_m_s2": 30.0,
+    "rocket_speed_m_s": 20.0,
+    "vertical_rate_m_s": 1.0,
+    "vertical_max_speed_m_s": 2.0,
+    "vertical_min_s": 1.0,
+    "airborne_height_m": 20.0,
+    "airborne_speed_m_s": 8.0,
+    "road_grade_max": 0.15,
+    "airborne_min_s": 1.0,
+    "sideways_min_deg": 45.0,
+    "sideways_min_s": 2.0,
+}
+"""Thresholds of :func:`recognise_vehicle` (``docs/assumptions.md`` V1; engineering choices)."""
+MAV_TYPES = {1: "fixed-wing", 2: "multicopter", 3: "multicopter", 4: "multicopter",
+             9: "rocket", 10: "ground", 11: "ground", 13: "multicopter", 14: "multicopter",
+             15: "multicopter", 19: "multicopter", 20: "multicopter", 21: "multicopter",
+             22: "multicopter", 23: "multicopter", 24: "fixed-wing", 29: "multicopter"}
+"""MAVLink ``MAV_TYPE`` -> vehicle class (fixed wing; quad-, coaxial, helicopter, hexa-,
+octo-, tricopter, dodecarotor; rocket; ground rover, surface boat; VTOLs, which take off as
+rotorcraft; parafoil as fixed-wing)."""
+_LOG_VEHICLES = (("arducopter", "multicopter"), ("copter", "multicopter"),
+                 ("heli", "multicopter"), ("arduplane", "fixed-wing"), ("plane", "fixed-wing"),
+                 ("rover", "ground"), ("ardurover", "ground"))
 
 SEGMENT_COLUMNS = ("phase", "t_start", "t_end")
 _FAMILY = {"free_fall": "unpowered", "coast": "unpowered"}
 _FEATURES = ("speed", "accel", "f_norm", "gravity", "f_along", "f_lateral", "rate",
-             "rate_across", "path_rate")
+             "rate_across", "path_rate", "v_up", "v_h", "a_up", "height", "sideslip")
 _TIME_TOL = 1e-6
 
 
@@ -115,11 +182,14 @@ class Segmentation:
         (rad/s), the label of the strict thresholds ``raw`` and the final ``phase``.
     thresholds : dict
         The thresholds used (:data:`SEGMENT_DEFAULTS` with the caller's changes).
+    vehicle : str or None
+        The vehicle class whose words name the phases (None: kinematic labels).
     """
 
     segments: pd.DataFrame
     features: pd.DataFrame
     thresholds: dict = field(default_factory=dict)
+    vehicle: str | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The editable segment table (a copy): ``phase, t_start, t_end, duration``."""
@@ -168,7 +238,12 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         ``|f^e - f_along u|`` (m/s^2);
         ``rate`` ``|omega_eb|``, ``rate_across`` its part off the roll axis (the body axis
         closest to ``u``) and ``path_rate`` ``|V x a| / |V|^2`` (rad/s; 0 below
-        ``turn_speed_m_s``).
+        ``turn_speed_m_s``); ``v_up`` and ``v_h`` the vertical and horizontal speed (m/s,
+        up of the first position's ellipsoid normal), ``a_up`` the vertical acceleration
+        (m/s^2), ``height`` the height above the
+        flight's lowest point (m) and ``sideslip`` the horizontal angle between the body
+        x axis and the velocity (rad, in [0, pi]; 0 below ``turn_speed_m_s`` or with the
+        body x axis within 5 deg of vertical).
     """
     t, P, V, f_b, w_ib_b, C_b_e = _trajectory_arrays(trajectory)
     omega = earth.EARTH_RATE_ECEF
@@ -192,6 +267,18 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
     path_rate = np.zeros_like(speed)
     fast = speed >= max(turn_speed_m_s, direction_speed_m_s)
     path_rate[fast] = np.linalg.norm(np.cross(V[fast], a_e[fast]), axis=1) / speed[fast] ** 2
+    lat, lon, _ = earth.ecef_to_geodetic(P[0])
+    up = -earth.ned_to_ecef_matrix(lat, lon)[:, 2]
+    v_up = V @ up
+    height = (P - P[0]) @ up
+    x_h = C_b_e[:, :, 0] - np.outer(C_b_e[:, :, 0] @ up, up)
+    v_hv = V - np.outer(v_up, up)
+    norms = np.linalg.norm(x_h, axis=1) * np.linalg.norm(v_hv, axis=1)
+    level = (np.linalg.norm(x_h, axis=1) > np.sin(5.0 * DEG)) & \
+        (np.linalg.norm(v_hv, axis=1) >= turn_speed_m_s)
+    sideslip = np.zeros_like(speed)
+    sideslip[level] = np.arccos(np.clip(np.einsum("ni,ni->n", x_h[level], v_hv[level])
+                                        / norms[level], -1.0, 1.0))
     return pd.DataFrame({
         "t": t,
         "speed": speed,
@@ -203,6 +290,11 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         "rate": rate,
         "rate_across": np.sqrt(np.maximum(rate**2 - roll**2, 0.0)),
         "path_rate": path_rate,
+        "v_up": v_up,
+        "v_h": np.sqrt(np.maximum(speed**2 - v_up**2, 0.0)),
+        "a_up": a_e @ up,
+        "height": height - height.min(),
+        "sideslip": sideslip,
     })
 
 
@@ -225,38 +317,77 @@ def _windows(features: pd.DataFrame, resolution_s: float) -> pd.DataFrame:
     return frame[["t", "t_start", "t_end", *_FEATURES]]
 
 
-def _conditions(w: pd.DataFrame, p: dict, relax: float) -> dict[str, np.ndarray]:
-    """Boolean condition of each phase per window, thresholds relaxed by ``relax``."""
+def _conditions(w: pd.DataFrame, p: dict, relax: float,
+                vehicle: str | None = None) -> dict[str, np.ndarray]:
+    """Boolean condition of each phase per window, thresholds relaxed by ``relax``, in
+    priority order (the fallback phase, ``cruise``, holds where none does)."""
     wider, narrower = 1.0 + relax, 1.0 - relax
     rest = ((w["speed"] < p["rest_speed_m_s"] * wider)
             & (w["rate"] < p["rest_rate_deg_s"] * DEG * wider)
             & (w["accel"] < p["rest_accel_m_s2"] * wider))
     powered = w["f_along"] > p["powered_accel_m_s2"] * narrower
     turn = np.maximum(w["rate_across"], w["path_rate"]) > p["turn_rate_deg_s"] * DEG * narrower
-    unpowered = w["f_along"] <= p["powered_accel_m_s2"] * wider
-    free_fall = (w["f_norm"] < p["free_fall_m_s2"] * wider) & unpowered
-    coast = (w["f_lateral"] < p["coast_lateral_m_s2"] * wider) & unpowered
-    return {"rest": rest.to_numpy(), "powered": powered.to_numpy(), "turn": turn.to_numpy(),
-            "free_fall": free_fall.to_numpy(), "coast": coast.to_numpy()}
+    if vehicle in (None, "rocket"):
+        unpowered = w["f_along"] <= p["powered_accel_m_s2"] * wider
+        free_fall = (w["f_norm"] < p["free_fall_m_s2"] * wider) & unpowered
+        coast = (w["f_lateral"] < p["coast_lateral_m_s2"] * wider) & unpowered
+        return {"rest": rest.to_numpy(), "powered": powered.to_numpy(), "turn": turn.to_numpy(),
+                "free_fall": free_fall.to_numpy(), "coast": coast.to_numpy()}
+    # a vertical take-off or landing starts with an acceleration before it has the speed
+    slow = w["v_h"] < p["hover_speed_m_s"] * wider
+    pushed = w["a_up"].abs() > p["rest_accel_m_s2"] * narrower
+    climb = (w["v_up"] > p["climb_rate_m_s"] * narrower) | (
+        slow & pushed & (w["a_up"] > 0) & (w["v_up"] > 0))
+    descent = (w["v_up"] < -p["climb_rate_m_s"] * narrower) | (
+        slow & pushed & (w["a_up"] < 0) & (w["v_up"] < 0))
+    low = w["height"] < p["hover_height_m"] * wider
+    hover = ((w["height"] >= p["hover_height_m"] * narrower)
+             & (w["v_h"] < p["hover_speed_m_s"] * wider)
+             & (w["v_up"].abs() < p["climb_rate_m_s"] * wider))
+    out = {"rest": (rest & low if vehicle == "multicopter" else rest).to_numpy(),
+           "hover": hover.to_numpy(), "climb": climb.to_numpy(), "descent": descent.to_numpy(),
+           "turn": turn.to_numpy()}
+    return {phase: out[phase] for phase in VEHICLE_PHASES[vehicle][:-1]}
 
 
 def _classify(conditions: dict[str, np.ndarray], n: int) -> np.ndarray:
     label = np.full(n, "cruise", dtype=object)
-    for phase in reversed(PHASES[:-1]):  # the first phase in priority order wins
+    for phase in reversed(list(conditions)):  # the first phase in priority order wins
         label[conditions[phase]] = phase
     return label
 
 
 def _with_hysteresis(strict: np.ndarray, relaxed: dict[str, np.ndarray]) -> np.ndarray:
     """Keep the current phase while its relaxed condition holds and no phase of higher
-    priority holds strictly; otherwise take the strict label."""
-    rank = {phase: i for i, phase in enumerate(PHASES)}
+    priority holds strictly; otherwise take the strict label. ``relaxed`` is in priority
+    order and holds the fallback phase last."""
+    rank = {phase: i for i, phase in enumerate(relaxed)}
     out = strict.copy()
     current = strict[0]
     for k in range(strict.size):
         if rank[strict[k]] < rank[current] or not relaxed[current][k]:
             current = strict[k]
         out[k] = current
+    return out
+
+
+def _rocket_sequence(labels: np.ndarray, height: np.ndarray, rise_m: float) -> np.ndarray:
+    """Rocket words from the kinematic labels and the flight's order (module docstring)."""
+    out = labels.copy()
+    rise = np.flatnonzero(height - height[0] >= rise_m)
+    if rise.size == 0:   # never rose: on the pad throughout, or recorded from mid-descent
+        falling = height[0] - height[-1] > rise_m
+        out[labels != "rest"] = "descent" if falling else "rest"
+        return out
+    launch = int(rise[0])
+    while launch > 0 and labels[launch - 1] == "powered":
+        launch -= 1
+    out[:launch] = "rest"
+    apogee = launch + int(np.argmax(height[launch:]))
+    ascent = out[launch:apogee + 1]
+    ascent[~np.isin(ascent, ("powered", "free_fall"))] = "coast"
+    after = out[apogee + 1:]
+    after[after != "rest"] = "descent"
     return out
 
 
@@ -298,21 +429,25 @@ def _merge_short(runs: list[list], t_start: np.ndarray, t_end: np.ndarray,
     return runs
 
 
-def segment_flight(trajectory, **thresholds) -> Segmentation:
+def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segmentation:
     """Cut a flight into phases (rest, powered, turn, free fall, coast, cruise) from its
-    kinematics.
+    kinematics, named in a vehicle's words when ``vehicle`` is given.
 
     Parameters
     ----------
     trajectory : navlib.trajectory.Trajectory
         A reference trajectory, typically :func:`navlib.trajectory.fit_flight_data` of a
         recorded flight (its IMU is smooth and exact).
+    vehicle : str, optional
+        One of :data:`VEHICLES`: the phases take its words (:data:`VEHICLE_PHASES`, module
+        docstring); None: the kinematic labels.
     **thresholds
         Any of :data:`SEGMENT_DEFAULTS`: ``rest_speed_m_s`` (1), ``rest_rate_deg_s`` (3),
         ``rest_accel_m_s2`` (0.5), ``powered_accel_m_s2`` (2), ``turn_rate_deg_s`` (5),
         ``free_fall_m_s2`` (0.5), ``coast_lateral_m_s2`` (2), ``direction_speed_m_s`` (1),
         ``turn_speed_m_s`` (3), ``resolution_s`` (0.1), ``hysteresis`` (0.25, in [0, 0.9]),
-        ``min_duration_s`` (2). Conditions in the module docstring.
+        ``min_duration_s`` (2), and for the vehicle words ``climb_rate_m_s`` (1),
+        ``hover_height_m`` (2), ``hover_speed_m_s`` (1). Conditions in the module docstring.
 
     Returns
     -------
@@ -320,15 +455,18 @@ def segment_flight(trajectory, **thresholds) -> Segmentation:
         ``segments`` (``phase, t_start, t_end, duration``, contiguous from the first to
         the last sample) and the per-window ``features``.
     """
+    vehicle = None if vehicle is None else check_vehicle(vehicle)
     p = _options(thresholds)
     features = flight_features(trajectory, p["direction_speed_m_s"], p["rest_accel_m_s2"],
                                p["turn_speed_m_s"])
     w = _windows(features, p["resolution_s"])
     n = len(w)
-    strict = _classify(_conditions(w, p, 0.0), n)
-    relaxed = _conditions(w, p, p["hysteresis"])
+    strict = _classify(_conditions(w, p, 0.0, vehicle), n)
+    relaxed = _conditions(w, p, p["hysteresis"], vehicle)
     relaxed["cruise"] = strict == "cruise"
     labels = _with_hysteresis(strict, relaxed)
+    if vehicle == "rocket":
+        labels = _rocket_sequence(labels, w["height"].to_numpy(), p["hover_height_m"])
     t_start, t_end = w["t_start"].to_numpy(), w["t_end"].to_numpy()
     runs = _merge_short(_runs(labels), t_start, t_end, p["min_duration_s"])
     final = labels.copy()
@@ -342,7 +480,103 @@ def segment_flight(trajectory, **thresholds) -> Segmentation:
         "t_end": [float(t_end[r[2]]) for r in runs],
     })
     segments["duration"] = segments["t_end"] - segments["t_start"]
-    return Segmentation(segments=segments, features=w, thresholds=p)
+    return Segmentation(segments=segments, features=w, thresholds=p, vehicle=vehicle)
+
+
+# --------------------------------------------------------------------------- vehicles
+
+
+def check_vehicle(vehicle) -> str:
+    """``vehicle`` if it is one of :data:`VEHICLES` (case and ``_``/``-`` forgiven)."""
+    text = str(vehicle).strip().lower().replace("_", "-") if isinstance(vehicle, str) else None
+    if text == "fixedwing":
+        text = "fixed-wing"
+    if text not in VEHICLES:
+        raise NavlibInputError(f"vehicle: expected one of {list(VEHICLES)}, got {vehicle!r}")
+    return text
+
+
+def vehicle_from_log(attrs: Mapping) -> tuple[str | None, str]:
+    """The vehicle class a log says it is, from a reader's ``attrs``, and why.
+
+    ``attrs["vehicle"]`` when a reader sets one of :data:`VEHICLES`; ``rocket`` for an
+    Altus Metrum AltOS export (``attrs["flight_states"]``: only rocket flight computers
+    write one); the ArduPilot firmware banner (``attrs["hardware"]``, e.g. ``ArduCopter
+    V4.5.0`` -> multicopter, ``ArduPlane`` -> fixed-wing, ``Rover`` -> ground). ``(None,
+    "")`` when the log does not say (then :func:`recognise_vehicle` reads the kinematics).
+    """
+    attrs = attrs if isinstance(attrs, Mapping) else {}
+    given = attrs.get("vehicle")
+    if isinstance(given, str) and given.strip().lower() in VEHICLES:
+        return given.strip().lower(), "the log names it"
+    if attrs.get("flight_states") is not None:
+        return "rocket", "an Altus Metrum AltOS flight-computer log"
+    mav_type = attrs.get("mav_type")
+    if isinstance(mav_type, int | np.integer) and int(mav_type) in MAV_TYPES:
+        return MAV_TYPES[int(mav_type)], f"the log's MAV_TYPE {int(mav_type)}"
+    banner = str(attrs.get("hardware") or "").lower()
+    if str(attrs.get("autopilot", "")).lower() == "ardupilot" and banner:
+        for word, vehicle in _LOG_VEHICLES:
+            if word in banner:
+                return vehicle, f"the ArduPilot firmware banner {attrs['hardware']!r}"
+    return None, ""
+
+
+def recognise_vehicle(trajectory, **thresholds) -> tuple[str, str]:
+    """The vehicle class of a (fitted) flight from its kinematics, and why
+    (``docs/assumptions.md`` V1).
+
+    In order: ``rocket`` when the specific force exceeds ``rocket_accel_m_s2`` (30, about
+    3 g, over 0.1 s) and the vertical speed ``rocket_speed_m_s`` (20); ``multicopter`` when
+    the vehicle moves vertically (``|v_up| > vertical_rate_m_s``, 1) with little horizontal
+    speed (``v_h < vertical_max_speed_m_s``, 2) for ``vertical_min_s`` (1 s) in all (only
+    rotorcraft and rockets take off or land vertically), or flies sideways (a sideslip
+    between ``sideways_min_deg`` (45) and 180 minus it, above ``hover_height_m`` of
+    :data:`SEGMENT_DEFAULTS` and 3 m/s) for ``sideways_min_s`` (2 s): an aeroplane or a car
+    goes where its nose points (or backwards), a multicopter in any direction;
+    ``fixed-wing`` when it rises
+    ``airborne_height_m`` (20) above its lowest point and climbs or descends faster than a
+    road allows (``|v_up| > road_grade_max v_h``, 0.15) at ``v_h > airborne_speed_m_s`` (8)
+    for ``airborne_min_s`` (1 s) in all;
+    else ``ground``. A stationary record is ``ground``.
+
+    Parameters
+    ----------
+    trajectory : navlib.trajectory.Trajectory
+    **thresholds
+        Any of :data:`RECOGNITION_DEFAULTS`.
+    """
+    reject_unknown(thresholds, RECOGNITION_DEFAULTS, "recognise_vehicle")
+    p = {k: finite_scalar(thresholds.get(k, v), k, 0.0, low_open=True)
+         for k, v in RECOGNITION_DEFAULTS.items()}
+    w = _windows(flight_features(trajectory), 0.1)
+    dt = (w["t_end"] - w["t_start"]).to_numpy()
+    f_peak, up_peak = float(w["f_norm"].max()), float(w["v_up"].max())
+    if f_peak > p["rocket_accel_m_s2"] and up_peak > p["rocket_speed_m_s"]:
+        return "rocket", (f"kinematics: specific force up to {f_peak:.3g} m/s^2 and vertical "
+                          f"speed up to {up_peak:.3g} m/s")
+    vertical = ((w["v_up"].abs() > p["vertical_rate_m_s"])
+                & (w["v_h"] < p["vertical_max_speed_m_s"])).to_numpy()
+    if dt[vertical].sum() >= p["vertical_min_s"]:
+        return "multicopter", (f"kinematics: {dt[vertical].sum():.3g} s of vertical motion "
+                               f"(|v_up| > {p['vertical_rate_m_s']:g} m/s at horizontal speed "
+                               f"below {p['vertical_max_speed_m_s']:g} m/s)")
+    slip = w["sideslip"].to_numpy()
+    sideways = ((slip > p["sideways_min_deg"] * DEG) & (slip < np.pi - p["sideways_min_deg"] * DEG)
+                & (w["height"] >= SEGMENT_DEFAULTS["hover_height_m"]).to_numpy())
+    if dt[sideways].sum() >= p["sideways_min_s"]:
+        return "multicopter", (f"kinematics: {dt[sideways].sum():.3g} s of flight sideways "
+                               f"(body x axis over {p['sideways_min_deg']:g} deg off the "
+                               "velocity)")
+    steep = ((w["v_h"] > p["airborne_speed_m_s"])
+             & (w["v_up"].abs() > p["road_grade_max"] * w["v_h"])).to_numpy()
+    height = float(w["height"].max())
+    if height > p["airborne_height_m"] and dt[steep].sum() >= p["airborne_min_s"]:
+        return "fixed-wing", (f"kinematics: {height:.3g} m of height range and "
+                              f"{dt[steep].sum():.3g} s of climb or descent steeper than a road "
+                              f"at over {p['airborne_speed_m_s']:g} m/s")
+    return "ground", ("kinematics: no boost, no vertical take-off or landing, no airborne "
+                      "climb")
 
 
 # --------------------------------------------------------------------------- user edits

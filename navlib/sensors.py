@@ -68,6 +68,7 @@ _TRIAD_UNITS = {
         "bias_markov_tau": _TIME,
         "bias_rw": {"rad_s_sqrt_s": 1.0},
         "scale_factor_rw": _SCALE_RW,
+        "range": _GYRO_RATE,
     },
     "accel": {
         "bias": _ACCEL,
@@ -79,13 +80,14 @@ _TRIAD_UNITS = {
         "bias_markov_tau": _TIME,
         "bias_rw": {"m_s2_sqrt_s": 1.0},
         "scale_factor_rw": _SCALE_RW,
+        "range": {**_ACCEL, "g": units.G0},
     },
 }
 _TRIAD_FIELD = {  # TOML field -> TriadSpec attribute
     "bias": "bias", "scale_factor": "scale_factor", "misalignment": "misalignment",
     "arw": "noise_density", "vrw": "noise_density", "bias_markov": "bias_markov_sigma",
     "bias_markov_tau": "bias_markov_tau", "bias_rw": "bias_random_walk",
-    "scale_factor_rw": "scale_factor_random_walk",
+    "scale_factor_rw": "scale_factor_random_walk", "range": "range",
 }
 _GNSS_UNITS = {
     "position_sigma": {"m": 1.0},
@@ -136,6 +138,10 @@ class TriadSpec:
         Bias random-walk density, rad/s/sqrt(s) or m/s^2/sqrt(s).
     scale_factor_random_walk : float
         Scale-factor random-walk density, 1/sqrt(s).
+    range : float or None
+        Measurement range: the largest magnitude one axis reports, rad/s or m/s^2 (preset
+        keys ``gyro_range_deg_s`` / ``_rad_s``, ``accel_range_g`` / ``_m_s2``); None when
+        the preset does not say. Samples at it are saturated (:mod:`navlib.quality`).
     """
 
     bias: float = 0.0
@@ -146,11 +152,15 @@ class TriadSpec:
     bias_markov_tau: float = np.inf
     bias_random_walk: float = 0.0
     scale_factor_random_walk: float = 0.0
+    range: float | None = None
 
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name == "bias_markov_tau":
+            if f.name == "range":
+                if value is not None and not (np.isfinite(value) and value > 0):
+                    raise NavlibInputError(f"range: must be a finite number > 0, got {value}")
+            elif f.name == "bias_markov_tau":
                 if not value > 0:
                     raise NavlibInputError(f"bias_markov_tau: must be > 0 s, got {value}")
             elif not (np.isfinite(value) and value >= 0):

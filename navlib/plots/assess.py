@@ -20,9 +20,12 @@ from navlib.plots.figure import subplots
 from navlib.units import DEG
 
 PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
-                 "free_fall": "tab:cyan", "coast": "tab:blue", "cruise": "tab:green"}
-"""Colour of each automatic phase; user-named segments cycle through :data:`OTHER_COLOURS`."""
-OTHER_COLOURS = ("tab:orange", "tab:brown", "tab:pink", "tab:olive", "0.3")
+                 "free_fall": "tab:cyan", "coast": "tab:blue", "cruise": "tab:green",
+                 "climb": "tab:orange", "hover": "tab:olive", "descent": "tab:brown"}
+"""Colour of each automatic phase (the words of every vehicle class,
+:data:`navlib.segmentation.VEHICLE_PHASES`); user-named segments cycle through
+:data:`OTHER_COLOURS`."""
+OTHER_COLOURS = ("tab:pink", "gold", "navy", "darkslategray", "0.3")
 _MAX_POINTS = 20_000
 
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from navlib import sensors
+from navlib import quality, sensors
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning, check_overlap
@@ -51,8 +51,11 @@ from navlib.models.ecef import PAPER_IDS, STATE_GROUPS, ecef21_at_epochs
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
     Segmentation,
+    check_vehicle,
+    recognise_vehicle,
     segment_flight,
     segments_table,
+    vehicle_from_log,
 )
 from navlib.trajectory import fit_flight_data
 from navlib.trajectory.fit import FIT_DEFAULTS
@@ -294,6 +297,11 @@ class FlightAssessment(SegmentedAnalysis):
     spans : tuple of FlightAssessment
         When the record was split at long holes: every span's assessment in time order
         (this one among them); empty otherwise.
+    quality : DataFrame or None
+        The data-quality findings of the whole record (:func:`navlib.quality.check_records`:
+        saturated IMU samples, frozen, disagreeing or jumping GNSS fixes, all dropped
+        before the fit); each ``message`` was also issued as a
+        :class:`~navlib.io.FlightDataWarning`.
 
     The long frames name each segment by ``segment`` (1-based) and ``phase``, and each state
     by ``state``, ``paper_id`` (e1..e21) and ``group``; the wide
@@ -311,6 +319,12 @@ class FlightAssessment(SegmentedAnalysis):
     imu_residuals: pd.DataFrame | None = None
     notes: tuple[str, ...] = ()
     spans: tuple = ()
+    quality: pd.DataFrame | None = None
+
+    @property
+    def vehicle(self) -> str:
+        """The vehicle class whose words name the phases (``options["vehicle"]``)."""
+        return self.options.get("vehicle", "")
 
     @property
     def labels(self) -> tuple[str, ...]:
@@ -431,7 +445,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
                   gnss_sigma_m: float | None = None, heading_fallback_deg: float | None = 0.0,
                   fit_options: Mapping | None = None, segment_options: Mapping | None = None,
                   model_options: Mapping | None = None,
-                  model_step_s: float | None = MODEL_STEP_S) -> FlightAssessment:
+                  model_step_s: float | None = MODEL_STEP_S, vehicle: str | None = None,
+                  quality_thresholds: Mapping | None = None) -> FlightAssessment:
     """Fit, segment and assess a recorded flight with the 21-state ECEF model.
 
     Parameters
@@ -478,6 +493,17 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         :func:`navlib.models.ecef.ecef21_at_epochs` (``attitude_error``, P0 sigmas...).
     model_step_s : float or None
         Longest step of the model build (:data:`MODEL_STEP_S`); None: every IMU step.
+    vehicle : str, optional
+        One of :data:`navlib.segmentation.VEHICLES` (rocket, multicopter, fixed-wing,
+        ground): the phases take its words. None: what the log says
+        (:func:`navlib.segmentation.vehicle_from_log`), else recognised from the fitted
+        kinematics (:func:`navlib.segmentation.recognise_vehicle`); the choice and its
+        reason are in ``options``.
+    quality_thresholds : mapping, optional
+        Overrides of the data-quality thresholds of ``data/quality.toml``
+        (:func:`navlib.quality.load_thresholds`, e.g. ``{"gnss": {"jump_min_m": 20}}``).
+        Saturated IMU samples and faulty GNSS fixes are found, warned about with times and
+        dropped before the fit (:func:`navlib.quality.check_records`, assumptions Q1-Q4).
 
     Returns
     -------
@@ -489,9 +515,10 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     ------
     NavlibInputError
         Records that are not DataFrames or lack columns, records that do not overlap,
-        overlap shorter than 2 s or holding fewer than 4 GNSS epochs (of every span), IMU
-        rates below the fit's minimum (:data:`navlib.trajectory.fit.MIN_IMU_RATE_HZ`), bad
-        thresholds or segments (naming the segment), and the fit's own input errors.
+        overlap shorter than 2 s or holding fewer than 4 GNSS epochs (of every span), too
+        much of the flight saturated or too many GNSS fixes faulty, IMU rates below the
+        fit's minimum (:data:`navlib.trajectory.fit.MIN_IMU_RATE_HZ`), bad thresholds or
+        segments (naming the segment), and the fit's own input errors.
     """
     thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
     _check_frame(imu, "imu", _IMU_KEYS)
@@ -512,11 +539,24 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         model_step_s = finite_scalar(model_step_s, "model_step_s", 0.0, low_open=True)
     max_bridge_s = finite_scalar(fit_options.get("max_bridge_s", FIT_DEFAULTS["max_bridge_s"]),
                                  "max_bridge_s", 0.0, low_open=True)
+    if vehicle is not None:
+        vehicle, vehicle_reason = check_vehicle(vehicle), "given"
+    else:
+        vehicle, vehicle_reason = vehicle_from_log(imu.attrs)
+    sigma = _gnss_sigma(gnss, spec) if gnss_sigma_m is None else gnss_sigma_m
+    checked = quality.check_records(imu, gnss, spec,
+                                    finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True),
+                                    quality_thresholds)
+    for message in checked.warnings:
+        warnings.warn(message, FlightDataWarning, stacklevel=2)
+    imu, gnss = checked.imu, checked.gnss
     kwargs = {"spec": spec, "preset": preset, "preset_reason": preset_reason,
               "segments": segments, "thresholds": thresholds, "gnss_rate_hz": gnss_rate_hz,
               "gnss_sigma_m": gnss_sigma_m, "heading_fallback_deg": heading_fallback_deg,
               "fit_options": fit_options, "segment_options": segment_options,
-              "model_options": model_options, "model_step_s": model_step_s}
+              "model_options": model_options, "model_step_s": model_step_s,
+              "vehicle": vehicle, "vehicle_reason": vehicle_reason,
+              "findings": checked.findings}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -547,7 +587,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
-                 segment_options, model_options, model_step_s) -> FlightAssessment:
+                 segment_options, model_options, model_step_s, vehicle, vehicle_reason,
+                 findings) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = _validate(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -569,7 +610,10 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     min_epochs_s = 2.0 / gnss_rate_hz
     seg_opts = dict(segment_options)
     seg_opts["min_duration_s"] = max(seg_opts.get("min_duration_s", 2.0), min_epochs_s)
-    automatic = segment_flight(trajectory, **seg_opts)
+    if vehicle is None:
+        vehicle, vehicle_reason = recognise_vehicle(trajectory)
+    notes.append(f"vehicle {vehicle!r}: {vehicle_reason}")
+    automatic = segment_flight(trajectory, vehicle=vehicle, **seg_opts)
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
@@ -581,13 +625,14 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                "fit_options": fit_options, "segment_options": seg_opts,
                "model_options": model_options, "model_step_s": model_step_s,
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
-               "attitude_source": residuals.get("heading_source")}
+               "attitude_source": residuals.get("heading_source"), "vehicle": vehicle,
+               "vehicle_reason": vehicle_reason}
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return FlightAssessment.build(
         model, _pairs(table), trajectory=trajectory, **thresholds, settings=settings,
         inputs=inputs, fit=fit, automatic=automatic, segment_table=table, options=options,
-        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes))
+        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=findings)
 
 
 def _fit_notes(trajectory) -> list[str]:
