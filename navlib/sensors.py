@@ -666,3 +666,12 @@ def simulate_attitude_sensor(trajectory, sigma: float, rate_hz: float | None = N
 
     noise = inject(noise, t, as_outliers(outliers), "att")
     return t, exp_so3(noise) @ trajectory.attitude[idx].as_matrix()
+
+
+# Allan-variance noise fit (spec api.md "Planning"): its own module, offered here with the
+# presets it writes.
+from navlib.allan import (  # noqa: E402
+    allan_deviation as allan_deviation,
+    fit_allan as fit_allan,
+    write_allan_preset as write_allan_preset,
+)

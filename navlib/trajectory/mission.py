@@ -691,9 +691,9 @@ def from_mission(path_or_mapping) -> Trajectory:
 
     Parameters
     ----------
-    path_or_mapping : str, Path or mapping
-        A TOML mission file, the name of an example mission (:func:`list_missions`) or the
-        same content as a mapping (module docstring).
+    path_or_mapping : str, Path, mapping or Mission
+        A TOML mission file, the name of an example mission (:func:`list_missions`), the
+        same content as a mapping (module docstring) or a :func:`load_mission` result.
 
     Returns
     -------
@@ -708,7 +708,8 @@ def from_mission(path_or_mapping) -> Trajectory:
     NavlibInputError
         Naming the file, the table, phase or waypoint and the key, and what was expected.
     """
-    mission = load_mission(path_or_mapping)
+    mission = path_or_mapping if isinstance(path_or_mapping, Mission) else \
+        load_mission(path_or_mapping)
     if mission.vehicle == "rocket":
         traj = _rocket(mission)
         return Trajectory(t=traj.t, position=traj.position, velocity=traj.velocity,
