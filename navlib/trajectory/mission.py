@@ -511,8 +511,9 @@ def _events(plan: dict, vehicle: str, where: str) -> tuple[list, np.ndarray, flo
         dv = np.linalg.norm(vb - va)
         a = a_max
         if vehicle != "multicopter":    # turns within the turn radius or bank limit,
-            if vehicle == "ground":      # speed changes within max_acceleration
-                a = max(np.linalg.norm(va), np.linalg.norm(vb))**2 / lim["turn_radius_m"]
+            if vehicle == "ground":      # speed changes within max_acceleration; the
+                # tightest radius is mid-blend, where the speed is |va + vb| / 2
+                a = (0.5 * np.linalg.norm(va + vb)) ** 2 / lim["turn_radius_m"]
             else:
                 a = G0 * np.tan(lim["bank_limit_deg"] * DEG)
             dv = max(dv, abs(np.linalg.norm(vb) - np.linalg.norm(va)) * a / a_max)
