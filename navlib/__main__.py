@@ -2,7 +2,8 @@
 [--jobs N] [--no-cache]``
 ``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``,
 ``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] --output DIR
-[-p key value ...]`` and ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
+[-p key value ...]`` and
+``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
 2 for bad command-line input, 128 + signal number when interrupted (130 Ctrl-C, 143 SIGTERM).

@@ -168,7 +168,7 @@ def test_bad_missions_name_the_place(mission, changes, words):
 def test_bad_mission_file_names_the_file(tmp_path):
     bad = tmp_path / "broken.toml"
     bad.write_text("vehicle = 'ground'\n[site\n", encoding="utf-8")
-    with pytest.raises(NavlibInputError, match="broken.toml: not valid TOML"):
+    with pytest.raises(NavlibInputError, match=r"broken\.toml: not valid TOML"):
         from_mission(bad)
     with pytest.raises(NavlibInputError, match="unknown example mission"):
         from_mission("no_such_mission")
