@@ -170,7 +170,9 @@ def _fit_axis(tau, dev, duration):
         else:
             resolved.append(values[j])
     log_err = np.log10(np.sqrt(np.where(model > 0, model, np.nan)) / dev)
-    quality = {"rms_log_error": float(np.sqrt(np.nanmean(log_err**2))),
+    ok = np.isfinite(log_err)
+    quality = {"rms_log_error": float(np.sqrt(np.average(log_err[ok] ** 2,
+                                                         weights=clusters[ok] - 1.0))),
                "tau_min_s": float(tau[0]), "tau_max_s": float(tau[-1]),
                "n_taus": int(tau.size), "tau_floor_s": float(tau[np.argmin(dev)]),
                "reason": "; ".join(reasons)}
@@ -195,7 +197,8 @@ def fit_allan(imu, rate_hz: float | None = None) -> pd.DataFrame:
         Indexed by axis (``w_x`` ... ``f_z``, those present): ``random_walk`` (rad/√s,
         m/s/√s), ``bias_instability`` (rad/s, m/s²), ``rate_random_walk`` (rad/s/√s,
         m/s²/√s), their units (``unit_random_walk``, ...), and the fit quality:
-        ``rms_log_error`` (RMS of log10 fitted/measured deviation), ``tau_min_s``,
+        ``rms_log_error`` (RMS of log10 fitted/measured deviation, each averaging time
+        weighted by its independent clusters less one, as in the fit), ``tau_min_s``,
         ``tau_max_s``, ``n_taus`` (averaging times used: at least 3 clusters each),
         ``tau_floor_s`` (tau of the lowest measured deviation) and ``reason`` (why a term
         is NaN; empty when all three are resolved). ``attrs`` keeps ``rate_hz``,
