@@ -114,3 +114,15 @@ def test_trade_study_through_sweep():
     assert table.iloc[1]["sigma_end_P_x"] == pytest.approx(direct["sigma_end_P_x"])
     # a MEMS gyro leaves the attitude less certain than the tactical unit at the end
     assert table.iloc[1]["sigma_end_theta_z"] > table.iloc[0]["sigma_end_theta_z"]
+
+
+def test_segment_inside_an_outage_is_joined_or_refused():
+    plan = plan_mission("ground_vehicle")            # a turn lies inside the 40-52 s outage
+    joined = [n for n in plan.notes if "lies inside a GNSS outage" in n]
+    assert len(joined) == 1
+    silent = ~np.any(np.asarray(plan.model.H) != 0.0, axis=(1, 2))
+    t = np.asarray(plan.model.t)
+    for a, b in plan.segments:
+        assert np.any(~silent & (t >= a) & (t <= b))
+    with pytest.raises(NavlibInputError, match=r"segment 2 \(turn, 42\.\.50 s\) lies inside"):
+        plan_mission("ground_vehicle", segments=[(0.0, 42.0), (42.0, 50.0), (50.0, 121.0)])
