@@ -1,8 +1,8 @@
 """Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]
 [--jobs N] [--no-cache]``
 ``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]``,
-``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] --output DIR
-[-p key value ...]`` and
+``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] [--flight LOG]
+--output DIR [-p key value ...]`` and
 ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
@@ -127,6 +127,9 @@ def _add_plan(sub) -> None:
                           "the default of its vehicle class)")
     pln.add_argument("--output", type=Path, required=True, metavar="DIR",
                      help="folder for summary.csv and the mission pages")
+    pln.add_argument("--flight", default=None, metavar="LOG",
+                     help="a recorded flight of the same vehicle (a LOG as for assess): its "
+                          "assessment is shown beside each plan, per phase")
     pln.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
                      metavar=("KEY", "VALUE"),
                      help="a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
@@ -140,7 +143,7 @@ def _plan(args) -> int:
     options = {key: reports.parse_parameter_value(text) for key, text in args.parameter}
     if args.sensors is not None:
         options["sensors_preset"] = args.sensors
-    table, pages = plan.plan_missions(args.missions, options)
+    table, pages = plan.plan_missions(args.missions, options, flight=args.flight)
     path = plan.write_plans(table, pages, args.output)
     failed = table[table["status"] != "ok"]
     for row in failed.itertuples(index=False):

@@ -1,13 +1,15 @@
 """Mission planning (navlib.studies.plan and python -m navlib plan): outages, timeline,
 the command line and the trade-study evaluation."""
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from navlib import NavlibInputError
 from navlib.__main__ import main
-from navlib.studies.plan import VEHICLE_PRESETS, plan_mission, plan_point
+from navlib.studies.plan import VEHICLE_PRESETS, plan_beside_flight, plan_mission, plan_point
 from navlib.sweep import sweep
 
 POSITION = ("P_x", "P_y", "P_z")
@@ -126,3 +128,38 @@ def test_segment_inside_an_outage_is_joined_or_refused():
         assert np.any(~silent & (t >= a) & (t <= b))
     with pytest.raises(NavlibInputError, match=r"segment 2 \(turn, 42\.\.50 s\) lies inside"):
         plan_mission("ground_vehicle", segments=[(0.0, 42.0), (42.0, 50.0), (50.0, 121.0)])
+
+
+SAMPLE = Path(__file__).resolve().parents[1] / "data" / "sample_flight"
+
+
+@pytest.fixture(scope="module")
+def sample_flight():
+    from navlib import io
+    from navlib.studies.assess import assess_flight
+
+    return assess_flight(io.read_imu_csv(SAMPLE / "imu.csv"),
+                         io.read_gnss_csv(SAMPLE / "gnss.csv"), preset="motionpak_tactical")
+
+
+def test_planned_beside_flown_per_phase(sample_flight):
+    """The sample flight was simulated from the sounding-rocket profile the rocket mission
+    describes: per phase the plan expects what the flight delivers."""
+    table = plan_beside_flight(plan_mission("sounding_rocket"), sample_flight)
+    assert list(table["phase"]) == ["rest", "powered", "coast", "free_fall"]
+    assert (table["planned_excitable"] == table["flown_excitable"]).all()
+    assert (table["planned_sensible"] == table["flown_sensible"]).all()
+    assert (table["sensible_only_planned"] == "-").all()
+    other = plan_beside_flight(plan_mission("multicopter_survey"), sample_flight)
+    turn = other.set_index("phase").loc["turn"]
+    assert turn["flown_segments"] == "-" and turn["planned_segments"] != "-"
+    with pytest.raises(NavlibInputError, match="flight: expected a FlightAssessment"):
+        plan_beside_flight(plan_mission("sounding_rocket"), "flight.ulg")
+
+
+def test_plan_command_with_a_flight(tmp_path):
+    out = tmp_path / "plans"
+    flight = f"{SAMPLE / 'imu.csv'},{SAMPLE / 'gnss.csv'}"
+    assert main(["plan", "sounding_rocket", "--flight", flight, "--output", str(out)]) == 0
+    page = (out / pd.read_csv(out / "summary.csv")["page"][0]).read_text(encoding="utf-8")
+    assert "Planned beside flown" in page and "sensible_only_flown" in page

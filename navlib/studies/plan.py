@@ -42,12 +42,13 @@ from navlib.studies.assess import (
     FlightAssessment,
     _pairs,
     _segment_table,
+    assess_flight,
     describe_inputs,
 )
 from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
 
-__all__ = ["VEHICLE_PRESETS", "MissionPlan", "plan_mission", "plan_missions", "plan_page",
-           "plan_point", "write_plans"]
+__all__ = ["VEHICLE_PRESETS", "MissionPlan", "plan_beside_flight", "plan_mission",
+           "plan_missions", "plan_page", "plan_point", "write_plans"]
 
 VEHICLE_PRESETS = {"rocket": "motionpak_tactical", "multicopter": "pixhawk_mems",
                    "fixed-wing": "pixhawk_mems", "ground": "pixhawk_mems"}
@@ -305,11 +306,72 @@ model_options, model_step_s
         outages=windows)
 
 
+# --------------------------------------------------------------------------- planned beside flown
+
+
+def _by_phase(analysis) -> dict:
+    """Phase -> (segment labels, excitable states, sensible states) of an analysis, over all
+    its segments of that phase (a state counts when it qualifies in any of them)."""
+    table = analysis.state_table()
+    out = {}
+    for phase in dict.fromkeys(analysis.segment_table["phase"]):
+        part = table[table["phase"] == phase]
+        segs = analysis.segment_table[analysis.segment_table["phase"] == phase]
+        out[phase] = (
+            [f"{r.t_start:.4g}-{r.t_end:.4g} s" for r in segs.itertuples(index=False)],
+            [s for s in analysis.state_names if part.loc[part["state"] == s, "excitable"].any()],
+            [s for s in analysis.state_names if part.loc[part["state"] == s, "sensible"].any()])
+    return out
+
+
+def plan_beside_flight(plan: MissionPlan, flight: FlightAssessment) -> pd.DataFrame:
+    """Which states the plan expected to be estimable and which the flight delivered, per
+    phase (issue 27 item 4).
+
+    One row per phase found in either (plan phases first): ``phase``, ``planned_segments``,
+    ``flown_segments`` (their spans), ``planned_excitable``, ``flown_excitable``,
+    ``planned_sensible``, ``flown_sensible`` (comma-separated states that are excitable or
+    sensible in at least one segment of that phase, at each analysis's own thresholds),
+    ``sensible_only_planned`` and ``sensible_only_flown`` (the differences). A phase
+    missing on one side shows ``-`` there.
+    """
+    if not isinstance(plan, MissionPlan):
+        raise NavlibInputError(f"plan: expected a MissionPlan (plan_mission), got "
+                               f"{type(plan).__name__}")
+    if not isinstance(flight, FlightAssessment):
+        raise NavlibInputError(f"flight: expected a FlightAssessment (assess_flight), got "
+                               f"{type(flight).__name__}")
+    if list(plan.state_names) != list(flight.state_names):
+        raise NavlibInputError("flight: its model's states differ from the plan's; compare "
+                               "assessments of the same (21-state ECEF) model")
+    planned, flown = _by_phase(plan), _by_phase(flight)
+    none = ([], [], [])
+
+    def text(names):
+        return ", ".join(names) or "-"
+
+    rows = []
+    for phase in dict.fromkeys([*planned, *flown]):
+        p_seg, p_exc, p_sen = planned.get(phase, none)
+        f_seg, f_exc, f_sen = flown.get(phase, none)
+        rows.append({"phase": phase, "planned_segments": text(p_seg),
+                     "flown_segments": text(f_seg), "planned_excitable": text(p_exc),
+                     "flown_excitable": text(f_exc), "planned_sensible": text(p_sen),
+                     "flown_sensible": text(f_sen),
+                     "sensible_only_planned": text([x for x in p_sen if x not in f_sen]),
+                     "sensible_only_flown": text([x for x in f_sen if x not in p_sen])})
+    return pd.DataFrame(rows)
+
+
 # --------------------------------------------------------------------------- pages
 
 
-def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = ()) -> str:
-    """A self-contained HTML page of one mission plan (tables, figures as PNG)."""
+def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = (),
+              flight: tuple[str, FlightAssessment] | None = None) -> str:
+    """A self-contained HTML page of one mission plan (tables, figures as PNG); with
+    ``flight = (log, assessment)`` of a recorded flight of the same vehicle, also the
+    planned-beside-flown table (:func:`plan_beside_flight`) and the flight's estimable
+    states."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -335,6 +397,15 @@ def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = ()) 
              "<h2>Planned records</h2>", plan.inputs.to_html(index=False),
              "<h2>Segments and estimable states</h2>", plan.summary().to_html(index=False),
              "<h2>Timeline</h2>", plan.timeline().to_html(index=False, float_format="%.4g")]
+    if flight is not None:
+        log, flown = flight
+        parts += [f"<h2>Planned beside flown: {html.escape(log)}</h2>",
+                  "<p>States excitable or sensible in at least one segment of each phase, "
+                  "as the plan expected them and as the recorded flight delivered them "
+                  f"(flight assessed with preset {html.escape(str(flown.options['preset']))})."
+                  "</p>", plan_beside_flight(plan, flown).to_html(index=False)]
+        figures.append((f"Flown: which states each segment could estimate ({log})",
+                        aplots.estimable_figure(flown)))
     notes = [*warning_texts, *plan.notes]
     parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{html.escape(str(n))}</li>"
                                                 for n in notes) + "</ul>")
@@ -349,7 +420,7 @@ def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = ()) 
             "<body>" + "\n".join(parts) + "</body></html>")
 
 
-def _plan_row(label: str, options: Mapping) -> tuple[dict, str | None]:
+def _plan_row(label: str, options: Mapping, flight=None) -> tuple[dict, str | None]:
     start = time.perf_counter()
     row = dict.fromkeys(PLAN_COLUMNS, "")
     row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0)
@@ -360,7 +431,7 @@ def _plan_row(label: str, options: Mapping) -> tuple[dict, str | None]:
             plan = plan_mission(label, **options)
             summary = plan.summary()
             page = plan_page(label, plan, [f"{w.category.__name__}: {w.message}"
-                                           for w in caught])
+                                           for w in caught], flight)
             seg = plan.segment_table
             row.update(status="ok", vehicle=plan.mission.vehicle,
                        duration_s=float(seg.t_end.max() - seg.t_start.min()),
@@ -377,11 +448,14 @@ def _plan_row(label: str, options: Mapping) -> tuple[dict, str | None]:
     return row, page
 
 
-def plan_missions(missions: Sequence[str], options: Mapping | None = None
-                  ) -> tuple[pd.DataFrame, list]:
+def plan_missions(missions: Sequence[str], options: Mapping | None = None,
+                  flight: str | None = None) -> tuple[pd.DataFrame, list]:
     """Plan each mission file (in turn); returns the summary table (one row per mission,
     :data:`PLAN_COLUMNS`) and the HTML pages (None for a mission that failed).
-    ``options``: keywords of :func:`plan_mission`, checked before any mission runs."""
+    ``options``: keywords of :func:`plan_mission`, checked before any mission runs.
+    ``flight``: a recorded flight (a ``LOG`` of ``python -m navlib assess``) assessed once
+    with the plan's sensor preset and shown beside every plan (:func:`plan_beside_flight`).
+    """
     missions = list(missions)
     if not missions or not all(isinstance(m, str) for m in missions):
         raise NavlibInputError(f"missions: expected one or more mission files, got "
@@ -389,7 +463,13 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None
     options = dict(options or {})
     keywords = [p for p in inspect.signature(plan_mission).parameters if p != "mission"]
     reject_unknown(options, keywords, "plan options (-p)")
-    rows = [_plan_row(m, options) for m in missions]
+    flown = None
+    if flight is not None:
+        kind, paths = fleet.parse_log(flight)
+        imu, gnss = fleet._read(kind, paths)
+        preset = options.get("sensors_preset")
+        flown = (flight, assess_flight(imu, gnss, preset=preset))
+    rows = [_plan_row(m, options, flown) for m in missions]
     table = pd.DataFrame([r for r, _ in rows], columns=list(PLAN_COLUMNS))
     return table, [p for _, p in rows]
 
