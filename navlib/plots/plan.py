@@ -43,7 +43,7 @@ def timeline_figure(plan):
                Patch(color="tab:blue", label=f"sensible (s ≥ {plan.settings['s_threshold']:.3g})")]
     if plan.outages:
         handles.append(Patch(color="0.85", label="GNSS outage"))
-    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 1.0),
+    ax.legend(handles=handles, fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 1.0),
               ncol=3, frameon=False)
     fig.suptitle(f"{plan.mission.name}: when each state becomes excitable and sensible "
                  "(dashed: segment starts)", fontsize=10)
