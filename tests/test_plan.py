@@ -57,6 +57,13 @@ def test_timeline_reads_the_metrics(multicopter_pair):
         exc = table[(table["state"] == row.state) & table["excitable"]]
         assert (np.isnan(row.excitable_from_s) if exc.empty
                 else row.excitable_from_s == exc["t_start"].min())
+    starts = timeline["sensible_from_s"].dropna()
+    assert (starts >= 5.0).all()                 # the start-up transient is left out
+    se = outage.sensability
+    for row in timeline.dropna(subset=["sensible_from_s"]).itertuples(index=False):
+        j = outage.state_names.index(row.state)
+        first = np.flatnonzero((se.t >= 5.0) & (se.s[:, j] >= outage.settings["s_threshold"]))
+        assert row.sensible_from_s == se.t[first[0]]
     pos = timeline.set_index("state").loc[list(POSITION)]
     assert np.all(pos["sensible_share_outage"] < pos["sensible_share"])
     assert clear.timeline()["sensible_share_outage"].isna().all()

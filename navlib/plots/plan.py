@@ -6,6 +6,7 @@ import numpy as np
 from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
+from navlib.studies.plan import TRANSIENT_S
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -14,9 +15,11 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
 
 
-def timeline_figure(plan):
+def timeline_figure(plan, transient_s: float = TRANSIENT_S):
     """States (rows) over time: light bars where the state is excitable (per segment), dark
-    bars where it is sensible (per epoch, ``s >= s_threshold``), grey the GNSS outages."""
+    bars where it is sensible (per epoch, ``s >= s_threshold``), grey the GNSS outages,
+    hatched the start-up transient that :meth:`~navlib.studies.plan.MissionPlan.timeline`
+    leaves out."""
     names = list(plan.state_names)
     se = plan.sensability
     t = se.t
@@ -26,6 +29,8 @@ def timeline_figure(plan):
     fig, ax = subplots(1, 1, figsize=(11, 0.28 * len(names) + 1.6), layout="constrained")
     for a, b in plan.outages:
         ax.axvspan(a, b, color="0.85", zorder=0)
+    ax.axvspan(t[0], t[0] + transient_s, facecolor="none", edgecolor="0.6", hatch="//",
+               linewidth=0, zorder=0)
     for j, name in enumerate(names):
         rows = table[(table["state"] == name) & table["excitable"]]
         ax.broken_barh([(r.t_start, r.t_end - r.t_start) for r in rows.itertuples()],
@@ -43,8 +48,10 @@ def timeline_figure(plan):
                Patch(color="tab:blue", label=f"sensible (s ≥ {plan.settings['s_threshold']:.3g})")]
     if plan.outages:
         handles.append(Patch(color="0.85", label="GNSS outage"))
+    handles.append(Patch(facecolor="none", edgecolor="0.6", hatch="//",
+                         label="start-up transient"))
     ax.legend(handles=handles, fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 1.0),
-              ncol=3, frameon=False)
+              ncol=4, frameon=False)
     fig.suptitle(f"{plan.mission.name}: when each state becomes excitable and sensible "
                  "(dashed: segment starts)", fontsize=10)
     return fig

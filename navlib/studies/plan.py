@@ -54,6 +54,9 @@ VEHICLE_PRESETS = {"rocket": "motionpak_tactical", "multicopter": "pixhawk_mems"
                    "fixed-wing": "pixhawk_mems", "ground": "pixhawk_mems"}
 """Sensor preset of a mission that names none: the tactical-grade unit of the rocket study
 for rockets, the Pixhawk-class MEMS for the others."""
+TRANSIENT_S = 5.0
+"""Start-up transient left out of the timeline's sensability columns, s (the reading of the
+rocket study's "weakly sensible" counts, ``navlib.studies.rocket.TRANSIENT_S``)."""
 DEFAULT_GNSS_RATE_HZ = 1.0
 """GNSS rate when neither the mission, the call nor the preset gives one, Hz."""
 DEFAULT_GNSS_SIGMA_M = 5.0
@@ -93,21 +96,28 @@ class MissionPlan(FlightAssessment):
             out |= (t >= a) & (t <= b)
         return out
 
-    def timeline(self) -> pd.DataFrame:
+    def timeline(self, transient_s: float = TRANSIENT_S) -> pd.DataFrame:
         """When each state becomes excitable and sensible, one row per state (model order).
 
         Columns: ``state``, ``paper_id``, ``group``, ``excitable_from_s`` (start of the first
         segment where ``e >= e_threshold``; NaN: never), ``excitable_segments`` (those
-        segments), ``sensible_from_s`` (first epoch with ``s >= s_threshold``; NaN: never),
-        ``sensible_share`` (share of all epochs with it), ``sensible_share_outage`` (the
-        same inside the outage windows; NaN without outages) and ``sigma_end`` (posterior
-        1-sigma at the last epoch, SI).
+        segments), ``sensible_from_s`` (first epoch after the start-up transient with
+        ``s >= s_threshold``; NaN: never), ``sensible_share`` (share of the epochs after
+        the transient with it), ``sensible_share_outage`` (the same inside the outage
+        windows; NaN without outages) and ``sigma_end`` (posterior 1-sigma at the last
+        epoch, SI). The first ``transient_s`` seconds are left out of the sensability
+        columns: at the first epochs the information is still the normalised prior, in
+        which every state looks sensible (assumption M6).
         """
+        transient_s = finite_scalar(transient_s, "transient_s", 0.0)
         table = self.state_table()
         names = list(self.state_names)
         se = self.sensability
-        ok = se.s >= self.settings["s_threshold"]
-        inside = self.outage_mask(se.t)
+        after = se.t >= se.t[0] + transient_s
+        if not after.any():
+            raise NavlibInputError(f"transient_s: {transient_s:g} s covers the whole mission")
+        ok = (se.s >= self.settings["s_threshold"]) & after[:, None]
+        inside = self.outage_mask(se.t) & after
         rows = []
         for j, name in enumerate(names):
             part = table[table["state"] == name]
@@ -120,7 +130,7 @@ class MissionPlan(FlightAssessment):
                 "excitable_segments": ", ".join(f"{r.segment} {r.phase}"
                                                 for r in exc.itertuples()) or "-",
                 "sensible_from_s": float(se.t[first[0]]) if first.size else np.nan,
-                "sensible_share": float(ok[:, j].mean()),
+                "sensible_share": float(ok[after, j].mean()),
                 "sensible_share_outage": float(ok[inside, j].mean()) if inside.any()
                 else np.nan,
                 "sigma_end": float(se.sigma[-1, j])})
