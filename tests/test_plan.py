@@ -170,3 +170,20 @@ def test_plan_command_with_a_flight(tmp_path):
     assert main(["plan", "sounding_rocket", "--flight", flight, "--output", str(out)]) == 0
     page = (out / pd.read_csv(out / "summary.csv")["page"][0]).read_text(encoding="utf-8")
     assert "Planned beside flown" in page and "sensible_only_flown" in page
+
+
+def test_plan_panel_replans_only_for_the_mission_controls():
+    from navlib.widgets.plan import plan_panel
+
+    panel = plan_panel(plan_mission("sounding_rocket"))
+    model = panel.plan.model
+    panel.controls["s_threshold"].value = 0.8
+    assert panel.plan.model is model and panel.plan.settings["s_threshold"] == 0.8
+    panel.controls["outage_start"].value = 30.0
+    panel.controls["outage_length"].value = 10.0
+    assert panel.plan.outages == ((30.0, 40.0),)
+    assert panel.plan.settings["s_threshold"] == 0.8            # kept across a re-plan
+    panel.controls["outage_start"].value = 86.0                 # at the end: refused
+    assert "Not applied" in panel.status.value and panel.plan.outages == ((30.0, 40.0),)
+    assert "timeline" in panel.parts and "summary" in panel.parts
+    assert plan_panel(plan_mission("ground_vehicle")).controls["spin_hz"].disabled
