@@ -43,6 +43,11 @@ BI_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 TERMS = ("random_walk", "bias_instability", "rate_random_walk")
 RESOLVED_SHARE = 0.5
 """Share of the fitted Allan variance a term must carry at some tau to count as resolved."""
+MAX_GAP_STEPS = 10.0
+"""Longest interval of a record the Allan deviation accepts, in sample steps: real logs drop
+a sample now and then; the samples are then taken as evenly spaced (assumption M5)."""
+MAX_IRREGULAR = 1e-3
+"""Largest share of intervals longer than 1.5 sample steps the Allan deviation accepts."""
 MIN_CLUSTERS = 3
 """Fewest independent clusters (``duration / tau``) an averaging time needs to be fitted."""
 REWEIGHT = 4
@@ -67,16 +72,19 @@ def _check_imu(imu) -> tuple[pd.DataFrame, float, list[str]]:
     if not np.all(np.isfinite(t)) or np.any(dt <= 0):
         raise NavlibInputError("imu: column 't' must be finite and strictly increasing")
     step = float(np.median(dt))
-    if np.max(dt) > 1.5 * step:
-        k = int(np.argmax(dt))
+    long = np.flatnonzero(dt > 1.5 * step)
+    worst = int(np.argmax(dt))
+    if dt[worst] > MAX_GAP_STEPS * step or long.size > MAX_IRREGULAR * dt.size:
         raise NavlibInputError(
-            f"imu: row {k + 1} (t = {t[k + 1]:.6g} s) follows a gap of {dt[k]:.3g} s (sample "
-            f"step {step:.3g} s); the Allan deviation needs an evenly sampled record: fit a "
-            "span without gaps")
+            f"imu: row {worst + 1} (t = {t[worst + 1]:.6g} s) follows a gap of "
+            f"{dt[worst]:.3g} s (sample step {step:.3g} s; {long.size} interval(s) longer "
+            f"than 1.5 steps); the Allan deviation needs an evenly sampled record (gaps of at "
+            f"most {MAX_GAP_STEPS:g} steps in at most {100 * MAX_IRREGULAR:g}% of the "
+            "intervals): fit a span without gaps")
     for a in axes:
         if not np.all(np.isfinite(imu[a].to_numpy(dtype=float))):
             raise NavlibInputError(f"imu: column {a!r} contains NaN or infinite values")
-    return imu, 1.0 / step, axes
+    return imu, 1.0 / step, axes, int(long.size)
 
 
 def allan_deviation(imu: pd.DataFrame, rate_hz: float | None = None,
@@ -97,12 +105,14 @@ def allan_deviation(imu: pd.DataFrame, rate_hz: float | None = None,
     -------
     DataFrame
         ``tau_s`` and one column per axis (rad/s, m/s^2); ``attrs``: ``rate_hz``,
-        ``duration_s``, ``n_samples``.
+        ``duration_s``, ``n_samples`` and ``irregular_intervals`` (intervals longer than 1.5
+        sample steps, taken as one step: at most :data:`MAX_IRREGULAR` of them, none longer
+        than :data:`MAX_GAP_STEPS` steps, else NavlibInputError naming the row).
     """
     # allantools pulls in scipy.stats at import (about 1 s): imported where it is used
     import allantools
 
-    imu, rate_auto, axes = _check_imu(imu)
+    imu, rate_auto, axes, irregular = _check_imu(imu)
     rate = rate_auto if rate_hz is None else finite_scalar(rate_hz, "rate_hz", 0.0,
                                                            low_open=True)
     if not isinstance(points_per_decade, int | np.integer) or not 1 <= points_per_decade <= 100:
@@ -121,7 +131,8 @@ def allan_deviation(imu: pd.DataFrame, rate_hz: float | None = None,
     frame = pd.DataFrame(out).sort_index()
     frame.insert(0, "tau_s", frame.index.to_numpy() / rate)
     frame = frame.reset_index(drop=True)
-    frame.attrs.update(rate_hz=rate, duration_s=n / rate, n_samples=n)
+    frame.attrs.update(rate_hz=rate, duration_s=n / rate, n_samples=n,
+                       irregular_intervals=irregular)
     return frame
 
 

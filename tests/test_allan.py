@@ -56,6 +56,13 @@ def test_short_white_record_leaves_the_rate_random_walk_unresolved():
     assert fit["reason"].str.contains("rate_random_walk").all()
 
 
+def test_a_dropped_sample_is_accepted_and_counted():
+    imu = _static(4, 100.0, duration_s=600.0).drop(index=[1000]).reset_index(drop=True)
+    adev = allan_deviation(imu)
+    assert adev.attrs["irregular_intervals"] == 1
+    assert (fit_allan(adev)["random_walk"] / N_TRUE - 1.0).abs().max() < 0.05
+
+
 def test_allan_deviation_frame_and_its_fit_agree():
     imu = _static(3, 50.0, duration_s=600.0)
     adev = allan_deviation(imu)
@@ -123,6 +130,8 @@ def test_allan_figure_draws_measured_fit_and_asymptotes():
     (pd.DataFrame({"t": np.arange(50) / 10.0, "w_x": 0.0}), "at least 100 samples"),
     (pd.DataFrame({"t": np.r_[np.arange(200), np.arange(300, 500)] / 10.0, "w_x": 0.0}),
      "row 200 (t = 30 s) follows a gap"),
+    (pd.DataFrame({"t": np.arange(0, 1000, 2) / 10.0, "w_x": 0.0}).drop(index=[5, 9]),
+     "2 interval(s) longer than 1.5 steps"),
     (pd.DataFrame({"t": np.arange(500) / 10.0, "w_x": np.r_[np.nan, np.zeros(499)]}),
      "column 'w_x' contains NaN"),
 ])

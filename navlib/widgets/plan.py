@@ -18,7 +18,8 @@ class PlanPanel(Panel):
     Attributes
     ----------
     controls : dict
-        ``preset`` (dropdown of the shipped sensor presets), ``outage_start`` and
+        ``preset`` (dropdown of the shipped sensor presets and the plan's own, which may be
+        a file), ``outage_start`` and
         ``outage_length`` (s; length 0: no outage), ``spin_hz`` (rockets only; disabled
         otherwise), ``e_threshold``, ``s_threshold`` and ``nu``.
     parts : dict
@@ -40,9 +41,9 @@ class PlanPanel(Panel):
         spin = float(mission.table.get("rocket", {}).get("spin_hz", 2.0)) if rocket else 0.0
         low, _ = nu_range(len(plan.state_names))
         th = plan.thresholds
+        presets = list(dict.fromkeys([*list_presets(), plan.options["preset"]]))
         controls = {
-            "preset": widgets.Dropdown(options=list_presets(), value=plan.options["preset"]
-                                       if plan.options["preset"] in list_presets() else None,
+            "preset": widgets.Dropdown(options=presets, value=plan.options["preset"],
                                        description="sensor grade", **look()),
             "outage_start": widgets.FloatSlider(value=start, min=0.0, max=end, step=1.0,
                                                 description="outage start [s]",
