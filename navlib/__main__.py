@@ -2,8 +2,10 @@
 [--jobs N] [--no-cache]``
 ``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [--preset NAME]
 [--vehicle CLASS] [--initial-attitude YAW,PITCH,ROLL] [--launch-elevation DEG]
-[--launch-azimuth DEG] [-p key value ...]``
-and ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
+[--launch-azimuth DEG] [-p key value ...]``,
+``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] [--flight LOG]
+--output DIR [-p key value ...]`` and
+``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
 2 for bad command-line input, 128 + signal number when interrupted (130 Ctrl-C, 143 SIGTERM).
@@ -65,6 +67,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="rebuild every trajectory and model: the kernels run with "
                           "NAVLIB_NO_CACHE=1 and read or write no cache entry")
     _add_assess(sub)
+    _add_plan(sub)
     _add_sweep(sub)
     return parser
 
@@ -182,6 +185,51 @@ def _assess(args) -> int:
     for row in failed.itertuples(index=False):
         print(f"failed: {row.log}: {row.error}", file=sys.stderr)
     print(f"{len(table) - len(failed)} of {len(table)} flight(s) assessed; summary: "
+          f"{path.resolve()}", file=sys.stderr)
+    return 1 if len(failed) else 0
+
+
+def _add_plan(sub) -> None:
+    pln = sub.add_parser(
+        "plan", help="plan missions: which states will be estimable, and when",
+        description="Build each mission file's trajectory (navlib.trajectory.from_mission) "
+                    "and assess it with navlib.studies.plan.plan_mission; write "
+                    "DIR/summary.csv (one row per mission) and one HTML page per mission, "
+                    "with the timeline of when each state becomes excitable and sensible. "
+                    "The exit status is 1 when any mission failed.")
+    pln.add_argument("missions", nargs="+", metavar="MISSION",
+                     help="a mission TOML file or the name of an example mission "
+                          "(data/missions)")
+    pln.add_argument("--sensors", default=None, metavar="PRESET_OR_FILE",
+                     help="sensor preset name or TOML file (default: the mission's, else "
+                          "the default of its vehicle class)")
+    pln.add_argument("--output", type=Path, required=True, metavar="DIR",
+                     help="folder for summary.csv and the mission pages")
+    pln.add_argument("--flight", default=None, metavar="LOG",
+                     help="a recorded flight of the same vehicle (a LOG as for assess): its "
+                          "assessment is shown beside each plan, per phase")
+    pln.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
+                     metavar=("KEY", "VALUE"),
+                     help="a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
+                          "s_threshold, ...); VALUE parsed as JSON or a Python literal, else "
+                          "a string")
+
+
+def _plan(args) -> int:
+    from navlib.studies import plan
+
+    options = {key: reports.parse_parameter_value(text) for key, text in args.parameter}
+    if args.sensors is not None:
+        options["sensors_preset"] = args.sensors
+    table, pages = plan.plan_missions(args.missions, options, flight=args.flight)
+    path = plan.write_plans(table, pages, args.output)
+    failed = table[table["status"] != "ok"]
+    for row in failed.itertuples(index=False):
+        print(f"failed: {row.log}: {row.error}", file=sys.stderr)
+    for row in table[table["status"] == "ok"].itertuples(index=False):
+        print(f"{row.log}: {row.vehicle}, {row.n_segments} segment(s), {row.seconds:.1f} s",
+              file=sys.stderr)
+    print(f"{len(table) - len(failed)} of {len(table)} mission(s) planned; summary: "
           f"{path.resolve()}", file=sys.stderr)
     return 1 if len(failed) else 0
 
@@ -332,6 +380,8 @@ def main(argv: list[str] | None = None) -> int:
             return _sweep(args)
         if args.command == "assess":
             return _assess(args)
+        if args.command == "plan":
+            return _plan(args)
     except NavlibInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -40,6 +40,11 @@ import pandas as pd
 
 from navlib import units
 from navlib._validation import finite_array, finite_scalar, reject_unknown
+from navlib.allan import (  # noqa: F401 - re-exported: navlib.sensors.fit_allan (spec api.md)
+    allan_deviation,
+    fit_allan,
+    write_allan_preset,
+)
 from navlib.errors import NavlibInputError
 from navlib.outliers import as_outliers, channel_profile
 from navlib.resources import data_dir
@@ -676,3 +681,4 @@ def simulate_attitude_sensor(trajectory, sigma: float, rate_hz: float | None = N
 
     noise = inject(noise, t, as_outliers(outliers), "att")
     return t, exp_so3(noise) @ trajectory.attitude[idx].as_matrix()
+

@@ -1,0 +1,57 @@
+"""Mission-plan figures: when each state becomes excitable and sensible."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.patches import Patch
+
+from navlib.plots.figure import subplots
+from navlib.studies.plan import TRANSIENT_S
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Index runs ``(first, last)`` where ``mask`` holds."""
+    edges = np.diff(np.r_[0, mask.astype(int), 0])
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
+
+
+def timeline_figure(plan, transient_s: float = TRANSIENT_S):
+    """States (rows) over time: light bars where the state is excitable (per segment), dark
+    bars where it is sensible (per epoch, ``s >= s_threshold``), grey the GNSS outages,
+    hatched the start-up transient that :meth:`~navlib.studies.plan.MissionPlan.timeline`
+    leaves out."""
+    names = list(plan.state_names)
+    se = plan.sensability
+    t = se.t
+    ok = se.s >= plan.settings["s_threshold"]
+    step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    table = plan.state_table()
+    fig, ax = subplots(1, 1, figsize=(11, 0.28 * len(names) + 1.6), layout="constrained")
+    for a, b in plan.outages:
+        ax.axvspan(a, b, color="0.85", zorder=0)
+    ax.axvspan(t[0], t[0] + transient_s, facecolor="none", edgecolor="0.6", hatch="//",
+               linewidth=0, zorder=0)
+    for j, name in enumerate(names):
+        rows = table[(table["state"] == name) & table["excitable"]]
+        ax.broken_barh([(r.t_start, r.t_end - r.t_start) for r in rows.itertuples()],
+                       (j - 0.4, 0.8), color="tab:orange", alpha=0.35, linewidth=0)
+        ax.broken_barh([(t[a], t[b] - t[a] + step) for a, b in _runs(ok[:, j])],
+                       (j - 0.2, 0.4), color="tab:blue", linewidth=0)
+    for r in plan.segment_table.itertuples(index=False):
+        ax.axvline(r.t_start, color="0.5", linewidth=0.5, linestyle="--")
+    ax.set_yticks(np.arange(len(names)), names, fontsize=7)
+    ax.set_ylim(len(names) - 0.5, -0.5)
+    ax.set_xlim(float(plan.trajectory.t[0]), float(plan.trajectory.t[-1]))
+    ax.set_xlabel("t [s]")
+    handles = [Patch(color="tab:orange", alpha=0.35,
+                     label=f"excitable (e ≥ {plan.settings['e_threshold']:.3g}) in the segment"),
+               Patch(color="tab:blue", label=f"sensible (s ≥ {plan.settings['s_threshold']:.3g})")]
+    if plan.outages:
+        handles.append(Patch(color="0.85", label="GNSS outage"))
+    handles.append(Patch(facecolor="none", edgecolor="0.6", hatch="//",
+                         label="start-up transient"))
+    ax.legend(handles=handles, fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 1.0),
+              ncol=4, frameon=False)
+    fig.suptitle(f"{plan.mission.name}: when each state becomes excitable and sensible "
+                 "(dashed: segment starts)", fontsize=10)
+    return fig

@@ -1,0 +1,525 @@
+"""Plan a mission before it flies: which states will the filter estimate, and when?
+
+The assessment of a recorded flight (:mod:`navlib.studies.assess`) applied to the
+trajectory a mission file describes (:func:`navlib.trajectory.from_mission`) instead of a
+fitted one::
+
+    mission file  ->  trajectory (exact IMU)  ->  21-state ECEF model at the GNSS epochs,
+    without measurements inside the outage windows  ->  segments (navlib.segmentation)
+    ->  excitability per segment, sensability over time (navlib.metrics)
+
+:func:`plan_mission` returns a :class:`MissionPlan`: a
+:class:`~navlib.studies.assess.FlightAssessment` (same segment table, summary, figures and
+``with_settings``) with the mission, its outage windows and a :meth:`MissionPlan.timeline` of
+when each state first becomes excitable and sensible. A GNSS outage is modelled as epochs
+whose measurement matrix is zero (no information), so the covariance recursion runs through
+it on the IMU alone (assumption M6). :func:`plan_missions` and :func:`write_plans` make the
+``summary.csv`` and HTML pages of ``python -m navlib plan`` with the fleet page machinery;
+:func:`plan_point` is the picklable evaluation of a trade study through
+:func:`navlib.sweep.sweep`.
+"""
+
+from __future__ import annotations
+
+import html
+import inspect
+import time
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+
+from navlib import fleet, sensors
+from navlib._validation import finite_scalar, reject_unknown
+from navlib.errors import NavlibInputError
+from navlib.metrics import E_THRESHOLD, MIN_FRACTION, S_THRESHOLD, check_thresholds
+from navlib.models.ecef import ecef21_at_epochs
+from navlib.segmentation import SEGMENT_DEFAULTS, segment_flight
+from navlib.studies.assess import (
+    MODEL_STEP_S,
+    FlightAssessment,
+    _pairs,
+    _segment_table,
+    assess_flight,
+    describe_inputs,
+)
+from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
+
+__all__ = ["VEHICLE_PRESETS", "MissionPlan", "plan_beside_flight", "plan_mission",
+           "plan_missions", "plan_page", "plan_point", "write_plans"]
+
+VEHICLE_PRESETS = {"rocket": "motionpak_tactical", "multicopter": "pixhawk_mems",
+                   "fixed-wing": "pixhawk_mems", "ground": "pixhawk_mems"}
+"""Sensor preset of a mission that names none: the tactical-grade unit of the rocket study
+for rockets, the Pixhawk-class MEMS for the others."""
+TRANSIENT_S = 5.0
+"""Start-up transient left out of the timeline's sensability columns, s (the reading of the
+rocket study's "weakly sensible" counts, ``navlib.studies.rocket.TRANSIENT_S``)."""
+DEFAULT_GNSS_RATE_HZ = 1.0
+"""GNSS rate when neither the mission, the call nor the preset gives one, Hz."""
+DEFAULT_GNSS_SIGMA_M = 5.0
+"""GNSS position sigma when neither the mission, the call nor the preset gives one, m."""
+PLAN_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
+                "excitable", "sensible", "warnings", "seconds", "page")
+"""Columns of the plan's ``summary.csv`` (the fleet's, with the mission's vehicle class)."""
+
+
+def _fit_columns() -> pd.DataFrame:
+    return pd.DataFrame(columns=["quantity", "axis", "rms", "unit", "white_noise"])
+
+
+@dataclass(frozen=True, eq=False)
+class MissionPlan(FlightAssessment):
+    """A :class:`~navlib.studies.assess.FlightAssessment` of a planned trajectory.
+
+    ``fit`` is empty and the residual frames are None (nothing was fitted); ``inputs``
+    describes the planned IMU samples and the GNSS epochs outside the outages.
+
+    Attributes
+    ----------
+    mission : Mission
+        The checked mission (:func:`navlib.trajectory.mission.load_mission`).
+    outages : tuple of (float, float)
+        GNSS outage windows of the model, s.
+    """
+
+    mission: Mission | None = None
+    outages: tuple = ()
+
+    def outage_mask(self, t) -> np.ndarray:
+        """True at the times ``t`` inside an outage window."""
+        t = np.asarray(t, dtype=float)
+        out = np.zeros(t.shape, dtype=bool)
+        for a, b in self.outages:
+            out |= (t >= a) & (t <= b)
+        return out
+
+    def timeline(self, transient_s: float = TRANSIENT_S) -> pd.DataFrame:
+        """When each state becomes excitable and sensible, one row per state (model order).
+
+        Columns: ``state``, ``paper_id``, ``group``, ``excitable_from_s`` (start of the first
+        segment where ``e >= e_threshold``; NaN: never), ``excitable_segments`` (those
+        segments), ``sensible_from_s`` (first epoch after the start-up transient with
+        ``s >= s_threshold``; NaN: never), ``sensible_share`` (share of the epochs after
+        the transient with it), ``sensible_share_outage`` (the same inside the outage
+        windows; NaN without outages) and ``sigma_end`` (posterior 1-sigma at the last
+        epoch, SI). The first ``transient_s`` seconds are left out of the sensability
+        columns: at the first epochs the information is still the normalised prior, in
+        which every state looks sensible (assumption M6).
+        """
+        transient_s = finite_scalar(transient_s, "transient_s", 0.0)
+        table = self.state_table()
+        names = list(self.state_names)
+        se = self.sensability
+        after = se.t >= se.t[0] + transient_s
+        if not after.any():
+            raise NavlibInputError(f"transient_s: {transient_s:g} s covers the whole mission")
+        ok = (se.s >= self.settings["s_threshold"]) & after[:, None]
+        inside = self.outage_mask(se.t) & after
+        rows = []
+        for j, name in enumerate(names):
+            part = table[table["state"] == name]
+            exc = part[part["excitable"]]
+            first = np.flatnonzero(ok[:, j])
+            rows.append({
+                "state": name, "paper_id": part["paper_id"].iloc[0],
+                "group": part["group"].iloc[0],
+                "excitable_from_s": float(exc["t_start"].min()) if len(exc) else np.nan,
+                "excitable_segments": ", ".join(f"{r.segment} {r.phase}"
+                                                for r in exc.itertuples()) or "-",
+                "sensible_from_s": float(se.t[first[0]]) if first.size else np.nan,
+                "sensible_share": float(ok[after, j].mean()),
+                "sensible_share_outage": float(ok[inside, j].mean()) if inside.any()
+                else np.nan,
+                "sigma_end": float(se.sigma[-1, j])})
+        return pd.DataFrame(rows)
+
+
+def _gnss_settings(mission: Mission, spec, gnss_rate_hz, gnss_sigma_m):
+    gnss = getattr(spec, "gnss", None)
+    rate = gnss_rate_hz if gnss_rate_hz is not None else mission.gnss_rate_hz
+    if rate is None:
+        rate = gnss.rate_hz if gnss is not None and gnss.rate_hz else DEFAULT_GNSS_RATE_HZ
+    sigma = gnss_sigma_m if gnss_sigma_m is not None else mission.gnss_sigma_m
+    if sigma is None:
+        sigma = gnss.position_sigma if gnss is not None and gnss.position_sigma > 0 \
+            else DEFAULT_GNSS_SIGMA_M
+    return (finite_scalar(rate, "gnss_rate_hz", 0.0, low_open=True),
+            finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True))
+
+
+def _check_outages(outages, t_end: float, where: str) -> tuple:
+    out = []
+    for i, pair in enumerate(outages):
+        if not isinstance(pair, Sequence) or isinstance(pair, str) or len(pair) != 2:
+            raise NavlibInputError(f"outages[{i}]: expected (start_s, end_s), got {pair!r}")
+        a = finite_scalar(pair[0], f"outages[{i}] start_s", 0.0)
+        b = finite_scalar(pair[1], f"outages[{i}] end_s", a, low_open=True)
+        if a >= t_end:
+            raise NavlibInputError(f"{where} outages[{i}]: starts at {a:g} s, after the "
+                                   f"mission ends ({t_end:.6g} s)")
+        out.append((a, b))
+    return tuple(sorted(out))
+
+
+def _measured_segments(table: pd.DataFrame, model, automatic, t_flight, *,
+                       automatic_segments: bool) -> tuple[pd.DataFrame, list[str]]:
+    """Segments that hold no measured epoch (inside an outage) joined to the segment before
+    them (the next one for the first): excitability needs a measurement (assumption M6).
+    A segment given by the user is refused instead."""
+    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    t = np.asarray(model.t)
+    entries = [[r.phase, float(r.t_start), float(r.t_end)]
+               for r in table.itertuples(index=False)]
+    notes = []
+    k = 0
+    while k < len(entries) and len(entries) > 1:
+        phase, a, b = entries[k]
+        inside = (t >= a - 1e-9) & (t <= b + 1e-9)
+        if np.any(measured & inside):
+            k += 1
+            continue
+        if not automatic_segments:
+            raise NavlibInputError(
+                f"segments: segment {k + 1} ({phase}, {a:.6g}..{b:.6g} s) lies inside a GNSS "
+                "outage: without a measurement its excitability is undefined; join it to a "
+                "neighbour")
+        other = k - 1 if k > 0 else k + 1
+        notes.append(f"segment {phase} {a:.6g}-{b:.6g} s lies inside a GNSS outage (no "
+                     f"measurement, no excitability): joined to the {entries[other][0]} "
+                     "segment next to it")
+        lo, hi = min(k, other), max(k, other)
+        entries[lo] = [entries[other][0], entries[lo][1], entries[hi][2]]
+        del entries[hi]
+        k = lo
+    if not notes:
+        return table, notes
+    return _segment_table([tuple(e) for e in entries], model, automatic, t_flight), notes
+
+
+def _planned_records(trajectory, model) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The planned IMU samples and the GNSS epochs that carry a measurement, as the
+    readers' frames (for :func:`navlib.studies.assess.describe_inputs`)."""
+    frame = trajectory.to_frame()
+    imu = frame[["t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z"]]
+    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    k = np.searchsorted(frame["t"].to_numpy(), np.asarray(model.t)[measured])
+    gnss = frame.iloc[k][["t", "x", "y", "z"]].reset_index(drop=True)
+    return imu, gnss
+
+
+def plan_mission(mission, sensors_preset: str | None = None, *, changes: Mapping | None = None,
+                 outages=None, gnss_rate_hz: float | None = None,
+                 gnss_sigma_m: float | None = None, segments=None, eta: float = 1e-3,
+                 nu: float = 0.985, e_threshold: float = E_THRESHOLD,
+                 s_threshold: float = S_THRESHOLD, min_fraction: float = MIN_FRACTION,
+                 segment_options: Mapping | None = None, model_options: Mapping | None = None,
+                 model_step_s: float | None = MODEL_STEP_S) -> MissionPlan:
+    """Which states a mission lets the filter estimate, segment by segment and over time.
+
+    Parameters
+    ----------
+    mission : str, Path, mapping or Mission
+        A mission file, an example name (``navlib.trajectory.mission.list_missions()``), a
+        mapping or a loaded :class:`~navlib.trajectory.mission.Mission`.
+    sensors_preset : str, optional
+        Sensor preset name or file; None: the mission's ``sensors``, else
+        :data:`VEHICLE_PRESETS` of its vehicle class.
+    changes : mapping, optional
+        Mission values to change first (:func:`navlib.trajectory.mission.with_values`:
+        ``{"rocket.spin_hz": 1.0}``).
+    outages : sequence of (start_s, end_s), optional
+        GNSS outage windows; None: the mission's ``[gnss] outages``.
+    gnss_rate_hz, gnss_sigma_m : float, optional
+        GNSS rate and position sigma of the model; None: the mission's, else the preset's,
+        else :data:`DEFAULT_GNSS_RATE_HZ` / :data:`DEFAULT_GNSS_SIGMA_M`.
+    segments, eta, nu, e_threshold, s_threshold, min_fraction, segment_options, \
+model_options, model_step_s
+        As in :func:`navlib.studies.assess.assess_flight`.
+
+    Returns
+    -------
+    MissionPlan
+
+    Raises
+    ------
+    NavlibInputError
+        A bad mission (naming the key, phase or waypoint), an unknown preset, outage
+        windows that do not fit the mission, bad thresholds or segments.
+    """
+    thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
+    if changes:
+        table = with_values(mission, changes)
+        where = mission.where if isinstance(mission, Mission) else "mission"
+        mission = load_mission(table)
+        mission = replace(mission, where=where)
+    elif not isinstance(mission, Mission):
+        mission = load_mission(mission)
+    preset = sensors_preset or mission.sensors or VEHICLE_PRESETS[mission.vehicle]
+    if not isinstance(preset, str):
+        raise NavlibInputError(f"sensors_preset: expected a preset name or file, got "
+                               f"{preset!r}")
+    spec = sensors.load_preset(preset)
+    segment_options = dict(segment_options or {})
+    reject_unknown(segment_options, SEGMENT_DEFAULTS, "segment_options")
+    model_options = dict(model_options or {})
+    if "gnss_sigma_m" in model_options:
+        raise NavlibInputError("model_options: pass gnss_sigma_m as its own keyword")
+    if model_step_s is not None:
+        model_step_s = finite_scalar(model_step_s, "model_step_s", 0.0, low_open=True)
+
+    trajectory = from_mission(mission)
+    rate, sigma = _gnss_settings(mission, spec, gnss_rate_hz, gnss_sigma_m)
+    rate = min(rate, trajectory.rate_hz)
+    windows = _check_outages(mission.outages if outages is None else outages,
+                             float(trajectory.t[-1]), mission.where)
+    model = ecef21_at_epochs(trajectory, rate, sensors=preset, gnss_sigma_m=sigma,
+                             max_step_s=model_step_s, **model_options)
+    H = np.array(model.H)
+    t_model = np.asarray(model.t)
+    for a, b in windows:
+        H[(t_model >= a) & (t_model <= b)] = 0.0
+    if not np.any(H != 0.0):
+        raise NavlibInputError("outages: cover every GNSS epoch of the mission; nothing "
+                               "would be measured")
+    model = replace(model, H=H)
+
+    seg_opts = dict(segment_options)
+    seg_opts["min_duration_s"] = max(seg_opts.get("min_duration_s", 2.0), 2.0 / rate)
+    automatic = segment_flight(trajectory, **seg_opts)
+    table = _segment_table(automatic.segments if segments is None else segments, model,
+                           automatic, trajectory.t)
+    table, merged = _measured_segments(table, model, automatic, trajectory.t,
+                                       automatic_segments=segments is None)
+    imu, gnss = _planned_records(trajectory, model)
+    notes = [f"sensor preset {preset!r}: " + ("given" if sensors_preset else
+                                              "the mission's" if mission.sensors else
+                                              f"default for a {mission.vehicle}"),
+             f"planned trajectory of mission {mission.name!r} ({mission.where}); nothing "
+             "fitted, the IMU is exact"]
+    notes += [f"GNSS outage {a:g}-{b:g} s: no GNSS measurement at the model epochs inside"
+              for a, b in windows]
+    notes += merged
+    options = {"preset": preset, "gnss_rate_hz": rate, "gnss_sigma_m": sigma,
+               "outages": windows, "vehicle": mission.vehicle, "mission": mission.name,
+               "segment_options": seg_opts, "model_options": model_options,
+               "model_step_s": model_step_s, "imu_rate_hz": trajectory.rate_hz,
+               "heading_deg": None}
+    settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
+                "preset": preset, "gnss_sigma_m": sigma}
+    return MissionPlan.build(
+        model, _pairs(table), trajectory=trajectory, **thresholds, settings=settings,
+        inputs=describe_inputs(imu, gnss), fit=_fit_columns(), automatic=automatic,
+        segment_table=table, options=options, notes=tuple(notes), mission=mission,
+        outages=windows)
+
+
+# --------------------------------------------------------------------------- planned beside flown
+
+
+def _by_phase(analysis) -> dict:
+    """Phase -> (segment labels, excitable states, sensible states) of an analysis, over all
+    its segments of that phase (a state counts when it qualifies in any of them)."""
+    table = analysis.state_table()
+    out = {}
+    for phase in dict.fromkeys(analysis.segment_table["phase"]):
+        part = table[table["phase"] == phase]
+        segs = analysis.segment_table[analysis.segment_table["phase"] == phase]
+        out[phase] = (
+            [f"{r.t_start:.4g}-{r.t_end:.4g} s" for r in segs.itertuples(index=False)],
+            [s for s in analysis.state_names if part.loc[part["state"] == s, "excitable"].any()],
+            [s for s in analysis.state_names if part.loc[part["state"] == s, "sensible"].any()])
+    return out
+
+
+def plan_beside_flight(plan: MissionPlan, flight: FlightAssessment) -> pd.DataFrame:
+    """Which states the plan expected to be estimable and which the flight delivered, per
+    phase (issue 27 item 4).
+
+    One row per phase found in either (plan phases first): ``phase``, ``planned_segments``,
+    ``flown_segments`` (their spans), ``planned_excitable``, ``flown_excitable``,
+    ``planned_sensible``, ``flown_sensible`` (comma-separated states that are excitable or
+    sensible in at least one segment of that phase, at each analysis's own thresholds),
+    ``sensible_only_planned`` and ``sensible_only_flown`` (the differences). A phase
+    missing on one side shows ``-`` there.
+    """
+    if not isinstance(plan, MissionPlan):
+        raise NavlibInputError(f"plan: expected a MissionPlan (plan_mission), got "
+                               f"{type(plan).__name__}")
+    if not isinstance(flight, FlightAssessment):
+        raise NavlibInputError(f"flight: expected a FlightAssessment (assess_flight), got "
+                               f"{type(flight).__name__}")
+    if list(plan.state_names) != list(flight.state_names):
+        raise NavlibInputError("flight: its model's states differ from the plan's; compare "
+                               "assessments of the same (21-state ECEF) model")
+    planned, flown = _by_phase(plan), _by_phase(flight)
+    none = ([], [], [])
+
+    def text(names):
+        return ", ".join(names) or "-"
+
+    rows = []
+    for phase in dict.fromkeys([*planned, *flown]):
+        p_seg, p_exc, p_sen = planned.get(phase, none)
+        f_seg, f_exc, f_sen = flown.get(phase, none)
+        rows.append({"phase": phase, "planned_segments": text(p_seg),
+                     "flown_segments": text(f_seg), "planned_excitable": text(p_exc),
+                     "flown_excitable": text(f_exc), "planned_sensible": text(p_sen),
+                     "flown_sensible": text(f_sen),
+                     "sensible_only_planned": text([x for x in p_sen if x not in f_sen]),
+                     "sensible_only_flown": text([x for x in f_sen if x not in p_sen])})
+    return pd.DataFrame(rows)
+
+
+# --------------------------------------------------------------------------- pages
+
+
+def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = (),
+              flight: tuple[str, FlightAssessment] | None = None) -> str:
+    """A self-contained HTML page of one mission plan (tables, figures as PNG); with
+    ``flight = (log, assessment)`` of a recorded flight of the same vehicle, also the
+    planned-beside-flown table (:func:`plan_beside_flight`) and the flight's estimable
+    states."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from navlib.plots import assess as aplots
+    from navlib.plots.metrics import excitability_figure
+    from navlib.plots.plan import timeline_figure
+
+    figures = [("Planned specific force and angular rate, with the phases",
+                aplots.phases_figure(plan)),
+               ("When each state becomes excitable and sensible", timeline_figure(plan)),
+               ("Excitability per segment", excitability_figure(plan)),
+               ("Which states each segment could estimate", aplots.estimable_figure(plan))]
+    assumed = pd.DataFrame([{"vehicle": plan.mission.vehicle, **{
+        k: plan.options.get(k) for k in ("preset", "gnss_rate_hz", "gnss_sigma_m")},
+        "outages": "; ".join(f"{a:g}-{b:g} s" for a, b in plan.outages) or "none"}])
+    parts = [f"<h1>Mission plan: {html.escape(plan.mission.name)}</h1>",
+             f"<p>{html.escape(str(plan.mission.table.get('description', '')))}</p>",
+             f"<p>Generated by <code>python -m navlib plan</code> from "
+             f"<code>{html.escape(label)}</code> (navlib.studies.plan.plan_mission, 21-state "
+             "ECEF model along the planned trajectory). The statements are about the "
+             "linearised model under the stated preset, GNSS and thresholds.</p>",
+             "<h2>Assumed</h2>", assumed.to_html(index=False),
+             "<h2>Planned records</h2>", plan.inputs.to_html(index=False),
+             "<h2>Segments and estimable states</h2>", plan.summary().to_html(index=False),
+             "<h2>Timeline</h2>", plan.timeline().to_html(index=False, float_format="%.4g")]
+    if flight is not None:
+        log, flown = flight
+        parts += [f"<h2>Planned beside flown: {html.escape(log)}</h2>",
+                  "<p>States excitable or sensible in at least one segment of each phase, "
+                  "as the plan expected them and as the recorded flight delivered them "
+                  f"(flight assessed with preset {html.escape(str(flown.options['preset']))})."
+                  "</p>", plan_beside_flight(plan, flown).to_html(index=False)]
+        figures.append((f"Flown: which states each segment could estimate ({log})",
+                        aplots.estimable_figure(flown)))
+    notes = [*warning_texts, *plan.notes]
+    parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{html.escape(str(n))}</li>"
+                                                for n in notes) + "</ul>")
+    for title, fig in figures:
+        parts.append(f"<h2>{html.escape(title)}</h2>"
+                     f'<img alt="{html.escape(title)}" src="data:image/png;base64,'
+                     f'{fleet._figure_png(fig)}">')
+    return ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>"
+            f"{html.escape(plan.mission.name)}</title><style>body{{font-family:sans-serif;"
+            "max-width:1100px;margin:auto} table{border-collapse:collapse;font-size:small} "
+            "td,th{border:1px solid #ccc;padding:2px 6px} img{max-width:100%}</style></head>"
+            "<body>" + "\n".join(parts) + "</body></html>")
+
+
+def _plan_row(label: str, options: Mapping, flight=None) -> tuple[dict, str | None]:
+    start = time.perf_counter()
+    row = dict.fromkeys(PLAN_COLUMNS, "")
+    row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0)
+    page = None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            plan = plan_mission(label, **options)
+            summary = plan.summary()
+            page = plan_page(label, plan, [f"{w.category.__name__}: {w.message}"
+                                           for w in caught], flight)
+            seg = plan.segment_table
+            row.update(status="ok", vehicle=plan.mission.vehicle,
+                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
+                       n_segments=len(seg),
+                       phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
+                                        for r in seg.itertuples(index=False)),
+                       excitable=fleet._per_segment(summary, "excitable"),
+                       sensible=fleet._per_segment(summary, "sensible"))
+        except Exception as exc:  # a bad mission is reported, never stops the others
+            row["error"] = f"{type(exc).__name__}: {exc}"
+    row["warnings"] = " | ".join(sorted({f"{w.category.__name__}: {w.message}"
+                                         for w in caught}))
+    row["seconds"] = round(time.perf_counter() - start, 2)
+    return row, page
+
+
+def plan_missions(missions: Sequence[str], options: Mapping | None = None,
+                  flight: str | None = None) -> tuple[pd.DataFrame, list]:
+    """Plan each mission file (in turn); returns the summary table (one row per mission,
+    :data:`PLAN_COLUMNS`) and the HTML pages (None for a mission that failed).
+    ``options``: keywords of :func:`plan_mission`, checked before any mission runs.
+    ``flight``: a recorded flight (a ``LOG`` of ``python -m navlib assess``) assessed once
+    with the plan's sensor preset and shown beside every plan (:func:`plan_beside_flight`).
+    """
+    missions = list(missions)
+    if not missions or not all(isinstance(m, str) for m in missions):
+        raise NavlibInputError(f"missions: expected one or more mission files, got "
+                               f"{missions!r}")
+    options = dict(options or {})
+    keywords = [p for p in inspect.signature(plan_mission).parameters if p != "mission"]
+    reject_unknown(options, keywords, "plan options (-p)")
+    flown = None
+    if flight is not None:
+        kind, paths = fleet.parse_log(flight)
+        imu, gnss = fleet._read(kind, paths)
+        preset = options.get("sensors_preset")
+        flown = (flight, assess_flight(imu, gnss, preset=preset))
+    rows = [_plan_row(m, options, flown) for m in missions]
+    table = pd.DataFrame([r for r, _ in rows], columns=list(PLAN_COLUMNS))
+    return table, [p for _, p in rows]
+
+
+def write_plans(table: pd.DataFrame, pages: Sequence, output):
+    """Write ``output/summary.csv`` and the pages (:func:`navlib.fleet.write_fleet`)."""
+    return fleet.write_fleet(table, pages, output)
+
+
+# --------------------------------------------------------------------------- trade study
+
+
+def plan_point(mission, sensors_preset: str | None = None, spin_hz: float | None = None,
+               outage_start_s: float | None = None, outage_s: float = 0.0,
+               s_threshold: float = S_THRESHOLD, e_threshold: float = E_THRESHOLD,
+               min_fraction: float = MIN_FRACTION, model_step_s: float | None = MODEL_STEP_S
+               ) -> dict:
+    """One point of a mission trade study (a picklable evaluation for
+    :func:`navlib.sweep.sweep`).
+
+    ``spin_hz`` changes a rocket's ``[rocket] spin_hz``; ``outage_start_s`` with
+    ``outage_s > 0`` replaces the mission's outages by that one window. Returns
+    ``n_excitable`` / ``n_sensible`` (states excitable or sensible in at least one segment),
+    ``n_sensible_end`` (states with ``s >= s_threshold`` at the last epoch) and, per
+    state, ``share_<state>`` (share of epochs sensible) and ``sigma_end_<state>`` (SI).
+    """
+    changes = {"rocket.spin_hz": spin_hz} if spin_hz is not None else None
+    outages = None
+    if outage_start_s is not None and outage_s > 0:
+        outages = [(outage_start_s, outage_start_s + outage_s)]
+    plan = plan_mission(mission, sensors_preset, changes=changes, outages=outages,
+                        s_threshold=s_threshold, e_threshold=e_threshold,
+                        min_fraction=min_fraction, model_step_s=model_step_s)
+    table = plan.state_table()
+    timeline = plan.timeline()
+    se = plan.sensability
+    out = {"n_excitable": int(table.groupby("state")["excitable"].any().sum()),
+           "n_sensible": int(table.groupby("state")["sensible"].any().sum()),
+           "n_sensible_end": int((se.s[-1] >= s_threshold).sum())}
+    for row in timeline.itertuples(index=False):
+        out[f"share_{row.state}"] = row.sensible_share
+        out[f"sigma_end_{row.state}"] = row.sigma_end
+    return out
