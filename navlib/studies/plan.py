@@ -288,7 +288,7 @@ model_options, model_step_s
 
     seg_opts = dict(segment_options)
     seg_opts["min_duration_s"] = max(seg_opts.get("min_duration_s", 2.0), 2.0 / rate)
-    automatic = segment_flight(trajectory, **seg_opts)
+    automatic = segment_flight(trajectory, vehicle=mission.vehicle, **seg_opts)
     table = _segment_table(automatic.segments if segments is None else segments, model,
                            automatic, trajectory.t)
     table, merged = _measured_segments(table, model, automatic, trajectory.t,
