@@ -213,6 +213,7 @@ def _counts_and_verdicts(result) -> list[list[str]]:
     return rows
 
 
+@pytest.mark.slow
 def test_every_step_table_keeps_the_counts_and_verdicts_of_the_5hz_grid():
     """The paper's every-step test (the default now) changes condition digits only: every
     unobservable count, match count and claim verdict is the 5 Hz grid's."""

@@ -22,7 +22,8 @@ def _same(got, reference: str, name: str):
 
 
 @pytest.mark.notebook
-@pytest.mark.parametrize("quick", [True, False], ids=["quick", "full"])
+@pytest.mark.parametrize("quick", [True, pytest.param(False, marks=pytest.mark.slow)],
+                         ids=["quick", "full"])
 def test_notebook_05_shows_the_reference_tables(quick):
     mode = "quick" if quick else "full"
     _same(tables.notebook_values(quick), f"outliers_{mode}.csv", f"outliers_{mode}")
