@@ -10,10 +10,11 @@
   ``dV/dt = (V_target - V) / tau``, ``V_target = -rate * up`` (up: the site's ellipsoid
   normal, no wind), so the velocity settles on the descent rate with the time constant
   ``tau``;
-* when the height above the site falls to ``main_height_m`` the main opens: rate and time
+* when the height above the site (its tangent plane) falls to ``main_height_m`` the main
+  opens: rate and time
   constant move to the main's over ``main_inflation_s`` with the same smoothstep;
-* the flight ends at touchdown (height back to the site's) or at ``end_s``, whichever comes
-  first.
+* the flight ends at touchdown (height back to the site's tangent plane) or at ``end_s``,
+  whichever comes first.
 
 The body x axis turns from the flight direction to the riser (straight up, towards the
 canopy): its yaw and pitch in :func:`recovery_frame` shrink to zero with a smoothstep over
@@ -78,15 +79,16 @@ class Canopy:
 
     def __init__(self, p: dict, P0):
         self.p = p
-        self.r0 = float(np.linalg.norm(P0))
+        self.P0 = np.asarray(P0, dtype=float)
         lat, lon = p["lat_deg"] * math.pi / 180.0, p["lon_deg"] * math.pi / 180.0
         self.up = -np.asarray(earth.ned_to_ecef_matrix(lat, lon))[:, 2]
         self.t_drogue = math.inf
         self.t_main = math.inf
 
     def height(self, P) -> float:
-        """Height above the site's geocentric radius, m."""
-        return math.sqrt(P @ P) - self.r0
+        """Height above the site's tangent plane, m (within a centimetre of the geodetic
+        height for a drift of a few hundred metres)."""
+        return float(self.up @ (P - self.P0))
 
     def blend(self, t, V, acc):
         """The ECEF acceleration ``acc`` of free flight blended into the canopy law."""
