@@ -148,14 +148,14 @@ def test_without_a_drogue_nothing_changes():
     assert traj.t[-1] == 86.0 and "apogee" not in traj.events
 
 
-def _without(kind):
+def _without(*kinds):
     table, _ = read_mission("hpr_rocket")
-    table["phase"] = [p for p in table["phase"] if p["kind"] != kind]
+    table["phase"] = [p for p in table["phase"] if p["kind"] not in kinds]
     return table
 
 
-def _drop_key(phase, key):
-    table, _ = read_mission("hpr_rocket")
+def _drop_key(phase, key, mission="hpr_rocket"):
+    table, _ = read_mission(mission)
     del table["phase"][phase][key]
     return table
 
@@ -185,6 +185,8 @@ def _swap(a, b):
     (_drop_key(3, "rate_m_s"), "phase 3 (drogue): missing key 'rate_m_s'"),
     (_drop_key(4, "height_m"), "phase 4 (main): missing key 'height_m'"),
     (_swap(3, 4), "phases must come in the order rail, boost, coast, drogue, main"),
+    (_without("drogue", "main"), "phase 3 (landing): needs a 'drogue' phase before it"),
+    (_drop_key(2, "end_s", "sounding_rocket"), "phase 2 (coast): missing key 'end_s'"),
 ])
 def test_bad_descent_keys_name_the_place(mission, words):
     with pytest.raises(NavlibInputError) as info:
