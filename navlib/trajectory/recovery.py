@@ -51,6 +51,11 @@ RECOVERY_DEFAULTS = {
     "canopy_spin_hz": 0.0,        # roll rate about the riser under the canopy
 }
 """Recovery keywords of :func:`navlib.trajectory.sounding_rocket` and their defaults."""
+APOGEE_TURN_LIMIT = 10.0
+"""Largest rate, rad/s, at which the flight direction may turn over apogee (gravity over the
+speed there): a near-vertical flight that stops at apogee tumbles, which the pointing along
+the velocity does not represent."""
+
 
 def check_recovery(p: dict) -> None:
     """Validate the recovery keywords of a checked rocket keyword dict (names the keyword)."""
@@ -167,6 +172,14 @@ def deployments(rhs, canopy: Canopy, t_start, y_start, t_cap, cuts, rtol=1e-10, 
                                lambda y: y[:3] @ y[3:6], rtol, atol)
     if t_apo is None:
         return events, t_cap
+    speed = float(np.linalg.norm(y[3:6]))
+    turn = float(np.linalg.norm(earth.normal_gravity_ecef(y[:3]))) / max(speed, 1e-9)
+    if turn > APOGEE_TURN_LIMIT:
+        raise NavlibInputError(
+            f"rail_elevation_deg: the flight reaches apogee at {speed:.2g} m/s, so its "
+            f"direction turns over at {turn:.3g} rad/s (above {APOGEE_TURN_LIMIT:g}: a tumble "
+            "the pointing along the velocity does not represent); tilt the rail further from "
+            "the vertical")
     events["apogee"] = t_apo
     canopy.t_drogue = t_apo + p["drogue_delay_s"]
     t = t_apo
@@ -176,6 +189,10 @@ def deployments(rhs, canopy: Canopy, t_start, y_start, t_cap, cuts, rtol=1e-10, 
     if p["main_rate_mps"] > 0.0:
         sol = solve_ivp(rhs, (t, canopy.t_drogue), y, method="DOP853", rtol=rtol, atol=atol)
         y, t = sol.y[:, -1], canopy.t_drogue
+        if canopy.height(y[:3]) <= 0.0:
+            raise NavlibInputError(
+                f"drogue_delay_s: the rocket is on the ground before the drogue opens at "
+                f"{canopy.t_drogue:.2f} s")
         if canopy.height(y[:3]) <= p["main_height_m"]:
             raise NavlibInputError(
                 f"main_height_m: the drogue opens at {canopy.height(y[:3]):.0f} m, not above "
@@ -191,5 +208,9 @@ def deployments(rhs, canopy: Canopy, t_start, y_start, t_cap, cuts, rtol=1e-10, 
                                 lambda y: canopy.height(y[:3]), rtol, atol)
     if t_land is None:
         return events, t_cap
+    if t_land <= canopy.t_drogue + p["drogue_inflation_s"]:
+        raise NavlibInputError(
+            f"drogue_delay_s: the rocket lands at {t_land:.2f} s, before the drogue opening "
+            f"at {canopy.t_drogue:.2f} s has ended")
     events["landing"] = t_land
     return events, t_land
