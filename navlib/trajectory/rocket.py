@@ -27,6 +27,8 @@ Construction
    de-spin step. The body rate follows from the Euler kinematics.
 4. :func:`navlib.trajectory.base.build_trajectory` turns these into ``f^b`` and
    ``omega_ib^b`` exactly.
+5. With ``drogue_rate_mps > 0`` the same ODE flies on through apogee and the descent under
+   drogue and main to touchdown (:mod:`navlib.trajectory.recovery`, assumption M7).
 """
 
 from __future__ import annotations
