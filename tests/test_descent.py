@@ -1,7 +1,7 @@
 """Rocket descent under drogue and main (navlib.trajectory.recovery, assumption M7): the
 kinematics close exactly through apogee and both deployments, the stated descent rates are
-reached, the body hangs under the canopy, bad descent keys are refused with their place, and
-the hpr_rocket example plans with a descent segment."""
+reached, the body hangs (and, if asked, swings) under the canopy, bad descent keys are
+refused with their place, and the hpr_rocket example plans with a descent segment."""
 
 import numpy as np
 import pytest
@@ -128,6 +128,30 @@ def test_body_hangs_up_the_riser_and_spins_as_stated(hpr):
     np.testing.assert_allclose(hpr.specific_force[steady, 0], g, rtol=1e-4)
 
 
+def test_swing_tilts_the_body_in_the_azimuth_plane(hpr):
+    swing = from_mission(with_values("hpr_rocket", {"phase.3.swing_deg": 10.0,
+                                                    "phase.3.swing_period_s": 3.0}))
+    np.testing.assert_array_equal(swing.position, hpr.position)     # attitude only
+    C_n_e = earth.ned_to_ecef_matrix(*SITE)
+    along = C_n_e @ [np.cos(30 * DEG), np.sin(30 * DEG), 0.0]        # launch azimuth 30 deg
+    across = np.cross(UP, along)
+    hanging = swing.t > swing.events["drogue"] + 1.5
+    x_body = swing.attitude[hanging].apply([1.0, 0.0, 0.0])
+    tilt = np.arcsin(x_body @ along)
+    assert np.abs(x_body @ across).max() < 1e-9
+    assert np.abs(tilt).max() == pytest.approx(10 * DEG, abs=1e-4)
+    phase = 2 * np.pi * (swing.t[hanging] - swing.events["drogue"]) / 3.0
+    np.testing.assert_allclose(tilt, 10 * DEG * np.sin(phase), atol=1e-9)
+    t, w, C = swing.t, swing.angular_rate, swing.attitude
+    i = np.flatnonzero(_window(swing, "drogue"))
+    dt = (t[i + 1] - t[i])[:, None]
+    body = Rotation.from_rotvec(0.5 * (w[i] + w[i + 1]) * dt
+                                + np.cross(w[i], w[i + 1]) * dt**2 / 12.0)
+    earth_step = Rotation.from_rotvec(-dt * earth.EARTH_RATE_ECEF)
+    assert ((earth_step * C[i] * body).inv() * C[i + 1]).magnitude().max() < 2e-5
+    assert strapdown.closure_error(swing).attitude_rad < 1e-4
+
+
 def test_landing_end_s_cuts_the_log_and_drogue_alone_lands():
     cut = from_mission(with_values("hpr_rocket", {"phase.5.end_s": 30.0}))
     assert cut.t[-1] == pytest.approx(30.0) and cut.events["end"] == cut.t[-1]
@@ -178,6 +202,8 @@ def _swap(a, b):
     (with_values("hpr_rocket", {"phase.4.height_m": 2000.0}),
      "phase 4 (main) height_m: main_height_m: the drogue opens at"),
     (with_values("hpr_rocket", {"phase.4.inflation_s": 0.0}), "phase 4 (main) inflation_s"),
+    (with_values("hpr_rocket", {"phase.3.swing_period_s": 0.0}),
+     "phase 3 (drogue) swing_period_s"),
     (with_values("hpr_rocket", {"phase.3.delay_s": 40.0}),
      "phase 3 (drogue) delay_s: drogue_delay_s: the rocket is on the ground before"),
     (with_values(_without("main"), {"phase.3.delay_s": 40.0}),
@@ -204,6 +230,8 @@ def test_bad_descent_keys_name_the_place(mission, words):
     ({"main_rate_mps": 5.0}, "main_rate_mps: needs a drogue"),
     ({"drogue_rate_mps": 20.0, "main_height_m": 300.0}, "main_height_m: a main parachute"),
     ({"drogue_rate_mps": 20.0, "drogue_tau_s": 0.0}, "drogue_tau_s"),
+    ({"drogue_rate_mps": 20.0, "canopy_swing_deg": 50.0}, "canopy_swing_deg"),
+    ({"canopy_swing_deg": 5.0}, "canopy_swing_deg: needs a drogue"),
 ])
 def test_bad_recovery_keywords_of_the_generator(kwargs, words):
     with pytest.raises(NavlibInputError, match=words):

@@ -85,7 +85,8 @@ ROCKET_PHASES = {
                "duration_s": "despin_duration_s"},
     "drogue": {"rate_m_s": "drogue_rate_mps", "delay_s": "drogue_delay_s",
                "time_constant_s": "drogue_tau_s", "inflation_s": "drogue_inflation_s",
-               "spin_hz": "canopy_spin_hz"},
+               "spin_hz": "canopy_spin_hz", "swing_deg": "canopy_swing_deg",
+               "swing_period_s": "canopy_swing_period_s"},
     "main": {"height_m": "main_height_m", "rate_m_s": "main_rate_mps",
              "time_constant_s": "main_tau_s", "inflation_s": "main_inflation_s"},
     "landing": {"end_s": "end_s"},
@@ -99,9 +100,10 @@ through apogee, the drogue opens ``delay_s`` after it and brings the rocket to i
 rate ``rate_m_s`` with the time constant ``time_constant_s``; an optional ``main`` opens at
 ``height_m`` above the site; the flight ends at touchdown, or at the ``landing`` phase's
 ``end_s`` (the end of the log) if that comes first. ``spin_hz`` of the drogue is the roll
-rate about the riser under the canopies."""
+rate about the riser under the canopies, ``swing_deg`` and ``swing_period_s`` a pendulum
+swing of the body there."""
 
-_POSITIVE_KEYS = {"rate_m_s", "time_constant_s", "inflation_s", "height_m"}
+_POSITIVE_KEYS = {"rate_m_s", "time_constant_s", "inflation_s", "height_m", "swing_period_s"}
 """Phase keys that must be strictly positive."""
 
 _REQUIRED_PHASE_KEYS = {"rail": (), "boost": ("start_s", "burn_time_s"), "coast": (),

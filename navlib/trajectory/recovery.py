@@ -19,7 +19,7 @@
 The body x axis turns from the flight direction to the riser (straight up, towards the
 canopy): its yaw and pitch in :func:`recovery_frame` shrink to zero with a smoothstep over
 the drogue's inflation plus time constant, and the roll rate blends into the canopy spin
-with the same weight.
+with the same weight; a pendulum swing of the body about the vertical may be added.
 Every change is a smoothstep of a smooth law, so specific force and body rate stay
 continuous (C^1) and :func:`navlib.trajectory.base.build_trajectory` keeps the kinematics
 exact.
@@ -49,6 +49,8 @@ RECOVERY_DEFAULTS = {
     "main_tau_s": 1.0,
     "main_inflation_s": 1.0,
     "canopy_spin_hz": 0.0,        # roll rate about the riser under the canopy
+    "canopy_swing_deg": 0.0,      # amplitude of a pendulum swing of the body under the canopy
+    "canopy_swing_period_s": 3.0,
 }
 """Recovery keywords of :func:`navlib.trajectory.sounding_rocket` and their defaults."""
 APOGEE_TURN_LIMIT = 10.0
@@ -61,10 +63,12 @@ def check_recovery(p: dict) -> None:
     """Validate the recovery keywords of a checked rocket keyword dict (names the keyword)."""
     for key in ("drogue_rate_mps", "drogue_delay_s", "main_height_m", "main_rate_mps"):
         finite_scalar(p[key], key, 0.0)
-    for key in ("drogue_tau_s", "drogue_inflation_s", "main_tau_s", "main_inflation_s"):
+    for key in ("drogue_tau_s", "drogue_inflation_s", "main_tau_s", "main_inflation_s",
+                "canopy_swing_period_s"):
         finite_scalar(p[key], key, 0.0, low_open=True)
+    finite_scalar(p["canopy_swing_deg"], "canopy_swing_deg", 0.0, 45.0)
     if p["drogue_rate_mps"] == 0.0:
-        for key in ("main_rate_mps", "canopy_spin_hz"):
+        for key in ("main_rate_mps", "canopy_spin_hz", "canopy_swing_deg"):
             if p[key] != 0.0:
                 raise NavlibInputError(f"{key}: needs a drogue (drogue_rate_mps > 0), got "
                                        f"{p[key]} without one")
@@ -126,10 +130,17 @@ class Canopy:
 
     def turn(self, t, psi, theta, dpsi, dtheta):
         """Yaw and pitch of the flight direction in :func:`recovery_frame` (and rates) turned
-        to zero, body x straight up along the riser, with the :meth:`hang` weight."""
+        with the :meth:`hang` weight to the riser: body x straight up, tilted by the swing
+        ``canopy_swing_deg sin(2 pi (t - t_drogue) / canopy_swing_period_s)`` in the
+        vertical plane of the launch azimuth."""
         c, dc = self.hang(t)
         keep = 1.0 - c
-        return (keep * psi, keep * theta, keep * dpsi - dc * psi, keep * dtheta - dc * theta)
+        omega = 2.0 * np.pi / self.p["canopy_swing_period_s"]
+        amplitude = self.p["canopy_swing_deg"] * np.pi / 180.0
+        phase = omega * (np.asarray(t, float) - self.t_drogue)
+        swing, dswing = amplitude * np.sin(phase), amplitude * omega * np.cos(phase)
+        return (keep * psi + c * swing, keep * theta,
+                keep * dpsi + dc * (swing - psi) + c * dswing, keep * dtheta - dc * theta)
 
 
 def recovery_frame(lat, lon, azimuth):

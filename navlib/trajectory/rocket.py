@@ -170,7 +170,8 @@ def sounding_rocket(**overrides) -> Trajectory:
           ``drogue_delay_s=0`` (after apogee), ``drogue_tau_s=1`` (time constant of the
           approach to the descent rate), ``drogue_inflation_s=0.5``, ``main_height_m=0``
           (above the site), ``main_rate_mps=0`` (0: no main), ``main_tau_s=1``,
-          ``main_inflation_s=1``, ``canopy_spin_hz=0`` (roll rate about the riser);
+          ``main_inflation_s=1``, ``canopy_spin_hz=0`` (roll rate about the riser),
+          ``canopy_swing_deg=0`` and ``canopy_swing_period_s=3`` (pendulum swing);
         * numerics: ``grid_step_s=0.02`` (spline nodes on the ODE solution).
 
     Returns
