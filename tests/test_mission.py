@@ -156,7 +156,7 @@ def test_fixed_wing_bank_and_ground_turn_radius_stay_within_limits():
     ("sounding_rocket", {"vehicle": "boat"}, "vehicle: expected one of"),
     ("sounding_rocket", {"phase.1.burn_time_s": -1.0}, "phase 1 (boost) burn_time_s"),
     ("sounding_rocket", {"phase.1.acceleration_m_s2": 100.0}, "exactly one of"),
-    ("sounding_rocket", {"phase.2.kind": "drogue"}, "phase 2: kind 'drogue'"),
+    ("sounding_rocket", {"phase.2.kind": "parafoil"}, "phase 2: kind 'parafoil'"),
     ("sounding_rocket", {"phase.3.at_s": 90.0}, "phase 3 (despin) at_s"),
     ("sounding_rocket", {"rocket.mass_kg": 3.0}, "[rocket]: unknown keyword(s) ['mass_kg']"),
     ("sounding_rocket", {"gnss.outages": [[10.0, 5.0]]}, "outages[0] end_s"),

@@ -85,7 +85,8 @@ def roll_spline(grid, rate):
     return spline, spline.antiderivative()
 
 
-def assemble(t, P0, displacement, pointing, C_L_e, roll, *, events, name, parameters):
+def assemble(t, P0, displacement, pointing, C_L_e, roll, *, events, name, parameters,
+             turn=None):
     """Sample the smooth flight on ``t`` and build the exact-IMU :class:`Trajectory`.
 
     Parameters
@@ -103,12 +104,17 @@ def assemble(t, P0, displacement, pointing, C_L_e, roll, *, events, name, parame
         The fixed frame in which yaw/pitch stay regular (see ``_attitude``).
     roll : callable
         ``roll(t, nu)`` roll angle (``nu = 0``) and roll rate (``nu = 1``), rad.
+    turn : callable, optional
+        ``turn(t, psi, theta, dpsi, dtheta) -> (psi, theta, dpsi, dtheta)``: reshapes the
+        yaw and pitch of the pointing (a rocket turning to hang under its canopy).
     """
     P = P0 + displacement(t)
     V = displacement(t, 1)
     a = displacement(t, 2)
     u_e, du_e = pointing(t, V, a)
     psi, theta, dpsi, dtheta = pointing_angles(u_e @ C_L_e, du_e @ C_L_e)
+    if turn is not None:
+        psi, theta, dpsi, dtheta = turn(t, psi, theta, dpsi, dtheta)
     C_b_e, w_eb_b = zyx_attitude(C_L_e, psi, theta, roll(t, 0), dpsi, dtheta, roll(t, 1))
     return build_trajectory(t, P, V, a, C_b_e, w_eb_b, events=events, name=name,
                             parameters=parameters)

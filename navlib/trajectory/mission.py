@@ -19,9 +19,10 @@ like the sensor presets of ``data/sensors/``::
     outages = [[40.0, 55.0]]     # [start_s, end_s] windows without GNSS
 
 Rockets then give ``[rocket]`` (body: masses, drag area, spin) and ``[[phase]]`` tables of
-kinds ``rail``, ``boost``, ``coast`` and optionally ``despin`` (see :data:`ROCKET_PHASES`);
-they map one-to-one onto the keywords of :func:`navlib.trajectory.sounding_rocket`, whose
-ODE and splines build the flight (assumption M1 of ``docs/assumptions.md``). Multicopters,
+kinds ``rail``, ``boost``, ``coast`` and optionally ``despin``, ``drogue``, ``main`` and
+``landing`` (see :data:`ROCKET_PHASES`); they map one-to-one onto the keywords of
+:func:`navlib.trajectory.sounding_rocket`, whose ODE and splines build the flight
+(assumptions M1 and M7 of ``docs/assumptions.md``). Multicopters,
 fixed-wing aircraft and ground vehicles give ``[limits]`` and ``[[waypoint]]`` tables
 (position, leg speed, hover or hold times; see :data:`WAYPOINT_KEYS`), built by
 :func:`waypoint_trajectory` (assumptions M2-M4).
@@ -82,14 +83,38 @@ ROCKET_PHASES = {
     "coast": {"end_s": "end_s", "free_flight_s": "free_flight_s"},
     "despin": {"at_s": "despin_s", "factor": "despin_factor",
                "duration_s": "despin_duration_s"},
+    "drogue": {"rate_m_s": "drogue_rate_mps", "delay_s": "drogue_delay_s",
+               "time_constant_s": "drogue_tau_s", "inflation_s": "drogue_inflation_s",
+               "spin_hz": "canopy_spin_hz", "swing_deg": "canopy_swing_deg",
+               "swing_period_s": "canopy_swing_period_s"},
+    "main": {"height_m": "main_height_m", "rate_m_s": "main_rate_mps",
+             "time_constant_s": "main_tau_s", "inflation_s": "main_inflation_s"},
+    "landing": {"end_s": "end_s"},
 }
 """Rocket phase kind -> its keys -> :func:`sounding_rocket` keyword (None: derived:
 ``burnout_s = start_s + burn_time_s``; ``thrust_n = acceleration_m_s2 * mass_burnout_kg``,
 the thrust acceleration at burnout). ``boost`` needs ``start_s``, ``burn_time_s`` and one of
-``thrust_n`` / ``acceleration_m_s2``; ``coast`` needs ``end_s``; ``despin`` needs ``at_s``."""
+``thrust_n`` / ``acceleration_m_s2``; ``despin`` needs ``at_s``. Without a ``drogue`` the
+flight ends at the coast's ``end_s`` (required). With one (assumption M7) the coast runs
+through apogee, the drogue opens ``delay_s`` after it and brings the rocket to its descent
+rate ``rate_m_s`` with the time constant ``time_constant_s``; an optional ``main`` opens at
+``height_m`` above the site; the flight ends at touchdown, or at the ``landing`` phase's
+``end_s`` (the end of the log) if that comes first. ``spin_hz`` of the drogue is the roll
+rate about the riser under the canopies, ``swing_deg`` and ``swing_period_s`` a pendulum
+swing of the body there."""
 
-_REQUIRED_PHASE_KEYS = {"rail": (), "boost": ("start_s", "burn_time_s"), "coast": ("end_s",),
-                        "despin": ("at_s",)}
+_POSITIVE_KEYS = {"rate_m_s", "time_constant_s", "inflation_s", "height_m", "swing_period_s"}
+"""Phase keys that must be strictly positive."""
+
+_REQUIRED_PHASE_KEYS = {"rail": (), "boost": ("start_s", "burn_time_s"), "coast": (),
+                        "despin": ("at_s",), "drogue": ("rate_m_s",),
+                        "main": ("height_m", "rate_m_s"), "landing": ()}
+
+_PHASE_ORDER = ("rail", "boost", "coast", "drogue", "main", "landing")
+"""Order of the rocket phases in the file (``despin`` may come anywhere after ``boost``)."""
+
+DESCENT_CAP_S = 3600.0
+"""End of a recovery flight that gives no ``[landing] end_s`` and has not touched down."""
 
 WAYPOINT_KEYS = {
     "multicopter": {"hover_s"},
@@ -326,11 +351,14 @@ def _rocket_keywords(mission: Mission) -> tuple[dict, dict]:
         if not isinstance(phase, Mapping):
             raise NavlibInputError(f"{label}: expected a table, got {phase!r}")
         kind = phase.get("kind")
+        if kind == "apogee":
+            raise NavlibInputError(
+                f"{label}: 'apogee' is not a phase but the event that ends the climb; the "
+                "'drogue' phase's delay_s counts from it")
         if kind not in ROCKET_PHASES:
             raise NavlibInputError(
                 f"{label}: kind {kind!r} is not a rocket phase this planner builds; expected "
-                f"one of {list(ROCKET_PHASES)} (descent under drogue and main is not "
-                "modelled: the flight ends at the coast phase's end_s)")
+                f"one of {list(ROCKET_PHASES)}")
         if kind in seen:
             raise NavlibInputError(f"{label}: a second '{kind}' phase (first: phase "
                                    f"{seen[kind]})")
@@ -343,8 +371,8 @@ def _rocket_keywords(mission: Mission) -> tuple[dict, dict]:
                 raise NavlibInputError(f"{label}: missing key {key!r}")
         for key, keyword in ROCKET_PHASES[kind].items():
             if key in phase:
-                low = None if key in ("azimuth_deg",) else 0.0
-                value = _number(phase, key, label, low)
+                low = None if key in ("azimuth_deg", "spin_hz") else 0.0
+                value = _number(phase, key, label, low, low_open=key in _POSITIVE_KEYS)
                 if keyword is not None:
                     kw[keyword] = value
                     origin[keyword] = f"phase {i} ({kind}) {key}"
@@ -361,19 +389,37 @@ def _rocket_keywords(mission: Mission) -> tuple[dict, dict]:
     for kind in ("rail", "boost", "coast"):
         if kind not in seen:
             raise NavlibInputError(f"{where}: no '{kind}' phase; a rocket mission needs rail, "
-                                   "boost and coast (despin optional)")
-    order = [seen[k] for k in ("rail", "boost", "coast")]
+                                   "boost and coast (despin, drogue, main, landing optional)")
+    present = [k for k in _PHASE_ORDER if k in seen]
+    order = [seen[k] for k in present]
     if order != sorted(order):
-        raise NavlibInputError(f"{where}: phases must come in the order rail, boost, coast "
-                               f"(got them at positions {order})")
+        raise NavlibInputError(f"{where}: phases must come in the order "
+                               f"{', '.join(present)} (got them at positions {order})")
+    coast = phases[seen["coast"]]
+    if "drogue" in seen:
+        if "end_s" in coast:
+            raise NavlibInputError(
+                f"{where} phase {seen['coast']} (coast): no end_s with a drogue phase: the "
+                "coast ends at apogee and the flight at touchdown (give the end of the log as "
+                "the landing phase's end_s)")
+        kw.setdefault("end_s", DESCENT_CAP_S)
+    else:
+        for kind in ("main", "landing"):
+            if kind in seen:
+                raise NavlibInputError(f"{where} phase {seen[kind]} ({kind}): needs a "
+                                       "'drogue' phase before it")
+        if "end_s" not in coast:
+            raise NavlibInputError(f"{where} phase {seen['coast']} (coast): missing key "
+                                   "'end_s' (the end of the flight without a drogue)")
     if "free_flight_s" not in kw:   # an event marker only: inside the coast
-        kw["free_flight_s"] = min(max(ROCKET_DEFAULTS["free_flight_s"], kw["burnout_s"]),
-                                  kw["end_s"])
-    if "despin" not in seen:        # no de-spin: a unit factor at the middle of the coast
+        kw["free_flight_s"] = kw["burnout_s"] if "drogue" in seen else min(
+            max(ROCKET_DEFAULTS["free_flight_s"], kw["burnout_s"]), kw["end_s"])
+    if "despin" not in seen:        # no de-spin: a unit factor inside the coast
         kw["despin_factor"] = 1.0
         kw["despin_duration_s"] = min(ROCKET_DEFAULTS["despin_duration_s"],
                                       kw["end_s"] - kw["burnout_s"])
-        kw["despin_s"] = 0.5 * (kw["burnout_s"] + kw["end_s"])
+        kw["despin_s"] = (kw["burnout_s"] + 0.5 * kw["despin_duration_s"] if "drogue" in seen
+                          else 0.5 * (kw["burnout_s"] + kw["end_s"]))
     return kw, origin
 
 
@@ -700,7 +746,8 @@ def from_mission(path_or_mapping) -> Trajectory:
     -------
     Trajectory
         Rockets: :func:`navlib.trajectory.sounding_rocket` with the phases' keywords (its
-        events: ``ignition``, ``liftoff``, ``rail_exit``, ``burnout``, ...). Other vehicles:
+        events: ``ignition``, ``liftoff``, ``rail_exit``, ``burnout``, ..., with a drogue
+        ``apogee``, ``drogue``, ``main``, ``landing``). Other vehicles:
         :func:`waypoint_trajectory` (events ``waypoint k`` at the nominal passage of each
         waypoint and ``end``). ``parameters["mission"]`` names the mission.
 

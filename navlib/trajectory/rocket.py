@@ -27,6 +27,8 @@ Construction
    de-spin step. The body rate follows from the Euler kinematics.
 4. :func:`navlib.trajectory.base.build_trajectory` turns these into ``f^b`` and
    ``omega_ib^b`` exactly.
+5. With ``drogue_rate_mps > 0`` the same ODE flies on through apogee and the descent under
+   drogue and main to touchdown (:mod:`navlib.trajectory.recovery`, assumption M7).
 """
 
 from __future__ import annotations
@@ -51,6 +53,14 @@ from navlib.trajectory._flight import (
     step,
 )
 from navlib.trajectory.base import Trajectory
+from navlib.trajectory.recovery import (
+    RECOVERY_DEFAULTS,
+    Canopy,
+    check_recovery,
+    deployments,
+    recovering,
+    recovery_frame,
+)
 from navlib.units import DEG
 
 ROCKET_DEFAULTS = {
@@ -81,6 +91,7 @@ ROCKET_DEFAULTS = {
     "spin_speed_mps": 400.0,     # speed scale of the spin-up
     "roll0_deg": 0.0,
     "grid_step_s": 0.02,         # spline node spacing of the ODE samples
+    **RECOVERY_DEFAULTS,         # no descent under canopy unless drogue_rate_mps > 0
 }
 
 _MARGIN_S = 2.0  # the splines extend past the end so their end conditions stay out of view
@@ -122,6 +133,7 @@ def _check(p):
         raise NavlibInputError(
             f"despin_s: the de-spin step [{out['despin_s'] - half}, {out['despin_s'] + half}] s "
             f"must lie between burnout_s ({out['burnout_s']}) and end_s ({out['end_s']})")
+    check_recovery(out)
     if out["end_s"] * out["rate_hz"] < 2.0:
         raise NavlibInputError(f"rate_hz: gives fewer than 2 samples over end_s={out['end_s']}")
     return out
@@ -152,14 +164,23 @@ def sounding_rocket(**overrides) -> Trajectory:
           proportional to thrust;
         * spin: ``spin_hz=2`` (aerodynamic spin at high speed), ``spin_speed_mps=400``,
           ``roll0_deg=0``;
+        * recovery (assumption M7 of ``docs/assumptions.md``; off by default):
+          ``drogue_rate_mps=0`` (a positive descent rate adds apogee, drogue, optional main
+          and touchdown; the flight then ends at touchdown or ``end_s``),
+          ``drogue_delay_s=0`` (after apogee), ``drogue_tau_s=1`` (time constant of the
+          approach to the descent rate), ``drogue_inflation_s=0.5``, ``main_height_m=0``
+          (above the site), ``main_rate_mps=0`` (0: no main), ``main_tau_s=1``,
+          ``main_inflation_s=1``, ``canopy_spin_hz=0`` (roll rate about the riser),
+          ``canopy_swing_deg=0`` and ``canopy_swing_period_s=3`` (pendulum swing);
         * numerics: ``grid_step_s=0.02`` (spline nodes on the ODE solution).
 
     Returns
     -------
     Trajectory
         ``events``: ``ignition``, ``liftoff`` (thrust exceeds the weight along the rail),
-        ``rail_exit``, ``burnout``, ``free_flight``, ``despin``, ``end``. ``parameters``
-        holds every keyword used plus derived values.
+        ``rail_exit``, ``burnout``, ``free_flight``, ``despin``, ``end``, and with a drogue
+        ``apogee``, ``drogue``, ``main`` and ``landing`` (those reached before ``end_s``).
+        ``parameters`` holds every keyword used plus derived values.
 
     Raises
     ------
@@ -207,6 +228,7 @@ def sounding_rocket(**overrides) -> Trajectory:
     cd_a, scale_h, rho0 = p["drag_area_m2"], p["scale_height_m"], p["density_sea_level"]
 
     w_e = earth.OMEGA_E
+    canopy = Canopy(p, P0)
 
     def rhs(t, y):
         # scalar arithmetic where possible: this runs a few thousand times per flight
@@ -222,14 +244,19 @@ def sounding_rocket(**overrides) -> Trajectory:
         acc = (T * u - drag * v_hat) / m + earth.normal_gravity_ecef(P)
         acc[0] += 2.0 * w_e * V[1]     # - 2 Omega x V with Omega = [0, 0, w_e]
         acc[1] -= 2.0 * w_e * V[0]
+        acc = canopy.blend(t, V, acc)
         acc = acc - rail * (acc - r_hat * (acc @ r_hat))   # rail reaction removes lateral part
         return np.array([V[0], V[1], V[2], acc[0], acc[1], acc[2], -T / v_exhaust])
 
-    t_end = p["end_s"] + _MARGIN_S
+    y0 = np.concatenate([P0, np.zeros(3), [m_lift]])
+    cuts = [t_ign + tau_ign, t_bo - tau_tail, t_bo]
+    t_final, recovery_events = p["end_s"], {}
+    if recovering(p):
+        recovery_events, t_final = deployments(rhs, canopy, t_lift, y0, p["end_s"], cuts)
+    t_end = t_final + _MARGIN_S
     n_grid = int(np.ceil((t_end - t_lift) / p["grid_step_s"])) + 1
     grid = np.linspace(t_lift, t_end, n_grid)
-    y0 = np.concatenate([P0, np.zeros(3), [m_lift]])
-    y_grid = integrate(rhs, grid, y0, [t_ign + tau_ign, t_bo - tau_tail, t_bo])
+    y_grid = integrate(rhs, grid, y0, cuts + canopy.breakpoints())
     P_grid, V_grid = y_grid[:, :3], y_grid[:, 3:6]
     acc_end = rhs(grid[-1], y_grid[-1])[3:6]
     displacement = RestStartSpline(grid, P_grid - P0, V_grid[-1], acc_end)
@@ -239,7 +266,10 @@ def sounding_rocket(**overrides) -> Trajectory:
     despin = 1.0 - (1.0 - p["despin_factor"]) * smoothstep(
         (grid - p["despin_s"] + 0.5 * p["despin_duration_s"]) / p["despin_duration_s"])[0]
     spin = 2.0 * np.pi * p["spin_hz"] * np.tanh((speed_grid / p["spin_speed_mps"]) ** 2)
-    _, roll_angle = roll_spline(grid, spin * despin)
+    spin = spin * despin
+    if recovering(p):
+        spin = canopy.spin(grid, spin)
+    _, roll_angle = roll_spline(grid, spin)
     roll0 = p["roll0_deg"] * DEG
 
     def roll(t, nu):
@@ -262,14 +292,18 @@ def sounding_rocket(**overrides) -> Trajectory:
         dw = drail[:, None] * (r_hat - v_hat) + (1.0 - rail)[:, None] * dv_hat
         return unit_and_rate(w, dw)
 
-    t_out = output_times(p["end_s"], p["rate_hz"])
+    t_out = output_times(t_final, p["rate_hz"])
     x_grid = (P_grid - P0) @ r_hat
     t_exit = float(np.interp(p["rail_length_m"], x_grid, grid))
     events = {
         "ignition": t_ign, "liftoff": float(t_lift), "rail_exit": t_exit, "burnout": t_bo,
-        "free_flight": p["free_flight_s"], "despin": p["despin_s"], "end": p["end_s"],
+        "free_flight": p["free_flight_s"], "despin": p["despin_s"], **recovery_events,
+        "end": float(t_out[-1]) if recovering(p) else p["end_s"],
     }
+    frame, turn = C_L_e, None
+    if recovering(p):
+        frame, turn = recovery_frame(lat, lon, p["rail_azimuth_deg"] * DEG), canopy.turn
     parameters = {**p, "exhaust_velocity_mps": float(v_exhaust),
                   "liftoff_mass_kg": float(m_lift)}
-    return assemble(t_out, P0, displacement, pointing, C_L_e, roll, events=events,
+    return assemble(t_out, P0, displacement, pointing, frame, roll, turn=turn, events=events,
                     name="sounding rocket (VS30-like)", parameters=parameters)
