@@ -294,6 +294,11 @@ def _triad(values: dict[str, float], prefix: str) -> TriadSpec:
     return TriadSpec(**kwargs)
 
 
+DEFAULT_IMU_PRESET = "motionpak_tactical"
+"""The preset of the España sounding rocket's IMU (spec excitability.md §5): the default of
+the 21-state model and of the flight fit."""
+
+
 def load_preset(name_or_path) -> SensorSpec:
     """Load a sensor preset by name (see :func:`list_presets`) or from a TOML file path.
 
@@ -596,8 +601,9 @@ class ReferenceTrajectory:
     differs from it by the divergence ``d`` (body axes): ``C_ref = C exp(S(d))``, so that
     ``rotvec(C_hat' C_ref) = T_E^B psi + d`` is Beaudoin's eq. (8). ``d`` is the
     ``psi_ref`` block of the closed-loop attitude dynamics of the RT augmentation
-    (spec launcher.md §3.4, :func:`navlib.models.launcher.rt_dynamics_matrix`),
-    ``x_a' = M x_a + a1_sign [T_E^B psi; 0] + [0; omega_wind]``, integrated with the
+    (spec launcher.md §3.4), ``x_a' = M x_a + a1_sign [T_E^B psi; 0] + [0; omega_wind]``
+    with ``M`` = ``dynamics`` (10 x 10, :func:`navlib.models.launcher.rt_dynamics_matrix`),
+    integrated with the
     paper's Euler steps. It is driven by white wind rates of ``sigma_wind`` rad/s per
     sample and by the **actual** navigation attitude error ``psi`` of the filter that calls
     it (``C = (I + S(psi)) C_nav``: the control steers with the navigation attitude), so
@@ -610,13 +616,11 @@ class ReferenceTrajectory:
     the true divergence at the calls.
     """
 
-    def __init__(self, trajectory, *, sigma_wind: float = 0.01, a1_sign: float = 1.0,
-                 seed=None, rng=None, outliers=None, noise: bool = True):
-        from navlib.models.launcher import rt_dynamics_matrix
-
+    def __init__(self, trajectory, dynamics, *, sigma_wind: float = 0.01,
+                 a1_sign: float = 1.0, seed=None, rng=None, outliers=None, noise: bool = True):
         self._C = trajectory.attitude.as_matrix()
         self._t = np.asarray(trajectory.t, dtype=float)
-        self._M = rt_dynamics_matrix()
+        self._M = finite_array(dynamics, "dynamics", shape=(10, 10))
         self._sigma = finite_scalar(sigma_wind, "sigma_wind", 0.0)
         if a1_sign not in (1, -1, 1.0, -1.0):
             raise NavlibInputError(f"a1_sign: expected +1 or -1, got {a1_sign}")

@@ -35,7 +35,7 @@ from navlib.filters.measurements import (
 )
 from navlib.models.base import ErrorStateModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
-from navlib.models.launcher import LauncherErrorState
+from navlib.models.launcher import LauncherErrorState, rt_dynamics_matrix
 from navlib.outliers import as_outliers
 from navlib.rotations import log_so3
 from navlib.sensors import ReferenceTrajectory, simulate_attitude_sensor
@@ -741,8 +741,8 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
                                             outliers=outliers)
     if "rt" in es.measurements:
         reference = ReferenceTrajectory(
-            trajectory, sigma_wind=es.settings["sigma_wind"], a1_sign=es.settings["a1_sign"],
-            rng=g_ref, outliers=outliers, noise=noise)
+            trajectory, rt_dynamics_matrix(), sigma_wind=es.settings["sigma_wind"],
+            a1_sign=es.settings["a1_sign"], rng=g_ref, outliers=outliers, noise=noise)
 
     # initial error: a draw from the model's P0 navigation block, fed back with minus sign
     truth0 = strapdown.StrapdownState.from_trajectory(trajectory, 0)

@@ -46,6 +46,7 @@ from navlib.models.base import (
     MeasurementRows,
 )
 from navlib.rotations import skew
+from navlib.sensors import DEFAULT_IMU_PRESET, load_preset
 
 STATE_NAMES = (
     "P_x", "P_y", "P_z", "V_x", "V_y", "V_z", "theta_x", "theta_y", "theta_z",
@@ -88,7 +89,7 @@ NOISE_KEYS = ("arw_rad_sqrt_s", "vrw_m_s_sqrt_s", "bg_rw_rad_s_sqrt_s", "ba_rw_m
               "sg_rw_per_sqrt_s", "sa_rw_per_sqrt_s")
 """Names of the noise densities (SI) the model takes from the sensor preset."""
 
-DEFAULT_SENSORS = "motionpak_tactical"
+DEFAULT_SENSORS = DEFAULT_IMU_PRESET
 
 
 def _per_axis(value, name: str) -> np.ndarray:
@@ -104,9 +105,7 @@ def _imu_spec(sensors):
     if sensors is None:
         sensors = DEFAULT_SENSORS
     if isinstance(sensors, str):
-        from navlib import sensors as sensor_lib
-
-        sensors = sensor_lib.load_preset(sensors)
+        sensors = load_preset(sensors)
     if isinstance(sensors, Mapping):
         return sensors
     imu = getattr(sensors, "imu", sensors)

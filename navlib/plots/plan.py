@@ -6,7 +6,6 @@ import numpy as np
 from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
-from navlib.studies.plan import TRANSIENT_S
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -15,11 +14,13 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
 
 
-def timeline_figure(plan, transient_s: float = TRANSIENT_S):
+def timeline_figure(plan, transient_s: float | None = None):
     """States (rows) over time: light bars where the state is excitable (per segment), dark
     bars where it is sensible (per epoch, ``s >= s_threshold``), grey the GNSS outages,
     hatched the start-up transient that :meth:`~navlib.studies.plan.MissionPlan.timeline`
-    leaves out."""
+    leaves out (``transient_s``; None: the plan's ``TRANSIENT_S``)."""
+    if transient_s is None:
+        transient_s = plan.TRANSIENT_S
     names = list(plan.state_names)
     se = plan.sensability
     t = se.t

@@ -27,6 +27,7 @@ import time
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 import pandas as pd
@@ -87,6 +88,7 @@ class MissionPlan(FlightAssessment):
 
     mission: Mission | None = None
     outages: tuple = ()
+    TRANSIENT_S: ClassVar[float] = TRANSIENT_S
 
     def outage_mask(self, t) -> np.ndarray:
         """True at the times ``t`` inside an outage window."""

@@ -120,6 +120,7 @@ from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.io import check_overlap
+from navlib.sensors import DEFAULT_IMU_PRESET, ImuSpec, load_preset
 from navlib.trajectory._so3 import SO3Spline, basis
 from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.units import DEG, G0
@@ -407,14 +408,26 @@ def _hole_bounds(t, f_b, w_b, after):
     return out
 
 
+TURN_ON_FALLBACK = {"gyro_bias_deg_s": 0.05, "accel_bias_m_s2": 0.02}
+"""Turn-on bias sigmas for a preset that states none: the 21-state model's default P0
+(``navlib.models.ecef.P0_DEFAULTS``, spec excitability.md §5)."""
+
+
+def _imu_preset(preset) -> ImuSpec:
+    """The IMU of the sensor preset named ``preset`` (None: :data:`DEFAULT_IMU_PRESET`)."""
+    if preset is not None and not isinstance(preset, str):
+        raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
+    imu = load_preset(preset or DEFAULT_IMU_PRESET).imu
+    if imu is None:
+        raise NavlibInputError(f"preset: {preset!r} has no IMU")
+    return imu
+
+
 def _white_sigmas(preset, rate):
     """Per-sample white-noise sigmas (specific force m/s^2, rate rad/s) of a preset."""
-    from navlib.models.ecef import DEFAULT_SENSORS, imu_noise_densities
-
-    noise = imu_noise_densities(preset or DEFAULT_SENSORS)
+    imu = _imu_preset(preset)
     root = np.sqrt(rate)
-    return (float(np.max(noise["vrw_m_s_sqrt_s"])) * root,
-            float(np.max(noise["arw_rad_sqrt_s"])) * root)
+    return float(imu.accel.noise_density) * root, float(imu.gyro.noise_density) * root
 
 
 def _gnss_acceleration(tc, t_g, P_g, V_g, half_s, until=None):
@@ -1053,23 +1066,19 @@ def _gyro_drift_deg_s(preset):
     attitude, the preset's turn-on gyro bias (at least 0.01 deg/s); 0.01 without a preset."""
     if preset is None:
         return 0.01
-    from navlib.models.ecef import parameter_sigmas
-
-    if not isinstance(preset, str):
-        raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
-    return max(0.01, float(parameter_sigmas(preset)["sigma_bg_deg_s"]))
+    bias = _imu_preset(preset).gyro.bias
+    return max(0.01, bias / DEG if bias > 0 else TURN_ON_FALLBACK["gyro_bias_deg_s"])
 
 
 def _accel_bias_sigma(p):
     """Prior sigma of the fit's accelerometer bias, m/s^2: ``sigma_accel_bias_mps2``, else
     the turn-on value of the named ``preset``, else 0 (no bias estimated)."""
-    from navlib.models.ecef import parameter_sigmas
-
     if p["sigma_accel_bias_mps2"] is not None:
         return p["sigma_accel_bias_mps2"]
     if p["preset"] is None:
         return 0.0
-    return float(parameter_sigmas(p["preset"])["sigma_ba_m_s2"])
+    bias = _imu_preset(p["preset"]).accel.bias
+    return float(bias) if bias > 0 else TURN_ON_FALLBACK["accel_bias_m_s2"]
 
 
 def _rms(x):
