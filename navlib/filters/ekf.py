@@ -578,7 +578,8 @@ class _Loop:
 def _propagate(x, P, F, Q, kept, j0, j1):
     """Error-state mean and covariance from sample ``j0`` to ``j1`` of a window (``F[j]``,
     ``Q[j]`` the step from sample j to j+1): ``x <- F x`` and ``P <- sym(F P F' + Q)``
-    (:func:`navlib.filters.kalman.predict_kernel`), compiled (docs/assumptions.md C1).
+    (:func:`navlib.filters.kalman.predict_kernel`), compiled (docs/assumptions.md
+    "Compiled kernels").
 
     The closed loop drives the ``kept`` (RT) states with the error of the corrected
     navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back

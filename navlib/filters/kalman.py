@@ -82,11 +82,13 @@ def _batched(P_prior, H, R, definite):
     n, m = P_prior.shape[-1], H.shape[-2]
     definite = np.broadcast_to(definite_noise(R) if definite is None else definite, batch)
 
+    size = int(np.prod(batch))
+
     def flat(a, shape):
-        return np.ascontiguousarray(np.broadcast_to(a, (*batch, *shape)).reshape(-1, *shape))
+        return np.ascontiguousarray(np.broadcast_to(a, (*batch, *shape)).reshape(size, *shape))
 
     return (flat(P_prior, (n, n)), flat(H, (m, n)), flat(R, (m, m)),
-            np.ascontiguousarray(definite, dtype=np.bool_).reshape(-1), batch)
+            np.ascontiguousarray(definite, dtype=np.bool_).reshape(size), batch)
 
 
 def _shaped(dof, batch):
@@ -110,7 +112,7 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
         S_pinv[:, :] = S
         return 0
     if definite:
-        S_pinv[:, :] = np.linalg.inv(S)
+        S_pinv[:, :] = np.linalg.solve(S, np.eye(m))    # NumPy's inv: LAPACK gesv
         dof = m
     else:
         w, V = np.linalg.eigh(S)
@@ -161,7 +163,7 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
 
     The Joseph form holds for any gain, so ``P+`` stays symmetric positive semi-definite
     with a singular or zero ``R`` (spec launcher.md §6.2). Compiled
-    (:func:`_joseph_kernel`, docs/assumptions.md C1).
+    (:func:`_joseph_kernel`, docs/assumptions.md "Compiled kernels").
     """
     P, H, R, definite, batch = _batched(P_prior, H, R, definite)
     P_post, K, S_pinv, dof = _batch_kernel(P, H, R, definite, float(pinv_rtol), True)
@@ -193,7 +195,7 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     gains to ``K[i], S_pinv[i], dof[i]`` (when ``K`` has rows). Returns the last posterior.
 
     The recursion of :func:`navlib.covariance._recursion` (spec launcher.md §6.2), compiled
-    (docs/assumptions.md C1)."""
+    (docs/assumptions.md "Compiled kernels")."""
     n = P.shape[0]
     m = H.shape[1]
     cur, nxt = P.copy(), np.empty((n, n))
