@@ -190,9 +190,26 @@ def test_rocket_ekf_86_s_equals_numpy_loop(monkeypatch):
                    model="ecef21", model_options={"sensors": "motionpak_tactical"})
 
     compiled = run()
-    monkeypatch.setattr(ekf_module, "_propagate", _numpy_propagate)
+    monkeypatch.setattr(ekf_module, "propagate_kernel", _numpy_propagate)
     monkeypatch.setattr(ekf_module, "_joseph_kernel", _numpy_joseph)
     numpy_run = run()
     assert np.abs(compiled.position - numpy_run.position).max() < 1e-3
     assert np.max(np.abs(compiled.sigma - numpy_run.sigma) / numpy_run.sigma) < 1e-9
     assert rel(compiled.nis, numpy_run.nis) < 1e-8
+
+
+def test_definite_noise_with_a_numerically_singular_s_takes_the_pseudo_inverse():
+    """``R`` positive definite but lost in rounding beside a huge ``H P H'`` of rank one:
+    the LU inverse meets a zero pivot and the gain is the pseudo-inverse one (NumPy's
+    ``inv`` raised a bare LinAlgError here)."""
+    n, m = 3, 2
+    v = np.array([1.0, 2.0, 3.0])
+    P = 1e40 * np.outer(v, v)
+    H = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    R = np.eye(m)
+    assert definite_noise(R)
+    P_post, gains = joseph_update(P, H, R)
+    K, S_pinv, dof = ref.gain(P, H, R, definite=False)
+    assert gains.dof == dof == 1
+    assert rel(gains.K, K) < STEP_RTOL and rel(gains.S_pinv, S_pinv) < STEP_RTOL
+    assert np.isfinite(P_post).all() and P_post.shape == (n, n)

@@ -16,7 +16,6 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 import pandas as pd
 
@@ -30,7 +29,7 @@ from navlib.filters.kalman import (
     _joseph_kernel,
     _psd_sqrt,
     definite_noise,
-    predict_kernel,
+    propagate_kernel,
 )
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
@@ -537,7 +536,8 @@ def _fixed_design(measurements):
 
 
 class _Loop:
-    """Updates sample by sample and the compiled propagation between them (:func:`_propagate`)
+    """Updates sample by sample and the compiled propagation between them
+    (:func:`~navlib.filters.kalman.propagate_kernel`)
     over the windows of :func:`_run`."""
 
     def __init__(self, es, kept, observers, epochs):
@@ -555,7 +555,7 @@ class _Loop:
         updates = [j for j in range(steps + 1) if (j or not w0) and w0 + j in at]
         rec, j0 = [], 0
         for j in updates:
-            x, P = _propagate(x, P, F, Q, self.kept, j0, j)
+            x, P = propagate_kernel(x, P, F, Q, self.kept, j0, j)
             j0 = j
             epoch, cols, fixed = at[w0 + j]
             if fixed is not None:
@@ -570,34 +570,8 @@ class _Loop:
                 C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
                 for meas in self.observers:
                     meas.observe(C_post)
-        x, P = _propagate(x, P, F, Q, self.kept, j0, steps)
+        x, P = propagate_kernel(x, P, F, Q, self.kept, j0, steps)
         return x, P, rec
-
-
-@numba.njit(cache=True)
-def _propagate(x, P, F, Q, kept, j0, j1):
-    """Error-state mean and covariance from sample ``j0`` to ``j1`` of a window (``F[j]``,
-    ``Q[j]`` the step from sample j to j+1): ``x <- F x`` and ``P <- sym(F P F' + Q)``
-    (:func:`navlib.filters.kalman.predict_kernel`), compiled (docs/assumptions.md
-    "Compiled kernels").
-
-    The closed loop drives the ``kept`` (RT) states with the error of the corrected
-    navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back
-    estimate of the reset states, so their rows take the ``kept`` columns only.
-    Returns new arrays (the inputs are not written)."""
-    x, P = x.copy(), P.copy()
-    spare = np.empty_like(P)
-    for j in range(j0, j1):
-        x_next = np.dot(F[j], x)
-        for a in kept:
-            drive = 0.0
-            for b in kept:
-                drive += F[j, a, b] * x[b]
-            x_next[a] = drive
-        x = x_next
-        predict_kernel(P, F[j], Q[j], spare)
-        P, spare = spare, P
-    return x, P
 
 
 def _records(rec, nominal, es, kept, keep_covariance, m_all):

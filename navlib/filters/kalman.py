@@ -67,7 +67,7 @@ def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) 
         :func:`definite_noise` of ``R`` when already known (computed otherwise).
     """
     P, H, R, definite, batch = _batched(P_prior, H, R, definite)
-    K, S_pinv, dof = _batch_kernel(P, H, R, definite, float(pinv_rtol), False)[1:]
+    K, S_pinv, dof = _each(P, H, R, definite, float(pinv_rtol), False)[1:]
     n, m = P.shape[-1], H.shape[-2]
     return Gains(K.reshape(*batch, n, m), S_pinv.reshape(*batch, m, m), _shaped(dof, batch))
 
@@ -101,8 +101,9 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
     """Compiled :func:`kalman_gain` of one epoch into ``K`` (n, m) and ``S_pinv`` (m, m);
     returns the rank of ``S`` used (the dof).
 
-    ``S = sym(H P H' + R)``; ``S^-1`` when ``definite``, else ``V diag(1/w) V'`` over the
-    eigenvalues ``w > pinv_rtol max(w)`` of ``S`` (spec launcher.md §6.2)."""
+    ``S = sym(H P H' + R)``; ``S^-1`` when ``definite`` (:func:`_inverse`), else (or when
+    ``S`` is singular in floating point) ``V diag(1/w) V'`` over the eigenvalues
+    ``w > pinv_rtol max(w)`` of ``S`` (spec launcher.md §6.2)."""
     m = H.shape[0]
     PHt = np.dot(P, H.T)
     M = np.dot(H, PHt) + R
@@ -111,8 +112,7 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
         K[:, :] = PHt
         S_pinv[:, :] = S
         return 0
-    if definite:
-        S_pinv[:, :] = np.linalg.solve(S, np.eye(m))    # NumPy's inv: LAPACK gesv
+    if definite and _inverse(S, S_pinv):
         dof = m
     else:
         w, V = np.linalg.eigh(S)
@@ -127,6 +127,45 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
     K[:, :] = np.dot(PHt, S_pinv)
     return dof
 @numba.njit(cache=True)
+def _inverse(S, out):
+    """``out = S^-1`` by LU decomposition with partial pivoting and two triangular solves
+    against the identity: the algorithm of LAPACK ``gesv`` that :func:`numpy.linalg.inv`
+    calls, written out (numba's own ``solve`` takes seconds more to compile). ``S`` is the
+    innovation covariance of a positive-definite ``R``; returns False (``out`` unset) when a
+    pivot is nevertheless zero (``S`` singular in floating point, e.g. ``H P H'`` so large
+    that ``R`` is lost in rounding), and the caller takes the pseudo-inverse."""
+    m = S.shape[0]
+    LU = S.copy()
+    perm = np.arange(m)
+    for k in range(m):
+        p = k + np.argmax(np.abs(LU[k:, k]))
+        if LU[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
+            perm[k], perm[p] = perm[p], perm[k]
+        for i in range(k + 1, m):
+            LU[i, k] /= LU[k, k]
+            for j in range(k + 1, m):
+                LU[i, j] -= LU[i, k] * LU[k, j]
+    out[:, :] = 0.0
+    for i in range(m):
+        out[i, perm[i]] = 1.0
+    for i in range(m):                         # L y = P I (unit lower triangle)
+        for k in range(i):
+            for j in range(m):
+                out[i, j] -= LU[i, k] * out[k, j]
+    for i in range(m - 1, -1, -1):             # U x = y
+        for k in range(i + 1, m):
+            for j in range(m):
+                out[i, j] -= LU[i, k] * out[k, j]
+        for j in range(m):
+            out[i, j] /= LU[i, i]
+    return True
+
+
+@numba.njit(cache=True)
 def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     """Compiled :func:`joseph_update` of one epoch: ``P_post = sym((I - K H) P (I - K H)'
     + K R K')`` with the gain of :func:`_gain_kernel` (written to ``K``, ``S_pinv``);
@@ -140,8 +179,7 @@ def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     return dof
 
 
-@numba.njit(cache=True)
-def _batch_kernel(P, H, R, definite, pinv_rtol, update):
+def _each(P, H, R, definite, pinv_rtol: float, update: bool):
     """:func:`_gain_kernel` (and with ``update`` :func:`_joseph_kernel`) over a batch
     (B, ., .); returns ``(P_post, K, S_pinv, dof)`` (``P_post`` empty without ``update``)."""
     batch, n, m = P.shape[0], P.shape[1], H.shape[1]
@@ -150,10 +188,11 @@ def _batch_kernel(P, H, R, definite, pinv_rtol, update):
     dof = np.empty(batch, dtype=np.int64)
     for b in range(batch):
         if update:
-            dof[b] = _joseph_kernel(P[b], H[b], R[b], definite[b], pinv_rtol, P_post[b],
+            dof[b] = _joseph_kernel(P[b], H[b], R[b], bool(definite[b]), pinv_rtol, P_post[b],
                                     K[b], S_pinv[b])
         else:
-            dof[b] = _gain_kernel(P[b], H[b], R[b], definite[b], pinv_rtol, K[b], S_pinv[b])
+            dof[b] = _gain_kernel(P[b], H[b], R[b], bool(definite[b]), pinv_rtol, K[b],
+                                  S_pinv[b])
     return P_post, K, S_pinv, dof
 
 
@@ -166,7 +205,7 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
     (:func:`_joseph_kernel`, docs/assumptions.md "Compiled kernels").
     """
     P, H, R, definite, batch = _batched(P_prior, H, R, definite)
-    P_post, K, S_pinv, dof = _batch_kernel(P, H, R, definite, float(pinv_rtol), True)
+    P_post, K, S_pinv, dof = _each(P, H, R, definite, float(pinv_rtol), True)
     n, m = P.shape[-1], H.shape[-2]
     return P_post.reshape(*batch, n, n), Gains(K.reshape(*batch, n, m),
                                                S_pinv.reshape(*batch, m, m),
@@ -215,6 +254,50 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
         if slot[i] >= 0:
             P_post[slot[i]] = cur
     return cur
+
+
+@numba.njit(cache=True)
+def propagate_kernel(x, P, F, Q, kept, j0, j1):
+    """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
+    from sample ``j0`` to ``j1`` of a window (``F[j]``,
+    ``Q[j]`` the step from sample j to j+1): ``x <- F x`` and ``P <- sym(F P F' + Q)``
+    (:func:`predict_kernel`), compiled (docs/assumptions.md
+    "Compiled kernels").
+
+    The closed loop drives the ``kept`` (RT) states with the error of the corrected
+    navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back
+    estimate of the reset states, so their rows take the ``kept`` columns only.
+    Returns new arrays (the inputs are not written)."""
+    x, P = x.copy(), P.copy()
+    spare = np.empty_like(P)
+    for j in range(j0, j1):
+        x_next = np.dot(F[j], x)
+        for a in kept:
+            drive = 0.0
+            for b in kept:
+                drive += F[j, a, b] * x[b]
+            x_next[a] = drive
+        x = x_next
+        predict_kernel(P, F[j], Q[j], spare)
+        P, spare = spare, P
+    return x, P
+
+
+def compile_kernels() -> None:
+    """Run each compiled kernel once on tiny inputs: compiles them on the first run on a
+    machine (about 20 CPU-seconds, README "Compiled kernels") and loads them from numba's
+    disk cache afterwards, so processes started later (notebook kernels of a report) only
+    load."""
+    n, m = 2, 1
+    P, H, R = np.eye(n), np.ones((1, m, n)), np.ones((1, m, m))
+    steps = np.eye(n)[None]
+    riccati_kernel(P, steps, steps, H, R, np.ones(1, dtype=np.bool_), np.ones(1, dtype=np.bool_),
+                   _PINV_RTOL, 0, np.empty((0, n, n)), np.zeros(1, dtype=np.int64),
+                   np.empty((1, n, n)), np.empty((1, n, m)), np.empty((1, m, m)),
+                   np.empty(1, dtype=np.int64))
+    joseph_update(P, H[0], R[0])
+    kalman_gain(P, H[0], R[0])
+    propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = _PINV_RTOL) -> Gains:
