@@ -106,8 +106,8 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
     ``w > pinv_rtol max(w)`` of ``S`` (spec launcher.md §6.2)."""
     m = H.shape[0]
     PHt = np.dot(P, H.T)
-    M = np.dot(H, PHt) + R
-    S = 0.5 * (M + M.T)
+    S = np.empty((m, m))
+    _sym_sum(np.dot(H, PHt), R, S)
     if m == 0:
         K[:, :] = PHt
         S_pinv[:, :] = S
@@ -121,11 +121,24 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
         dof = 0
         for j in range(m):
             if w[j] > cut:
-                scaled[:, j] = V[:, j] * (1.0 / w[j])
+                inv_w = 1.0 / w[j]
+                for i in range(m):
+                    scaled[i, j] = V[i, j] * inv_w
                 dof += 1
         S_pinv[:, :] = np.dot(scaled, V.T)
     K[:, :] = np.dot(PHt, S_pinv)
     return dof
+
+
+@numba.njit(cache=True)
+def _sym_sum(A, B, out):
+    """``out = sym(A + B)``, i.e. ``M = A + B; (M + M') / 2`` entry by entry (the operations
+    of :func:`navlib.covariance.symmetrize`); ``out`` must be neither ``A`` nor ``B``."""
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            out[i, j] = 0.5 * ((A[i, j] + B[i, j]) + (A[j, i] + B[j, i]))
+
+
 @numba.njit(cache=True)
 def _inverse(S, out):
     """``out = S^-1`` by LU decomposition with partial pivoting and two triangular solves
@@ -171,11 +184,12 @@ def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     + K R K')`` with the gain of :func:`_gain_kernel` (written to ``K``, ``S_pinv``);
     returns the dof. ``P_post`` may be ``P`` itself."""
     dof = _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv)
-    IKH = -np.dot(K, H)
-    for i in range(IKH.shape[0]):
-        IKH[i, i] += 1.0
-    M = np.dot(np.dot(IKH, P), IKH.T) + np.dot(np.dot(K, R), K.T)
-    P_post[:, :] = 0.5 * (M + M.T)
+    IKH = np.dot(K, H)
+    n = IKH.shape[0]
+    for i in range(n):
+        for j in range(n):
+            IKH[i, j] = (1.0 if i == j else 0.0) - IKH[i, j]
+    _sym_sum(np.dot(np.dot(IKH, P), IKH.T), np.dot(np.dot(K, R), K.T), P_post)
     return dof
 
 
@@ -215,11 +229,8 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
 @numba.njit(cache=True)
 def predict_kernel(P, F, Q, out):
     """Covariance prediction ``out = sym(F P F' + Q)`` of one matrix (compiled; ``out``
-    must not be ``P``)."""
-    M = np.dot(np.dot(F, P), F.T) + Q
-    for i in range(M.shape[0]):
-        for j in range(M.shape[1]):
-            out[i, j] = 0.5 * (M[i, j] + M[j, i])
+    may be ``P``, not ``Q``)."""
+    _sym_sum(np.dot(np.dot(F, P), F.T), Q, out)
 
 
 @numba.njit(cache=True)
@@ -285,7 +296,7 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
 
 def compile_kernels() -> None:
     """Run each compiled kernel once on tiny inputs: compiles them on the first run on a
-    machine (about 20 CPU-seconds, README "Compiled kernels") and loads them from numba's
+    machine (about 21 CPU-seconds, README "Compiled kernels") and loads them from numba's
     disk cache afterwards, so processes started later (notebook kernels of a report) only
     load."""
     n, m = 2, 1
