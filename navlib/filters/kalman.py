@@ -1,6 +1,14 @@
 """Kalman-filter algebra shared by the linear simulator, the EKF and
 :func:`navlib.covariance.kalman_covariance`: gains with the pseudo-inverse rule, the
 Joseph-form update, NEES/NIS consistency statistics (spec launcher.md §6.2-6.4; issue 5).
+
+The per-step algebra runs as compiled numba kernels (issue 26; docs/assumptions.md
+"Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
+:func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
+covariance recursion of :func:`navlib.covariance._recursion`) and :func:`propagate_kernel`
+(the EKF between updates). :func:`kalman_gain` and :func:`joseph_update` keep their NumPy
+interface (one epoch or a batch) around them; :func:`compile_kernels` compiles or loads
+them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
 """
 
 from __future__ import annotations
