@@ -233,7 +233,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     :func:`navlib.filters.kalman.kalman_gains` computes from the priors (within rounding:
     one compiled kernel, docs/assumptions.md "Compiled kernels").
     """
-    from navlib.filters.kalman import Gains, definite_noise, riccati_kernel
+    from navlib.filters.kalman import Gains, definite_noise, kernel_array, riccati_kernel
 
     count, (batch, n) = measured.size, P0.shape[:2]
     m = 0 if H is None else H.shape[-2]
@@ -241,7 +241,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
         r_definite = np.zeros(count, dtype=bool)
     else:
         r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
-    update = np.asarray(measured, dtype=bool)
+    update, r_definite = kernel_array(measured, np.bool_), kernel_array(r_definite, np.bool_)
     P_prior = np.empty((batch, count, n, n)) if priors else np.empty((batch, 0, n, n))
     kept = range(count) if keep is None else np.unique(np.asarray(keep, dtype=int) % max(count, 1))
     slot = np.full(count, -1, dtype=np.int64)
@@ -254,13 +254,11 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     P = np.array(P0, dtype=float)
     for a in range(0, count, block):
         b, q0 = min(count, a + block), max(a - 1, 0)
-        F_block = np.ascontiguousarray(F[q0:b - 1], dtype=float)
-        Q_block = np.ascontiguousarray(Q[q0:b - 1], dtype=float)
+        F_block, Q_block = kernel_array(F[q0:b - 1]), kernel_array(Q[q0:b - 1])
         if H is None:
             H_block, R_block = np.zeros((b - a, 0, n)), np.zeros((b - a, 0, 0))
         else:
-            H_block = np.ascontiguousarray(H[a:b], dtype=float)
-            R_block = np.ascontiguousarray(R[a:b], dtype=float)
+            H_block, R_block = kernel_array(H[a:b]), kernel_array(R[a:b])
         for j in range(batch):
             P[j] = riccati_kernel(P[j], F_block, Q_block, H_block, R_block, r_definite[a:b],
                                   update[a:b], pinv_rtol, a, P_prior[j, a:b] if priors

@@ -29,6 +29,7 @@ from navlib.filters.kalman import (
     _joseph_kernel,
     _psd_sqrt,
     definite_noise,
+    kernel_array,
     propagate_kernel,
 )
 from navlib.filters.linear import METHODS
@@ -547,7 +548,7 @@ class _Loop:
     def window(self, x, P, F, Q, w0, nominal):
         """``x``, ``P`` at the end of the window that starts at sample ``w0`` and the
         records ``(j, x, P, innovation, columns, NIS, dof)`` of its updates."""
-        F, Q = np.ascontiguousarray(F, dtype=float), np.ascontiguousarray(Q, dtype=float)
+        x, P, F, Q = kernel_array(x), kernel_array(P), kernel_array(F), kernel_array(Q)
         z_fixed = self.epochs.innovations(w0, nominal)
         by_rows = {}                           # the innovations in the rows of each pattern
         at = self.epochs.at
@@ -615,7 +616,7 @@ def _update(x, P, z, H, R, definite):
     """Joseph update with the stacked measurements of one epoch (``definite``: of ``R``
     when known); the posterior, the innovation, NIS and its dof."""
     innov = z - H @ x
-    H, R = np.ascontiguousarray(H, dtype=float), np.ascontiguousarray(R, dtype=float)
+    P, H, R = kernel_array(P), kernel_array(H), kernel_array(R)
     definite = bool(definite_noise(R) if definite is None else definite)
     n, m = H.shape[1], H.shape[0]
     P_post, K, S_pinv = np.empty((n, n)), np.empty((n, m)), np.empty((m, m))

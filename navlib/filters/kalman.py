@@ -93,10 +93,18 @@ def _batched(P_prior, H, R, definite):
     size = int(np.prod(batch))
 
     def flat(a, shape):
-        return np.ascontiguousarray(np.broadcast_to(a, (*batch, *shape)).reshape(size, *shape))
+        return kernel_array(np.broadcast_to(a, (*batch, *shape)).reshape(size, *shape))
 
     return (flat(P_prior, (n, n)), flat(H, (m, n)), flat(R, (m, m)),
-            np.ascontiguousarray(definite, dtype=np.bool_).reshape(size), batch)
+            kernel_array(definite.reshape(size), np.bool_), batch)
+
+
+def kernel_array(a, dtype=float) -> np.ndarray:
+    """``a`` as a C-contiguous, writable array of ``dtype``: the one array type the kernels
+    are compiled for (a read-only or strided input would compile, and cache, another
+    specialisation of each kernel it reaches). Copies only when ``a`` is not one already."""
+    a = np.ascontiguousarray(a, dtype=dtype)
+    return a if a.flags.writeable else a.copy()
 
 
 def _shaped(dof, batch):
