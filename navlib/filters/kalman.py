@@ -312,7 +312,7 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
 
 def compile_kernels() -> None:
     """Run each compiled kernel once on tiny inputs: compiles them on the first run on a
-    machine (about 21 CPU-seconds, README "Compiled kernels") and loads them from numba's
+    machine (README "Compiled kernels" gives the cost) and loads them from numba's
     disk cache afterwards, so processes started later (notebook kernels of a report) only
     load."""
     n, m = 2, 1
