@@ -26,11 +26,11 @@ from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.kalman import (
     _PINV_RTOL,
-    _joseph_kernel,
     _psd_sqrt,
     definite_noise,
     kernel_array,
     propagate_kernel,
+    update_kernel,
 )
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
@@ -615,13 +615,12 @@ def _stacked(parts):
 def _update(x, P, z, H, R, definite):
     """Joseph update with the stacked measurements of one epoch (``definite``: of ``R``
     when known); the posterior, the innovation, NIS and its dof."""
-    innov = z - H @ x
-    P, H, R = kernel_array(P), kernel_array(H), kernel_array(R)
+    x, P, z, H, R = (kernel_array(a) for a in (x, P, z, H, R))
     definite = bool(definite_noise(R) if definite is None else definite)
     n, m = H.shape[1], H.shape[0]
     P_post, K, S_pinv = np.empty((n, n)), np.empty((n, m)), np.empty((m, m))
-    dof = _joseph_kernel(P, H, R, definite, _PINV_RTOL, P_post, K, S_pinv)
-    return x + K @ innov, P_post, innov, float(innov @ S_pinv @ innov), int(dof)
+    x, innov, nis, dof = update_kernel(x, P, z, H, R, definite, _PINV_RTOL, P_post, K, S_pinv)
+    return x, P_post, innov, float(nis), int(dof)
 
 
 @dataclass(frozen=True, eq=False)

@@ -5,9 +5,10 @@ Joseph-form update, NEES/NIS consistency statistics (spec launcher.md §6.2-6.4;
 The per-step algebra runs as compiled numba kernels (issue 26; docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
-covariance recursion of :func:`navlib.covariance._recursion`) and :func:`propagate_kernel`
-(the EKF between updates). :func:`kalman_gain` and :func:`joseph_update` keep their NumPy
-interface (one epoch or a batch) around them; :func:`compile_kernels` compiles or loads
+covariance recursion of :func:`navlib.covariance._recursion`), :func:`propagate_kernel`
+(the EKF between updates) and :func:`update_kernel` (the EKF's updates).
+:func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
+batch) around them; :func:`compile_kernels` compiles or loads
 them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
 """
 
@@ -209,6 +210,17 @@ def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     return dof
 
 
+@numba.njit(cache=True)
+def update_kernel(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
+    """The EKF's measurement update (:mod:`navlib.filters.ekf`): innovation ``z - H x``,
+    :func:`_joseph_kernel` into ``P_post``, ``K``, ``S_pinv``, the corrected mean
+    ``x + K innovation`` and the NIS ``innovation' S^+ innovation``; returns
+    ``(x_post, innovation, nis, dof)``."""
+    innov = z - np.dot(H, x)
+    dof = _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv)
+    return x + np.dot(K, innov), innov, np.dot(np.dot(innov, S_pinv), innov), dof
+
+
 def _each(P, H, R, definite, pinv_rtol: float, update: bool):
     """:func:`_gain_kernel` (and with ``update`` :func:`_joseph_kernel`) over a batch
     (B, ., .); returns ``(P_post, K, S_pinv, dof)`` (``P_post`` empty without ``update``)."""
@@ -324,6 +336,8 @@ def compile_kernels() -> None:
                    np.empty(1, dtype=np.int64))
     joseph_update(P, H[0], R[0])
     kalman_gain(P, H[0], R[0])
+    update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, _PINV_RTOL, np.empty((n, n)),
+                  np.empty((n, m)), np.empty((m, m)))
     propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
 
 
