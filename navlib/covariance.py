@@ -230,8 +230,8 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     history), and with ``gains`` the
     :class:`~navlib.filters.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
     ``S_pinv`` and dof at epochs without update), else None. These are the gains
-    :func:`navlib.filters.kalman.kalman_gains` computes from the priors (within rounding:
-    one compiled kernel, docs/assumptions.md "Compiled kernels").
+    :func:`navlib.filters.kalman.kalman_gains` computes from the priors, to the bit (the
+    same compiled kernel; docs/assumptions.md "Compiled kernels").
     """
     from navlib.filters.kalman import Gains, definite_noise, kernel_array, riccati_kernel
 
