@@ -212,40 +212,17 @@ class FactoredNoise:
         return L @ L.swapaxes(-1, -2)
 
 
-class Prediction:
-    """Covariance prediction ``symmetrize(F P F' + Q)`` into work arrays: the operations of
-    :func:`symmetrize` without allocations per step, for one matrix or a stack of ``shape``
-    (F and Q one matrix). The two result arrays take turns, so a prior is never written
-    over the matrix it comes from; a caller keeping a result past the next call copies it.
-    Used by :func:`_recursion` and the EKF (:mod:`navlib.filters.ekf`)."""
-
-    def __init__(self, shape):
-        self.FP, self.M = np.empty(shape), np.empty(shape)
-        self.results = (np.empty(shape), np.empty(shape))
-        self.turn = 0
-
-    def __call__(self, P, F, FT, Q):
-        np.matmul(F, P, out=self.FP)
-        np.matmul(self.FP, FT, out=self.M)
-        self.M += Q
-        self.turn = 1 - self.turn
-        P_next = self.results[self.turn]
-        np.add(self.M, self.M.swapaxes(-1, -2), out=P_next)
-        P_next *= 0.5
-        return P_next
-
-
 def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
                gains: bool = False, block: int = 2048, keep=None):
     """The Joseph-form recursion of :func:`kalman_covariance` for a stack of initial
     covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``.
 
-    Every step is one stacked product or decomposition over the B members; each member
-    goes through the very operations of its own recursion (stacked ``matmul``, ``inv`` and
-    ``eigh`` treat each matrix alone), so its history is the same to the last bit. The
-    steps stay sequential (the Riccati recursion); the noise test of every epoch's ``R`` is
-    one batched call before the loop. ``Q`` is read ``block`` steps at a time (an array or
-    a :class:`FactoredNoise`).
+    Each member runs the compiled recursion
+    :func:`navlib.filters.kalman.riccati_kernel` (the prediction and Joseph update of
+    every caller), so the members of a stack have the histories of their own runs, to the
+    bit. The noise test of every epoch's ``R`` is one batched call before the loop. ``F``,
+    ``H``, ``R`` and ``Q`` are read ``block`` steps at a time (``Q`` an array or a
+    :class:`FactoredNoise`; a broadcast matrix is copied one block at a time).
 
     Returns ``(P_prior, P_post, Gains)``: ``P_prior`` (B, N, n, n) or None without
     ``priors``, ``P_post`` (B, N, n, n), or (B, K, n, n) at the K distinct epochs ``keep``
@@ -253,45 +230,42 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     history), and with ``gains`` the
     :class:`~navlib.filters.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
     ``S_pinv`` and dof at epochs without update), else None. These are the gains
-    :func:`navlib.filters.kalman.kalman_gains` computes from the priors, to the bit.
+    :func:`navlib.filters.kalman.kalman_gains` computes from the priors, to the bit (the
+    same compiled kernel; docs/assumptions.md "Compiled kernels").
     """
-    count, (batch, n) = measured.size, P0.shape[:2]
-    update = None
-    if H is not None:
-        from navlib.filters.kalman import Gains, definite_noise, joseph_update
+    from navlib.filters.kalman import Gains, definite_noise, kernel_array, riccati_kernel
 
+    count, (batch, n) = measured.size, P0.shape[:2]
+    m = 0 if H is None else H.shape[-2]
+    if H is None:
+        r_definite = np.zeros(count, dtype=bool)
+    else:
         r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
-        update = measured.tolist()
-    P_prior = np.empty((batch, count, n, n)) if priors else None
+    update, r_definite = kernel_array(measured, np.bool_), kernel_array(r_definite, np.bool_)
+    P_prior = np.empty((batch, count, n, n)) if priors else np.empty((batch, 0, n, n))
     kept = range(count) if keep is None else np.unique(np.asarray(keep, dtype=int) % max(count, 1))
-    slot = np.full(count, -1)
+    slot = np.full(count, -1, dtype=np.int64)
     slot[kept] = np.arange(len(kept))
-    slot = slot.tolist()
     P_post = np.empty((batch, len(kept), n, n))
-    if gains:
-        m = 0 if H is None else H.shape[-2]
-        K = np.zeros((batch, count, n, m))
-        S_pinv = np.zeros((batch, count, m, m))
-        dof = np.zeros((batch, count), dtype=int)
-    P = P0[0] if batch == 1 else P0         # one member: plain matrices, fewer broadcasts
-    predict = Prediction(P.shape)
+    rows = count if gains else 0
+    K = np.zeros((batch, rows, n, m))
+    S_pinv = np.zeros((batch, rows, m, m))
+    dof = np.zeros((batch, rows), dtype=np.int64)
+    P = np.array(P0, dtype=float)
     for a in range(0, count, block):
         b, q0 = min(count, a + block), max(a - 1, 0)
-        Q_block = Q[q0:b - 1]                # the steps into this block's epochs
-        for k in range(a, b):
-            if k:
-                F_k = F[k - 1]
-                P = predict(P, F_k, F_k.swapaxes(-1, -2), Q_block[k - 1 - q0])
-            if priors:
-                P_prior[:, k] = P
-            if update is not None and update[k]:
-                P, gain = joseph_update(P, H[k], R[k], pinv_rtol=pinv_rtol,
-                                        definite=r_definite[k])
-                if gains:
-                    K[:, k], S_pinv[:, k], dof[:, k] = gain.K, gain.S_pinv, gain.dof
-            if slot[k] >= 0:
-                P_post[:, slot[k]] = P
-    return P_prior, P_post, (Gains(K, S_pinv, dof) if gains else None)
+        F_block, Q_block = kernel_array(F[q0:b - 1]), kernel_array(Q[q0:b - 1])
+        if H is None:
+            H_block, R_block = np.zeros((b - a, 0, n)), np.zeros((b - a, 0, 0))
+        else:
+            H_block, R_block = kernel_array(H[a:b]), kernel_array(R[a:b])
+        for j in range(batch):
+            P[j] = riccati_kernel(P[j], F_block, Q_block, H_block, R_block, r_definite[a:b],
+                                  update[a:b], pinv_rtol, a, P_prior[j, a:b] if priors
+                                  else P_prior[j], slot[a:b], P_post[j], K[j, a:b],
+                                  S_pinv[j, a:b], dof[j, a:b])
+    return (P_prior if priors else None, P_post,
+            Gains(K, S_pinv, dof) if gains else None)
 
 
 def kalman_covariances(F, Q=None, H=None, R=None, P0=None, *, update_first: bool = True,

@@ -774,6 +774,8 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     staging.chmod(0o777 & ~umask)  # mkdtemp makes it private; a report folder is not
     try:
         with _signals_interrupt():
+            if jobs > 1:
+                _compile_kernels()
             runs = _run_all(selected, queue, staging, settings, progress)
             _publish(staging, output, runs, partial=only is not None)
         return runs
@@ -783,6 +785,16 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     finally:
         if staging.exists():
             shutil.rmtree(staging, ignore_errors=True)
+
+
+def _compile_kernels() -> None:
+    """Compile navlib's numba kernels (or load them from numba's disk cache) before kernels
+    that run at once start: otherwise each of them compiles the same kernels on a machine's
+    first run (README "Compiled kernels")."""
+    # imported here: the runner itself needs neither numba nor NumPy otherwise
+    from navlib.filters.kalman import compile_kernels
+
+    compile_kernels()
 
 
 def _remove_orphaned_staging(output: Path) -> None:

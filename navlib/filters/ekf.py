@@ -21,10 +21,17 @@ import pandas as pd
 
 from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
-from navlib.covariance import Prediction, symmetrize
+from navlib.covariance import symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import _psd_sqrt, definite_noise, joseph_update
+from navlib.filters.kalman import (
+    _PINV_RTOL,
+    _psd_sqrt,
+    definite_noise,
+    kernel_array,
+    propagate_kernel,
+    update_kernel,
+)
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
     FixedDesign,
@@ -410,8 +417,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
                                    resume.state[3].copy())
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
-    loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)),
-                 Prediction((x.size, x.size)))
+    loop = _Loop(es, kept, observers, _Epochs(events, rows, len(names)))
     clocks = strapdown._block_clocks(t, bounds)
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
@@ -531,46 +537,41 @@ def _fixed_design(measurements):
 
 
 class _Loop:
-    """Updates and propagation sample by sample over the windows of :func:`_run`."""
+    """Updates sample by sample and the compiled propagation between them
+    (:func:`~navlib.filters.kalman.propagate_kernel`)
+    over the windows of :func:`_run`."""
 
-    def __init__(self, es, kept, observers, epochs, predict):
+    def __init__(self, es, kept, observers, epochs):
         self.es, self.kept, self.observers = es, kept, observers
-        self.epochs, self.predict = epochs, predict
+        self.epochs = epochs
 
     def window(self, x, P, F, Q, w0, nominal):
         """``x``, ``P`` at the end of the window that starts at sample ``w0`` and the
         records ``(j, x, P, innovation, columns, NIS, dof)`` of its updates."""
-        FT = np.swapaxes(F, 1, 2)
+        x, P, F, Q = kernel_array(x), kernel_array(P), kernel_array(F), kernel_array(Q)
         z_fixed = self.epochs.innovations(w0, nominal)
         by_rows = {}                           # the innovations in the rows of each pattern
         at = self.epochs.at
-        rec = []
-        for j in range(F.shape[0] + 1):
-            item = at.get(w0 + j) if j or not w0 else None
-            if item is not None:
-                epoch, cols, fixed = item
-                if fixed is not None:
-                    if id(cols) not in by_rows:
-                        by_rows[id(cols)] = z_fixed[:, cols]
-                    z, H, R, definite = by_rows[id(cols)][j], *fixed
-                else:
-                    z, H, R, definite = _evaluated(epoch, nominal, j)
-                x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
-                rec.append((j, x, P, innov, cols, nis, dof))
-                if self.observers:             # posterior navigation attitude
-                    C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
-                    for meas in self.observers:
-                        meas.observe(C_post)
-            if j < F.shape[0]:
-                Fj = F[j]
-                x_next = Fj @ x
-                if self.kept.size:
-                    # the closed loop drives the kept (RT) states with the error of the
-                    # corrected navigation, x[reset] - x_hat[reset]: no mean drive from
-                    # the not-yet-fed-back estimate of the reset states
-                    x_next[self.kept] = Fj[np.ix_(self.kept, self.kept)] @ x[self.kept]
-                x = x_next
-                P = self.predict(P, Fj, FT[j], Q[j])
+        steps = F.shape[0]
+        updates = [j for j in range(steps + 1) if (j or not w0) and w0 + j in at]
+        rec, j0 = [], 0
+        for j in updates:
+            x, P = propagate_kernel(x, P, F, Q, self.kept, j0, j)
+            j0 = j
+            epoch, cols, fixed = at[w0 + j]
+            if fixed is not None:
+                if id(cols) not in by_rows:
+                    by_rows[id(cols)] = z_fixed[:, cols]
+                z, H, R, definite = by_rows[id(cols)][j], *fixed
+            else:
+                z, H, R, definite = _evaluated(epoch, nominal, j)
+            x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
+            rec.append((j, x, P, innov, cols, nis, dof))
+            if self.observers:                 # posterior navigation attitude
+                C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
+                for meas in self.observers:
+                    meas.observe(C_post)
+        x, P = propagate_kernel(x, P, F, Q, self.kept, j0, steps)
         return x, P, rec
 
 
@@ -614,9 +615,12 @@ def _stacked(parts):
 def _update(x, P, z, H, R, definite):
     """Joseph update with the stacked measurements of one epoch (``definite``: of ``R``
     when known); the posterior, the innovation, NIS and its dof."""
-    innov = z - H @ x
-    P, gain = joseph_update(P, H, R, definite=definite)
-    return x + gain.K @ innov, P, innov, float(innov @ gain.S_pinv @ innov), int(gain.dof)
+    x, P, z, H, R = (kernel_array(a) for a in (x, P, z, H, R))
+    definite = bool(definite_noise(R) if definite is None else definite)
+    n, m = H.shape[1], H.shape[0]
+    P_post, K, S_pinv = np.empty((n, n)), np.empty((n, m)), np.empty((m, m))
+    x, innov, nis, dof = update_kernel(x, P, z, H, R, definite, _PINV_RTOL, P_post, K, S_pinv)
+    return x, P_post, innov, float(nis), int(dof)
 
 
 @dataclass(frozen=True, eq=False)

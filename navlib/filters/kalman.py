@@ -1,13 +1,22 @@
 """Kalman-filter algebra shared by the linear simulator, the EKF and
 :func:`navlib.covariance.kalman_covariance`: gains with the pseudo-inverse rule, the
 Joseph-form update, NEES/NIS consistency statistics (spec launcher.md §6.2-6.4; issue 5).
+
+The per-step algebra runs as compiled numba kernels (issue 26; docs/assumptions.md
+"Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
+:func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
+covariance recursion of :func:`navlib.covariance._recursion`), :func:`propagate_kernel`
+(the EKF between updates) and :func:`update_kernel` (the EKF's updates).
+:func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
+batch) around them; :func:`compile_kernels` compiles or loads
+them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
 """
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy import stats
 
@@ -53,8 +62,9 @@ def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) 
     eigen-decomposition pseudo-inverse otherwise (eigenvalues below ``pinv_rtol * max``
     dropped), which gives the optimal update in the measured subspace and no update in the
     directions with ``S = 0`` (ideal measurements, ``R = 0``). The one implementation of
-    this rule: :func:`joseph_update`, :func:`kalman_gains`, the EKF
-    (:func:`navlib.filters.ekf`) and :func:`navlib.covariance.kalman_covariance` use it.
+    this rule (the compiled :func:`_gain_kernel`): :func:`joseph_update`,
+    :func:`kalman_gains`, the EKF (:func:`navlib.filters.ekf`) and
+    :func:`navlib.covariance.kalman_covariance` use it.
 
     Parameters
     ----------
@@ -65,40 +75,167 @@ def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) 
     definite : bool or ndarray (...,) of bool, optional
         :func:`definite_noise` of ``R`` when already known (computed otherwise).
     """
+    P, H, R, definite, batch = _batched(P_prior, H, R, definite)
+    K, S_pinv, dof = _each(P, H, R, definite, float(pinv_rtol), False)[1:]
+    n, m = P.shape[-1], H.shape[-2]
+    return Gains(K.reshape(*batch, n, m), S_pinv.reshape(*batch, m, m), _shaped(dof, batch))
+
+
+def _batched(P_prior, H, R, definite):
+    """``P- , H, R`` broadcast to one batch and flattened to (B, ., .) C-contiguous stacks,
+    the definiteness of each ``R`` (B,) and the batch shape."""
     P_prior = np.asarray(P_prior, dtype=float)
     H = np.asarray(H, dtype=float)
-    PHt = P_prior @ H.swapaxes(-1, -2)
-    S = symmetrize(H @ PHt + R)
-    batch, m = S.shape[:-2], S.shape[-1]
+    R = np.asarray(R, dtype=float)
+    batch = np.broadcast_shapes(P_prior.shape[:-2], H.shape[:-2], R.shape[:-2])
+    n, m = P_prior.shape[-1], H.shape[-2]
+    definite = np.broadcast_to(definite_noise(R) if definite is None else definite, batch)
+
+    size = int(np.prod(batch))
+
+    def flat(a, shape):
+        return kernel_array(np.broadcast_to(a, (*batch, *shape)).reshape(size, *shape))
+
+    return (flat(P_prior, (n, n)), flat(H, (m, n)), flat(R, (m, m)),
+            kernel_array(definite.reshape(size), np.bool_), batch)
+
+
+def kernel_array(a, dtype=float) -> np.ndarray:
+    """``a`` as a C-contiguous, writable array of ``dtype``: the one array type the kernels
+    are compiled for (a read-only or strided input would compile, and cache, another
+    specialisation of each kernel it reaches). Copies only when ``a`` is not one already."""
+    a = np.ascontiguousarray(a, dtype=dtype)
+    return a if a.flags.writeable else a.copy()
+
+
+def _shaped(dof, batch):
+    """The per-member dof (B,) in the batch shape (a NumPy integer for one epoch)."""
+    return dof.reshape(batch) if batch else dof[0]
+
+
+@numba.njit(cache=True)
+def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
+    """Compiled :func:`kalman_gain` of one epoch into ``K`` (n, m) and ``S_pinv`` (m, m);
+    returns the rank of ``S`` used (the dof).
+
+    ``S = sym(H P H' + R)``; ``S^-1`` when ``definite`` (:func:`_inverse`), else (or when
+    ``S`` is singular in floating point) ``V diag(1/w) V'`` over the eigenvalues
+    ``w > pinv_rtol max(w)`` of ``S`` (spec launcher.md §6.2)."""
+    m = H.shape[0]
+    PHt = np.dot(P, H.T)
+    S = np.empty((m, m))
+    _sym_sum(np.dot(H, PHt), R, S)
     if m == 0:
-        return Gains(PHt, S, np.zeros(batch, dtype=int))
-    definite = np.asarray(definite_noise(R) if definite is None else definite, dtype=bool)
-    if bool(definite) if definite.ndim == 0 else definite.all():
-        S_pinv, dof = np.linalg.inv(S), np.full(batch, m) if batch else np.int64(m)
-    elif definite.ndim == 0 or not definite.any():
-        S_pinv, dof = _eigen_pinv(S, pinv_rtol)
+        K[:, :] = PHt
+        S_pinv[:, :] = S
+        return 0
+    if definite and _inverse(S, S_pinv):
+        dof = m
     else:
-        definite = np.broadcast_to(definite, batch)
-        S_pinv, dof = np.empty_like(S), np.full(batch, m)
-        S_pinv[definite] = np.linalg.inv(S[definite])
-        S_pinv[~definite], dof[~definite] = _eigen_pinv(S[~definite], pinv_rtol)
-    return Gains(PHt @ S_pinv, S_pinv, dof)
+        w, V = np.linalg.eigh(S)
+        cut = pinv_rtol * max(w[m - 1], 0.0)
+        scaled = np.zeros_like(V)
+        dof = 0
+        for j in range(m):
+            if w[j] > cut:
+                inv_w = 1.0 / w[j]
+                for i in range(m):
+                    scaled[i, j] = V[i, j] * inv_w
+                dof += 1
+        S_pinv[:, :] = np.dot(scaled, V.T)
+    K[:, :] = np.dot(PHt, S_pinv)
+    return dof
 
 
-def _eigen_pinv(S, rtol: float):
-    """Eigen-decomposition pseudo-inverse of symmetric ``S`` (..., m, m) and its kept rank."""
-    w, V = np.linalg.eigh(S)
-    keep = w > rtol * np.maximum(w[..., -1:], 0.0)
-    inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
-    return (V * inv_w[..., None, :]) @ V.swapaxes(-1, -2), keep.sum(axis=-1)
+@numba.njit(cache=True)
+def _sym_sum(A, B, out):
+    """``out = sym(A + B)``, i.e. ``M = A + B; (M + M') / 2`` entry by entry (the operations
+    of :func:`navlib.covariance.symmetrize`); ``out`` must be neither ``A`` nor ``B``."""
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            out[i, j] = 0.5 * ((A[i, j] + B[i, j]) + (A[j, i] + B[j, i]))
 
 
-@functools.cache
-def _identity(n: int) -> np.ndarray:
-    """The (read-only) n x n identity of :func:`joseph_update`, made once per size."""
-    eye = np.eye(n)
-    eye.flags.writeable = False
-    return eye
+@numba.njit(cache=True)
+def _inverse(S, out):
+    """``out = S^-1`` by LU decomposition with partial pivoting and two triangular solves
+    against the identity: the algorithm of LAPACK ``gesv`` that :func:`numpy.linalg.inv`
+    calls, written out (numba's own ``solve`` takes seconds more to compile). ``S`` is the
+    innovation covariance of a positive-definite ``R``; returns False (``out`` unset) when a
+    pivot is nevertheless zero (``S`` singular in floating point, e.g. ``H P H'`` so large
+    that ``R`` is lost in rounding), and the caller takes the pseudo-inverse."""
+    m = S.shape[0]
+    LU = S.copy()
+    perm = np.arange(m)
+    for k in range(m):
+        p = k + np.argmax(np.abs(LU[k:, k]))
+        if LU[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
+            perm[k], perm[p] = perm[p], perm[k]
+        for i in range(k + 1, m):
+            LU[i, k] /= LU[k, k]
+            for j in range(k + 1, m):
+                LU[i, j] -= LU[i, k] * LU[k, j]
+    out[:, :] = 0.0
+    for i in range(m):
+        out[i, perm[i]] = 1.0
+    for i in range(m):                         # L y = P I (unit lower triangle)
+        for k in range(i):
+            for j in range(m):
+                out[i, j] -= LU[i, k] * out[k, j]
+    for i in range(m - 1, -1, -1):             # U x = y
+        for k in range(i + 1, m):
+            for j in range(m):
+                out[i, j] -= LU[i, k] * out[k, j]
+        for j in range(m):
+            out[i, j] /= LU[i, i]
+    return True
+
+
+@numba.njit(cache=True)
+def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
+    """Compiled :func:`joseph_update` of one epoch: ``P_post = sym((I - K H) P (I - K H)'
+    + K R K')`` with the gain of :func:`_gain_kernel` (written to ``K``, ``S_pinv``);
+    returns the dof. ``P_post`` may be ``P`` itself."""
+    dof = _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv)
+    IKH = np.dot(K, H)
+    n = IKH.shape[0]
+    for i in range(n):
+        for j in range(n):
+            IKH[i, j] = (1.0 if i == j else 0.0) - IKH[i, j]
+    _sym_sum(np.dot(np.dot(IKH, P), IKH.T), np.dot(np.dot(K, R), K.T), P_post)
+    return dof
+
+
+@numba.njit(cache=True)
+def update_kernel(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
+    """The EKF's measurement update (:mod:`navlib.filters.ekf`): innovation ``z - H x``,
+    :func:`_joseph_kernel` into ``P_post``, ``K``, ``S_pinv``, the corrected mean
+    ``x + K innovation`` and the NIS ``innovation' S^+ innovation``; returns
+    ``(x_post, innovation, nis, dof)``."""
+    innov = z - np.dot(H, x)
+    dof = _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv)
+    return x + np.dot(K, innov), innov, np.dot(np.dot(innov, S_pinv), innov), dof
+
+
+def _each(P, H, R, definite, pinv_rtol: float, update: bool):
+    """:func:`_gain_kernel` (and with ``update`` :func:`_joseph_kernel`) over a batch
+    (B, ., .); returns ``(P_post, K, S_pinv, dof)`` (``P_post`` empty without ``update``)."""
+    batch, n, m = P.shape[0], P.shape[1], H.shape[1]
+    P_post = np.empty((batch if update else 0, n, n))
+    K, S_pinv = np.empty((batch, n, m)), np.empty((batch, m, m))
+    dof = np.empty(batch, dtype=np.int64)
+    for b in range(batch):
+        if update:
+            dof[b] = _joseph_kernel(P[b], H[b], R[b], bool(definite[b]), pinv_rtol, P_post[b],
+                                    K[b], S_pinv[b])
+        else:
+            dof[b] = _gain_kernel(P[b], H[b], R[b], bool(definite[b]), pinv_rtol, K[b],
+                                  S_pinv[b])
+    return P_post, K, S_pinv, dof
 
 
 def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None):
@@ -106,14 +243,102 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
     gain of :func:`kalman_gain` (one epoch or a batch); returns ``(P_post, Gains)``.
 
     The Joseph form holds for any gain, so ``P+`` stays symmetric positive semi-definite
-    with a singular or zero ``R`` (spec launcher.md §6.2).
+    with a singular or zero ``R`` (spec launcher.md §6.2). Compiled
+    (:func:`_joseph_kernel`, docs/assumptions.md "Compiled kernels").
     """
-    P_prior = np.asarray(P_prior, dtype=float)
-    gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol, definite=definite)
-    K = gains.K
-    IKH = _identity(P_prior.shape[-1]) - K @ H
-    P_post = IKH @ P_prior @ IKH.swapaxes(-1, -2) + K @ R @ K.swapaxes(-1, -2)
-    return symmetrize(P_post), gains
+    P, H, R, definite, batch = _batched(P_prior, H, R, definite)
+    P_post, K, S_pinv, dof = _each(P, H, R, definite, float(pinv_rtol), True)
+    n, m = P.shape[-1], H.shape[-2]
+    return P_post.reshape(*batch, n, n), Gains(K.reshape(*batch, n, m),
+                                               S_pinv.reshape(*batch, m, m),
+                                               _shaped(dof, batch))
+
+
+@numba.njit(cache=True)
+def predict_kernel(P, F, Q, out):
+    """Covariance prediction ``out = sym(F P F' + Q)`` of one matrix (compiled; ``out``
+    may be ``P``, not ``Q``)."""
+    _sym_sum(np.dot(np.dot(F, P), F.T), Q, out)
+
+
+@numba.njit(cache=True)
+def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot, P_post,
+                   K, S_pinv, dof):
+    """The Kalman covariance recursion of one member over the epochs ``a .. a + len(update)``
+    from ``P`` (the posterior at epoch ``a - 1``, or the initial covariance when ``a`` is 0):
+    prediction with ``F[i], Q[i]`` into epoch ``a + i`` (``i >= 1``, or ``i >= 0`` when
+    ``a > 0``: ``F``/``Q`` start at the step into epoch ``a``), Joseph update where
+    ``update[i]`` (``H[i]``, ``R[i]``, ``definite[i]``). Writes the priors to ``P_prior[i]``
+    (when it has rows), the posteriors to ``P_post[slot[i]]`` where ``slot[i] >= 0`` and the
+    gains to ``K[i], S_pinv[i], dof[i]`` (when ``K`` has rows). Returns the last posterior.
+
+    The recursion of :func:`navlib.covariance._recursion` (spec launcher.md §6.2), compiled
+    (docs/assumptions.md "Compiled kernels")."""
+    n = P.shape[0]
+    m = H.shape[1]
+    cur, nxt = P.copy(), np.empty((n, n))
+    K_k, S_k = np.empty((n, m)), np.empty((m, m))
+    for i in range(update.size):
+        if a + i:
+            s = i - 1 if a == 0 else i
+            predict_kernel(cur, F[s], Q[s], nxt)
+            cur, nxt = nxt, cur
+        if P_prior.shape[0]:
+            P_prior[i] = cur
+        if update[i]:
+            d = _joseph_kernel(cur, H[i], R[i], definite[i], pinv_rtol, nxt, K_k, S_k)
+            cur, nxt = nxt, cur
+            if K.shape[0]:
+                K[i], S_pinv[i], dof[i] = K_k, S_k, d
+        if slot[i] >= 0:
+            P_post[slot[i]] = cur
+    return cur
+
+
+@numba.njit(cache=True)
+def propagate_kernel(x, P, F, Q, kept, j0, j1):
+    """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
+    from sample ``j0`` to ``j1`` of a window (``F[j]``,
+    ``Q[j]`` the step from sample j to j+1): ``x <- F x`` and ``P <- sym(F P F' + Q)``
+    (:func:`predict_kernel`), compiled (docs/assumptions.md
+    "Compiled kernels").
+
+    The closed loop drives the ``kept`` (RT) states with the error of the corrected
+    navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back
+    estimate of the reset states, so their rows take the ``kept`` columns only.
+    Returns new arrays (the inputs are not written)."""
+    x, P = x.copy(), P.copy()
+    spare = np.empty_like(P)
+    for j in range(j0, j1):
+        x_next = np.dot(F[j], x)
+        for a in kept:
+            drive = 0.0
+            for b in kept:
+                drive += F[j, a, b] * x[b]
+            x_next[a] = drive
+        x = x_next
+        predict_kernel(P, F[j], Q[j], spare)
+        P, spare = spare, P
+    return x, P
+
+
+def compile_kernels() -> None:
+    """Run each compiled kernel once on tiny inputs: compiles them on the first run on a
+    machine (README "Compiled kernels" gives the cost) and loads them from numba's
+    disk cache afterwards, so processes started later (notebook kernels of a report) only
+    load."""
+    n, m = 2, 1
+    P, H, R = np.eye(n), np.ones((1, m, n)), np.ones((1, m, m))
+    steps = np.eye(n)[None]
+    riccati_kernel(P, steps, steps, H, R, np.ones(1, dtype=np.bool_), np.ones(1, dtype=np.bool_),
+                   _PINV_RTOL, 0, np.empty((0, n, n)), np.zeros(1, dtype=np.int64),
+                   np.empty((1, n, n)), np.empty((1, n, m)), np.empty((1, m, m)),
+                   np.empty(1, dtype=np.int64))
+    joseph_update(P, H[0], R[0])
+    kalman_gain(P, H[0], R[0])
+    update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, _PINV_RTOL, np.empty((n, n)),
+                  np.empty((n, m)), np.empty((m, m)))
+    propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = _PINV_RTOL) -> Gains:

@@ -1,0 +1,124 @@
+"""Benchmarks of the compiled Kalman kernels (issue 26), each beside the NumPy code it
+replaced (``tests/kalman_reference.py``):
+
+* ``kernels.riccati_28``: 2000 epochs of the covariance recursion with the Joseph update
+  (28 states, 12 measurements at every epoch, the size of the launcher's INS/GPS/att + RT
+  model), compiled (:func:`navlib.filters.kalman.riccati_kernel`) and NumPy
+  (``numpy_riccati_28``). Goal 2000 x 14 us: the 2.9x of the issue's prototype over 42 us.
+* ``kernels.ekf_propagate_21``: the EKF's propagation between updates over 2000 IMU samples
+  of a 21-state model, compiled (:func:`navlib.filters.kalman.propagate_kernel`) and NumPy.
+* ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
+  :func:`navlib.filters.kalman.compile_kernels`, with an empty numba cache folder (the
+  first run on a machine: every kernel compiled) and then with that folder filled (later
+  runs: loaded from disk); the import alone is ``kernels.import_only``.
+
+Times are the best of 3; the machine is shared, so read ``uptime`` beside them.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+from _harness import Case
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+import kalman_reference as ref  # noqa: E402
+
+from navlib.filters.kalman import propagate_kernel, riccati_kernel  # noqa: E402
+
+STEPS = 2000
+
+
+@cache
+def _riccati_case(n: int = 28, m: int = 12):
+    rng = np.random.default_rng(0)
+    F = np.eye(n) + 0.01 * rng.standard_normal((STEPS, n, n))
+    L = 0.01 * rng.standard_normal((n, n))
+    Q = np.ascontiguousarray(np.broadcast_to(L @ L.T, (STEPS, n, n)))
+    H = np.ascontiguousarray(np.broadcast_to(rng.standard_normal((m, n)), (STEPS, m, n)))
+    R = np.ascontiguousarray(np.broadcast_to(0.1 * np.eye(m), (STEPS, m, m)))
+    return F, Q, H, R, np.eye(n), np.ones(STEPS, dtype=bool)
+
+
+def _riccati_compiled():
+    F, Q, H, R, P0, update = _riccati_case()
+    n, m = P0.shape[0], H.shape[1]
+    prior, post = np.empty((STEPS, n, n)), np.empty((STEPS, n, n))
+    riccati_kernel(P0, F, Q, H, R, update, update, 1e-12, 0, prior, np.arange(STEPS), post,
+                   np.empty((0, n, m)), np.empty((0, m, m)), np.empty(0, dtype=np.int64))
+
+
+def _riccati_numpy():
+    F, Q, H, R, P0, update = _riccati_case()
+    ref.recursion(F, Q, H, R, P0, update, update)
+
+
+@cache
+def _ekf_case(n: int = 21):
+    rng = np.random.default_rng(1)
+    F = np.eye(n) + 0.01 * rng.standard_normal((STEPS, n, n))
+    Q = np.ascontiguousarray(np.broadcast_to(1e-6 * np.eye(n), (STEPS, n, n)))
+    return rng.standard_normal(n), np.eye(n), F, Q, np.arange(15, 21)
+
+
+def _ekf_compiled():
+    x, P, F, Q, kept = _ekf_case()
+    propagate_kernel(x, P, F, Q, kept, 0, STEPS)
+
+
+def _ekf_numpy():
+    x, P, F, Q, kept = _ekf_case()
+    ref.propagate(x, P, F, Q, kept)
+
+
+_WARM_UP = "from navlib.filters.kalman import compile_kernels; compile_kernels()"
+
+
+def _fresh_process(code: str, cache_dir: str) -> float:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=ROOT)
+    return time.perf_counter() - start
+
+
+def _compile_cases() -> list[Case]:
+    folder = tempfile.mkdtemp(prefix="navlib-numba-")
+
+    def cold():
+        for path in Path(folder).rglob("*.nb*"):
+            path.unlink()
+        _fresh_process(_WARM_UP, folder)
+
+    return [
+        Case("kernels.import_only", "fresh interpreter, import navlib.filters",
+             lambda: _fresh_process("import navlib.filters", folder), 10.0, repeat=1,
+             warmup=False),
+        Case("kernels.compile_cold", "fresh interpreter, empty numba cache", cold, 30.0,
+             repeat=1, warmup=False),
+        Case("kernels.compile_warm", "fresh interpreter, numba cache filled",
+             lambda: _fresh_process(_WARM_UP, folder), 10.0, repeat=1, warmup=False),
+    ]
+
+
+def cases() -> list[Case]:
+    per_step = f"{STEPS} steps"
+    return [
+        Case("kernels.riccati_28", f"{per_step}, 28 states, 12 meas", _riccati_compiled,
+             STEPS * 14e-6),
+        Case("kernels.numpy_riccati_28", f"{per_step} (NumPy reference)", _riccati_numpy,
+             STEPS * 14e-6),
+        Case("kernels.ekf_propagate_21", f"{per_step}, 21 states", _ekf_compiled,
+             STEPS * 5e-6),
+        Case("kernels.numpy_ekf_propagate_21", f"{per_step} (NumPy reference)", _ekf_numpy,
+             STEPS * 5e-6),
+        *_compile_cases(),
+    ]
