@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 from scipy.ndimage import maximum_filter1d
+from scipy.stats import siegelslopes
 
 from navlib import earth
 from navlib._validation import finite_scalar, reject_unknown
@@ -283,6 +284,17 @@ def _baro_coverage(t: np.ndarray, t_b: np.ndarray, h_g_all: np.ndarray, h_b: np.
                     "their whole spans are not comparable")}]
 
 
+def _baro_offset(d: np.ndarray, height: np.ndarray, max_scale: float) -> np.ndarray:
+    """The expected GNSS-minus-barometer altitude ``a + b height`` (Q2): an offset (geoid,
+    datum, pressure reference) and a scale error of the barometric model (a non-standard
+    atmosphere: about 3 % per 10 K), fitted by Siegel's repeated medians (robust to half the
+    fixes being wrong), the scale clipped to ``max_scale``."""
+    if np.ptp(height) <= 0:
+        return np.full_like(d, np.median(d))
+    b = float(np.clip(siegelslopes(d, height).slope, -max_scale, max_scale))
+    return np.median(d - b * height) + b * height
+
+
 def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]:
     baro = imu.attrs.get("baro")
     t = gnss["t"].to_numpy(dtype=float)
@@ -302,9 +314,10 @@ def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]
         return bad, rows
     h_g = h_g_all[inside]
     h_bi = np.interp(t[inside], t_b, h_b)
+    height = h_bi - h_b[0]
     d = h_g - h_bi
-    d = d - np.median(d)
-    limit = p["baro_tolerance_m"] + p["baro_tolerance_fraction"] * np.abs(h_bi - h_b[0])
+    d = d - _baro_offset(d, height, p["baro_max_scale"])
+    limit = p["baro_tolerance_m"] + p["baro_tolerance_fraction"] * np.abs(height)
     off = np.abs(d) > limit
     if not off.any():
         return bad, rows
@@ -318,7 +331,7 @@ def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]
               "disagree, so which sensor is wrong cannot be told")
     row = _finding("gnss altitude", "altitude", t[idx], t.size, p["span_join_s"],
                    f"GNSS altitude disagrees with the barometer by up to "
-                   f"{np.abs(d).max():.3g} m after removing their median offset (GNSS "
+                   f"{np.abs(d).max():.3g} m after removing their offset and scale (GNSS "
                    f"altitude spans {np.ptp(h_g):.3g} m, barometer {np.ptp(h_bi):.3g} m where "
                    f"both exist; tolerance {p['baro_tolerance_m']:g} m + "
                    f"{p['baro_tolerance_fraction']:g} x height)", "fixes", f"; {action}")
