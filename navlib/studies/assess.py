@@ -363,8 +363,7 @@ def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.Dat
     """Normalise ``segments`` (inside the fitted flight ``t_flight``) and count the model
     epochs each holds (at least 2 needed; the last epoch may precede the flight's end)."""
     table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
-    counts = [int(np.count_nonzero(in_segment(model.t, a, b)))
-              for a, b in zip(table["t_start"], table["t_end"], strict=True)]
+    counts = _epoch_counts(table, model.t)
     for k, (count, row) in enumerate(zip(counts, table.itertuples(index=False), strict=True)):
         if count < 2:
             raise NavlibInputError(
@@ -374,6 +373,50 @@ def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.Dat
     table.insert(0, "segment", np.arange(1, len(table) + 1))
     table["n_epochs"] = counts
     return table
+
+
+def _epoch_counts(table: pd.DataFrame, t, measured=None) -> list[int]:
+    """Model epochs at ``t`` (where ``measured``, when given) inside each segment."""
+    keep = np.ones(np.shape(t), dtype=bool) if measured is None else measured
+    return [int(np.count_nonzero(keep & in_segment(t, a, b)))
+            for a, b in zip(table["t_start"], table["t_end"], strict=True)]
+
+
+def automatic_segment_table(segments, model, automatic: Segmentation, t_flight, *,
+                            automatic_segments: bool) -> tuple[pd.DataFrame, list[str]]:
+    """:func:`_segment_table` of ``segments``, with each automatic segment that holds fewer
+    than two measured epochs of the model (a short phase between GNSS fixes, or one inside a
+    GNSS outage: rows of ``model.H`` that are zero) joined to the segment before it (after
+    it, for the first), with a note: excitability needs measurements (assumptions V1, M6).
+    Segments the user gave (``automatic_segments=False``) are refused instead, naming the
+    segment. Returns the table and the notes."""
+    t = np.asarray(model.t)
+    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
+    entries = [[r.phase, float(r.t_start), float(r.t_end)]
+               for r in table.itertuples(index=False)]
+    notes = []
+    k = 0
+    while k < len(entries) and len(entries) > 1:
+        phase, a, b = entries[k]
+        count = int(np.count_nonzero(measured & in_segment(t, a, b)))
+        if count >= 2:
+            k += 1
+            continue
+        outage = count < np.count_nonzero(in_segment(t, a, b))
+        why = ("lies inside a GNSS outage (no measurement, no excitability)" if outage else
+               f"holds {count} GNSS epoch(s) of the model; each segment needs at least 2")
+        if not automatic_segments:
+            raise NavlibInputError(f"segments: segment {k + 1} ({phase}, {a:.6g}..{b:.6g} s) "
+                                   f"{why}; join it to a neighbour")
+        other = k - 1 if k > 0 else k + 1
+        notes.append(f"segment {phase} {a:.6g}-{b:.6g} s {why}: joined to the "
+                     f"{entries[other][0]} segment next to it")
+        lo, hi = min(k, other), max(k, other)
+        entries[lo] = [entries[other][0], entries[lo][1], entries[hi][2]]
+        del entries[hi]
+        k = lo
+    return _segment_table([tuple(e) for e in entries], model, automatic, t_flight), notes
 
 
 
@@ -617,8 +660,10 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
-    table = _segment_table(automatic.segments if segments is None else segments, model,
-                           automatic, trajectory.t)
+    table, joined = automatic_segment_table(
+        automatic.segments if segments is None else segments, model, automatic, trajectory.t,
+        automatic_segments=segments is None)
+    notes += joined
     residuals = trajectory.parameters.get("fit_residuals", {})
     options = {"preset": preset, "preset_reason": preset_reason, "gnss_rate_hz": gnss_rate_hz,
                "gnss_sigma_m": sigma, "heading_fallback_deg": heading_fallback_deg,

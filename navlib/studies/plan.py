@@ -42,8 +42,8 @@ from navlib.studies.assess import (
     MODEL_STEP_S,
     FlightAssessment,
     _pairs,
-    _segment_table,
     assess_flight,
+    automatic_segment_table,
     describe_inputs,
 )
 from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
@@ -166,41 +166,6 @@ def _check_outages(outages, t_end: float, where: str) -> tuple:
     return tuple(sorted(out))
 
 
-def _measured_segments(table: pd.DataFrame, model, automatic, t_flight, *,
-                       automatic_segments: bool) -> tuple[pd.DataFrame, list[str]]:
-    """Segments that hold no measured epoch (inside an outage) joined to the segment before
-    them (the next one for the first): excitability needs a measurement (assumption M6).
-    A segment given by the user is refused instead."""
-    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
-    t = np.asarray(model.t)
-    entries = [[r.phase, float(r.t_start), float(r.t_end)]
-               for r in table.itertuples(index=False)]
-    notes = []
-    k = 0
-    while k < len(entries) and len(entries) > 1:
-        phase, a, b = entries[k]
-        inside = (t >= a - 1e-9) & (t <= b + 1e-9)
-        if np.any(measured & inside):
-            k += 1
-            continue
-        if not automatic_segments:
-            raise NavlibInputError(
-                f"segments: segment {k + 1} ({phase}, {a:.6g}..{b:.6g} s) lies inside a GNSS "
-                "outage: without a measurement its excitability is undefined; join it to a "
-                "neighbour")
-        other = k - 1 if k > 0 else k + 1
-        notes.append(f"segment {phase} {a:.6g}-{b:.6g} s lies inside a GNSS outage (no "
-                     f"measurement, no excitability): joined to the {entries[other][0]} "
-                     "segment next to it")
-        lo, hi = min(k, other), max(k, other)
-        entries[lo] = [entries[other][0], entries[lo][1], entries[hi][2]]
-        del entries[hi]
-        k = lo
-    if not notes:
-        return table, notes
-    return _segment_table([tuple(e) for e in entries], model, automatic, t_flight), notes
-
-
 def _planned_records(trajectory, model) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The planned IMU samples and the GNSS epochs that carry a measurement, as the
     readers' frames (for :func:`navlib.studies.assess.describe_inputs`)."""
@@ -291,10 +256,9 @@ model_options, model_step_s
     seg_opts = dict(segment_options)
     seg_opts["min_duration_s"] = max(seg_opts.get("min_duration_s", 2.0), 2.0 / rate)
     automatic = segment_flight(trajectory, vehicle=mission.vehicle, **seg_opts)
-    table = _segment_table(automatic.segments if segments is None else segments, model,
-                           automatic, trajectory.t)
-    table, merged = _measured_segments(table, model, automatic, trajectory.t,
-                                       automatic_segments=segments is None)
+    table, merged = automatic_segment_table(
+        automatic.segments if segments is None else segments, model, automatic, trajectory.t,
+        automatic_segments=segments is None)
     imu, gnss = _planned_records(trajectory, model)
     notes = [f"sensor preset {preset!r}: " + ("given" if sensors_preset else
                                               "the mission's" if mission.sensors else
