@@ -73,7 +73,8 @@ def test_robustness_grid_reuses_and_counts():
     grid = {"eta": (1e-2, 1e-3), "nu": (0.985,), "p0": ("baseline (30 m, 3 m/s)",),
             "sigma_sg_ppm": (5000.0,), "spin_hz": (2.0,)}
     variants = rocket.robustness_variants(grid)
-    assert len(variants) == 2 and all(len(v) == 15 for v in variants)
+    assert len(variants) == 2 and all(len(v) == 15 for _, v in variants)
+    assert [p["eta"] for p, _ in variants] == [1e-2, 1e-3]
     with pytest.raises(NavlibInputError, match="grid"):
         rocket.robustness_variants({"gamma": (1,)})
 

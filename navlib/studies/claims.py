@@ -256,7 +256,7 @@ def claim(claim_id: str, statement: str, paper: str, ours: str, checks: Iterable
           explanation: str = "") -> ClaimResult:
     """Build a :class:`ClaimResult` (the verdict follows from ``checks``)."""
     return ClaimResult(claim_id, statement, paper, ours, tuple(checks), basis, assumption,
-                       depends_on=tuple(depends_on), explanation=explanation)
+                       depends_on=depends_on, explanation=explanation)
 
 
 def not_evaluated(claim_id: str, statement: str, paper: str, why: str, *,
@@ -264,7 +264,7 @@ def not_evaluated(claim_id: str, statement: str, paper: str, why: str, *,
                   depends_on: Sequence[str] = ()) -> ClaimResult:
     """A claim the given input cannot judge (``why`` says what is missing)."""
     return ClaimResult(claim_id, statement, paper, why, (), basis, assumption, note=why,
-                       depends_on=tuple(depends_on))
+                       depends_on=depends_on)
 
 
 def with_failed_headline(result: ClaimResult) -> ClaimResult:
