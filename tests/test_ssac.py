@@ -249,7 +249,10 @@ def test_every_claim_can_fail(claims):
     """Each claim has checks, and a failing headline makes it "not reproduced"."""
     from navlib.studies.claims import with_failed_headline
 
+    # only the experimental-data claim cannot be evaluated on a 60 min run
+    assert [cid for cid, c in claims.items() if not c.checks] == ["SSAC-experimental"]
     for cid, c in claims.items():
-        assert c.checks, cid
+        if cid == "SSAC-experimental":
+            continue
         assert with_failed_headline(c).verdict == "not reproduced", cid
         assert all(not k.failing().passed for k in c.checks), cid

@@ -585,8 +585,8 @@ def claim_s4(analysis: RocketAnalysis) -> ClaimResult:
     explanation = "" if only_after.passed else (
         f"on the pad (after the {TRANSIENT_S:g} s transient) s(theta_x), s(theta_y) already "
         f"rise by {pad_rise[0]:.3f} / {pad_rise[1]:.3f}, against {gain[0]:.3f} / "
-        f"{gain[1]:.3f} in the 10 s after lift-off (ratio {only_after.value:.3g}): the "
-        "GNSS updates on the pad keep shrinking the tilt uncertainty before any motion")
+        f"{gain[1]:.3f} in the 10 s after lift-off (ratio {only_after.value:.3g}): their "
+        "rise starts before lift-off")
     return claim("S4", "On the pad the IMU is an inclinometer: attitude components more "
                  "sensible the larger their tangent-plane projection; q_x, q_y grow only "
                  "after lift-off", "order by projection; q_x, q_y rise only after 19 s", ours,

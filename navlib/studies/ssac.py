@@ -687,8 +687,8 @@ def _static_tables(lat_deg: float, alt_m: float, duration: float, rtol: float = 
 def actual_claim(study: SSACStudy, x0=None) -> ClaimResult:
     """SSAC-actual: the actual psiD error of a noise-free run (truth ``x0``, default every
     bias at 1 sigma, :func:`actual_error`) against the (44) sigma. Its number is set by
-    ``x0``, which the paper does not give: ``depends_on`` x0, and the claims engine judges
-    it over :func:`x0_draws` as well."""
+    ``x0``, which the paper does not give (A-SSAC-actual): ``depends_on`` x0, and the claims
+    engine judges it over :func:`x0_draws` as well."""
     psid = closed_form_limits(study).set_index("state").loc["psiD"]
     err = actual_error(study, x0)
     i_psid = study.model.state_names.index("psiD")
