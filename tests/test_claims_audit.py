@@ -199,3 +199,28 @@ def test_x_claims_move_with_eta(analysis):
         values[eta] = (x1.checks[0].value, x1.verdict)
     assert values[1e-2][0] != values[1e-4][0]
     assert {v for _, v in values.values()} == {"reproduced", "not reproduced"}
+
+
+def test_conclusions_1_and_3_follow_the_table():
+    """Missing claims of issue 25: conclusion 1 (no solution observes b_p) and 3 (the RT
+    does not improve observability), judged on Table 2 rows."""
+    frame = _table2_frame(17.0)
+    paper = {c.claim_id: c for c in launcher.conclusion_claims(frame)}
+    assert paper["C1-bp"].verdict == "reproduced"
+    hidden = frame.copy()
+    rw = (hidden.solution == "ins_gps_rt") & (hidden.bias_model == "random_walk")
+    hidden.loc[rw, "groups"] = ""
+    assert {c.claim_id: c for c in launcher.conclusion_claims(hidden)}["C1-bp"].verdict \
+        == "not reproduced"
+    helped = frame.copy()
+    rt = (helped.solution == "ins_gps_rt") & (helped.biases == "G")
+    helped.loc[rt, "log10_cond"] = helped.loc[rt, "log10_cond"] - 3.0
+    moved = {c.claim_id: c for c in launcher.conclusion_claims(helped)}["C3-RT"]
+    assert moved.verdict == "not reproduced"
+    assert moved.checks[0].value > paper["C3-RT"].checks[0].value
+
+
+def test_espana_rank_claim_is_by_construction(analysis):
+    c = rocket.claim_xrank(analysis)
+    assert c.basis == "by construction" and not c.reproduced
+    assert "X-rank" in [r.claim_id for r in rocket._baseline_claims()]

@@ -511,6 +511,44 @@ def table2_claim_results(frame: pd.DataFrame, cond_tol: float = COND_TOL,
     return out
 
 
+def conclusion_claims(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> list[ClaimResult]:
+    """Conclusions 1 and 3 (§5) as far as Table 2 speaks to them: no solution observes the
+    GPS position bias (random-walk b_p rows of every solution), and the RT does not improve
+    observability (its rows against the same configuration without it)."""
+    rw_p = _rows(frame, bias_model="random_walk", biases=["P", "GP", "AP", "GAP"])
+    hidden = rw_p.groups.str.contains("bp_", regex=False)
+    per_solution = hidden.groupby(rw_p.solution, sort=False).all()
+    out = [claim(
+        "C1-bp", "No solution makes the GPS position bias observable (conclusion 1)",
+        "b_p unobservable in every solution",
+        "b_p in the null space of every random-walk b_p row: " + ", ".join(
+            f"{s} {'yes' if v else 'no'}" for s, v in per_solution.items()),
+        [check("solutions whose random-walk b_p rows all leave b_p unobservable",
+               int(per_solution.sum()), ">=", len(SOLUTIONS), True)],
+        assumption="Table 2 random-walk b_p rows (the Markov rows are full rank: there the "
+                   "claim rests on the covariance, F3-bp)", depends_on=("rank_rtol",))]
+    rows = []
+    for plain, rt in (("ins_gps", "ins_gps_rt"), ("ins_gps_att", "ins_gps_att_rt")):
+        pair = _pair_frame(frame, plain, rt, BIAS_SETS)
+        better = ((pair[f"n_unobservable_{rt}"] < pair[f"n_unobservable_{plain}"])
+                  | ((pair[f"n_unobservable_{rt}"] == pair[f"n_unobservable_{plain}"])
+                     & (pair[f"log10_cond_{rt}"] < pair[f"log10_cond_{plain}"] - cond_tol)))
+        rows.append((plain, int(better.sum()), len(pair)))
+    improved = sum(n for _, n, _ in rows)
+    total = sum(m for _, _, m in rows)
+    out.append(claim(
+        "C3-RT", "The RT does not improve observability (conclusion 3; its lower roll sigma is "
+        "F7/F11)", "no configuration more observable with the RT",
+        "; ".join(f"{SOLUTION_LABELS[p]} + RT more observable in {n}/{m} configurations"
+                  for p, n, m in rows),
+        [check("share of configurations the RT makes more observable",
+               improved / total if total else float("nan"), "<=", 0.0, True)],
+        assumption=f"'more observable' = fewer unobservable states, or the same count and "
+                   f"log10 cond lower by more than {cond_tol:g}",
+        depends_on=("rank_rtol", "cond_tol")))
+    return out
+
+
 def variant_comparison(trajectory=None, solution: str = "ins_gps", *, stride: int = 1,
                        **kw) -> pd.DataFrame:
     """One solution's Table 2 rows under both readings of eq. (6), beside the paper.
@@ -1006,14 +1044,18 @@ def _cached_table2(quick: bool, rtol: float | None = None) -> Table2Result:
     return _T2_CACHE[(quick, rtol)]
 
 
+def _all_table2_claims(result: Table2Result, cond_tol: float = COND_TOL) -> list[ClaimResult]:
+    return result.claims(cond_tol) + conclusion_claims(result.frame, cond_tol)
+
+
 def _table2_claims(quick: bool = False) -> list[ClaimResult]:
-    return _cached_table2(quick).claims()
+    return _all_table2_claims(_cached_table2(quick))
 
 
 def _table2_robustness(quick: bool = False) -> list:
     base = _cached_table2(quick)
-    out = [({"cond_tol": tol}, base.claims(tol)) for tol in TOLERANCES]
-    out += [({"rank_rtol": rtol}, _cached_table2(quick, rtol).claims())
+    out = [({"cond_tol": tol}, _all_table2_claims(base, tol)) for tol in TOLERANCES]
+    out += [({"rank_rtol": rtol}, _all_table2_claims(_cached_table2(quick, rtol)))
             for rtol in TABLE2_RANK_RTOLS if not isinstance(rtol, str)]
     return out
 

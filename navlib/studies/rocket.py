@@ -50,6 +50,7 @@ from navlib.models.ecef import (
     initial_covariance,
     parameter_sigmas,
 )
+from navlib.resolution import relative_resolution
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim, claims_frame
 from navlib.trajectory import sounding_rocket
@@ -422,6 +423,31 @@ def claim_x7(analysis: RocketAnalysis) -> ClaimResult:
     return claim("X7", "Free fall (tau3) is unfavourable for in-flight recalibration",
                  "IMU parameters not excitable in tau3", ours, checks,
                  assumption=_assumption(analysis))
+
+
+def claim_xrank(analysis: RocketAnalysis) -> ClaimResult:
+    """España §4: a rank-deficient O_tau leaves a subspace with zero excitability. An
+    identity of the SVD (basis "by construction"); the counts show where it applies."""
+    _require_three(analysis)
+    deficient, energy = [], []
+    for ex in analysis.excitability:
+        singular = np.sqrt(np.clip(ex.sigma, 0.0, None))
+        floor = relative_resolution(ex.O.shape) * singular[0]
+        beyond = singular <= floor
+        deficient.append(int(beyond.sum()))
+        energy.append(float(ex.S[beyond].max()) if beyond.any() else 0.0)
+    checks = [check("segments whose O_tau is rank-deficient", sum(d > 0 for d in deficient),
+                    ">=", 1, True),
+              check("largest energy S of a direction beyond the rank", max(energy), "<=",
+                    analysis.excitability[0].eta)]
+    ours = ("directions beyond the numerical rank of O_tau per segment: "
+            + "/".join(str(d) for d in deficient))
+    return claim("X-rank", "A rank-deficient O_tau leaves a subspace with zero excitability",
+                 "zero excitability where rank O_tau < n (§4)", ours, checks,
+                 basis="by construction",
+                 assumption="rank = singular values above the numerical resolution of O_tau "
+                            "(navlib.resolution); zero energy there is an identity of the SVD",
+                 depends_on=("rank_tolerance",))
 
 
 # --------------------------------------------------------------------------- S1-S8 (Figs 3-5)
@@ -1229,7 +1255,7 @@ ROBUSTNESS_BASELINE = {"eta": BASELINE["eta"], "nu": BASELINE["nu"],
 
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
     a = analyze()
-    return excitability_claims(a) + sensability_claims(a)
+    return [*excitability_claims(a), claim_xrank(a), *sensability_claims(a)]
 
 
 def _robustness(quick: bool = False) -> list:
