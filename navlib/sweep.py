@@ -521,9 +521,33 @@ def _claims_run(prepared, **full) -> dict:
         nu=full["nu"], d0=full["d0"],
         settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
                                        "imu_grade", "coning_deg")})
-    claims = rocket.excitability_claims(analysis) + rocket.sensability_claims(analysis)
+    claims = rocket.excitability_claims(analysis) + rocket.sensability_claims(
+        analysis, _quiet_gyro_analysis(full, coning))
     passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
     return {**passed, "n_reproduced": int(sum(passed.values()))}
+
+
+def _quiet_gyro_analysis(full, coning):
+    """S5's counterfactual of a "claims" point: the same model with the gyro noise and the
+    initial gyro-bias sigma scaled by ``rocket.QUIET_GYRO_SCALE`` (docs/assumptions.md,
+    A-S5-cause)."""
+    from navlib.models.ecef import ecef21_at_epochs, imu_noise_densities, parameter_sigmas
+    from navlib.studies import rocket
+
+    scale, grade = rocket.QUIET_GYRO_SCALE, float(full["imu_grade"])
+    noise = {k: v * grade * (scale if k in rocket.GYRO_NOISE_KEYS else 1.0)
+             for k, v in imu_noise_densities(full["preset"]).items()}
+    traj = rocket.rocket_trajectory(full["spin_hz"], **coning)
+    model = ecef21_at_epochs(traj, full["gnss_rate_hz"], sensors=noise,
+                             attitude_error=full["attitude_error"])
+    bg = full["sigma_bg_deg_s"]
+    bg = parameter_sigmas(full["preset"])["sigma_bg_deg_s"] * grade if bg is None else bg
+    quiet = {**full, "sigma_bg_deg_s": bg * scale}
+    return rocket.RocketAnalysis.build(
+        _rocket_model((model, None), quiet), rocket.SEGMENTS, trajectory=traj,
+        eta=full["eta"], nu=full["nu"], d0=full["d0"],
+        settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
+                                       "imu_grade", "coning_deg")})
 
 
 # ----- launcher family: Beaudoin et al.'s models along the launcher ascent

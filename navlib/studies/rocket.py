@@ -81,6 +81,8 @@ QUIET_GYRO_SCALE = 1e-4
 """Factor on the gyro ARW, bias random walk and initial bias sigma of S5's counterfactual
 run: the claim names the gyro errors as the cause, so removing them must make the heading
 sensible (docs/assumptions.md, A-S5-cause)."""
+GYRO_NOISE_KEYS = ("arw_rad_sqrt_s", "bg_rw_rad_s_sqrt_s")
+"""The gyro noise densities S5's counterfactual scales (:data:`QUIET_GYRO_SCALE`)."""
 EXCITABILITY_DEPENDS = ("eta", "p0", "sigma_sg_ppm", "spin_hz")
 """The assumptions X1-X7's numbers depend on (the keys of :data:`ROBUSTNESS_GRID`)."""
 SENSABILITY_DEPENDS = ("nu", "p0", "sigma_sg_ppm", "spin_hz")
@@ -640,8 +642,7 @@ def quiet_gyro_analysis(analysis: RocketAnalysis, scale: float = QUIET_GYRO_SCAL
         raise NavlibInputError("sensors: the analysis was built from a noise mapping; pass "
                                "the same mapping for S5's counterfactual")
     noise = imu_noise_densities(analysis.settings["sensors"] if sensors is None else sensors)
-    quiet = {k: (v * scale if k in ("arw_rad_sqrt_s", "bg_rw_rad_s_sqrt_s") else v)
-             for k, v in noise.items()}
+    quiet = {k: (v * scale if k in GYRO_NOISE_KEYS else v) for k, v in noise.items()}
     s = analysis.settings
     sigmas = {k: s[k] for k in P0_DEFAULTS if k in s}
     sigmas["sigma_bg_deg_s"] = sigmas.get("sigma_bg_deg_s", P0_DEFAULTS["sigma_bg_deg_s"]) \
@@ -878,7 +879,8 @@ def tension_table(variants: dict | None = None, sensors=None, progress: bool = F
                               disable=not progress):
         kwargs = {**common, **options}
         a = analyze(sensors=sensors, **kwargs)
-        claims = {c.claim_id: c for c in excitability_claims(a) + sensability_claims(a)}
+        quiet = quiet_gyro_analysis(a, sensors=sensors)
+        claims = {c.claim_id: c for c in excitability_claims(a) + sensability_claims(a, quiet)}
         t = a.model.t
         k2 = a.epochs(*a.segments[1])
         traj_t, w_x = a.trajectory.t, np.abs(a.trajectory.angular_rate[:, 0])
@@ -987,12 +989,14 @@ def _sweep_group(rows: list, sensors, attitude_error: str) -> list[dict]:
                    gnss_sigma_m=first["gnss_sigma_m"], sensors=imu, **grade_sigmas,
                    **P0_SETS[first["p0"]])
     by_d0: dict = {}   # one set of segment SVDs per D0 choice, re-thresholded per row
+    quiet = quiet_gyro_analysis(base, sensors=imu)   # S5's counterfactual, once per group
     out = []
     for row in rows:
         if row["d0"] not in by_d0:
             by_d0[row["d0"]] = base.with_settings(d0=row["d0"])
         analysis = by_d0[row["d0"]].with_settings(eta=row["eta"], nu=row["nu"])
-        claims = excitability_claims(analysis) + sensability_claims(analysis)
+        claims = excitability_claims(analysis) + sensability_claims(
+            analysis, quiet.with_settings(nu=row["nu"]))
         passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
         out.append({"factor": row["factor"], **{k: row[k] for k in SWEEP_BASELINE}, **passed,
                     "n_reproduced": sum(passed.values())})
