@@ -610,6 +610,71 @@ def counts(table: pd.DataFrame) -> pd.DataFrame:
                              values="claim_id", aggfunc="count", fill_value=0)
 
 
+@dataclass(frozen=True)
+class JointSearch:
+    """Which assumptions reproduce a paper's claims at once (:func:`joint_search`).
+
+    Attributes
+    ----------
+    best : dict
+        The assumption point reproducing the most claims (first in grid order on a tie).
+    n_reproduced : int
+        Claims reproduced there, of :attr:`claims`.
+    n_points : int
+        Points searched.
+    claims : tuple of str
+        The claims counted.
+    held : dict
+        Per claim, the number of points where it is reproduced.
+    conflicts : DataFrame
+        ``claim_a, claim_b, points_a, points_b`` for every pair that each hold somewhere
+        but together nowhere in the space searched.
+    """
+
+    best: dict
+    n_reproduced: int
+    n_points: int
+    claims: tuple
+    held: dict
+    conflicts: pd.DataFrame
+
+
+def joint_search(frame: pd.DataFrame, parameters: Sequence[str],
+                 claim_ids: Sequence[str]) -> JointSearch:
+    """The best point and the conflicting claims of a sweep of an assumption space.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        One row per point: the ``parameters`` columns and one boolean column per claim
+        (True = reproduced), e.g. :func:`navlib.sweep.sweep` with the ``"claims"``
+        evaluation.
+    parameters : sequence of str
+        The assumption columns.
+    claim_ids : sequence of str
+        The claim columns to count.
+    """
+    missing = [c for c in (*parameters, *claim_ids) if c not in frame.columns]
+    if missing:
+        raise NavlibInputError(f"frame: missing columns {missing}")
+    if not len(frame):
+        raise NavlibInputError("frame: no points")
+    passed = frame[list(claim_ids)].astype(bool)
+    count = passed.sum(axis=1)
+    i = int(np.argmax(count.to_numpy()))
+    held = {c: int(passed[c].sum()) for c in claim_ids}
+    rows = []
+    for k, a in enumerate(claim_ids):
+        for b in claim_ids[k + 1:]:
+            if held[a] and held[b] and not (passed[a] & passed[b]).any():
+                rows.append({"claim_a": a, "claim_b": b, "points_a": held[a],
+                             "points_b": held[b]})
+    best = {p: frame[p].iloc[i] for p in parameters}
+    return JointSearch(best, int(count.iloc[i]), len(frame), tuple(claim_ids), held,
+                       pd.DataFrame(rows, columns=["claim_a", "claim_b", "points_a",
+                                                   "points_b"]))
+
+
 def paper_summary(table: pd.DataFrame) -> pd.DataFrame:
     """Per paper: measured claims reproduced, explained (partly / not reproduced with a
     measured ``explanation``) and unexplained, and the claims by construction, fitted and not

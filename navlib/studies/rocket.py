@@ -51,8 +51,10 @@ from navlib.models.ecef import (
     parameter_sigmas,
 )
 from navlib.resolution import relative_resolution
+from navlib.resources import data_dir
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim, claims_frame
+from navlib.sweep import sweep
 from navlib.trajectory import sounding_rocket
 
 SEGMENTS = ((0.0, 19.0), (19.0, 60.0), (60.0, 86.0))
@@ -1255,6 +1257,51 @@ ROBUSTNESS_BASELINE = {"eta": BASELINE["eta"], "nu": BASELINE["nu"],
                        "p0": "baseline (30 m, 3 m/s)", "sigma_sg_ppm": BASELINE["sigma_sg_ppm"],
                        "spin_hz": BASELINE["spin_hz"]}
 """The baseline point of :data:`ROBUSTNESS_GRID`."""
+
+
+SEARCH_FILE = "claims_search_rocket.csv"
+"""The stored joint search of the España assumption space (``data/``, written by
+``scripts/claims_search.py``)."""
+SEARCH_PARAMETERS = ("eta", "nu", "sigma_p0_m", "sigma_v0_m_s", "sigma_sg_ppm", "spin_hz")
+
+
+def search_points(grid: dict | None = None) -> pd.DataFrame:
+    """The points of :data:`ROBUSTNESS_GRID` (the declared assumption space, full factorial)
+    as :func:`navlib.sweep.sweep` points of its ``"claims"`` evaluation."""
+    grid = ROBUSTNESS_GRID if grid is None else dict(grid)
+    reject_unknown(grid, ROBUSTNESS_GRID, "grid")
+    grid = {**{k: (v,) for k, v in ROBUSTNESS_BASELINE.items()}, **grid}
+    rows = []
+    for eta, nu, p0, sg, spin in itertools.product(grid["eta"], grid["nu"], grid["p0"],
+                                                   grid["sigma_sg_ppm"], grid["spin_hz"]):
+        if p0 not in P0_SETS:
+            raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
+        p = {**P0_DEFAULTS, **P0_SETS[p0]}
+        rows.append({"eta": eta, "nu": nu, "sigma_p0_m": p["sigma_p0_m"],
+                     "sigma_v0_m_s": p["sigma_v0_m_s"], "sigma_sg_ppm": sg, "spin_hz": spin})
+    return pd.DataFrame(rows, columns=list(SEARCH_PARAMETERS))
+
+
+def assumption_search(grid: dict | None = None, scheduler=None, output=None) -> pd.DataFrame:
+    """X1-X7 and S1-S8 at every point of the declared assumption space, through
+    :func:`navlib.sweep.sweep` (``scheduler``: as there, e.g. ``"synchronous"`` or a Dask
+    client); judge it with :func:`navlib.studies.claims.joint_search`."""
+    return sweep(search_points(grid), "claims", scheduler=scheduler, output=output)
+
+
+def stored_search() -> tuple[pd.DataFrame, dict]:
+    """The stored search table and its header (``command``, ``navlib`` version)."""
+    path = data_dir() / SEARCH_FILE
+    if not path.exists():
+        raise NavlibInputError(f"{path} is missing: run scripts/claims_search.py")
+    header = {}
+    with path.open(encoding="utf-8") as handle:
+        for line in handle:
+            if not line.startswith("#"):
+                break
+            key, _, value = line[1:].partition(":")
+            header[key.strip()] = value.strip()
+    return pd.read_csv(path, comment="#"), header
 
 
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
