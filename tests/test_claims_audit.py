@@ -224,3 +224,32 @@ def test_espana_rank_claim_is_by_construction(analysis):
     c = rocket.claim_xrank(analysis)
     assert c.basis == "by construction" and not c.reproduced
     assert "X-rank" in [r.claim_id for r in rocket._baseline_claims()]
+
+
+@pytest.fixture(scope="module")
+def quick_table():
+    return engine.all_claims(quick=True)
+
+
+def test_every_measured_claim_declares_what_it_depends_on(quick_table):
+    measured = quick_table[quick_table.basis == "measured"]
+    assert (measured.depends_on.str.len() > 0).all(), \
+        list(measured[measured.depends_on == ""].claim_id)
+
+
+def test_robustness_is_never_one_for_a_number_that_does_not_move(quick_table):
+    flat = quick_table[quick_table.robustness_note.str.startswith("insensitive")]
+    assert len(flat) and flat.robustness.isna().all()
+    rated = quick_table.dropna(subset=["robustness"])
+    assert (rated.robustness_note == "").all()
+
+
+def test_failing_claims_with_a_varied_set_are_explained(quick_table):
+    failing = quick_table[quick_table.verdict.isin(["partly", "not reproduced"])]
+    varied = failing[~failing.robustness_note.str.startswith(("not varied", "not evaluated",
+                                                              "no assumption"))]
+    assert len(varied)
+    assert (varied.explanation.str.len() > 0).all(), \
+        list(varied[varied.explanation == ""].claim_id)
+    summary = engine.paper_summary(quick_table)
+    assert summary[["reproduced", "explained", "unexplained"]].sum().sum() > 0
