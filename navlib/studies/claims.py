@@ -239,10 +239,9 @@ class ClaimResult:
             return self.note or "not evaluated"
         return "; ".join(c.text() for c in self.checks)
 
-    def headline_values(self) -> tuple:
-        """The measured values of the headline check(s) (:func:`verdict_of`)."""
-        heads = [c for c in self.checks if c.headline] or list(self.checks[:1])
-        return tuple(c.value for c in heads)
+    def check_values(self) -> tuple:
+        """The measured value of every check (what :func:`robustness_over` compares)."""
+        return tuple(c.value for c in self.checks)
 
     def as_dict(self) -> dict:
         return {"claim_id": self.claim_id, "claim": self.claim, "paper": self.paper,
@@ -344,7 +343,7 @@ def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
     -----
     A claim is judged only on the points that differ from the baseline in the assumptions
     it declares (``depends_on``), so a factorial set's other axes do not repeat it. Where
-    its headline values are the same at every such point the fraction is NaN with the note
+    its checks measure the same values at every such point the fraction is NaN with the note
     "insensitive" (a robustness of 1.0 there would only restate the baseline verdict).
     """
     by_id: dict[str, list[tuple[dict, ClaimResult]]] = {}
@@ -375,8 +374,8 @@ def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
             out[cid] = Robustness(float("nan"), "not evaluated at any point of its set",
                                   varied)
             continue
-        first = evaluated[0][1].headline_values()
-        if all(_same_values(r.headline_values(), first) for _, r in evaluated):
+        first = evaluated[0][1].check_values()
+        if all(_same_values(r.check_values(), first) for _, r in evaluated):
             out[cid] = Robustness(
                 float("nan"), f"insensitive: the same measured value at all {len(evaluated)} "
                 f"points varying {', '.join(varied)}", varied, tuple(evaluated))
@@ -428,7 +427,7 @@ def explain(result: ClaimResult, robustness: Robustness | None) -> str:
         return ""
     values = [c.value for _, c in rows]
     varied = ", ".join(robustness.varied)
-    if all(_same_values((v,), (values[0],)) for v in values):
+    if len({_fmt(v) for v in values}) == 1:
         c = rows[0][1]
         return (f"'{key}' is {_fmt(c.value)} at all {len(rows)} points varying {varied} "
                 f"(needs {_target_text(c)}): the failure does not come from {varied}")
