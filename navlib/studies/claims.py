@@ -239,9 +239,10 @@ class ClaimResult:
             return self.note or "not evaluated"
         return "; ".join(c.text() for c in self.checks)
 
-    def check_values(self) -> tuple:
-        """The measured value of every check (what :func:`robustness_over` compares)."""
-        return tuple(c.value for c in self.checks)
+    def headline_values(self) -> tuple:
+        """The measured values of the headline check(s) (:func:`verdict_of`)."""
+        heads = [c for c in self.checks if c.headline] or list(self.checks[:1])
+        return tuple(c.value for c in heads)
 
     def as_dict(self) -> dict:
         return {"claim_id": self.claim_id, "claim": self.claim, "paper": self.paper,
@@ -343,8 +344,9 @@ def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
     -----
     A claim is judged only on the points that differ from the baseline in the assumptions
     it declares (``depends_on``), so a factorial set's other axes do not repeat it. Where
-    its checks measure the same values at every such point the fraction is NaN with the note
-    "insensitive" (a robustness of 1.0 there would only restate the baseline verdict).
+    its headline value and its verdict are the same at every such point the fraction is NaN
+    with the note "insensitive" (a robustness of 1.0 there would only restate the baseline
+    verdict); a verdict that moves through a secondary check is counted.
     """
     by_id: dict[str, list[tuple[dict, ClaimResult]]] = {}
     for point, results in variants:
@@ -374,8 +376,9 @@ def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
             out[cid] = Robustness(float("nan"), "not evaluated at any point of its set",
                                   varied)
             continue
-        first = evaluated[0][1].check_values()
-        if all(_same_values(r.check_values(), first) for _, r in evaluated):
+        first = evaluated[0][1].headline_values()
+        if len({r.verdict for _, r in evaluated}) == 1 and all(
+                _same_values(r.headline_values(), first) for _, r in evaluated):
             out[cid] = Robustness(
                 float("nan"), f"insensitive: the same measured value at all {len(evaluated)} "
                 f"points varying {', '.join(varied)}", varied, tuple(evaluated))
