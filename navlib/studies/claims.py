@@ -24,8 +24,13 @@ Every study registers itself with :func:`register` (a :class:`Study`: a function
 its baseline claims, its declared assumption set as data, and a function evaluating the
 claims over that set). :func:`all_claims` runs every registered study and returns the one
 table of the contract (spec api.md, "Claims"), with the **robustness** of each measured or
-fitted claim: the fraction of its study's declared assumption set in which it is reproduced
-(NaN for claims by construction and where the study declares no set).
+fitted claim: the fraction of the points of its study's declared set, varying exactly the
+assumptions the claim declares in ``depends_on``, at which it is reproduced
+(:func:`robustness_over`; NaN for claims by construction, where the set varies none of its
+assumptions, and where its number and verdict do not move: "insensitive"), and the
+**explanation** of each partly / not reproduced claim (:func:`explain`). :func:`joint_search`
+reads a sweep of a whole assumption space: the point reproducing the most claims at once and
+the claims that hold together nowhere.
 """
 
 from __future__ import annotations
