@@ -521,9 +521,46 @@ def _claims_run(prepared, **full) -> dict:
         nu=full["nu"], d0=full["d0"],
         settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
                                        "imu_grade", "coning_deg")})
-    claims = rocket.excitability_claims(analysis) + rocket.sensability_claims(analysis)
+    claims = rocket.excitability_claims(analysis) + rocket.sensability_claims(
+        analysis, _quiet_gyro_analysis(full))
     passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
     return {**passed, "n_reproduced": int(sum(passed.values()))}
+
+
+@lru_cache(maxsize=4)
+def _quiet_model(spin_hz, coning_deg, coning_hz, preset, imu_grade, gnss_rate_hz,
+                 attitude_error):
+    """The discretised model of :func:`_rocket_prepare` with the gyro noise scaled by
+    ``rocket.QUIET_GYRO_SCALE`` (kept per process: the points of a shared input reuse it)."""
+    from navlib.models.ecef import ecef21_at_epochs, imu_noise_densities
+    from navlib.studies import rocket
+
+    grade = float(imu_grade)
+    noise = {k: v * grade * (rocket.QUIET_GYRO_SCALE if k in rocket.GYRO_NOISE_KEYS else 1.0)
+             for k, v in imu_noise_densities(preset).items()}
+    coning = {"coning_deg": coning_deg, "coning_hz": coning_hz} if coning_deg else {}
+    traj = rocket.rocket_trajectory(spin_hz, **coning)
+    return traj, ecef21_at_epochs(traj, gnss_rate_hz, sensors=noise,
+                                  attitude_error=attitude_error)
+
+
+def _quiet_gyro_analysis(full):
+    """S5's counterfactual of a "claims" point: the same model with the gyro noise and the
+    initial gyro-bias sigma scaled by ``rocket.QUIET_GYRO_SCALE`` (docs/assumptions.md,
+    A-S5-cause)."""
+    from navlib.models.ecef import parameter_sigmas
+    from navlib.studies import rocket
+
+    scale, grade = rocket.QUIET_GYRO_SCALE, float(full["imu_grade"])
+    traj, model = _quiet_model(*(full[k] for k in _ROCKET_SHARED))
+    bg = full["sigma_bg_deg_s"]
+    bg = parameter_sigmas(full["preset"])["sigma_bg_deg_s"] * grade if bg is None else bg
+    quiet = {**full, "sigma_bg_deg_s": bg * scale}
+    return rocket.RocketAnalysis.build(
+        _rocket_model((model, None), quiet), rocket.SEGMENTS, trajectory=traj,
+        eta=full["eta"], nu=full["nu"], d0=full["d0"],
+        settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
+                                       "imu_grade", "coning_deg")})
 
 
 # ----- launcher family: Beaudoin et al.'s models along the launcher ascent

@@ -62,12 +62,45 @@ def test_claim_result_basis_and_frame():
     assert with_failed_headline(c).verdict == "not reproduced"
 
 
-def test_reproduced_fraction():
-    yes = claim("A", "s", "p", "o", [check("h", 1, "==", 1)])
-    no = claim("A", "s", "p", "o", [check("h", 0, "==", 1)])
-    skip = engine.not_evaluated("A", "s", "p", "short")
-    assert engine.reproduced_fraction([[yes], [no], [yes], [skip]])["A"] == pytest.approx(2 / 3)
-    assert np.isnan(engine.reproduced_fraction([[skip]])["A"])
+def test_robustness_over_the_points_of_what_a_claim_depends_on():
+    def result(value, deps=("a",)):
+        return claim("A", "s", "p", "o", [check("h", value, ">=", 1.0)], depends_on=deps)
+
+    base = {"a": 1, "b": 1}
+    variants = [({"a": 1}, [result(1.0)]), ({"a": 2}, [result(0.5)]),
+                ({"a": 3}, [result(2.0)]), ({"b": 2}, [result(0.0)])]
+    rob = engine.robustness_over(variants, base)["A"]
+    assert rob.fraction == pytest.approx(2 / 3)       # the b point is not A's: left out
+    assert rob.varied == ("a",) and rob.note == ""
+    # the same measured value everywhere: NaN "insensitive", never 1.0
+    same = [({"a": v}, [result(2.0)]) for v in (1, 2, 3)]
+    flat = engine.robustness_over(same, base)["A"]
+    assert np.isnan(flat.fraction) and flat.note.startswith("insensitive")
+    # a set that varies none of its assumptions
+    other = engine.robustness_over([({"b": v}, [result(2.0 + v)]) for v in (1, 2)], base)["A"]
+    assert np.isnan(other.fraction) and other.note.startswith("not varied")
+    skip = engine.not_evaluated("A", "s", "p", "short", depends_on=("a",))
+    assert np.isnan(engine.robustness_over([({"a": 2}, [skip])], base)["A"].fraction)
+    with pytest.raises(NavlibInputError, match="depends_on"):
+        claim("A", "s", "p", "o", [], depends_on="a")
+
+
+def test_explanation_quotes_the_set_experiment():
+    def result(value):
+        return claim("A", "s", "p", "o", [check("h", value, ">=", 1.0)], depends_on=("a",))
+
+    base = {"a": 1}
+    variants = [({"a": 1}, [result(0.5)]), ({"a": 2}, [result(0.8)])]
+    rob = engine.robustness_over(variants, base)["A"]
+    text = engine.explain(result(0.5), rob)
+    assert "closest at a=2 with 0.8" in text and "holds at no point" in text
+    variants.append(({"a": 3}, [result(1.5)]))
+    text = engine.explain(result(0.5), engine.robustness_over(variants, base)["A"])
+    assert "holds at 1/3 points" in text and "a=3: 1.5" in text
+    assert engine.explain(result(1.5), rob) == ""                 # reproduced: none
+    own = claim("A", "s", "p", "o", [check("h", 0.1, ">=", 1.0)], explanation="measured 0.1")
+    assert engine.explain(own, rob) == "measured 0.1"
+    assert engine.explain(result(0.5), None) == ""                # nothing measured: none
 
 
 # ---------------------------------------------------------------- the registry and the table
@@ -81,6 +114,8 @@ def test_registry_and_table_contract():
     assert set(table.verdict) <= set(engine.STATUSES) and set(table.basis) <= set(engine.BASES)
     assert (table[table.study == "rocket_profile"].basis == "by construction").all()
     assert table.robustness.isna().all()                     # no assumption set declared
+    summary = engine.paper_summary(table)
+    assert {"reproduced", "explained", "unexplained"} <= set(summary.columns)
     text = engine.summary_markdown(table)
     assert "claims" in text and "by construction" in text
     assert engine.counts(table).to_numpy().sum() == len(table)
@@ -141,6 +176,7 @@ def test_evolution_claims_follow_the_table():
     good = {c.claim_id: c for c in launcher.evolution_claims(_evolution())}
     assert good["F2-roll"].verdict == "reproduced"
     assert good["C4-models"].verdict == good["F5-ins-only"].verdict == "reproduced"
+    assert good["F5-ins-only"].basis == "by construction" and not good["F5-ins-only"].reproduced
     assert good["F3-bp"].verdict == "reproduced"
     assert good["F6-x1000"].verdict == "reproduced"
     assert good["F5-barely"].verdict == "reproduced"

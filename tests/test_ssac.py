@@ -191,7 +191,7 @@ def test_p0_sensitivity(full_study):
 
 
 def test_claims(claims):
-    for cid in ("SSAC-rank15", "SSAC-rank12", "SSAC-rank10", "SSAC-individual",
+    for cid in ("SSAC-rank15", "SSAC-rank10", "SSAC-individual",
                 "SSAC-estimable", "SSAC-position", "SSAC-fast5", "SSAC-eig6",
                 "SSAC-pairs", "SSAC-poseig", "SSAC-P0", "SSAC-orientation", "SSAC-actual",
                 "SSAC-nine", "SSAC-nonzero"):
@@ -205,6 +205,8 @@ def test_claims(claims):
     assert claims["SSAC-eq44"].verdict == "not reproduced"
     # the honest difference: our position triple is the largest (ssac.md §7)
     assert claims["SSAC-order"].verdict == "not reproduced"
+    # the 12-state rank is the prototype's, not the paper's: no claim (issue 25)
+    assert "SSAC-rank12" not in claims
     frame = study_mod.claims_table(study_mod.run(duration_s=600, track=False))
     assert frame.set_index("claim_id").loc["SSAC-bgD", "verdict"] == "not evaluated"
 
@@ -247,7 +249,10 @@ def test_every_claim_can_fail(claims):
     """Each claim has checks, and a failing headline makes it "not reproduced"."""
     from navlib.studies.claims import with_failed_headline
 
+    # only the experimental-data claim cannot be evaluated on a 60 min run
+    assert [cid for cid, c in claims.items() if not c.checks] == ["SSAC-experimental"]
     for cid, c in claims.items():
-        assert c.checks, cid
+        if cid == "SSAC-experimental":
+            continue
         assert with_failed_headline(c).verdict == "not reproduced", cid
         assert all(not k.failing().passed for k in c.checks), cid

@@ -75,8 +75,10 @@ def test_table2_frame_and_wide_layout(result):
 
 def test_robust_claims_hold_on_a_short_mission(result):
     claims = result.claims()
-    for claim_id in ("T2-RW-P", "T2-bp-dr", "T2-Markov", "T2-rank-constant", "T2-att-noRT"):
+    for claim_id in ("T2-bp-dr", "T2-Markov", "T2-rank-constant", "T2-att-noRT"):
         assert claim(claims, claim_id).verdict == "reproduced", claim(claims, claim_id)
+    # the count holds; "cond at least 1e17" is read as stated and may miss (A-T2-1e17)
+    assert claim(claims, "T2-RW-P").checks[0].passed
     frame = result.frame
     rw_p = frame[(frame.bias_model == "random_walk") & frame.biases.str.contains("P")]
     assert (rw_p.n_unobservable == 3).all() and (rw_p.log10_cond >= 16).all()
@@ -213,11 +215,21 @@ def _counts_and_verdicts(result) -> list[list[str]]:
     return rows
 
 
+SINGULAR_DIGIT_CLAIMS = ("T2-RW-P@", "T2-threshold@")
+"""Claims that check the paper's "at least 1e17" on the rank-deficient rows (A-T2-1e17):
+their verdicts follow the round-off digits, which differ between the grids by design."""
+
+
 @pytest.mark.slow
 def test_every_step_table_keeps_the_counts_and_verdicts_of_the_5hz_grid():
     """The paper's every-step test (the default now) changes condition digits only: every
-    unobservable count, match count and claim verdict is the 5 Hz grid's."""
+    unobservable count, match count and claim verdict is the 5 Hz grid's, except those of
+    the claims that read the round-off digits (:data:`SINGULAR_DIGIT_CLAIMS`)."""
+    def kept(rows):
+        return [r for r in rows if not r[0].startswith(SINGULAR_DIGIT_CLAIMS)]
+
     with REFERENCE_5HZ.open() as file:
         want = list(csv.reader(file))[1:]
     got = _counts_and_verdicts(table2(launcher_ascent(), stride=1))
-    assert got == want
+    assert kept(got) == kept(want)
+    assert len(kept(want)) < len(want)

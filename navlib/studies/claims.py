@@ -24,8 +24,13 @@ Every study registers itself with :func:`register` (a :class:`Study`: a function
 its baseline claims, its declared assumption set as data, and a function evaluating the
 claims over that set). :func:`all_claims` runs every registered study and returns the one
 table of the contract (spec api.md, "Claims"), with the **robustness** of each measured or
-fitted claim: the fraction of its study's declared assumption set in which it is reproduced
-(NaN for claims by construction and where the study declares no set).
+fitted claim: the fraction of the points of its study's declared set, varying exactly the
+assumptions the claim declares in ``depends_on``, at which it is reproduced
+(:func:`robustness_over`; NaN for claims by construction, where the set varies none of its
+assumptions, and where its number and verdict do not move: "insensitive"), and the
+**explanation** of each partly / not reproduced claim (:func:`explain`). :func:`joint_search`
+reads a sweep of a whole assumption space: the point reproducing the most claims at once and
+the claims that hold together nowhere.
 """
 
 from __future__ import annotations
@@ -186,6 +191,14 @@ class ClaimResult:
         The assumption(s) the verdict hinges on.
     note : str
         Why the claim is not evaluated (when it has no checks).
+    depends_on : tuple of str
+        The named assumptions the measured number depends on (keys of its study's
+        assumption set, e.g. ``"rank_rtol"``, ``"P0"``); its robustness varies exactly
+        these (:func:`robustness_over`).
+    explanation : str
+        A measured cause of a ``partly`` / ``not reproduced`` verdict, quoting the number a
+        study experiment produced (empty: the engine derives one from the assumption set,
+        :func:`explain`).
     """
 
     claim_id: str
@@ -196,9 +209,15 @@ class ClaimResult:
     basis: str = "measured"
     assumption: str = ""
     note: str = ""
+    depends_on: tuple = ()
+    explanation: str = ""
 
     def __post_init__(self):
         object.__setattr__(self, "checks", tuple(self.checks))
+        if isinstance(self.depends_on, str):
+            raise NavlibInputError("depends_on: expected a sequence of assumption names, "
+                                   f"got the string {self.depends_on!r}")
+        object.__setattr__(self, "depends_on", tuple(self.depends_on))
         if self.basis not in BASES:
             raise NavlibInputError(f"basis: expected one of {BASES}, got {self.basis!r}")
         bad = [c for c in self.checks if not isinstance(c, Check)]
@@ -225,22 +244,32 @@ class ClaimResult:
             return self.note or "not evaluated"
         return "; ".join(c.text() for c in self.checks)
 
+    def headline_values(self) -> tuple:
+        """The measured values of the headline check(s) (:func:`verdict_of`)."""
+        heads = [c for c in self.checks if c.headline] or list(self.checks[:1])
+        return tuple(c.value for c in heads)
+
     def as_dict(self) -> dict:
         return {"claim_id": self.claim_id, "claim": self.claim, "paper": self.paper,
                 "ours": self.ours, "verdict": self.verdict, "basis": self.basis,
-                "checks": self.checks_text(), "assumption": self.assumption}
+                "checks": self.checks_text(), "assumption": self.assumption,
+                "depends_on": "; ".join(self.depends_on), "explanation": self.explanation}
 
 
 def claim(claim_id: str, statement: str, paper: str, ours: str, checks: Iterable[Check],
-          *, basis: str = "measured", assumption: str = "") -> ClaimResult:
+          *, basis: str = "measured", assumption: str = "", depends_on: Sequence[str] = (),
+          explanation: str = "") -> ClaimResult:
     """Build a :class:`ClaimResult` (the verdict follows from ``checks``)."""
-    return ClaimResult(claim_id, statement, paper, ours, tuple(checks), basis, assumption)
+    return ClaimResult(claim_id, statement, paper, ours, tuple(checks), basis, assumption,
+                       depends_on=depends_on, explanation=explanation)
 
 
 def not_evaluated(claim_id: str, statement: str, paper: str, why: str, *,
-                  basis: str = "measured", assumption: str = "") -> ClaimResult:
+                  basis: str = "measured", assumption: str = "",
+                  depends_on: Sequence[str] = ()) -> ClaimResult:
     """A claim the given input cannot judge (``why`` says what is missing)."""
-    return ClaimResult(claim_id, statement, paper, why, (), basis, assumption, note=why)
+    return ClaimResult(claim_id, statement, paper, why, (), basis, assumption, note=why,
+                       depends_on=depends_on)
 
 
 def with_failed_headline(result: ClaimResult) -> ClaimResult:
@@ -252,24 +281,181 @@ def with_failed_headline(result: ClaimResult) -> ClaimResult:
 
 def claims_frame(results: Iterable[ClaimResult]) -> pd.DataFrame:
     """A table of claim results, one row per claim: ``claim_id, claim, paper, ours,
-    verdict, basis, checks, assumption``."""
+    verdict, basis, checks, assumption, depends_on, explanation``."""
     rows = [r.as_dict() for r in results]
     return pd.DataFrame(rows, columns=["claim_id", "claim", "paper", "ours", "verdict",
-                                       "basis", "checks", "assumption"])
+                                       "basis", "checks", "assumption", "depends_on",
+                                       "explanation"])
 
 
-def reproduced_fraction(variants: Sequence[Sequence[ClaimResult]]) -> dict[str, float]:
-    """Per claim id, the fraction of ``variants`` (each a list of results over the same
-    claims) in which it is reproduced; claims not evaluated in a variant do not count in
-    that variant's denominator (NaN when never evaluated)."""
-    hits: dict[str, list[bool]] = {}
-    for results in variants:
+@dataclass(frozen=True)
+class Robustness:
+    """A claim's robustness over the part of its study's assumption set that varies what the
+    claim depends on (:func:`robustness_over`).
+
+    Attributes
+    ----------
+    fraction : float
+        Share of the evaluated points where the claim is reproduced; NaN when the set varies
+        none of its assumptions, when it is never evaluated, or when its measured number is
+        the same at every point ("insensitive": a fraction would then restate the baseline).
+    note : str
+        Why the fraction is NaN (empty otherwise).
+    varied : tuple of str
+        The assumptions of ``depends_on`` the set varies.
+    points : tuple
+        ``(point, result)`` per evaluated point of the sub-set, ``point`` restricted to
+        :attr:`varied`.
+    """
+
+    fraction: float
+    note: str = ""
+    varied: tuple = ()
+    points: tuple = ()
+
+
+def _same_values(a: tuple, b: tuple) -> bool:
+    if len(a) != len(b):
+        return False
+    for x, y in zip(a, b, strict=True):
+        if isinstance(x, (float, np.floating)) or isinstance(y, (float, np.floating)):
+            x, y = float(x), float(y)
+            if not ((math.isnan(x) and math.isnan(y)) or math.isclose(x, y, rel_tol=1e-9,
+                                                                     abs_tol=0.0)):
+                return False
+        elif x != y:
+            return False
+    return True
+
+
+def _point_text(point: Mapping) -> str:
+    return ", ".join(f"{k}={_fmt(v) if isinstance(v, (int, float)) else v}"
+                     for k, v in point.items())
+
+
+def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
+                    baseline: Mapping) -> dict[str, Robustness]:
+    """Per claim id, its :class:`Robustness` over ``variants``.
+
+    Parameters
+    ----------
+    variants : sequence of (point, results)
+        ``point``: assumption name -> value (a name left out is at its ``baseline``
+        value); ``results``: the claims evaluated there.
+    baseline : mapping
+        The baseline value of every assumption of the set.
+
+    Notes
+    -----
+    A claim is judged only on the points that differ from the baseline in the assumptions
+    it declares (``depends_on``), so a factorial set's other axes do not repeat it. Where
+    its headline value and its verdict are the same at every such point the fraction is NaN
+    with the note "insensitive" (a robustness of 1.0 there would only restate the baseline
+    verdict); a verdict that moves through a secondary check is counted.
+    """
+    by_id: dict[str, list[tuple[dict, ClaimResult]]] = {}
+    for point, results in variants:
+        full = {**baseline, **point}
         for r in results:
-            if r.verdict != NOT_EVALUATED:
-                hits.setdefault(r.claim_id, []).append(r.verdict == "reproduced")
-            else:
-                hits.setdefault(r.claim_id, [])
-    return {k: (float(np.mean(v)) if v else float("nan")) for k, v in hits.items()}
+            by_id.setdefault(r.claim_id, []).append((full, r))
+    varying = {k for k in baseline
+               if len({repr(p.get(k, baseline[k])) for p, _ in variants}) > 1}
+    out = {}
+    for cid, rows in by_id.items():
+        depends = rows[0][1].depends_on
+        varied = tuple(k for k in depends if k in varying)
+        if not varied:
+            what = ", ".join(depends) if depends else "nothing declared"
+            out[cid] = Robustness(float("nan"), f"not varied: the set varies none of its "
+                                                f"assumptions ({what})")
+            continue
+        rest = [k for k in baseline if k not in varied]
+        subset = [({k: p[k] for k in varied}, r) for p, r in rows
+                  if all(repr(p[k]) == repr(baseline[k]) for k in rest)]
+        unique = []
+        for point, r in subset:
+            if all(point != q for q, _ in unique):
+                unique.append((point, r))
+        evaluated = [(p, r) for p, r in unique if r.verdict != NOT_EVALUATED]
+        if not evaluated:
+            out[cid] = Robustness(float("nan"), "not evaluated at any point of its set",
+                                  varied)
+            continue
+        first = evaluated[0][1].headline_values()
+        if len({r.verdict for _, r in evaluated}) == 1 and all(
+                _same_values(r.headline_values(), first) for _, r in evaluated):
+            out[cid] = Robustness(
+                float("nan"), f"insensitive: the same measured value at all {len(evaluated)} "
+                f"points varying {', '.join(varied)}", varied, tuple(evaluated))
+            continue
+        frac = float(np.mean([r.verdict == "reproduced" for _, r in evaluated]))
+        out[cid] = Robustness(frac, "", varied, tuple(evaluated))
+    return out
+
+
+def _margin(c: Check) -> float:
+    """How far a numeric check's value is inside (+) or outside (-) its tolerance."""
+    v, t = c.value, c.target
+    if isinstance(v, (bool, np.bool_)) or isinstance(t, (bool, np.bool_)):
+        return 0.0 if c.passed else -1.0
+    v = float(v)
+    if math.isnan(v):
+        return -math.inf
+    if c.op == "in":
+        return min(v - t[0], t[1] - v)
+    if c.op == "out":
+        return max(t[0] - v, v - t[1])
+    if c.op in ("<", "<="):
+        return float(t) - v
+    if c.op in (">", ">="):
+        return v - float(t)
+    return 0.0 if c.passed else -abs(v - float(t))
+
+
+def explain(result: ClaimResult, robustness: Robustness | None) -> str:
+    """The ``explanation`` of a ``partly`` / ``not reproduced`` claim: its own measured
+    cause when the study gave one, otherwise what the assumption-set experiment measured
+    (the headline value over the points varying what the claim depends on, and where it is
+    closest to or meets the paper's statement). Empty for other verdicts and where neither
+    exists (the claim is then counted as unexplained, :func:`paper_summary`)."""
+    if result.verdict not in ("partly", "not reproduced"):
+        return ""
+    if result.explanation:
+        return result.explanation
+    if robustness is None or not robustness.points:
+        return ""
+    failing = [c for c in result.checks if not c.passed]
+    key = failing[0].name
+    rows = []
+    for point, r in robustness.points:
+        same = [c for c in r.checks if c.name == key]
+        if same:
+            rows.append((point, same[0]))
+    if not rows:
+        return ""
+    values = [c.value for _, c in rows]
+    varied = ", ".join(robustness.varied)
+    if len({_fmt(v) for v in values}) == 1:
+        c = rows[0][1]
+        return (f"'{key}' is {_fmt(c.value)} at all {len(rows)} points varying {varied} "
+                f"(needs {_target_text(c)}): the failure does not come from {varied}")
+    numbers = [float(v) for v in values if not isinstance(v, (bool, np.bool_))]
+    span = (f" ranges {_fmt(min(numbers))} to {_fmt(max(numbers))}" if numbers else "")
+    passing = [(p, c) for p, c in rows if c.passed]
+    head = f"over {varied} ({len(rows)} points) '{key}'{span}"
+    if passing:
+        point, c = passing[0]
+        return (f"{head}; it holds at {len(passing)}/{len(rows)} points, e.g. at "
+                f"{_point_text(point)}: {_fmt(c.value)}")
+    point, c = max(rows, key=lambda pc: _margin(pc[1]))
+    return (f"{head}; it holds at no point: closest at {_point_text(point)} with "
+            f"{_fmt(c.value)} (needs {_target_text(c)})")
+
+
+def _target_text(c: Check) -> str:
+    if c.op in ("in", "out"):
+        return f"{c.op} [{_fmt(c.target[0])}, {_fmt(c.target[1])}]"
+    return f"{c.op} {_fmt(c.target)}"
 
 
 # --------------------------------------------------------------------------------------------
@@ -290,11 +476,16 @@ class Study:
     grid : mapping
         The declared assumption set (data): name -> values. Empty when none applies.
     robustness : callable, optional
-        ``robustness(quick) -> dict[claim_id, fraction]`` over :attr:`grid`.
+        ``robustness(quick) -> [(point, results), ...]``: the claims at points of
+        :attr:`grid` (each point a mapping of assumption name -> value), judged by
+        :func:`robustness_over`.
     grid_note : str
         How the grid is evaluated (factorial, one at a time, what is reused).
     order : int
         Position among the studies of the same module.
+    baseline_point : mapping or callable
+        The baseline value of every assumption of :attr:`grid` (a callable:
+        ``baseline_point(quick)``, for studies whose quick mode has another baseline).
     """
 
     name: str
@@ -304,6 +495,19 @@ class Study:
     robustness: Callable | None = None
     grid_note: str = ""
     order: int = 0
+    baseline_point: Mapping = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.robustness is not None:
+            for quick in (False, True):
+                missing = [k for k in self.grid if k not in self.baseline_at(quick)]
+                if missing:
+                    raise NavlibInputError(f"baseline_point: no baseline value for {missing}")
+
+    def baseline_at(self, quick: bool) -> Mapping:
+        """:attr:`baseline_point` in the given mode."""
+        point = self.baseline_point
+        return point(quick) if callable(point) else point
 
     @property
     def module(self) -> str:
@@ -338,21 +542,37 @@ def studies() -> dict[str, Study]:
 
 
 COLUMNS = ["study", "paper_ref", "claim_id", "statement", "paper", "ours", "verdict", "basis",
-           "robustness", "checks", "assumption"]
+           "robustness", "checks", "assumption", "depends_on", "explanation",
+           "robustness_note"]
+
+
+def study_robustness(study: Study, quick: bool = False) -> dict[str, Robustness]:
+    """:func:`robustness_over` the study's declared set (empty when it declares none)."""
+    if study.robustness is None:
+        return {}
+    return robustness_over(study.robustness(quick), study.baseline_at(quick))
 
 
 def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> pd.DataFrame:
     """One study's claims in the :func:`all_claims` layout."""
     results = study.baseline(quick)
-    fractions = study.robustness(quick) if (robustness and study.robustness) else {}
+    rob = study_robustness(study, quick) if robustness else {}
     rows = []
     for r in results:
-        frac = fractions.get(r.claim_id, float("nan")) if r.basis != "by construction" \
-            else float("nan")
+        res = rob.get(r.claim_id)
+        if r.basis == "by construction":
+            frac, note = float("nan"), "by construction"
+        elif res is None:
+            frac, note = float("nan"), ("no assumption set declared" if robustness
+                                        else "not computed")
+        else:
+            frac, note = res.fraction, res.note
         rows.append({"study": study.name, "paper_ref": study.paper, "claim_id": r.claim_id,
                      "statement": r.claim, "paper": r.paper, "ours": r.ours,
                      "verdict": r.verdict, "basis": r.basis, "robustness": frac,
-                     "checks": r.checks_text(), "assumption": r.assumption})
+                     "checks": r.checks_text(), "assumption": r.assumption,
+                     "depends_on": "; ".join(r.depends_on), "explanation": explain(r, res),
+                     "robustness_note": note})
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
@@ -374,7 +594,8 @@ def all_claims(quick: bool = False, only: Sequence[str] | None = None,
     -------
     DataFrame
         ``study, paper_ref, claim_id, statement, paper, ours, verdict, basis, robustness,
-        checks, assumption``; ``claim_id`` unique.
+        checks, assumption, depends_on, explanation, robustness_note``; ``claim_id``
+        unique.
     """
     registry = studies()
     names = list(registry) if only is None else list(only)
@@ -394,6 +615,90 @@ def counts(table: pd.DataFrame) -> pd.DataFrame:
     """Claims per paper by verdict and basis (for the summary page)."""
     return table.pivot_table(index=["paper_ref", "basis"], columns="verdict",
                              values="claim_id", aggfunc="count", fill_value=0)
+
+
+@dataclass(frozen=True)
+class JointSearch:
+    """Which assumptions reproduce a paper's claims at once (:func:`joint_search`).
+
+    Attributes
+    ----------
+    best : dict
+        The assumption point reproducing the most claims (first in grid order on a tie).
+    n_reproduced : int
+        Claims reproduced there, of :attr:`claims`.
+    n_points : int
+        Points searched.
+    claims : tuple of str
+        The claims counted.
+    held : dict
+        Per claim, the number of points where it is reproduced.
+    conflicts : DataFrame
+        ``claim_a, claim_b, points_a, points_b`` for every pair that each hold somewhere
+        but together nowhere in the space searched.
+    """
+
+    best: dict
+    n_reproduced: int
+    n_points: int
+    claims: tuple
+    held: dict
+    conflicts: pd.DataFrame
+
+
+def joint_search(frame: pd.DataFrame, parameters: Sequence[str],
+                 claim_ids: Sequence[str]) -> JointSearch:
+    """The best point and the conflicting claims of a sweep of an assumption space.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        One row per point: the ``parameters`` columns and one boolean column per claim
+        (True = reproduced), e.g. :func:`navlib.sweep.sweep` with the ``"claims"``
+        evaluation.
+    parameters : sequence of str
+        The assumption columns.
+    claim_ids : sequence of str
+        The claim columns to count.
+    """
+    missing = [c for c in (*parameters, *claim_ids) if c not in frame.columns]
+    if missing:
+        raise NavlibInputError(f"frame: missing columns {missing}")
+    if not len(frame):
+        raise NavlibInputError("frame: no points")
+    passed = frame[list(claim_ids)].astype(bool)
+    count = passed.sum(axis=1)
+    i = int(np.argmax(count.to_numpy()))
+    held = {c: int(passed[c].sum()) for c in claim_ids}
+    rows = []
+    for k, a in enumerate(claim_ids):
+        for b in claim_ids[k + 1:]:
+            if held[a] and held[b] and not (passed[a] & passed[b]).any():
+                rows.append({"claim_a": a, "claim_b": b, "points_a": held[a],
+                             "points_b": held[b]})
+    best = {p: frame[p].iloc[i] for p in parameters}
+    return JointSearch(best, int(count.iloc[i]), len(frame), tuple(claim_ids), held,
+                       pd.DataFrame(rows, columns=["claim_a", "claim_b", "points_a",
+                                                   "points_b"]))
+
+
+def paper_summary(table: pd.DataFrame) -> pd.DataFrame:
+    """Per paper: measured claims reproduced, explained (partly / not reproduced with a
+    measured ``explanation``) and unexplained, and the claims by construction, fitted and not
+    evaluated (the summary notebook's first table)."""
+    rows = []
+    for paper, group in table.groupby("paper_ref", sort=False):
+        measured = group[group.basis == "measured"]
+        failing = group[group.verdict.isin(["partly", "not reproduced"])]
+        explained = failing.explanation.fillna("").str.len() > 0
+        rows.append({"paper": paper, "claims": len(group),
+                     "reproduced": int((measured.verdict == "reproduced").sum()),
+                     "explained": int(explained.sum()),
+                     "unexplained": int((~explained).sum()),
+                     "by construction": int((group.basis == "by construction").sum()),
+                     "fitted": int((group.basis == "fitted").sum()),
+                     "not evaluated": int((group.verdict == NOT_EVALUATED).sum())})
+    return pd.DataFrame(rows).set_index("paper")
 
 
 def summary_markdown(table: pd.DataFrame) -> str:

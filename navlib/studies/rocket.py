@@ -50,8 +50,11 @@ from navlib.models.ecef import (
     initial_covariance,
     parameter_sigmas,
 )
+from navlib.resolution import relative_resolution
+from navlib.resources import data_dir
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim, claims_frame
+from navlib.sweep import sweep
 from navlib.trajectory import sounding_rocket
 
 SEGMENTS = ((0.0, 19.0), (19.0, 60.0), (60.0, 86.0))
@@ -72,6 +75,20 @@ NOT_IMPROVED = 0.9
 """sigma_end / sigma_0 above which an a-priori bound is "not improved" (S7)."""
 FUTILE = 0.5
 """sigma_end / sigma_0 above which in-flight calibration of a parameter is futile (S8)."""
+ONLY_AFTER = 0.5
+"""S4's "q_x, q_y grow only after lift-off": the rise of their sensability over the pad
+(after :data:`TRANSIENT_S`) must stay below this share of the gain in the 10 s after
+lift-off (docs/assumptions.md, A-S4-only-after)."""
+QUIET_GYRO_SCALE = 1e-4
+"""Factor on the gyro ARW, bias random walk and initial bias sigma of S5's counterfactual
+run: the claim names the gyro errors as the cause, so removing them must make the heading
+sensible (docs/assumptions.md, A-S5-cause)."""
+GYRO_NOISE_KEYS = ("arw_rad_sqrt_s", "bg_rw_rad_s_sqrt_s")
+"""The gyro noise densities S5's counterfactual scales (:data:`QUIET_GYRO_SCALE`)."""
+EXCITABILITY_DEPENDS = ("eta", "p0", "sigma_sg_ppm", "spin_hz")
+"""The assumptions X1-X7's numbers depend on (the keys of :data:`ROBUSTNESS_GRID`)."""
+SENSABILITY_DEPENDS = ("nu", "p0", "sigma_sg_ppm", "spin_hz")
+"""The assumptions S1-S8's numbers depend on."""
 
 BASELINE = {"spin_hz": 2.0, "attitude_error": "ecef", "eta": 1e-3, "nu": 0.985,
             "d0": "global", "gnss_sigma_m": 5.0, **P0_DEFAULTS}
@@ -412,6 +429,31 @@ def claim_x7(analysis: RocketAnalysis) -> ClaimResult:
                  assumption=_assumption(analysis))
 
 
+def claim_xrank(analysis: RocketAnalysis) -> ClaimResult:
+    """España §4: a rank-deficient O_tau leaves a subspace with zero excitability. An
+    identity of the SVD (basis "by construction"); the counts show where it applies."""
+    _require_three(analysis)
+    deficient, energy = [], []
+    for ex in analysis.excitability:
+        singular = np.sqrt(np.clip(ex.sigma, 0.0, None))
+        floor = relative_resolution(ex.O.shape) * singular[0]
+        beyond = singular <= floor
+        deficient.append(int(beyond.sum()))
+        energy.append(float(ex.S[beyond].max()) if beyond.any() else 0.0)
+    checks = [check("segments whose O_tau is rank-deficient", sum(d > 0 for d in deficient),
+                    ">=", 1, True),
+              check("largest energy S of a direction beyond the rank", max(energy), "<=",
+                    analysis.excitability[0].eta)]
+    ours = ("directions beyond the numerical rank of O_tau per segment: "
+            + "/".join(str(d) for d in deficient))
+    return claim("X-rank", "A rank-deficient O_tau leaves a subspace with zero excitability",
+                 "zero excitability where rank O_tau < n (§4)", ours, checks,
+                 basis="by construction",
+                 assumption="rank = singular values above the numerical resolution of O_tau "
+                            "(navlib.resolution); zero energy there is an identity of the SVD",
+                 depends_on=("rank_tolerance",))
+
+
 # --------------------------------------------------------------------------- S1-S8 (Figs 3-5)
 
 
@@ -548,24 +590,74 @@ def claim_s4(analysis: RocketAnalysis) -> ClaimResult:
     after = analysis.epochs(t_lift, t_lift + 10.0, open_start=True)
     mean_after = np.array([_s(analysis, s)[after].mean() for s in ATTITUDE])
     same_order = bool(np.array_equal(np.argsort(mean_pad), np.argsort(proj)))
+    # "only after": on the pad (after the start-up transient) s(theta_x), s(theta_y) must not
+    # already rise by a comparable amount (A-S4-only-after)
+    late_pad = pad[analysis.model.t[pad] > analysis.model.t[0] + TRANSIENT_S]
+    pad_rise = [float(_s(analysis, s)[late_pad[-1]] - _s(analysis, s)[late_pad[0]])
+                if late_pad.size else float("nan") for s in ATTITUDE[:2]]
+    gain = mean_after[:2] - mean_pad[:2]
     checks = [check("pad order of s(theta) follows the tangent projection", same_order,
                     "==", True, True),
               check("gain of s(theta_x) in the 10 s after lift-off",
-                    float(mean_after[0] - mean_pad[0]), ">", 0.0),
+                    float(gain[0]), ">", 0.0),
               check("gain of s(theta_y) in the 10 s after lift-off",
-                    float(mean_after[1] - mean_pad[1]), ">", 0.0)]
+                    float(gain[1]), ">", 0.0),
+              check("largest rise of s(theta_x), s(theta_y) on the pad / its gain after "
+                    "lift-off (only after)",
+                    float(max(r / g if g > 0 else np.inf for r, g in zip(pad_rise, gain,
+                                                                          strict=True))),
+                    "<", ONLY_AFTER)]
     ours = (f"pad mean s {'/'.join(f'{v:.2f}' for v in mean_pad)} vs projections "
             f"{'/'.join(f'{v:.2f}' for v in proj)}; 10 s after lift-off "
-            f"{'/'.join(f'{v:.2f}' for v in mean_after)}")
+            f"{'/'.join(f'{v:.2f}' for v in mean_after)}; rise on the pad "
+            f"{'/'.join(f'{v:.3f}' for v in pad_rise)}")
+    only_after = checks[-1]
+    explanation = "" if only_after.passed else (
+        f"on the pad (after the {TRANSIENT_S:g} s transient) s(theta_x), s(theta_y) already "
+        f"rise by {pad_rise[0]:.3f} / {pad_rise[1]:.3f}, against {gain[0]:.3f} / "
+        f"{gain[1]:.3f} in the 10 s after lift-off (ratio {only_after.value:.3g}): their "
+        "rise starts before lift-off")
     return claim("S4", "On the pad the IMU is an inclinometer: attitude components more "
-                 "sensible the larger their tangent-plane projection; q_x, q_y grow after "
-                 "lift-off", "order by projection; q_x, q_y rise after 19 s", ours, checks,
-                 assumption=_sens_assumption(analysis, "components in ECEF axes (A4 b)"))
+                 "sensible the larger their tangent-plane projection; q_x, q_y grow only "
+                 "after lift-off", "order by projection; q_x, q_y rise only after 19 s", ours,
+                 checks,
+                 assumption=_sens_assumption(analysis, "components in ECEF axes (A4 b); "
+                                             f"'only after' = pad rise < {ONLY_AFTER:g} of "
+                                             "the gain after lift-off (A-S4-only-after)"),
+                 depends_on=SENSABILITY_DEPENDS, explanation=explanation)
 
 
-def claim_s5(analysis: RocketAnalysis) -> ClaimResult:
+def _heading_at_ignition(analysis: RocketAnalysis) -> float:
+    pad = _pad(analysis)
+    heading = direction_sensability(analysis.sensability, heading_direction(analysis))
+    return float(heading[int(pad[-1])])
+
+
+def quiet_gyro_analysis(analysis: RocketAnalysis, scale: float = QUIET_GYRO_SCALE,
+                        sensors=None) -> RocketAnalysis:
+    """``analysis`` rerun with the gyro noise (ARW, bias random walk) and the initial gyro
+    bias sigma scaled by ``scale``: the counterfactual of S5 ("gyro noise and bias prevent
+    measuring the Earth rate", A-S5-cause). ``sensors``: the noise source of ``analysis``
+    when it was built from a mapping (default: its named preset)."""
+    scale = finite_scalar(scale, "scale", 0.0, 1.0, low_open=True)
+    if sensors is None and analysis.settings["sensors"] == "custom":
+        raise NavlibInputError("sensors: the analysis was built from a noise mapping; pass "
+                               "the same mapping for S5's counterfactual")
+    noise = imu_noise_densities(analysis.settings["sensors"] if sensors is None else sensors)
+    quiet = {k: (v * scale if k in GYRO_NOISE_KEYS else v) for k, v in noise.items()}
+    s = analysis.settings
+    sigmas = {k: s[k] for k in P0_DEFAULTS if k in s}
+    sigmas["sigma_bg_deg_s"] = sigmas.get("sigma_bg_deg_s", P0_DEFAULTS["sigma_bg_deg_s"]) \
+        * scale
+    return analyze(s["spin_hz"], s["attitude_error"], s["eta"], s["nu"], d0=s["d0"],
+                   gnss_sigma_m=s["gnss_sigma_m"], sensors=quiet,
+                   prior_update=s["prior_update"], **sigmas)
+
+
+def claim_s5(analysis: RocketAnalysis, quiet: RocketAnalysis | None = None) -> ClaimResult:
     """S5: gyro noise and bias hide the Earth rate: excitability at rest does not become
-    sensability (heading not sensible on the pad)."""
+    sensability (heading not sensible on the pad), *because of* the gyro errors: with them
+    scaled down (``quiet``, :func:`quiet_gyro_analysis`) the heading becomes sensible."""
     _require_three(analysis)
     pad = _pad(analysis)
     heading = direction_sensability(analysis.sensability, heading_direction(analysis))
@@ -579,17 +671,31 @@ def claim_s5(analysis: RocketAnalysis) -> ClaimResult:
     gyro = STATE_GROUPS["gyro_bias"]
     gyro_max = max(float(_s(analysis, s)[late_pad].max()) for s in gyro) if late_pad.size \
         else float("nan")
+    quiet = quiet_gyro_analysis(analysis) if quiet is None else quiet
+    quiet_heading = _heading_at_ignition(quiet)
     checks = [check("s(heading) at ignition", float(heading[k_end]), "<", SENSIBLE, True),
+              check(f"s(heading) at ignition with the gyro noise and bias x{QUIET_GYRO_SCALE:g}"
+                    " (the cause removed)", quiet_heading, ">=", SENSIBLE, True),
               check("max s(gyro bias) on the pad", gyro_max, "<", SENSIBLE),
               check("states excitable at rest but not sensible on the pad",
                     len(not_sensible), ">=", 1)]
     ours = (f"heading s {heading[k_end]:.2f}, 1sigma {sigma_heading:.1f} deg at "
-            f"{analysis.model.t[k_end]:.0f} s; excitable at rest but not sensible: "
+            f"{analysis.model.t[k_end]:.0f} s ({quiet_heading:.2f} with the gyro noise and "
+            f"bias x{QUIET_GYRO_SCALE:g}); excitable at rest but not sensible: "
             f"{', '.join(not_sensible) or 'none'}")
+    explanation = ""
+    if quiet_heading < SENSIBLE:
+        explanation = (f"with the gyro ARW, bias random walk and initial bias sigma scaled by "
+                       f"{QUIET_GYRO_SCALE:g} the heading sensability at ignition is "
+                       f"{quiet_heading:.3g} (baseline {heading[k_end]:.3g}), still below "
+                       f"{SENSIBLE:.4g}: in our model the gyro errors are not what keeps the "
+                       "heading insensible on the pad")
     return claim("S5", "Gyro noise and bias hide the Earth rate: high excitability at rest "
                  "does not become sensability", "heading not sensible on the pad", ours,
                  checks, assumption=_sens_assumption(analysis, "ARW, sigma_bg0 >> Earth rate "
-                                                               "(15 deg/h)"))
+                                                               "(15 deg/h); the cause tested "
+                                                               "by removing it (A-S5-cause)"),
+                 depends_on=SENSABILITY_DEPENDS, explanation=explanation)
 
 
 def claim_s6(analysis: RocketAnalysis) -> ClaimResult:
@@ -693,14 +799,27 @@ SENSABILITY_CLAIMS = (claim_s1, claim_s2, claim_s3, claim_s4, claim_s5, claim_s6
 CLAIM_IDS = tuple(f"X{i}" for i in range(1, 8)) + tuple(f"S{i}" for i in range(1, 9))
 
 
+BASELINE_BASIS = ("fitted", "the baseline (sigma_V0 3 m/s, sigma_sg 5000 ppm, eta 1e-3) is "
+                  "the set at which X1-X7 were made to hold, so X1-X7 are fitted there "
+                  "(A-rocket-baseline)")
+"""Basis of X1-X7 at the baseline and why (docs/assumptions.md, A-rocket-baseline)."""
+
+
 def excitability_claims(analysis: RocketAnalysis) -> list[ClaimResult]:
-    """X1-X7 (Fig. 2) evaluated on ``analysis``."""
-    return [claim(analysis) for claim in EXCITABILITY_CLAIMS]
+    """X1-X7 (Fig. 2) evaluated on ``analysis``; basis "fitted" (:data:`BASELINE_BASIS`)."""
+    basis, why = BASELINE_BASIS
+    return [replace(c, depends_on=EXCITABILITY_DEPENDS, basis=basis,
+                    assumption=f"{c.assumption}; {why}")
+            for c in (claim(analysis) for claim in EXCITABILITY_CLAIMS)]
 
 
-def sensability_claims(analysis: RocketAnalysis) -> list[ClaimResult]:
-    """S1-S8 (Figs. 3-5) evaluated on ``analysis``."""
-    return [claim(analysis) for claim in SENSABILITY_CLAIMS]
+def sensability_claims(analysis: RocketAnalysis, quiet: RocketAnalysis | None = None
+                       ) -> list[ClaimResult]:
+    """S1-S8 (Figs. 3-5) evaluated on ``analysis`` (``quiet``: S5's counterfactual run,
+    :func:`quiet_gyro_analysis`, computed when not given)."""
+    out = [claim_s5(analysis, quiet) if claim is claim_s5 else claim(analysis)
+           for claim in SENSABILITY_CLAIMS]
+    return [replace(c, depends_on=c.depends_on or SENSABILITY_DEPENDS) for c in out]
 
 
 def claims_table(analysis: RocketAnalysis, which: str = "all") -> pd.DataFrame:
@@ -762,7 +881,8 @@ def tension_table(variants: dict | None = None, sensors=None, progress: bool = F
                               disable=not progress):
         kwargs = {**common, **options}
         a = analyze(sensors=sensors, **kwargs)
-        claims = {c.claim_id: c for c in excitability_claims(a) + sensability_claims(a)}
+        quiet = quiet_gyro_analysis(a, sensors=sensors)
+        claims = {c.claim_id: c for c in excitability_claims(a) + sensability_claims(a, quiet)}
         t = a.model.t
         k2 = a.epochs(*a.segments[1])
         traj_t, w_x = a.trajectory.t, np.abs(a.trajectory.angular_rate[:, 0])
@@ -871,12 +991,14 @@ def _sweep_group(rows: list, sensors, attitude_error: str) -> list[dict]:
                    gnss_sigma_m=first["gnss_sigma_m"], sensors=imu, **grade_sigmas,
                    **P0_SETS[first["p0"]])
     by_d0: dict = {}   # one set of segment SVDs per D0 choice, re-thresholded per row
+    quiet = quiet_gyro_analysis(base, sensors=imu)   # S5's counterfactual, once per group
     out = []
     for row in rows:
         if row["d0"] not in by_d0:
             by_d0[row["d0"]] = base.with_settings(d0=row["d0"])
         analysis = by_d0[row["d0"]].with_settings(eta=row["eta"], nu=row["nu"])
-        claims = excitability_claims(analysis) + sensability_claims(analysis)
+        claims = excitability_claims(analysis) + sensability_claims(
+            analysis, quiet.with_settings(nu=row["nu"]))
         passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
         out.append({"factor": row["factor"], **{k: row[k] for k in SWEEP_BASELINE}, **passed,
                     "n_reproduced": sum(passed.values())})
@@ -1108,9 +1230,10 @@ QUICK_ROBUSTNESS_GRID = {"eta": (1e-2, 1e-3, 1e-4), "nu": (0.98, 0.985, 0.99),
 """Quick mode: eta x nu at the baseline P0, sigma_sg and spin (no new discretisation)."""
 
 
-def robustness_variants(grid: dict | None = None, sensors=None) -> list[list[ClaimResult]]:
-    """X1-X7 and S1-S8 at every point of ``grid`` (default :data:`ROBUSTNESS_GRID`; a key
-    left out keeps its :data:`BASELINE` value)."""
+def robustness_variants(grid: dict | None = None, sensors=None
+                        ) -> list[tuple[dict, list[ClaimResult]]]:
+    """``(point, X1-X7 and S1-S8)`` at every point of ``grid`` (default
+    :data:`ROBUSTNESS_GRID`; a key left out keeps its :data:`BASELINE` value)."""
     grid = ROBUSTNESS_GRID if grid is None else dict(grid)
     reject_unknown(grid, ROBUSTNESS_GRID, "grid")
     grid = {"eta": (BASELINE["eta"],), "nu": (BASELINE["nu"],),
@@ -1121,22 +1244,77 @@ def robustness_variants(grid: dict | None = None, sensors=None) -> list[list[Cla
         if p0 not in P0_SETS:
             raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
         base = analyze(spin, sensors=sensors, sigma_sg_ppm=sg, **P0_SETS[p0])
+        quiet = quiet_gyro_analysis(base, sensors=sensors)
         for eta, nu in itertools.product(grid["eta"], grid["nu"]):
             a = base.with_settings(eta=eta, nu=nu)
-            out.append(excitability_claims(a) + sensability_claims(a))
+            point = {"eta": eta, "nu": nu, "p0": p0, "sigma_sg_ppm": sg, "spin_hz": spin}
+            out.append((point, excitability_claims(a)
+                        + sensability_claims(a, quiet.with_settings(eta=eta, nu=nu))))
     return out
+
+
+ROBUSTNESS_BASELINE = {"eta": BASELINE["eta"], "nu": BASELINE["nu"],
+                       "p0": "baseline (30 m, 3 m/s)", "sigma_sg_ppm": BASELINE["sigma_sg_ppm"],
+                       "spin_hz": BASELINE["spin_hz"]}
+"""The baseline point of :data:`ROBUSTNESS_GRID`."""
+
+
+SEARCH_FILE = "claims_search_rocket.csv"
+"""The stored joint search of the España assumption space (``data/``, written by
+``scripts/claims_search.py``)."""
+SEARCH_PARAMETERS = ("eta", "nu", "sigma_p0_m", "sigma_v0_m_s", "sigma_sg_ppm", "spin_hz")
+
+
+def search_points(grid: dict | None = None) -> pd.DataFrame:
+    """The points of :data:`ROBUSTNESS_GRID` (the declared assumption space, full factorial)
+    as :func:`navlib.sweep.sweep` points of its ``"claims"`` evaluation."""
+    grid = ROBUSTNESS_GRID if grid is None else dict(grid)
+    reject_unknown(grid, ROBUSTNESS_GRID, "grid")
+    grid = {**{k: (v,) for k, v in ROBUSTNESS_BASELINE.items()}, **grid}
+    rows = []
+    for eta, nu, p0, sg, spin in itertools.product(grid["eta"], grid["nu"], grid["p0"],
+                                                   grid["sigma_sg_ppm"], grid["spin_hz"]):
+        if p0 not in P0_SETS:
+            raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
+        p = {**P0_DEFAULTS, **P0_SETS[p0]}
+        rows.append({"eta": eta, "nu": nu, "sigma_p0_m": p["sigma_p0_m"],
+                     "sigma_v0_m_s": p["sigma_v0_m_s"], "sigma_sg_ppm": sg, "spin_hz": spin})
+    return pd.DataFrame(rows, columns=list(SEARCH_PARAMETERS))
+
+
+def assumption_search(grid: dict | None = None, scheduler=None, output=None) -> pd.DataFrame:
+    """X1-X7 and S1-S8 at every point of the declared assumption space, through
+    :func:`navlib.sweep.sweep` (``scheduler``: as there, e.g. ``"synchronous"`` or a Dask
+    client); judge it with :func:`navlib.studies.claims.joint_search`."""
+    return sweep(search_points(grid), "claims", scheduler=scheduler, output=output)
+
+
+def stored_search() -> tuple[pd.DataFrame, dict]:
+    """The stored search table and its header (``command``, ``navlib`` version)."""
+    path = data_dir() / SEARCH_FILE
+    if not path.exists():
+        raise NavlibInputError(f"{path} is missing: run scripts/claims_search.py")
+    header = {}
+    with path.open(encoding="utf-8") as handle:
+        for line in handle:
+            if not line.startswith("#"):
+                break
+            key, _, value = line[1:].partition(":")
+            header[key.strip()] = value.strip()
+    return pd.read_csv(path, comment="#"), header
 
 
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
     a = analyze()
-    return excitability_claims(a) + sensability_claims(a)
+    return [*excitability_claims(a), claim_xrank(a), *sensability_claims(a)]
 
 
-def _robustness(quick: bool = False) -> dict:
-    return engine.reproduced_fraction(
-        robustness_variants(QUICK_ROBUSTNESS_GRID if quick else ROBUSTNESS_GRID))
+def _robustness(quick: bool = False) -> list:
+    return robustness_variants(QUICK_ROBUSTNESS_GRID if quick else ROBUSTNESS_GRID)
 
 
 engine.register(engine.Study(
     "rocket", "España, Carrizo & Giribet (2019)", _baseline_claims, ROBUSTNESS_GRID,
-    _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions"))
+    _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions; "
+    "each claim judged on the points varying its depends_on",
+    baseline_point=ROBUSTNESS_BASELINE))

@@ -87,14 +87,16 @@ def claim_values(quick: bool) -> pd.DataFrame:
     """The claims engine's outlier study: every (window, a1_sign) variant's claims and the
     robustness fractions."""
     from navlib.studies import outliers
-    from navlib.studies.claims import claims_frame
+    from navlib.studies.claims import claims_frame, studies, study_robustness
 
     outliers._CACHE.clear()
     rows = []
     for (window, sign), claims in outliers._variants(quick).items():
         frame = claims_frame(claims)[["claim_id", "ours", "verdict", "checks"]]
         rows += _rows(f"variant {window:g} {sign:+g}", frame.set_index("claim_id"))
-    rows += _rows("robustness", pd.Series(outliers._robustness(quick), name="fraction"))
+    robustness = study_robustness(studies()["outliers"], quick)
+    rows += _rows("robustness", pd.Series({k: r.fraction for k, r in robustness.items()},
+                                          name="fraction"))
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
