@@ -56,6 +56,7 @@ from navlib.io.csv_files import NED_KEYS, R_KEYS, V_KEYS, combine_sigma
 
 IMU_TOPIC = "sensor_combined"
 ATTITUDE_TOPIC = "vehicle_attitude"
+BARO_TOPIC = "vehicle_air_data"
 GPS_TOPICS = ("vehicle_gps_position", "sensor_gps")
 BODY_FRAMES = {"frd": np.eye(3), "flu": np.diag([1.0, -1.0, -1.0])}
 """Named body frames: ``C_b_frd`` taking PX4 FRD axes to the navlib body axes."""
@@ -91,7 +92,7 @@ def _load(path):
         # pyulog prints corruption notices; a library must not print, so catch them.
         with contextlib.redirect_stdout(io.StringIO()):
             ulog = ULog(str(p), message_name_filter_list=[IMU_TOPIC, ATTITUDE_TOPIC,
-                                                          *GPS_TOPICS])
+                                                          BARO_TOPIC, *GPS_TOPICS])
     except Exception as exc:  # pyulog raises several types on foreign or broken files
         raise NavlibInputError(f"{label}: not a readable PX4 ULog file ({exc})") from exc
     if ulog.file_corruption:
@@ -214,7 +215,9 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         ``source``, ``topic``, ``body_frame`` / ``altitude_reference``, ``dropped_no_fix``,
         ``gaps``, ``outliers``, ``autopilot`` (``"px4"``), ``hardware`` (the log's
         ``ver_hw``), ``attitude`` (the autopilot's ``vehicle_attitude`` as ``t, qw, qx, qy,
-        qz``, navlib body -> NED, or None; the flight fit starts from it), and ``clipping``
+        qz``, navlib body -> NED, or None; the flight fit starts from it), ``baro``
+        (``vehicle_air_data.baro_alt_meter`` as ``t, alt_m``, the barometric altitude above
+        mean sea level from the standard atmosphere, or None), and ``clipping``
         (samples flagged by PX4's ``accelerometer_clipping`` /
         ``gyro_clipping``; any flag also warns). The IMU sample time is
         ``sensor_combined.timestamp`` (PX4 integrates the accelerometer over the gyro
@@ -277,7 +280,7 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     imu.attrs.update(source=str(path), topic=IMU_TOPIC, t0_us=t0,
                      body_frame=body_frame if isinstance(body_frame, str) else "custom",
                      autopilot="px4", hardware=str(info.get("ver_hw", "")),
-                     attitude=_attitude(ulog, t0, C_b_frd))
+                     attitude=_attitude(ulog, t0, C_b_frd), baro=_baro(ulog, t0))
     imu = apply_gap_policy(imu, src_imu, "'timestamp'", imu_max_gap_s, on_gap)
 
     gnss, src_gps = _gnss_frame(d_gps, label, idx, ts_gps, t0, altitude, check_magnitudes)
@@ -305,6 +308,20 @@ def _attitude(ulog, t0: int, C_b_frd: np.ndarray) -> pd.DataFrame | None:
     x, y, z, w = C_b_n.as_quat().T
     t = (d.data["timestamp"].astype(np.int64)[ok] - t0) * units.MICROSECOND
     return pd.DataFrame({"t": t, "qw": w, "qx": x, "qy": y, "qz": z})
+
+
+def _baro(ulog, t0: int) -> pd.DataFrame | None:
+    """``vehicle_air_data.baro_alt_meter`` as ``t, alt_m`` (finite rows), or None."""
+    sets = [d for d in _dataset(ulog, BARO_TOPIC, None) if "baro_alt_meter" in d.data]
+    if not sets:
+        return None
+    d = max(sets, key=lambda d: len(d.data["timestamp"]))
+    alt = d.data["baro_alt_meter"].astype(float)
+    ok = np.isfinite(alt)
+    if not ok.any():
+        return None
+    t = (d.data["timestamp"].astype(np.int64)[ok] - t0) * units.MICROSECOND
+    return pd.DataFrame({"t": t, "alt_m": alt[ok]})
 
 
 def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, limits) -> pd.DataFrame:
