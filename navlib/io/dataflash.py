@@ -14,21 +14,22 @@ Messages and layouts
 * ``GPS``: ``Status`` (3: 3-D fix and better, kept from ``min_fix_type``), ``Lat``/``Lng``
   (deg), ``Alt`` (m above mean sea level: DataFlash logs no ellipsoidal height, so the
   positions are off by the geoid undulation, up to ~100 m; a constant offset the
-  assessment does not depend on), ``Spd`` (ground speed, m/s), ``GCrs`` (course over
-  ground, deg), ``VZ`` (vertical speed, m/s, down positive), giving the NED velocity
-  ``(Spd cos GCrs, Spd sin GCrs, VZ)``. Layouts: ``GPS`` with ``I`` (4.x) or ``GPS``/``GPS2``.
+  assessment does not depend on; docs/assumptions.md IO4), ``Spd`` (ground speed, m/s),
+  ``GCrs`` (course over ground, deg), ``VZ`` (vertical speed, m/s, down positive), giving
+  the NED velocity ``(Spd cos GCrs, Spd sin GCrs, VZ)``. Layouts: ``GPS`` with ``I`` (4.x)
+  or ``GPS``/``GPS2``.
 * ``ATT``: ``Roll``, ``Pitch``, ``Yaw`` (deg), the autopilot's attitude estimate, body (FRD)
   to NED as ``Rz(yaw) Ry(pitch) Rx(roll)``; attached as ``imu.attrs["attitude"]``, from
   which the flight fit takes its initial attitude.
 * ``BARO`` ``Alt`` (m above the barometer's ground calibration), or in older logs ``CTUN``
   ``BarAlt``: attached as ``imu.attrs["baro"]`` (``t, alt_m``) so GNSS heights can be
-  compared with it.
+  compared with it (docs/assumptions.md IO6).
 
 Time stamps: logs from about 2015 on stamp every record with ``TimeUS`` (us since boot).
 Older logs (ArduCopter/ArduPlane 3.1-3.3) use ``TimeMS`` (ms since boot), and their ``GPS``
 carries its own clocks: ``T`` (ms since boot) beside ``TimeMS``/``Week`` (GPS time of week),
 or ``TimeMS`` (boot) beside ``GMS``/``GWk``. Both generations are read on the boot clock
-(:func:`_boot_time_us`).
+(:func:`_boot_time_us`, docs/assumptions.md IO5).
 
 The body frame is FRD by default, as in :mod:`navlib.io.ulog` (``body_frame`` changes it).
 """
@@ -205,8 +206,10 @@ max_accel_m_s2, max_outlier_fraction, require_overlap
         ``t`` in s from the earlier of the first IMU and first kept GPS ``TimeUS``, which is
         ``attrs["t0_us"]``). ``imu.attrs``: ``source``, ``message``, ``instance``,
         ``body_frame``, ``gaps``, ``outliers``, ``autopilot`` (``"ardupilot"``),
-        ``hardware`` (the firmware banner, e.g. ``ArduCopter V4.5.0``), ``attitude`` (``ATT``
-        as ``t, qw, qx, qy, qz``, navlib body -> NED, or None). ``gnss.attrs``: ``source``,
+        ``hardware`` (the firmware banner, e.g. ``ArduCopter V4.5.0`` or ``APM:Copter
+        V3.3``), ``attitude`` (``ATT`` as ``t, qw, qx, qy, qz``, navlib body -> NED, or
+        None), ``baro`` (``t, alt_m``, or None), ``time_field`` (``"TimeUS"`` or
+        ``"TimeMS"``: the log's generation). ``gnss.attrs``: ``source``,
         ``instance``, ``altitude_reference`` (``"msl"``), ``dropped_no_fix``, ``gaps``.
 
     Raises

@@ -217,7 +217,8 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         ``ver_hw``), ``attitude`` (the autopilot's ``vehicle_attitude`` as ``t, qw, qx, qy,
         qz``, navlib body -> NED, or None; the flight fit starts from it), ``baro``
         (``vehicle_air_data.baro_alt_meter`` as ``t, alt_m``, the barometric altitude above
-        mean sea level from the standard atmosphere, or None), and ``clipping``
+        mean sea level from the standard atmosphere, or None; docs/assumptions.md IO6), and
+        ``clipping``
         (samples flagged by PX4's ``accelerometer_clipping`` /
         ``gyro_clipping``; any flag also warns). The IMU sample time is
         ``sensor_combined.timestamp`` (PX4 integrates the accelerometer over the gyro
