@@ -10,6 +10,7 @@ returns or raises :class:`navlib.NavlibInputError` (a ``ValueError``), never any
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -20,6 +21,16 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from navlib import NavlibInputError, io
+
+
+@dataclass(frozen=True)
+class Original:
+    """A valid file and its reader (``repr`` names the file only: hypothesis prints it)."""
+
+    name: str
+    reader: object = field(repr=False)
+    data: bytes = field(repr=False)
+
 
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -77,14 +88,15 @@ def originals(tmp_path_factory):
     _csv_pair(folder)
     files["imu_csv"] = (io.read_imu_csv, folder / "imu.csv")
     files["gnss_csv"] = (io.read_gnss_csv, folder / "gnss.csv")
-    return {name: (reader, path.read_bytes()) for name, (reader, path) in files.items()}
+    return {name: Original(name, reader, path.read_bytes())
+            for name, (reader, path) in files.items()}
 
 
 @pytest.fixture(scope="module")
 def ulog_original(tmp_path_factory, px4_log_path):
     path = tmp_path_factory.mktemp("valid_ulog") / "small.ulg"
     _ulog(path, px4_log_path)
-    return io.read_ulog, path.read_bytes()
+    return Original("ulog", io.read_ulog, path.read_bytes())
 
 
 def _mutate(data: bytes, draw) -> bytes:
@@ -120,12 +132,12 @@ def _check(reader, data: bytes, path) -> None:
 
 
 def test_unmutated_files_read(originals, tmp_path):
-    for name, (reader, data) in originals.items():
+    for name, original in originals.items():
         path = tmp_path / name
-        path.write_bytes(data)
+        path.write_bytes(original.data)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            out = reader(path)
+            out = original.reader(path)
         frames = out if isinstance(out, tuple) else (out,)
         assert all(len(f) >= 2 for f in frames), name
 
@@ -135,12 +147,22 @@ def test_unmutated_files_read(originals, tmp_path):
 @pytest.mark.parametrize("name", ["altos_version", "altos_legacy", "dataflash_4.x",
                                   "dataflash_TimeMS", "imu_csv", "gnss_csv"])
 def test_damaged_files_raise_only_navlib_input_error(originals, tmp_path, name, data):
-    reader, original = originals[name]
-    _check(reader, _mutate(original, data.draw), tmp_path / f"damaged_{name}")
+    original = originals[name]
+    _check(original.reader, _mutate(original.data, data.draw), tmp_path / f"damaged_{name}")
 
 
 @SETTINGS
 @given(data=st.data())
 def test_damaged_ulog_raises_only_navlib_input_error(ulog_original, tmp_path, data):
-    reader, original = ulog_original
-    _check(reader, _mutate(original, data.draw), tmp_path / "damaged.ulg")
+    _check(ulog_original.reader, _mutate(ulog_original.data, data.draw),
+           tmp_path / "damaged.ulg")
+
+
+def test_ulog_topic_without_timestamp_is_named(ulog_original, tmp_path):
+    """A damaged format definition that loses ``timestamp`` (found by the test above)."""
+    head = b"sensor_combined:uint64_t timestamp;"
+    assert head in ulog_original.data
+    path = tmp_path / "no_timestamp.ulg"
+    path.write_bytes(ulog_original.data.replace(head, head.replace(b"timestamp", b"timestamq")))
+    with pytest.raises(NavlibInputError, match="topic 'sensor_combined': no 'timestamp' field"):
+        io.read_ulog(path)

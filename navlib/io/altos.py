@@ -68,8 +68,11 @@ _OLD_HEAD = ("time", "acceleration", "pressure")
 _SERIAL = re.compile(r"serial-(\d+)", re.IGNORECASE)
 
 
-def _header_fields(line: str) -> list[str]:
-    return [h.strip().strip("\"'").lower() for h in line.split(",")]
+def _is_header(fields: list[str]) -> bool:
+    """``#version, ..., time, ...`` (newer) or ``time, acceleration, pressure, ...`` (older)."""
+    names = [f.strip().strip("\"'").lower() for f in fields]
+    return ((names[0].lstrip("#") == "version" and "time" in names)
+            or tuple(names[:3]) == _OLD_HEAD)
 
 
 def looks_like_altos(path) -> bool:
@@ -85,16 +88,13 @@ def looks_like_altos(path) -> bool:
         return False
     text = head.decode("utf-8-sig", errors="replace")
     line = next((ln for ln in text.splitlines() if ln.strip()), "")
-    fields = _header_fields(line)
-    if fields and fields[0] == _HEADER_PREFIX:
-        return "time" in fields and "state" in fields
-    return tuple(fields[:3]) == _OLD_HEAD
+    return _is_header(line.split(","))
 
 
 def _layout(table: TextTable, label: str) -> dict[str, int]:
     """Field index of each column read, by name; the two ``altitude`` columns told apart."""
     names = [h.strip().lower() for h in table.header]
-    if not (names[0] == _HEADER_PREFIX.lstrip("#") or tuple(names[:3]) == _OLD_HEAD):
+    if not _is_header(names):
         raise NavlibInputError(f"{label}: not an AltOS CSV export; expected a header starting "
                                f"'#version,serial,...' or 'time,acceleration,pressure,...', "
                                f"got {table.header[:4]}")

@@ -98,6 +98,11 @@ def _load(path):
     if ulog.file_corruption:
         warnings.warn(f"{label}: pyulog detected file corruption; data may be incomplete",
                       FlightDataWarning, stacklevel=3)
+    for d in ulog.data_list:
+        if "timestamp" not in d.data:
+            raise NavlibInputError(f"{label}, topic '{d.name}': no 'timestamp' field (the "
+                                   f"log's format definition of the topic is damaged); fields "
+                                   f"are {sorted(d.data)}")
     return ulog, label
 
 
