@@ -157,7 +157,7 @@ def _repeats(values: np.ndarray) -> np.ndarray:
     return same
 
 
-def _fixes(data: dict, index: dict, src: Source) -> tuple[np.ndarray, int]:
+def _fixes(data: dict, index: dict) -> tuple[np.ndarray, int]:
     """Rows where a new GPS fix appears, and how many new fixes were dropped as unusable.
 
     A fix is a change of any GPS column (position, altitude and, when exported, ``nsat``,
@@ -286,7 +286,7 @@ max_outlier_fraction, require_overlap
                      repeated_rows=int(t_all.size - rows.size), **extras)
     imu = apply_gap_policy(imu, imu_src, "'time'", imu_max_gap_s, on_gap)
 
-    fix_rows, dropped = _fixes(data, index, src)
+    fix_rows, dropped = _fixes(data, index)
     gps_src = Source(f"{label} (GPS fixes)", src.lines[fix_rows], [src.raw[k] for k in fix_rows],
                      src.sep)
     if fix_rows.size < 2:
