@@ -244,3 +244,19 @@ def test_public_legacy_timems_log():
     assert imu.attrs["attitude"] is not None and len(imu.attrs["baro"]) > 1000
     r = np.linalg.norm(gnss[["x", "y", "z"]].to_numpy(), axis=1)
     assert np.all((r > 6.3e6) & (r < 6.4e6))
+
+
+def test_field_declared_as_text_is_refused(flight, tmp_path):
+    """A damaged FMT that declares GPS Status as char[4] holding text: named, no TypeError."""
+    from dataflash_writer import LAYOUTS
+    _, imu_in, _, geo, _ = flight
+    saved = LAYOUTS["4.x"]["GPS"]
+    LAYOUTS["4.x"]["GPS"] = ("QBnLLeffff", saved[1])
+    try:
+        path = tmp_path / "text_status.bin"
+        write_flight(path, imu_in, geo, gps_status="ok")
+    finally:
+        LAYOUTS["4.x"]["GPS"] = saved
+    with pytest.raises(NavlibInputError, match=r"message 'GPS' instance 0: field\(s\) "
+                                               r"\['Status'\] do not hold numbers"):
+        io.read_dataflash(path)

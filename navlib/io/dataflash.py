@@ -79,22 +79,42 @@ _TIME_FIELD = "_t_field"
 """Key of the name of the field the boot time came from (for messages)."""
 
 
-def _boot_time_us(kind: str, data: dict) -> tuple[str, np.ndarray] | None:
+def _boot_time_us(kind: str, data: dict) -> tuple[str, np.ndarray | None] | None:
     """Boot time (us) of one message type's records and the field it comes from.
 
     ``TimeUS`` (us; logs from about 2015 on). Older logs: ``TimeMS`` (ms since boot), except
     in ``GPS``, where ``T`` (ms since boot) is the boot time when logged, and a ``TimeMS``
     beside ``Week`` is the GPS time of week, not a boot time (``GMS``/``GWk`` logs keep
-    ``TimeMS`` as boot time). None when no boot time is logged.
+    ``TimeMS`` as boot time). None when no boot time is logged; ``(field, None)`` when the
+    field does not hold finite numbers (a damaged format).
     """
     if "TimeUS" in data:
-        return "TimeUS", data["TimeUS"].astype(np.int64)
-    if kind == "GPS" and "T" in data:
-        return "T", data["T"].astype(np.int64) * 1000
-    gps_time_of_week = kind == "GPS" and "Week" in data
-    if "TimeMS" in data and not gps_time_of_week:
-        return "TimeMS", data["TimeMS"].astype(np.int64) * 1000
-    return None
+        name, scale = "TimeUS", 1
+    elif kind == "GPS" and "T" in data:
+        name, scale = "T", 1000
+    elif "TimeMS" in data and not (kind == "GPS" and "Week" in data):
+        name, scale = "TimeMS", 1000
+    else:
+        return None
+    raw = data[name]
+    if raw.dtype.kind not in "iuf" or not np.all(np.isfinite(raw)):
+        return name, None
+    return name, raw.astype(np.int64) * scale
+
+
+def _numbers(values: list) -> np.ndarray:
+    """The values of one field as a numeric array when they all are numbers, else as given."""
+    arr = np.array(values)
+    if arr.dtype.kind in "iufb":
+        return arr
+    try:
+        return arr.astype(float)
+    except (TypeError, ValueError):
+        return arr
+
+
+def _numeric(data: dict, fields) -> bool:
+    return all(data[f].dtype.kind in "iufb" for f in fields)
 
 
 def _load(path) -> dict[str, dict]:
@@ -134,16 +154,21 @@ def _load(path) -> dict[str, dict]:
     if "Skipped" in sink.getvalue():
         warnings.warn(f"{label}: pymavlink skipped bad bytes; data may be incomplete",
                       FlightDataWarning, stacklevel=3)
-    columns = {key: {f: np.array([r.get(f, np.nan) for r in rs]) for f in rs[0]}
+    columns = {key: {f: _numbers([r.get(f, np.nan) for r in rs]) for f in rs[0]}
                for key, rs in rows.items()}
     for (kind, _), data in columns.items():
         stamp = _boot_time_us(kind, data)
         if stamp is not None:
-            data[_TIME_FIELD], data[_TIME] = stamp
+            data[_TIME_FIELD] = stamp[0]
+            if stamp[1] is not None:
+                data[_TIME] = stamp[1]
     return columns, messages, label
 
 
-def _pick(columns, kind: str, instance, label: str, fields, found_types) -> tuple[int, dict]:
+def _pick(columns, kind: str, instance, label: str, fields, found_types,
+          optional=()) -> tuple[int, dict]:
+    """One instance of a message type with its time and ``fields`` (and the ``optional``
+    fields it has) numeric; NavlibInputError naming what is missing or not a number."""
     candidates = {inst: c for (k, inst), c in columns.items() if k == kind}
     if not candidates:
         raise NavlibInputError(f"{label}: no '{kind}' messages in the log; message types of "
@@ -155,14 +180,20 @@ def _pick(columns, kind: str, instance, label: str, fields, found_types) -> tupl
                                f"{sorted(candidates)}")
     data = candidates[instance]
     logged = sorted(f for f in data if not f.startswith(("_", "mavpackettype")))
+    where = f"{label}, message '{kind}' instance {instance}"
+    if _TIME_FIELD not in data:
+        raise NavlibInputError(f"{where}: no time field (TimeUS, or TimeMS in logs before "
+                               f"2015, or T in their GPS); fields are {logged}")
     if _TIME not in data:
-        raise NavlibInputError(f"{label}, message '{kind}' instance {instance}: no time field "
-                               f"(TimeUS, or TimeMS in logs before 2015, or T in their GPS); "
-                               f"fields are {logged}")
+        raise NavlibInputError(f"{where}: time field '{data[_TIME_FIELD]}' does not hold "
+                               f"finite numbers (a damaged format definition?)")
     missing = [f for f in fields if f not in data]
     if missing:
-        raise NavlibInputError(f"{label}, message '{kind}' instance {instance}: missing "
-                               f"field(s) {missing}; fields are {logged}")
+        raise NavlibInputError(f"{where}: missing field(s) {missing}; fields are {logged}")
+    odd = [f for f in (*fields, *optional) if f in data and not _numeric(data, (f,))]
+    if odd:
+        raise NavlibInputError(f"{where}: field(s) {odd} do not hold numbers (a damaged "
+                               f"format definition?)")
     return instance, data
 
 
@@ -235,7 +266,8 @@ max_accel_m_s2, max_outlier_fraction, require_overlap
     columns, messages, label = _load(path)
     found = sorted({k for k, _ in columns})
     i_imu, d_imu = _pick(columns, "IMU", imu_instance, label, _IMU_FIELDS, found)
-    i_gps, d_gps = _pick(columns, "GPS", gps_instance, label, _GPS_FIELDS, found)
+    i_gps, d_gps = _pick(columns, "GPS", gps_instance, label, _GPS_FIELDS, found,
+                         optional=("Status", "Spd", "GCrs", "VZ"))
 
     status = d_gps.get("Status", np.full(d_gps[_TIME].size, 3))
     idx = np.flatnonzero(status >= min_fix_type)
@@ -305,7 +337,9 @@ def _gnss_frame(d, label, idx, t, check_magnitudes, time_label):
 def _attitude(columns, t0: int, C_b_frd: np.ndarray) -> pd.DataFrame | None:
     """``ATT`` Roll/Pitch/Yaw (deg, FRD -> NED) as navlib body -> NED quaternions."""
     data = columns.get(("ATT", 0))
-    if data is None or not all(k in data for k in (_TIME, "Roll", "Pitch", "Yaw")):
+    fields = ("Roll", "Pitch", "Yaw")
+    if data is None or not all(k in data for k in (_TIME, *fields)) or not _numeric(data,
+                                                                                    fields):
         return None
     angles = np.column_stack([data[k].astype(float) for k in ("Yaw", "Pitch", "Roll")])
     ok = np.all(np.isfinite(angles), axis=1)
@@ -324,7 +358,8 @@ def _baro(columns, t0: int) -> pd.DataFrame | None:
     compare with GNSS heights. None when neither is logged with finite values."""
     for kind, field in (("BARO", "Alt"), ("CTUN", "BarAlt")):
         data = columns.get((kind, 0))
-        if data is None or _TIME not in data or field not in data:
+        if (data is None or _TIME not in data or field not in data
+                or not _numeric(data, (field,))):
             continue
         alt = data[field].astype(float)
         ok = np.isfinite(alt)
