@@ -260,3 +260,16 @@ def test_field_declared_as_text_is_refused(flight, tmp_path):
     with pytest.raises(NavlibInputError, match=r"message 'GPS' instance 0: field\(s\) "
                                                r"\['Status'\] do not hold numbers"):
         io.read_dataflash(path)
+
+
+def test_shifted_fmt_record_does_not_hang(bin4, tmp_path):
+    """One byte inserted before the Length byte of the ATT FMT record (so it reads 0 and the
+    rest of the record shifts) made pymavlink parse the same bytes forever (found by
+    tests/test_reader_robustness.py); the reader refuses such a log at once."""
+    data = bin4.read_bytes()
+    fmt_att = data.index(b"\xa3\x95\x80" + bytes([0x83]))
+    assert data[fmt_att + 5:fmt_att + 9] == b"ATT\x00"
+    path = tmp_path / "shifted.bin"
+    path.write_bytes(data[:fmt_att + 4] + b"\x00" + data[fmt_att + 4:])
+    with pytest.raises(NavlibInputError, match="does not move the parser forward"):
+        io.read_dataflash(path)

@@ -166,3 +166,18 @@ def test_ulog_topic_without_timestamp_is_named(ulog_original, tmp_path):
     path.write_bytes(ulog_original.data.replace(head, head.replace(b"timestamp", b"timestamq")))
     with pytest.raises(NavlibInputError, match="topic 'sensor_combined': no 'timestamp' field"):
         io.read_ulog(path)
+
+
+def test_ulog_damaged_message_at_the_end_does_not_hang(ulog_original, tmp_path):
+    """A message of type 0 declaring more bytes than remain, right after the definitions:
+    pyulog's corruption recovery seeks back and re-reads forever (found by the test above);
+    the reader's read budget turns that into a NavlibInputError."""
+    data = ulog_original.data
+    p = 16
+    while data[p + 2] not in b"ALC":            # walk the definitions to their end
+        p += 3 + int.from_bytes(data[p:p + 2], "little")
+    assert p > 9000
+    path = tmp_path / "loops.ulg"
+    path.write_bytes(data[:p] + (9000).to_bytes(2, "little") + b"\x00" + bytes(100))
+    with pytest.raises(NavlibInputError, match="keeps re-reading the same bytes"):
+        io.read_ulog(path)

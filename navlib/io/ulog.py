@@ -82,16 +82,44 @@ def body_rotation(body_frame) -> np.ndarray:
     return C
 
 
+READ_BUDGET = (16, 2 * 2**20)
+"""pyulog may read at most ``16 * file size + 2 MiB`` bytes before the file is refused: on a
+message damaged near the end of the file its corruption recovery seeks back and re-reads
+forever (a clean log is read about once; recovery from a damaged stretch re-reads it)."""
+
+
+class _ReadBudgetExceeded(Exception):
+    """Not a ValueError: pyulog's recovery swallows those and would go on reading."""
+
+
+class _BoundedFile(io.BufferedReader):
+    """A binary file that raises once more than ``budget`` bytes have been read from it."""
+
+    def __init__(self, path, budget: int):
+        super().__init__(io.FileIO(path, "rb"))
+        self.budget = budget
+
+    def read(self, size=-1):
+        data = super().read(size)
+        self.budget -= len(data)
+        if self.budget < 0:
+            raise _ReadBudgetExceeded("the parser keeps re-reading the same bytes (a damaged "
+                                      "message near the end of the file?)")
+        return data
+
+
 def _load(path):
     from pyulog import ULog
 
     p, label = existing_file(path)
-    if p.stat().st_size == 0:
+    size = p.stat().st_size
+    if size == 0:
         raise NavlibInputError(f"{label}: file is empty")
     try:
         # pyulog prints corruption notices; a library must not print, so catch them.
-        with contextlib.redirect_stdout(io.StringIO()):
-            ulog = ULog(str(p), message_name_filter_list=[IMU_TOPIC, ATTITUDE_TOPIC,
+        with contextlib.redirect_stdout(io.StringIO()), \
+                _BoundedFile(p, READ_BUDGET[0] * size + READ_BUDGET[1]) as handle:
+            ulog = ULog(handle, message_name_filter_list=[IMU_TOPIC, ATTITUDE_TOPIC,
                                                           BARO_TOPIC, *GPS_TOPICS])
     except Exception as exc:  # pyulog raises several types on foreign or broken files
         raise NavlibInputError(f"{label}: not a readable PX4 ULog file ({exc})") from exc
