@@ -268,7 +268,8 @@ max_accel_m_s2, max_outlier_fraction, require_overlap
     Raises
     ------
     NavlibInputError
-        Missing, empty or foreign file; no IMU or GPS messages or a missing field; no fix;
+        Missing, empty or foreign file (also a damaged one on which pymavlink would stop
+        advancing); no IMU or GPS messages, a missing or non-numeric field; no fix;
         NaN/inf values, duplicate or decreasing time stamps, gaps with ``on_gap="raise"``,
         implausible magnitudes, non-overlapping IMU and GNSS spans (naming message, field
         and message index).

@@ -260,7 +260,8 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     Raises
     ------
     NavlibInputError
-        Missing, empty or non-ULog file; missing topic or field; no GPS fix; NaN/inf values,
+        Missing, empty or non-ULog file (also a damaged one on which pyulog would re-read
+        without end: :data:`READ_BUDGET`); missing topic or field; no GPS fix; NaN/inf values,
         duplicate or decreasing time stamps, gaps with ``on_gap="raise"``, implausible
         magnitudes, non-overlapping IMU and GNSS spans (all naming topic, field, message).
     """
