@@ -5,7 +5,8 @@ Public contract (spec ``api.md``, "Scale")::
     python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [-p key value ...]
 
 Each ``LOG`` is a PX4 ``.ulg`` file, an ArduPilot DataFlash ``.bin`` file (read with
-``navlib.io.read_dataflash``) or an ``imu.csv,gnss.csv`` pair; each
+``navlib.io.read_dataflash``), an Altus Metrum AltOS CSV export (recognised by its header,
+read with ``navlib.io.read_altos``) or an ``imu.csv,gnss.csv`` pair; each
 flight goes through :func:`navlib.studies.assess.assess_flight` as one task
 (:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords (a ULog's ``MAV_TYPE`` parameter
 is attached as ``imu.attrs["mav_type"]`` so the vehicle class comes from the log,
@@ -30,6 +31,7 @@ from pathlib import Path
 import pandas as pd
 
 from navlib.errors import NavlibInputError
+from navlib.io.altos import looks_like_altos
 
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "flight_page", "parse_log",
            "write_fleet"]
@@ -37,11 +39,15 @@ __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "flight_page", "parse
 SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
                    "excitable", "sensible", "warnings", "seconds", "page")
 """Columns of ``summary.csv``, in order."""
-KINDS = ("ulog", "dataflash", "csv")
+KINDS = ("ulog", "dataflash", "altos", "csv")
 
 
 def parse_log(spec: str) -> tuple[str, tuple[Path, ...]]:
-    """The kind (``ulog``, ``dataflash``, ``csv``) and file(s) of a ``LOG`` argument."""
+    """The kind (``ulog``, ``dataflash``, ``altos``, ``csv``) and file(s) of a ``LOG`` argument.
+
+    One file is a ``.ulg`` or ``.bin`` by its suffix, an AltOS export by its first line
+    (:func:`navlib.io.altos.looks_like_altos`), whatever its name.
+    """
     if not isinstance(spec, str) or not spec.strip():
         raise NavlibInputError(f"log: expected a file name, got {spec!r}")
     parts = [p.strip() for p in spec.split(",")]
@@ -50,14 +56,17 @@ def parse_log(spec: str) -> tuple[str, tuple[Path, ...]]:
             raise NavlibInputError(f"log {spec!r}: a pair must be 'imu.csv,gnss.csv'")
         return "csv", (Path(parts[0]), Path(parts[1]))
     if len(parts) != 1:
-        raise NavlibInputError(f"log {spec!r}: expected one .ulg/.bin file or an "
-                               "'imu.csv,gnss.csv' pair")
+        raise NavlibInputError(f"log {spec!r}: expected one .ulg/.bin file, an AltOS .csv "
+                               "export or an 'imu.csv,gnss.csv' pair")
     suffix = Path(parts[0]).suffix.lower()
     if suffix == ".ulg":
         return "ulog", (Path(parts[0]),)
     if suffix == ".bin":
         return "dataflash", (Path(parts[0]),)
-    raise NavlibInputError(f"log {spec!r}: unknown kind; expected .ulg, .bin or "
+    if looks_like_altos(parts[0]):
+        return "altos", (Path(parts[0]),)
+    raise NavlibInputError(f"log {spec!r}: unknown kind; expected .ulg, .bin, an AltOS .csv "
+                           "export (header '#version,...' or 'time,acceleration,...') or "
                            "'imu.csv,gnss.csv'")
 
 
@@ -89,6 +98,8 @@ def _read(kind: str, paths: tuple[Path, ...]):
         return imu, gnss
     if kind == "csv":
         return io.read_imu_csv(paths[0]), io.read_gnss_csv(paths[1])
+    if kind == "altos":
+        return io.read_altos(paths[0])
     return io.read_dataflash(paths[0])
 
 

@@ -22,6 +22,7 @@ LAYOUTS = {
         "IMU": ("QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ"),
         "GPS": ("QBBLLeffff", "TimeUS,I,Status,Lat,Lng,Alt,Spd,GCrs,VZ,HDop"),
         "ATT": ("Qffffff", "TimeUS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw"),
+        "BARO": ("QBf", "TimeUS,I,Alt"),
         "MSG": ("QZ", "TimeUS,Message"),
     },
     # ArduPilot 3.x: IMU, IMU2, GPS without an instance column
@@ -30,9 +31,22 @@ LAYOUTS = {
         "IMU2": ("Qffffff", "TimeUS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ"),
         "GPS": ("QBLLeffff", "TimeUS,Status,Lat,Lng,Alt,Spd,GCrs,VZ,HDop"),
         "ATT": ("Qffffff", "TimeUS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw"),
+        "BARO": ("Qf", "TimeUS,Alt"),
         "MSG": ("QZ", "TimeUS,Message"),
     },
+    # before about 2015 (ArduCopter 3.1-3.3): TimeMS (ms since boot); GPS TimeMS is the GPS
+    # time of week beside Week, its boot time is T; the barometer in CTUN BarAlt
+    "TimeMS": {
+        "IMU": ("Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ"),
+        "IMU2": ("Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ"),
+        "GPS": ("BIHBfLLeefffI", "Status,TimeMS,Week,NSats,HDop,Lat,Lng,RelAlt,Alt,Spd,GCrs,VZ,T"),
+        "ATT": ("Iffffff", "TimeMS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw"),
+        "CTUN": ("Iff", "TimeMS,Alt,BarAlt"),
+        "MSG": ("Z", "Message"),
+    },
 }
+GPS_WEEK_START_MS = 345_600_000
+"""GPS time of week (ms) written at boot in the TimeMS layout (GPS TimeMS = this + boot ms)."""
 
 
 def _pack_format(fmt: str) -> struct.Struct:
@@ -74,13 +88,16 @@ class DataFlashWriter:
 
 
 def write_flight(path, imu, gnss_geodetic, attitude=None, *, layout="4.x", t0_us=50_000_000,
-                 imu_instances=(0,), gps_status=6, message="ArduCopter V4.5.0 (test)"):
+                 imu_instances=(0,), gps_status=6, message="ArduCopter V4.5.0 (test)",
+                 baro=None):
     """Write IMU frames and GNSS fixes as a DataFlash log.
 
     ``imu``: DataFrame ``t, f_x..w_z`` (FRD body); ``gnss_geodetic``: DataFrame ``t, lat_deg,
-    lon_deg, alt_m, vn, ve, vd``; ``attitude``: DataFrame ``t, roll_deg, pitch_deg, yaw_deg``.
-    Records are written in time order; a second IMU instance (``imu_instances=(0, 1)``) is a
-    copy with a small offset in the gyros.
+    lon_deg, alt_m, vn, ve, vd``; ``attitude``: DataFrame ``t, roll_deg, pitch_deg, yaw_deg``;
+    ``baro``: DataFrame ``t, alt_m`` (``BARO`` Alt, or ``CTUN`` BarAlt in the ``"TimeMS"``
+    layout). Records are written in time order; a second IMU instance
+    (``imu_instances=(0, 1)``) is a copy with a small offset in the gyros. The ``"TimeMS"``
+    layout stamps records in ms (``t0_us`` rounded to ms).
     """
     import math
 
@@ -106,7 +123,19 @@ def write_flight(path, imu, gnss_geodetic, attitude=None, *, layout="4.x", t0_us
         for row in attitude.itertuples(index=False):
             events.append((row.t, "ATT", {"Roll": row.roll_deg, "Pitch": row.pitch_deg,
                                           "Yaw": row.yaw_deg}))
+    if baro is not None:
+        kind, field = ("CTUN", "BarAlt") if layout == "TimeMS" else ("BARO", "Alt")
+        for row in baro.itertuples(index=False):
+            events.append((row.t, kind, {field: row.alt_m}))
     events.sort(key=lambda e: e[0])
     for t, name, vals in events:
-        w.add(name, TimeUS=t0_us + round(t * 1e6), **vals)
+        boot_us = t0_us + round(t * 1e6)
+        boot_ms = round(boot_us / 1000)
+        if layout != "TimeMS":
+            w.add(name, TimeUS=boot_us, **vals)
+        elif name == "GPS":
+            w.add(name, TimeMS=GPS_WEEK_START_MS + boot_ms, Week=2000, NSats=10, T=boot_ms,
+                  **vals)
+        else:
+            w.add(name, TimeMS=boot_ms, **vals)
     w.write(path)

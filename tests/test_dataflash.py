@@ -174,3 +174,102 @@ def test_notebook_runs_on_a_dataflash_log(bin4, tmp_path):
     assert done.returncode == 0, done.stdout + done.stderr
     html = (tmp_path / "rep" / "07_assess_flight.html").read_text()
     assert "pixhawk_mems" in html and "autopilot" in html
+
+
+# ------------------------------------------------------------ TimeMS generation, barometer
+
+
+def test_timems_log_reads_like_timeus(flight, tmp_path, bin4):
+    """A log of the TimeMS generation (IMU/IMU2, GPS with Week/T, CTUN BarAlt) gives the
+    frames of the TimeUS generation, to the millisecond its clock resolves."""
+    _, imu_in, _, geo, att = flight
+    baro = pd.DataFrame({"t": geo["t"], "alt_m": geo["alt_m"] - geo["alt_m"].iloc[0]})
+    path = tmp_path / "timems.bin"
+    write_flight(path, imu_in, geo, att, layout="TimeMS", imu_instances=(0, 1), baro=baro,
+                 message="APM:Copter V3.2.1 (test)")
+    imu, gnss = io.read_dataflash(path)
+    ref_imu, ref_gnss = io.read_dataflash(bin4)
+    assert imu.attrs["time_field"] == "TimeMS" and ref_imu.attrs["time_field"] == "TimeUS"
+    assert len(imu) == len(ref_imu) and len(gnss) == len(ref_gnss)
+    np.testing.assert_allclose(imu["t"], ref_imu["t"], atol=1e-3)
+    np.testing.assert_allclose(gnss["t"], ref_gnss["t"], atol=1e-3)
+    for col in ("f_x", "w_x", "w_z"):
+        np.testing.assert_allclose(imu[col], ref_imu[col], atol=1e-6)
+    np.testing.assert_allclose(gnss[["x", "y", "z"]], ref_gnss[["x", "y", "z"]], atol=0.02)
+    assert imu.attrs["hardware"] == "APM:Copter V3.2.1 (test)"
+    assert imu.attrs["attitude"] is not None and len(imu.attrs["attitude"]) == len(att)
+    np.testing.assert_allclose(imu.attrs["baro"]["alt_m"], baro["alt_m"], atol=1e-4)
+    imu2, _ = io.read_dataflash(path, imu_instance=1)
+    np.testing.assert_allclose(imu2["w_x"], imu_in["w_x"] + 1e-3, atol=1e-6)
+
+
+def test_gps_time_of_week_is_not_taken_for_boot_time(flight, tmp_path):
+    """Without T, a GPS TimeMS beside Week is GPS time: refused, naming the fields."""
+    from dataflash_writer import LAYOUTS
+    _, imu_in, _, geo, _ = flight
+    saved = LAYOUTS["TimeMS"]["GPS"]
+    LAYOUTS["TimeMS"]["GPS"] = ("BIHBLLe", "Status,TimeMS,Week,NSats,Lat,Lng,Alt")
+    try:
+        path = tmp_path / "no_t.bin"
+        write_flight(path, imu_in, geo, layout="TimeMS")
+    finally:
+        LAYOUTS["TimeMS"]["GPS"] = saved
+    with pytest.raises(NavlibInputError, match=r"message 'GPS' instance 0: no time field"):
+        io.read_dataflash(path)
+
+
+def test_baro_of_timeus_logs(flight, tmp_path, bin4):
+    _, imu_in, _, geo, _ = flight
+    assert io.read_dataflash(bin4)[0].attrs["baro"] is None
+    baro = pd.DataFrame({"t": geo["t"], "alt_m": 3.0 + geo["alt_m"] - geo["alt_m"].iloc[0]})
+    for layout in ("4.x", "3.x"):
+        path = tmp_path / f"baro{layout}.bin"
+        write_flight(path, imu_in, geo, layout=layout, baro=baro)
+        got = io.read_dataflash(path)[0].attrs["baro"]
+        np.testing.assert_allclose(got["t"], baro["t"] - imu_in["t"][0], atol=1e-6)
+        np.testing.assert_allclose(got["alt_m"], baro["alt_m"], atol=1e-4)
+
+
+def test_public_legacy_timems_log():
+    path = _public("legacy_copter_log171.bin")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", io.FlightDataWarning)
+        imu, gnss = io.read_dataflash(path)
+    assert imu.attrs["time_field"] == "TimeMS"
+    assert imu.attrs["hardware"].startswith("APM:Copter V3.3")
+    assert 1.0 / np.median(np.diff(imu["t"])) == pytest.approx(49.0, rel=0.03)
+    assert 1.0 / np.median(np.diff(gnss["t"])) == pytest.approx(5.0, rel=0.03)
+    assert imu["t"].iloc[-1] - imu["t"].iloc[0] > 200.0
+    assert gnss["t"].iloc[0] >= imu["t"].iloc[0] and gnss["t"].iloc[-1] > 200.0
+    assert imu.attrs["attitude"] is not None and len(imu.attrs["baro"]) > 1000
+    r = np.linalg.norm(gnss[["x", "y", "z"]].to_numpy(), axis=1)
+    assert np.all((r > 6.3e6) & (r < 6.4e6))
+
+
+def test_field_declared_as_text_is_refused(flight, tmp_path):
+    """A damaged FMT that declares GPS Status as char[4] holding text: named, no TypeError."""
+    from dataflash_writer import LAYOUTS
+    _, imu_in, _, geo, _ = flight
+    saved = LAYOUTS["4.x"]["GPS"]
+    LAYOUTS["4.x"]["GPS"] = ("QBnLLeffff", saved[1])
+    try:
+        path = tmp_path / "text_status.bin"
+        write_flight(path, imu_in, geo, gps_status="ok")
+    finally:
+        LAYOUTS["4.x"]["GPS"] = saved
+    with pytest.raises(NavlibInputError, match=r"message 'GPS' instance 0: field\(s\) "
+                                               r"\['Status'\] do not hold numbers"):
+        io.read_dataflash(path)
+
+
+def test_shifted_fmt_record_does_not_hang(bin4, tmp_path):
+    """One byte inserted before the Length byte of the ATT FMT record (so it reads 0 and the
+    rest of the record shifts) made pymavlink parse the same bytes forever (found by
+    tests/test_reader_robustness.py); the reader refuses such a log at once."""
+    data = bin4.read_bytes()
+    fmt_att = data.index(b"\xa3\x95\x80" + bytes([0x83]))
+    assert data[fmt_att + 5:fmt_att + 9] == b"ATT\x00"
+    path = tmp_path / "shifted.bin"
+    path.write_bytes(data[:fmt_att + 4] + b"\x00" + data[fmt_att + 4:])
+    with pytest.raises(NavlibInputError, match="does not move the parser forward"):
+        io.read_dataflash(path)

@@ -29,6 +29,23 @@ def test_parse_log_rejects(spec):
         fleet.parse_log(spec)
 
 
+@pytest.mark.parametrize("generation", ["version", "legacy"])
+@pytest.mark.parametrize("name", ["flight.csv", "flight-18.txt"])
+def test_altos_export_is_one_log_by_its_header(tmp_path, generation, name):
+    from altos_writer import rocket_rows, write_altos
+
+    path = tmp_path / name
+    write_altos(path, rocket_rows(), generation=generation)
+    kind, paths = fleet.parse_log(str(path))
+    assert kind == "altos" and paths == (path,)
+    imu, gnss = fleet._read(kind, paths)
+    assert imu.attrs["autopilot"] == "altos" and len(gnss) > 5
+    other = tmp_path / "imu.csv"
+    other.write_text("t,f_x,f_y,f_z,w_x,w_y,w_z\n0,0,0,9.8,0,0,0\n")
+    with pytest.raises(NavlibInputError, match=r"AltOS \.csv export"):
+        fleet.parse_log(str(other))
+
+
 def test_fleet_reports_bad_logs_and_keeps_going(tmp_path, capsys):
     bad_csv = tmp_path / "imu.csv"
     bad_csv.write_text("t,f_x\n0,1\nnot,a number\n")

@@ -683,3 +683,15 @@ def test_non_physical_imu_samples_are_excluded_by_rule(tmp_path):
             max_outlier_fraction=0.001)
     _raises("max_outlier_fraction", read_imu_csv, path, max_outlier_fraction=2.0)
     assert len(read_imu_csv(path, check_magnitudes=False)) == 300
+
+
+def test_px4_barometer_is_attached(px4_log):
+    """vehicle_air_data.baro_alt_meter on the IMU's time base, near the GNSS heights."""
+    _, imu, gnss, _ = px4_log
+    baro = imu.attrs["baro"]
+    assert list(baro.columns) == ["t", "alt_m"] and len(baro) > 5
+    assert np.all(np.diff(baro["t"]) > 0)
+    assert baro["t"].iloc[0] < imu["t"].iloc[-1] and baro["t"].iloc[-1] > imu["t"].iloc[0]
+    _, _, h = earth.ecef_to_geodetic(gnss[["x", "y", "z"]].to_numpy())
+    # MSL (standard atmosphere) against GNSS height: the geoid and the weather, not km
+    assert abs(np.median(baro["alt_m"]) - np.median(h)) < 200.0

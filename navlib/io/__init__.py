@@ -1,4 +1,5 @@
-"""Flight-data import and validation: IMU/GNSS CSV files, PX4 ULog and ArduPilot DataFlash logs.
+"""Flight-data import and validation: IMU/GNSS CSV files, PX4 ULog, ArduPilot DataFlash logs
+and Altus Metrum AltOS CSV exports.
 
 Public contract (spec ``api.md``, "Flight data")::
 
@@ -6,15 +7,18 @@ Public contract (spec ``api.md``, "Flight data")::
     gnss = navlib.io.read_gnss_csv(path, **units)  # t, x, y, z (ECEF m) [+ vx, vy, vz, sigma]
     imu, gnss = navlib.io.read_ulog(path)          # PX4 ULog via pyulog, same columns
     imu, gnss = navlib.io.read_dataflash(path)     # ArduPilot .bin via pymavlink, same columns
+    imu, gnss = navlib.io.read_altos(path)         # Altus Metrum AltOS CSV export, same columns
 
 plus :func:`check_overlap` (IMU and GNSS spans), :func:`split_at_gaps` (records read with
 ``on_gap="split"``) and the inverse writers :func:`write_imu_csv`, :func:`write_gnss_csv`.
 Column names, aliases and unit keywords: :mod:`navlib.io.csv_files`; PX4 body frame and
-field mapping: :mod:`navlib.io.ulog`; DataFlash messages: :mod:`navlib.io.dataflash`. Every
+field mapping: :mod:`navlib.io.ulog`; DataFlash messages: :mod:`navlib.io.dataflash`; AltOS
+columns and axes: :mod:`navlib.io.altos`. Every
 problem raises :class:`navlib.NavlibInputError` naming file, column and line (or topic,
 field and message).
 """
 
+from navlib.io.altos import read_altos
 from navlib.io.checks import FlightDataWarning, TimeOverlap, check_overlap, split_at_gaps
 from navlib.io.csv_files import (
     GNSS_COLUMNS,
@@ -35,6 +39,7 @@ __all__ = [
     "TimeOverlap",
     "check_overlap",
     "combine_sigma",
+    "read_altos",
     "read_dataflash",
     "read_gnss_csv",
     "read_imu_csv",

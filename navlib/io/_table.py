@@ -131,10 +131,13 @@ def existing_file(path) -> tuple[Path, str]:
     return p, label
 
 
-def read_text_table(path, sep: str | None = None) -> TextTable:
+def read_text_table(path, sep: str | None = None, *,
+                    header_prefix: str | None = None) -> TextTable:
     """Read ``path`` as a delimited text table with a header row.
 
-    ``sep`` None detects ``,``, ``;``, tab or blanks from the header line.
+    ``sep`` None detects ``,``, ``;``, tab or blanks from the header line. ``header_prefix``
+    (e.g. ``"#version"``, the AltOS export) names a ``#`` line that is the header rather than
+    a comment when it is the first non-blank line; its leading ``#`` is dropped.
     """
     p, label = existing_file(path)
     data = p.read_bytes()
@@ -150,6 +153,11 @@ def read_text_table(path, sep: str | None = None) -> TextTable:
         raise NavlibInputError(f"{label}: not UTF-8 text ({exc.reason} at byte {exc.start})") \
             from exc
     lines = text.splitlines()
+    first = next((i for i, ln in enumerate(lines) if ln.strip()), None)
+    named = (header_prefix is not None and first is not None
+             and lines[first].lstrip().startswith(header_prefix))
+    if named:
+        lines[first] = lines[first].lstrip()[1:]
     keep = [i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")]
     if not keep:
         raise NavlibInputError(f"{label}: no header and no data (only blank or # comment lines)")

@@ -56,6 +56,7 @@ from navlib.io.csv_files import NED_KEYS, R_KEYS, V_KEYS, combine_sigma
 
 IMU_TOPIC = "sensor_combined"
 ATTITUDE_TOPIC = "vehicle_attitude"
+BARO_TOPIC = "vehicle_air_data"
 GPS_TOPICS = ("vehicle_gps_position", "sensor_gps")
 BODY_FRAMES = {"frd": np.eye(3), "flu": np.diag([1.0, -1.0, -1.0])}
 """Named body frames: ``C_b_frd`` taking PX4 FRD axes to the navlib body axes."""
@@ -81,22 +82,55 @@ def body_rotation(body_frame) -> np.ndarray:
     return C
 
 
+READ_BUDGET = (16, 2 * 2**20)
+"""pyulog may read at most ``16 * file size + 2 MiB`` bytes before the file is refused: on a
+message damaged near the end of the file its corruption recovery seeks back and re-reads
+forever (a clean log is read about once; recovery from a damaged stretch re-reads it)."""
+
+
+class _ReadBudgetExceeded(Exception):
+    """Not a ValueError: pyulog's recovery swallows those and would go on reading."""
+
+
+class _BoundedFile(io.BufferedReader):
+    """A binary file that raises once more than ``budget`` bytes have been read from it."""
+
+    def __init__(self, path, budget: int):
+        super().__init__(io.FileIO(path, "rb"))
+        self.budget = budget
+
+    def read(self, size=-1):
+        data = super().read(size)
+        self.budget -= len(data)
+        if self.budget < 0:
+            raise _ReadBudgetExceeded("the parser keeps re-reading the same bytes (a damaged "
+                                      "message near the end of the file?)")
+        return data
+
+
 def _load(path):
     from pyulog import ULog
 
     p, label = existing_file(path)
-    if p.stat().st_size == 0:
+    size = p.stat().st_size
+    if size == 0:
         raise NavlibInputError(f"{label}: file is empty")
     try:
         # pyulog prints corruption notices; a library must not print, so catch them.
-        with contextlib.redirect_stdout(io.StringIO()):
-            ulog = ULog(str(p), message_name_filter_list=[IMU_TOPIC, ATTITUDE_TOPIC,
-                                                          *GPS_TOPICS])
+        with contextlib.redirect_stdout(io.StringIO()), \
+                _BoundedFile(p, READ_BUDGET[0] * size + READ_BUDGET[1]) as handle:
+            ulog = ULog(handle, message_name_filter_list=[IMU_TOPIC, ATTITUDE_TOPIC,
+                                                          BARO_TOPIC, *GPS_TOPICS])
     except Exception as exc:  # pyulog raises several types on foreign or broken files
         raise NavlibInputError(f"{label}: not a readable PX4 ULog file ({exc})") from exc
     if ulog.file_corruption:
         warnings.warn(f"{label}: pyulog detected file corruption; data may be incomplete",
                       FlightDataWarning, stacklevel=3)
+    for d in ulog.data_list:
+        if "timestamp" not in d.data:
+            raise NavlibInputError(f"{label}, topic '{d.name}': no 'timestamp' field (the "
+                                   f"log's format definition of the topic is damaged); fields "
+                                   f"are {sorted(d.data)}")
     return ulog, label
 
 
@@ -214,7 +248,10 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         ``source``, ``topic``, ``body_frame`` / ``altitude_reference``, ``dropped_no_fix``,
         ``gaps``, ``outliers``, ``autopilot`` (``"px4"``), ``hardware`` (the log's
         ``ver_hw``), ``attitude`` (the autopilot's ``vehicle_attitude`` as ``t, qw, qx, qy,
-        qz``, navlib body -> NED, or None; the flight fit starts from it), and ``clipping``
+        qz``, navlib body -> NED, or None; the flight fit starts from it), ``baro``
+        (``vehicle_air_data.baro_alt_meter`` as ``t, alt_m``, the barometric altitude above
+        mean sea level from the standard atmosphere, or None; docs/assumptions.md IO6), and
+        ``clipping``
         (samples flagged by PX4's ``accelerometer_clipping`` /
         ``gyro_clipping``; any flag also warns). The IMU sample time is
         ``sensor_combined.timestamp`` (PX4 integrates the accelerometer over the gyro
@@ -223,7 +260,8 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     Raises
     ------
     NavlibInputError
-        Missing, empty or non-ULog file; missing topic or field; no GPS fix; NaN/inf values,
+        Missing, empty or non-ULog file (also a damaged one on which pyulog would re-read
+        without end: :data:`READ_BUDGET`); missing topic or field; no GPS fix; NaN/inf values,
         duplicate or decreasing time stamps, gaps with ``on_gap="raise"``, implausible
         magnitudes, non-overlapping IMU and GNSS spans (all naming topic, field, message).
     """
@@ -277,7 +315,7 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     imu.attrs.update(source=str(path), topic=IMU_TOPIC, t0_us=t0,
                      body_frame=body_frame if isinstance(body_frame, str) else "custom",
                      autopilot="px4", hardware=str(info.get("ver_hw", "")),
-                     attitude=_attitude(ulog, t0, C_b_frd))
+                     attitude=_attitude(ulog, t0, C_b_frd), baro=_baro(ulog, t0))
     imu = apply_gap_policy(imu, src_imu, "'timestamp'", imu_max_gap_s, on_gap)
 
     gnss, src_gps = _gnss_frame(d_gps, label, idx, ts_gps, t0, altitude, check_magnitudes)
@@ -305,6 +343,20 @@ def _attitude(ulog, t0: int, C_b_frd: np.ndarray) -> pd.DataFrame | None:
     x, y, z, w = C_b_n.as_quat().T
     t = (d.data["timestamp"].astype(np.int64)[ok] - t0) * units.MICROSECOND
     return pd.DataFrame({"t": t, "qw": w, "qx": x, "qy": y, "qz": z})
+
+
+def _baro(ulog, t0: int) -> pd.DataFrame | None:
+    """``vehicle_air_data.baro_alt_meter`` as ``t, alt_m`` (finite rows), or None."""
+    sets = [d for d in _dataset(ulog, BARO_TOPIC, None) if "baro_alt_meter" in d.data]
+    if not sets:
+        return None
+    d = max(sets, key=lambda d: len(d.data["timestamp"]))
+    alt = d.data["baro_alt_meter"].astype(float)
+    ok = np.isfinite(alt)
+    if not ok.any():
+        return None
+    t = (d.data["timestamp"].astype(np.int64)[ok] - t0) * units.MICROSECOND
+    return pd.DataFrame({"t": t, "alt_m": alt[ok]})
 
 
 def _imu_frame(d, label, ts, t0, C_b_frd, check_magnitudes, limits) -> pd.DataFrame:
