@@ -437,9 +437,12 @@ def _gnss_sigma(gnss: pd.DataFrame, spec) -> float:
 
 DEFAULT_PRESET = "motionpak_tactical"
 """Sensor preset of records that do not say what their hardware is (CSV files)."""
-AUTOPILOT_PRESETS = {"px4": "pixhawk_mems", "ardupilot": "pixhawk_mems"}
-"""Preset chosen by default for logs whose reader found the autopilot (``attrs["autopilot"]``):
-the consumer MEMS class of the Pixhawk family (``data/sensors/pixhawk_mems.toml``)."""
+AUTOPILOT_PRESETS = {"px4": "pixhawk_mems", "ardupilot": "pixhawk_mems",
+                     "altos": "altus_telemega"}
+"""Preset chosen by default for logs whose reader found the autopilot or flight computer
+(``attrs["autopilot"]``): the consumer MEMS class of the Pixhawk family
+(``data/sensors/pixhawk_mems.toml``), the MPU-6000 class of the Altus Metrum TeleMega
+(``data/sensors/altus_telemega.toml``)."""
 MODEL_STEP_S = 0.02
 """Longest model step of the assessment (``ecef21_at_epochs(max_step_s=...)``), s: IMU steps
 are grouped to 50 Hz, which keeps long flights fast while the 1 s transitions move by less
