@@ -317,7 +317,8 @@ def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]
     height = h_bi - h_b[0]
     d = h_g - h_bi
     d = d - _baro_offset(d, height, p["baro_max_scale"])
-    limit = p["baro_tolerance_m"] + p["baro_tolerance_fraction"] * np.abs(height)
+    limit = (p["baro_tolerance_m"] + p["baro_tolerance_fraction"] * np.abs(height)
+             + p["baro_tolerance_span_fraction"] * np.ptp(height))
     off = np.abs(d) > limit
     if not off.any():
         return bad, rows
@@ -334,7 +335,9 @@ def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]
                    f"{np.abs(d).max():.3g} m after removing their offset and scale (GNSS "
                    f"altitude spans {np.ptp(h_g):.3g} m, barometer {np.ptp(h_bi):.3g} m where "
                    f"both exist; tolerance {p['baro_tolerance_m']:g} m + "
-                   f"{p['baro_tolerance_fraction']:g} x height)", "fixes", f"; {action}")
+                   f"{p['baro_tolerance_fraction']:g} x height + "
+                   f"{p['baro_tolerance_span_fraction']:g} x height span)", "fixes",
+                   f"; {action}")
     return bad, [*rows, row]
 
 
