@@ -288,7 +288,9 @@ def apply_gap_policy(frame: pd.DataFrame, source: Source, column: str,
     t = frame["t"].to_numpy()
     thr = gap_threshold(t, max_gap_s)
     dt = np.diff(t)
-    rows = np.flatnonzero(dt > thr) + 1
+    # an interval equal to the threshold is no gap, whatever the rounding of times written
+    # with a few decimals (AltOS logs 0.1 s steps under the parachutes, 10 x its 0.01 s median)
+    rows = np.flatnonzero(dt > thr * (1.0 + 1e-6)) + 1
     gaps = [{"t_start": float(t[k - 1]), "t_end": float(t[k]), "duration_s": float(dt[k - 1]),
              "row": int(k), "where": source.where(int(k))} for k in rows]
     frame.attrs["gaps"] = gaps
