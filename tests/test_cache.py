@@ -168,8 +168,9 @@ def test_salt_follows_the_source_of_the_modules_involved(monkeypatch):
     assert {"navlib.trajectory.rocket", "navlib.trajectory._flight", "navlib.earth",
             "navlib.cache"} <= set(closure)
     assert "navlib.models.ecef" not in closure  # not imported by the rocket builder
-    # imports inside functions count: fit.py imports the ECEF model lazily
-    assert "navlib.models.ecef" in cache.source_closure("navlib.trajectory.fit")
+    # imports inside functions count: the launcher model imports its default trajectory
+    # lazily
+    assert "navlib.trajectory.launcher" in cache.source_closure("navlib.models.launcher")
     modules = ("navlib.trajectory.rocket", "navlib.discretize")
     original = {m: cache.salt(m) for m in modules}
     real_source = cache._module_source
