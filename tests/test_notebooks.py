@@ -6,6 +6,7 @@ so they always run. Each execution goes through the report runner in quick mode 
 test's own tmp folder, so ``pytest -n 2`` is safe.
 """
 
+import json
 import logging
 from pathlib import Path
 
@@ -31,6 +32,9 @@ def test_committed_notebook_is_clean(path):
              and (c.get("outputs") or c.get("execution_count") is not None)]
     assert not dirty, f"{path.name}: cells {dirty} have outputs or execution counts"
     assert nb.metadata.get("kernelspec", {}).get("name") == "python3"
+    # nbformat.read adds missing cell ids with a warning; the file itself must carry them
+    raw = json.loads(path.read_text(encoding="utf-8"))
+    assert all("id" in c for c in raw["cells"]), f"{path.name}: cells without an id"
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
