@@ -8,8 +8,8 @@ replaced (``tests/kalman_reference.py``):
 * ``kernels.ekf_propagate_21``: the EKF's propagation between updates over 2000 IMU samples
   of a 21-state model, compiled (:func:`navlib.filters.kalman.propagate_kernel`) and NumPy.
 * ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
-  :func:`navlib.filters.kalman.compile_kernels`, with an empty numba cache folder (the
-  first run on a machine: every kernel compiled) and then with that folder filled (later
+  :func:`navlib.filters.linear.compile_kernels` (every kernel), with an empty numba cache
+  folder (the first run on a machine: every kernel compiled) and then with that folder filled (later
   runs: loaded from disk); the import alone is ``kernels.import_only``.
 
 Times are the best of 3; the machine is shared, so read ``uptime`` beside them.
@@ -80,7 +80,7 @@ def _ekf_numpy():
     ref.propagate(x, P, F, Q, kept)
 
 
-_WARM_UP = "from navlib.filters.kalman import compile_kernels; compile_kernels()"
+_WARM_UP = "from navlib.filters.linear import compile_kernels; compile_kernels()"
 
 
 def _fresh_process(code: str, cache_dir: str) -> float:

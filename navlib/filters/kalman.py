@@ -148,48 +148,6 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
 
 
 @numba.njit(cache=True)
-def _sparse_dot(A, B):
-    """``A @ B`` as a new array, skipping the zero entries of ``A``: ``F = I + A dt``, ``H``
-    and ``I - K H`` of the navigation models are mostly zeros (the launcher's 28-state ``F``
-    has 84 non-zero entries of 784), so the product costs ``nnz(A) * B.shape[1]``
-    multiply-adds instead of ``A.size * B.shape[1]``. Each entry is summed over ``k`` in
-    ascending order (BLAS may order them otherwise: equal to rounding, docs/assumptions.md
-    "Compiled kernels"); ``B`` must be finite (a skipped ``0 * inf`` would be NaN)."""
-    rows, inner = A.shape
-    out = np.zeros((rows, B.shape[1]))
-    for i in range(rows):
-        for k in range(inner):
-            a = A[i, k]
-            if a != 0.0:
-                for j in range(B.shape[1]):
-                    out[i, j] += a * B[k, j]
-    return out
-
-
-@numba.njit(cache=True)
-def _transpose(A, out):
-    """``out = A'`` (a C-contiguous copy, so that the next :func:`_sparse_dot` reads rows)."""
-    for i in range(A.shape[0]):
-        for j in range(A.shape[1]):
-            out[j, i] = A[i, j]
-
-
-@numba.njit(cache=True)
-def _transposed(A):
-    """``A'`` as a new C-contiguous array (:func:`_transpose`)."""
-    out = np.empty((A.shape[1], A.shape[0]))
-    _transpose(A, out)
-    return out
-
-
-@numba.njit(cache=True)
-def _congruence(A, P):
-    """``A P A'`` as a new array by two :func:`_sparse_dot` products:
-    ``(A (A P)')' = A P A'`` (no symmetry of ``P`` assumed)."""
-    return _transposed(_sparse_dot(A, _transposed(_sparse_dot(A, P))))
-
-
-@numba.njit(cache=True)
 def _sym_sum(A, B, out):
     """``out = sym(A + B)``, i.e. ``M = A + B; (M + M') / 2`` entry by entry (the operations
     of :func:`navlib.covariance.symmetrize`); ``out`` must be neither ``A`` nor ``B``."""
@@ -243,12 +201,12 @@ def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     + K R K')`` with the gain of :func:`_gain_kernel` (written to ``K``, ``S_pinv``);
     returns the dof. ``P_post`` may be ``P`` itself."""
     dof = _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv)
-    IKH = _transposed(_sparse_dot(_transposed(H), _transposed(K)))
+    IKH = np.dot(K, H)
     n = IKH.shape[0]
     for i in range(n):
         for j in range(n):
             IKH[i, j] = (1.0 if i == j else 0.0) - IKH[i, j]
-    _sym_sum(_congruence(IKH, P), _congruence(K, R), P_post)
+    _sym_sum(np.dot(np.dot(IKH, P), IKH.T), np.dot(np.dot(K, R), K.T), P_post)
     return dof
 
 
@@ -300,7 +258,7 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None
 def predict_kernel(P, F, Q, out):
     """Covariance prediction ``out = sym(F P F' + Q)`` of one matrix (compiled; ``out``
     may be ``P``, not ``Q``)."""
-    _sym_sum(_congruence(F, P), Q, out)
+    _sym_sum(np.dot(np.dot(F, P), F.T), Q, out)
 
 
 @numba.njit(cache=True)

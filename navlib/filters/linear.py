@@ -42,6 +42,7 @@ from navlib.filters.kalman import (
     nees_basis,
     nees_values,
 )
+from navlib.filters.kalman import compile_kernels as _kalman_compile_kernels
 from navlib.models.base import DiscreteModel, LinearModel
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
 
@@ -870,6 +871,18 @@ def _measure_block(prepared: LinearFilter, block: _Block, work: _Work, draws, z_
             Rs = R_sqrt[0].T if R_sqrt.shape[0] == 1 else R_sqrt[k].swapaxes(-1, -2)
             np.add(z, np.matmul(draws[1][j], Rs, out=work.product[:meas.size]), out=z)
     return meas
+
+
+def compile_kernels() -> None:
+    """:func:`navlib.filters.kalman.compile_kernels` and the linear simulation's
+    :func:`truth_kernel` and :func:`filter_kernel` on tiny inputs: compiles them on the
+    first run on a machine, loads them from numba's disk cache afterwards (README
+    "Compiled kernels")."""
+    _kalman_compile_kernels()
+    x = np.zeros((2, 1, 1))
+    F = np.ones((1, 1, 1))
+    truth_kernel(x, F, _NONE, _NONE, 0)
+    filter_kernel(x, x.copy(), x.copy(), x.copy(), F, F, F, np.zeros(1, dtype=np.int64), 0, 1)
 
 
 def _filter_block(prepared: LinearFilter, block: _Block, work: _Work, meas) -> None:
