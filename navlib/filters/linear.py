@@ -6,8 +6,10 @@ Truth error ``x_{k+1} = F_k x_k + w_k`` with ``w_k ~ N(0, Q_k)`` sampled, measur
 ``z_k = H_k x_k + v_k`` with ``v_k ~ N(0, R_k)``, filtered by the Kalman filter of the
 same model. The covariance recursion is data independent, so it is computed once
 (:func:`navlib.covariance.kalman_covariance`, Joseph form) and shared by every run; the
-gains follow from the priors in one batched pass; the runs sit on a batch axis, so a
-step is a handful of ``(R, n) @ (n, n)`` products whatever the number of runs. Because
+gains follow from the priors in one batched pass; the runs sit on a batch axis, and the
+step-by-step recursions of the truth and of the filter run as compiled kernels
+(:func:`truth_kernel`, :func:`filter_kernel`; issue 26), one BLAS product per step and no
+Python between them. Because
 everything is linear, the estimation error of a run with an outlier is the error of the
 same run without it plus the noise-free outlier response (``noise=False``), exactly —
 :mod:`navlib.outliers` uses this. Outliers on measurement channels are added to ``z``;
@@ -680,11 +682,13 @@ def _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_
     innovation at the recorded epochs, NIS at the updates).
 
     A block of :data:`_CHUNK` steps at a time: the true errors first (they do not depend on
-    the estimate), then their measurements and noise in batched products, then the filter
-    step by step, then the NIS and the recorded epochs in batched products. Every product
-    and sum is the one a step-by-step loop forms (the same operands, one step's
-    ``(R, n) @ (n, n)`` product per slice, the same order of additions), into preallocated
-    work arrays: the numbers are those of the plain loop, to the bit (issue 14).
+    the estimate; :func:`truth_kernel`), then their measurements and noise in batched
+    products, then the filter step by step (:func:`filter_kernel`), then the NIS and the
+    recorded epochs in batched products, into preallocated work arrays. Every product and
+    sum is the one a step-by-step loop forms, with the same operands; the compiled kernels
+    call the BLAS numba links (SciPy's) where NumPy calls its own, so the numbers equal
+    those of the plain loop to rounding (issue 14, issue 26; docs/assumptions.md "Compiled
+    kernels").
     """
     steps = prepared.steps
     runs, m = x.shape[0], steps.H.shape[-2]
@@ -826,16 +830,10 @@ _NONE = np.zeros((0, 1, 0))
 
 @numba.njit(cache=True)
 def _rows_times(X, A, out):
-    """``out = X A'`` for rows ``X`` (R, n) and ``A`` (p, n), skipping the zero entries of
-    ``A`` (``F``, ``H`` of the navigation models are mostly zeros); each entry summed over
-    the columns of ``A`` in ascending order (docs/assumptions.md "Compiled kernels")."""
-    out[:, :] = 0.0
-    for a in range(A.shape[0]):
-        for b in range(A.shape[1]):
-            f = A[a, b]
-            if f != 0.0:
-                for r in range(X.shape[0]):
-                    out[r, a] += X[r, b] * f
+    """``out = X A'`` for rows ``X`` (R, n) and ``A`` (p, n), one BLAS product (we tried
+    skipping the zeros of the sparse ``A``: no faster for 100 runs, docs/assumptions.md
+    "Compiled kernels")."""
+    np.dot(X, A.T, out)
 
 
 @numba.njit(cache=True)
