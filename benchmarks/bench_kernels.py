@@ -104,7 +104,8 @@ def _linear_case(runs: int = 100):
     work.truth[0] = rng.standard_normal((runs, steps.n))
     work.prior[0] = 0.0
     meas = np.flatnonzero(prepared.measured[:linear._CHUNK])
-    linear._measure_block(prepared, block, work, draws, np.zeros((steps.t.size, 12)),
+    linear._measure_block(prepared, block, work, draws,
+                          np.zeros((steps.t.size, steps.H.shape[-2])),
                           linear._psd_sqrt(steps.R[:1]))
     return prepared, block, work, draws, meas
 
