@@ -7,9 +7,16 @@ replaced (``tests/kalman_reference.py``):
   (``numpy_riccati_28``). Goal 2000 x 14 us: the 2.9x of the issue's prototype over 42 us.
 * ``kernels.ekf_propagate_21``: the EKF's propagation between updates over 2000 IMU samples
   of a 21-state model, compiled (:func:`navlib.filters.kalman.propagate_kernel`) and NumPy.
+* ``kernels.linear_block_28``: one block of the linear Monte-Carlo simulation (256 steps,
+  100 runs, 28-state launcher INS/GPS/att + RT model, update at every step): the true-error
+  and filter recursions, compiled (:func:`navlib.filters.linear.truth_kernel`,
+  :func:`navlib.filters.linear.filter_kernel`) and NumPy (``numpy_linear_block_28``, the
+  block code in ``tests/linear_reference.py``); ``..._4runs`` the same with 4 runs (the size
+  of a batch of unit outlier responses). No goal in the issue: 10 us (100 runs) and 2 us
+  (4 runs) per step, about a quarter of the NumPy block's time.
 * ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
-  :func:`navlib.filters.kalman.compile_kernels`, with an empty numba cache folder (the
-  first run on a machine: every kernel compiled) and then with that folder filled (later
+  :func:`navlib.filters.linear.compile_kernels` (every kernel), with an empty numba cache
+  folder (the first run on a machine: every kernel compiled) and then with that folder filled (later
   runs: loaded from disk); the import alone is ``kernels.import_only``.
 
 Times are the best of 3; the machine is shared, so read ``uptime`` beside them.
@@ -32,8 +39,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 import kalman_reference as ref  # noqa: E402
+import linear_reference  # noqa: E402
 
+from navlib.filters import linear, prepare_linear  # noqa: E402
 from navlib.filters.kalman import propagate_kernel, riccati_kernel  # noqa: E402
+from navlib.models import launcher  # noqa: E402
+from navlib.trajectory import launcher_ascent  # noqa: E402
 
 STEPS = 2000
 
@@ -80,7 +91,38 @@ def _ekf_numpy():
     ref.propagate(x, P, F, Q, kept)
 
 
-_WARM_UP = "from navlib.filters.kalman import compile_kernels; compile_kernels()"
+@cache
+def _linear_case(runs: int = 100):
+    flight = launcher_ascent(duration_s=14.0, rate_hz=20.0)        # 281 epochs: one block
+    prepared = prepare_linear(launcher("ins_gps_att_rt", "GAP", "markov", flight))
+    steps = prepared.steps
+    rng = np.random.default_rng(2)
+    work = linear._Work.of(runs, steps.n, steps.H.shape[-2])
+    block = linear._Block(0, 0, linear._CHUNK, steps.t.size)
+    draws = (rng.standard_normal((linear._CHUNK, runs, steps.L.shape[-1])),
+             rng.standard_normal((linear._CHUNK, runs, steps.H.shape[-2])))
+    work.truth[0] = rng.standard_normal((runs, steps.n))
+    work.prior[0] = 0.0
+    meas = np.flatnonzero(prepared.measured[:linear._CHUNK])
+    linear._measure_block(prepared, block, work, draws,
+                          np.zeros((steps.t.size, steps.H.shape[-2])),
+                          linear._psd_sqrt(steps.R[:1]))
+    return prepared, block, work, draws, meas
+
+
+def _linear_compiled(runs: int = 100):
+    prepared, block, work, draws, meas = _linear_case(runs)
+    linear._truth_block(prepared.steps, block, work, draws, None)
+    linear._filter_block(prepared, block, work, meas)
+
+
+def _linear_numpy(runs: int = 100):
+    prepared, block, work, draws, meas = _linear_case(runs)
+    linear_reference.truth_block(prepared.steps, block, work, draws, None)
+    linear_reference.filter_block(prepared, block, work, meas)
+
+
+_WARM_UP = "from navlib.filters.linear import compile_kernels; compile_kernels()"
 
 
 def _fresh_process(code: str, cache_dir: str) -> float:
@@ -120,5 +162,13 @@ def cases() -> list[Case]:
              STEPS * 5e-6),
         Case("kernels.numpy_ekf_propagate_21", f"{per_step} (NumPy reference)", _ekf_numpy,
              STEPS * 5e-6),
+        Case("kernels.linear_block_28", "256 steps x 100 runs, truth + filter, 28 states",
+             _linear_compiled, 256 * 10e-6),
+        Case("kernels.numpy_linear_block_28", "the same (NumPy reference)", _linear_numpy,
+             256 * 10e-6),
+        Case("kernels.linear_block_28_4runs", "256 steps x 4 runs (a unit-response batch)",
+             lambda: _linear_compiled(4), 256 * 2e-6),
+        Case("kernels.numpy_linear_block_28_4runs", "the same (NumPy reference)",
+             lambda: _linear_numpy(4), 256 * 2e-6),
         *_compile_cases(),
     ]

@@ -6,8 +6,10 @@ Truth error ``x_{k+1} = F_k x_k + w_k`` with ``w_k ~ N(0, Q_k)`` sampled, measur
 ``z_k = H_k x_k + v_k`` with ``v_k ~ N(0, R_k)``, filtered by the Kalman filter of the
 same model. The covariance recursion is data independent, so it is computed once
 (:func:`navlib.covariance.kalman_covariance`, Joseph form) and shared by every run; the
-gains follow from the priors in one batched pass; the runs sit on a batch axis, so a
-step is a handful of ``(R, n) @ (n, n)`` products whatever the number of runs. Because
+gains follow from the priors in one batched pass; the runs sit on a batch axis, and the
+step-by-step recursions of the truth and of the filter run as compiled kernels
+(:func:`truth_kernel`, :func:`filter_kernel`; issue 26), one BLAS product per step and no
+Python between them. Because
 everything is linear, the estimation error of a run with an outlier is the error of the
 same run without it plus the noise-free outlier response (``noise=False``), exactly —
 :mod:`navlib.outliers` uses this. Outliers on measurement channels are added to ``z``;
@@ -23,6 +25,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
+import numba
 import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
@@ -37,9 +40,11 @@ from navlib.filters.kalman import (
     Gains,
     _psd_sqrt,
     chi2_bounds,
+    kernel_array,
     nees_basis,
     nees_values,
 )
+from navlib.filters.kalman import compile_kernels as _kalman_compile_kernels
 from navlib.models.base import DiscreteModel, LinearModel
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
 
@@ -677,11 +682,13 @@ def _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_
     innovation at the recorded epochs, NIS at the updates).
 
     A block of :data:`_CHUNK` steps at a time: the true errors first (they do not depend on
-    the estimate), then their measurements and noise in batched products, then the filter
-    step by step, then the NIS and the recorded epochs in batched products. Every product
-    and sum is the one a step-by-step loop forms (the same operands, one step's
-    ``(R, n) @ (n, n)`` product per slice, the same order of additions), into preallocated
-    work arrays: the numbers are those of the plain loop, to the bit (issue 14).
+    the estimate; :func:`truth_kernel`), then their measurements and noise in batched
+    products, then the filter step by step (:func:`filter_kernel`), then the NIS and the
+    recorded epochs in batched products, into preallocated work arrays. Every product and
+    sum is the one a step-by-step loop forms, with the same operands; the compiled kernels
+    call the BLAS numba links (SciPy's) where NumPy calls its own, so the numbers equal
+    those of the plain loop to rounding (issue 14, issue 26; docs/assumptions.md "Compiled
+    kernels").
     """
     steps = prepared.steps
     runs, m = x.shape[0], steps.H.shape[-2]
@@ -801,21 +808,50 @@ def _rows(index: np.ndarray):
 
 def _truth_block(steps: LinearSteps, block: _Block, work: _Work, draws, x_input) -> None:
     """True errors ``x_{k+1} = x_k F_k' (+ xi_k L_k') (+ u_k)`` of a block, into
-    ``work.truth`` (``work.truth[j0]`` holds ``x_{k0}``)."""
+    ``work.truth`` (``work.truth[j0]`` holds ``x_{k0}``): the process noise of the block in
+    one batched product, the recursion in :func:`truth_kernel`."""
     moves = block.moves
-    FT = steps.F[moves].swapaxes(-1, -2)
-    j0, x = block.j0, work.truth
-    noise = None
+    F = kernel_array(steps.F[moves])
+    j0 = block.j0
+    noise = _NONE
     if draws is not None:
-        noise = np.matmul(draws[0][j0:j0 + FT.shape[0]], steps.L[moves].swapaxes(-1, -2),
-                          out=work.noise[:FT.shape[0]])
-    for i in range(FT.shape[0]):
+        noise = np.matmul(draws[0][j0:j0 + F.shape[0]], steps.L[moves].swapaxes(-1, -2),
+                          out=work.noise[:F.shape[0]])
+    inputs = _NONE
+    if x_input is not None:
+        u = x_input[moves]
+        inputs = kernel_array(u if u.ndim == 3 else u[:, None, :])
+    truth_kernel(work.truth, F, noise, inputs, j0)
+
+
+_NONE = np.zeros((0, 1, 0))
+"""An absent noise or input of :func:`truth_kernel` (no rows)."""
+
+
+@numba.njit(cache=True)
+def _rows_times(X, A, out):
+    """``out = X A'`` for rows ``X`` (R, n) and ``A`` (p, n), one BLAS product (we tried
+    skipping the zeros of the sparse ``A``: no faster for 100 runs, docs/assumptions.md
+    "Compiled kernels")."""
+    np.dot(X, A.T, out)
+
+
+@numba.njit(cache=True)
+def truth_kernel(x, F, noise, inputs, j0):
+    """The true-error recursion of a block, compiled (docs/assumptions.md "Compiled
+    kernels"): ``x[j0+i+1] = x[j0+i] F[i]' (+ noise[i]) (+ inputs[i])`` for each step ``i``
+    of ``F`` (s, n, n); ``x`` (., R, n), ``noise`` (s, R, n) or no rows, ``inputs``
+    (s, R, n) or (s, 1, n) (the same input for every run) or no rows. The NumPy code it
+    replaced is ``tests/linear_reference.py``."""
+    runs = x.shape[1]
+    for i in range(F.shape[0]):
         j = j0 + i
-        np.dot(x[j], FT[i], out=x[j + 1])
-        if noise is not None:
-            np.add(x[j + 1], noise[i], out=x[j + 1])
-        if x_input is not None:
-            np.add(x[j + 1], x_input[moves.start + i], out=x[j + 1])
+        _rows_times(x[j], F[i], x[j + 1])
+        if noise.shape[0]:
+            x[j + 1] += noise[i]
+        if inputs.shape[0]:
+            for r in range(runs):
+                x[j + 1, r] += inputs[i, 0 if inputs.shape[1] == 1 else r]
 
 
 def _measure_block(prepared: LinearFilter, block: _Block, work: _Work, draws, z_add,
@@ -835,30 +871,57 @@ def _measure_block(prepared: LinearFilter, block: _Block, work: _Work, draws, z_
     return meas
 
 
+def compile_kernels() -> None:
+    """:func:`navlib.filters.kalman.compile_kernels` and the linear simulation's
+    :func:`truth_kernel` and :func:`filter_kernel` on tiny inputs: compiles them on the
+    first run on a machine, loads them from numba's disk cache afterwards (README
+    "Compiled kernels")."""
+    _kalman_compile_kernels()
+    x = np.zeros((2, 1, 1))
+    F = np.ones((1, 1, 1))
+    truth_kernel(x, F, _NONE, _NONE, 0)
+    filter_kernel(x, x.copy(), x.copy(), x.copy(), F, F, F, np.zeros(1, dtype=np.int64), 0, 1)
+
+
 def _filter_block(prepared: LinearFilter, block: _Block, work: _Work, meas) -> None:
-    """The filter over a block: at an update ``x^+ = x^- + (z - x^- H') K'``, then
-    ``x^-_{k+1} = x^+ F'`` (``work.prior[j0]`` holds the prior at ``k0``)."""
+    """The filter over a block (:func:`filter_kernel`; ``work.prior[j0]`` holds the prior
+    at ``k0``)."""
     steps = prepared.steps
-    j0, j1 = block.j0, block.j1
-    update = np.full(j1 - j0, -1)
-    update[meas - j0] = np.arange(meas.size)
+    update = np.full(block.j1 - block.j0, -1, dtype=np.int64)
+    update[meas - block.j0] = np.arange(meas.size)
     moves = block.moves
-    HT = steps.H[block.k0:block.k1].swapaxes(-1, -2)
-    KT = prepared.gains.K[block.k0:block.k1].swapaxes(-1, -2)
-    FT = steps.F[moves].swapaxes(-1, -2)
-    last = moves.stop - block.c0
-    prior, post, innov, z = work.prior, work.post, work.innov, work.z
-    hx, gain_step = work.hx, work.gain_step
-    for i, p in enumerate(update.tolist()):
+    filter_kernel(work.prior, work.post, work.innov, work.z,
+                  kernel_array(steps.H[block.k0:block.k1]),
+                  kernel_array(prepared.gains.K[block.k0:block.k1]),
+                  kernel_array(steps.F[moves]), update, block.j0, moves.stop - block.c0)
+
+
+@numba.njit(cache=True)
+def filter_kernel(prior, post, innov, z, H, K, F, update, j0, last):
+    """The linear Kalman filter over the steps of a block, compiled (docs/assumptions.md
+    "Compiled kernels"). At step ``i`` (work index ``j = j0 + i``) with
+    ``update[i] = p >= 0``: ``innov[p] = z[p] - x^- H[i]'`` and
+    ``x^+ = x^- + innov[p] K[i]'`` into ``post[j]`` (rows are runs); then, while
+    ``j < last``, ``x^-_{j+1} = x F[i]'`` into ``prior[j + 1]``. The NumPy code it replaced
+    is ``tests/linear_reference.py``."""
+    runs, n = prior.shape[1], prior.shape[2]
+    step = np.empty((runs, n))
+    for i in range(update.size):
         j = j0 + i
         estimate = prior[j]
+        p = update[i]
         if p >= 0:
-            np.dot(estimate, HT[i], out=hx)
-            np.subtract(z[p], hx, out=innov[p])
-            np.dot(innov[p], KT[i], out=gain_step)
-            estimate = np.add(estimate, gain_step, out=post[j])
+            _rows_times(estimate, H[i], innov[p])
+            for r in range(runs):
+                for c in range(innov.shape[2]):
+                    innov[p, r, c] = z[p, r, c] - innov[p, r, c]
+            _rows_times(innov[p], K[i], step)
+            for r in range(runs):
+                for c in range(n):
+                    post[j, r, c] = estimate[r, c] + step[r, c]
+            estimate = post[j]
         if j < last:
-            np.dot(estimate, FT[i], out=prior[j + 1])
+            _rows_times(estimate, F[i], prior[j + 1])
 
 
 def _record_block(prepared: LinearFilter, block: _Block, work: _Work, meas, slot, upd_slot,
