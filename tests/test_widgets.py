@@ -207,7 +207,8 @@ def test_ink_of_blank_figure_is_lower_than_drawn():
     assert ink(blank) == 0.0 < ink(drawn)
 
 
-def _two_axes_figure(scale: float, label: str = "y", band: bool = False):
+def _two_axes_figure(scale: float, label: str = "y", band: bool = False,
+                     dots: bool = False):
     """A constrained-layout figure of lines, bars, a legend and titles, data times ``scale``."""
     fig, (top, bottom) = figure_mod.subplots(2, 1, figsize=(4, 3), layout="constrained")
     top.plot([0, 1, 2], [0, scale, 4 * scale], label=f"line {scale:g}")
@@ -218,6 +219,9 @@ def _two_axes_figure(scale: float, label: str = "y", band: bool = False):
     bottom.bar([0, 1, 2], [1, -scale, 3 * scale], color=["C0", "C1", "C2"])
     if band:
         bottom.fill_between([0, 2], 0, scale, alpha=0.2)
+        bottom.broken_barh([(0.5 * scale, 1.0)], (0.5, 1.0), color="C3")
+    if dots:
+        bottom.scatter([0, 1], [scale, 2 * scale])
     fig.suptitle("kept")
     return fig
 
@@ -241,30 +245,30 @@ def _in_layout_of(fig, kept_fig, dpi: float) -> bytes:
 def test_kept_figure_redrawn_with_new_data_equals_a_new_figure_in_its_layout():
     kept = base.KeptFigures()
     with figure_mod.detached():
-        kept.render("part", _two_axes_figure(1.0), 50)
+        kept.render("part", _two_axes_figure(1.0, band=True), 50)
         kept_fig = kept._kept["part"][1]
         assert not isinstance(kept_fig.get_layout_engine(), ConstrainedLayoutEngine)
-        png = kept.render("part", _two_axes_figure(7.5), 50)
+        png = kept.render("part", _two_axes_figure(7.5, band=True), 50)
         assert kept._kept["part"][1] is kept_fig  # the data moved into the kept figure
-        reference = _in_layout_of(_two_axes_figure(7.5), kept_fig, 50)
+        reference = _in_layout_of(_two_axes_figure(7.5, band=True), kept_fig, 50)
     assert np.array_equal(_pixels(png), _pixels(reference))
     assert kept_fig.axes[0].get_title() == "scale 7.5"
     assert kept_fig.axes[0].get_legend().get_texts()[0].get_text() == "line 7.5"
 
 
-def test_kept_figure_with_collections_lends_its_layout_and_a_new_label_relayouts():
+def test_kept_figure_with_markers_lends_its_layout_and_a_new_label_relayouts():
     kept = base.KeptFigures()
     with figure_mod.detached():
-        kept.render("part", _two_axes_figure(1.0, band=True), 50)
+        kept.render("part", _two_axes_figure(1.0, dots=True), 50)
         first = kept._kept["part"][1]
-        second = _two_axes_figure(3.0, band=True)
-        kept.render("part", second, 50)  # a band (collection): drawn in the kept layout
+        second = _two_axes_figure(3.0, dots=True)
+        kept.render("part", second, 50)  # markers (not polygons): drawn in the kept layout
         assert kept._kept["part"][1] is second
         assert not isinstance(second.get_layout_engine(), ConstrainedLayoutEngine)
         for ax, old in zip(second.axes, first.axes, strict=True):
             assert np.allclose(ax.get_position().bounds, old.get_position().bounds)
         relabelled = _two_axes_figure(3.0, label="a much longer label\nover two lines",
-                                      band=True)
+                                      dots=True)
         kept.render("part", relabelled, 50)  # new key: constrained layout runs again
     assert kept._kept["part"][1] is relabelled
     assert not np.allclose(relabelled.axes[0].get_position().bounds,

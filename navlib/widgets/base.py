@@ -36,6 +36,7 @@ import ipywidgets as widgets
 import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
@@ -149,20 +150,23 @@ def layout_key(fig: Figure) -> tuple:
 
 
 def _artists(fig: Figure) -> tuple:
-    """Per axes: the number of lines, the patch types, texts and legend entries, and
-    whether it holds collections or images (which :func:`_transplant` does not copy)."""
+    """Per axes: the number of lines, the patch, collection and text counts, the legend
+    entries, and whether it holds an image or a collection other than polygons (which
+    :func:`_transplant` does not copy)."""
     def legend(ax):
         found = ax.get_legend()
         return None if found is None else len(found.get_texts())
 
-    return tuple((len(ax.lines), tuple(type(p).__name__ for p in ax.patches), len(ax.texts),
-                  legend(ax), bool(ax.collections or ax.images)) for ax in fig.axes)
+    return tuple((len(ax.lines), tuple(type(p).__name__ for p in ax.patches),
+                  len(ax.collections), len(ax.texts), legend(ax),
+                  bool(ax.images) or not all(isinstance(c, PolyCollection)
+                                             for c in ax.collections)) for ax in fig.axes)
 
 
 def _transplant(new: Figure, kept: Figure) -> None:
-    """Give ``kept`` the data of ``new`` (same layout key and artists, no collections or
-    images): line data and styles, rectangles, texts, titles, legends, tick locators and
-    formatters, axis limits."""
+    """Give ``kept`` the data of ``new`` (same layout key and artists, no images and only
+    polygon collections): line data and styles, rectangles, polygons (bars, bands), texts,
+    titles, legends, tick locators and formatters, axis limits."""
     for name in _SUPER_TEXTS:
         if getattr(new, name, None) is not None:
             getattr(kept, name).set_text(getattr(new, name).get_text())
@@ -175,6 +179,11 @@ def _transplant(new: Figure, kept: Figure) -> None:
         for a, b in zip(src.patches, dst.patches, strict=True):
             if isinstance(a, Rectangle):
                 b.set_bounds(*a.get_bbox().bounds)
+            b.update({"facecolor": a.get_facecolor(), "edgecolor": a.get_edgecolor(),
+                      "visible": a.get_visible()})
+        for a, b in zip(src.collections, dst.collections, strict=True):
+            paths = a.get_paths()
+            b.set_verts_and_codes([p.vertices for p in paths], [p.codes for p in paths])
             b.update({"facecolor": a.get_facecolor(), "edgecolor": a.get_edgecolor(),
                       "visible": a.get_visible()})
         for a, b in zip(src.texts, dst.texts, strict=True):
@@ -203,7 +212,8 @@ class KeptFigures:
     :func:`layout_key`:
 
     * hands its data to the kept figure (:func:`_transplant`) when both hold the same
-      artists without collections or images, and the kept figure is redrawn: its axes and
+      artists without images or collections other than polygons, and the kept figure is
+      redrawn: its axes and
       ticks already exist, about half the cost of drawing a new figure;
     * otherwise gets the kept figure's axes and title positions and is drawn without a
       layout engine (and kept in its place).
