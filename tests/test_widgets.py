@@ -75,6 +75,7 @@ def test_panel_shows_parts_counts_updates_and_keeps_last_view_on_refusal():
     assert panel.parts["kept"].value[:4] == b"\x89PNG"
     assert panel.status.value.startswith("ok: slope 1.0")
     assert 'data-count="1"' in panel.status.value and panel.updates == 1
+    assert f'data-ms="{panel.last_timing["total_ms"]:.1f}"' in panel.status.value
     first = panel.parts["kept"].value
     panel.controls["slope"].value = -2.0
     assert panel.parts["kept"].value != first and panel.updates == 2
@@ -82,6 +83,7 @@ def test_panel_shows_parts_counts_updates_and_keeps_last_view_on_refusal():
     kept = panel.parts["kept"].value
     panel.controls["kind"].value = "refuse"
     assert "Invalid input:</b> kind: refused on purpose" in panel.status.value
+    assert "data-ms" not in panel.status.value  # a refusal has no update time
     assert panel.parts["kept"].value == kept and panel.updates == 3
     with pytest.raises(ZeroDivisionError):
         panel.controls["kind"].value = "crash"

@@ -284,9 +284,10 @@ class Panel(widgets.VBox):
     controls : dict
     status : ipywidgets.HTML
         Summary of the last update, or the message of the refused input; it ends with a
-        hidden ``<span class="navlib-update" data-count="N">``, N counting the updates
-        handled (applied or refused), which tells a page (and the browser tests) that an
-        update is complete.
+        hidden ``<span class="navlib-update" data-count="N" data-ms="T">``, N counting the
+        updates handled (applied or refused), which tells a page (and the browser tests)
+        that an update is complete, and T the milliseconds the kernel spent on an applied
+        one (``last_timing["total_ms"]``; absent after a refusal).
     view : ipywidgets.VBox
         The parts, in the order they were first shown.
     parts : dict
@@ -345,13 +346,14 @@ class Panel(widgets.VBox):
                        f'{html.escape(type(exc).__name__)}:</b> {html.escape(str(exc))}')
             raise
         self.last_timing["total_ms"] = 1e3 * (time.perf_counter() - start)
-        self._done(self.status.value)
+        self._done(self.status.value, self.last_timing["total_ms"])
         return True
 
-    def _done(self, status: str) -> None:
+    def _done(self, status: str, total_ms: float | None = None) -> None:
         self.updates += 1
+        ms = "" if total_ms is None else f' data-ms="{total_ms:.1f}"'
         self.status.value = (_MARK.sub("", status) + f'<span class="navlib-update" '
-                             f'data-count="{self.updates}" hidden></span>')
+                             f'data-count="{self.updates}"{ms} hidden></span>')
 
     def refresh(self, changed: set) -> None:
         """Recompute what the controls in ``changed`` touch and :meth:`show` it."""
