@@ -4,7 +4,7 @@ Starts JupyterLab (default settings, kernel comms over subshells) and Debian's c
 the browser tests do (``tests/browser/labharness.py``), runs notebooks 01, 02, 03, 04, 06,
 07 and 09 in quick mode and moves their thresholds (eta, nu, rank tolerance, s threshold),
 segment limits (tau2 on the rocket flight of 03, the boundaries of 07) and trajectory,
-latitude, duration and outage sliders ten times each by keyboard, measuring in the page
+latitude, duration and outage-length sliders ten times each by keyboard, measuring in the page
 from the key press to the ``load`` of the first and of the last new image. Prints the
 median and max per control beside the panel's own update time in the kernel and the goals
 of issue 26 (thresholds: 100 ms; segments, trajectory, latitude, duration: 300 ms) and
@@ -30,7 +30,7 @@ MOVES = {
     "04_sensability": ("ν",),
     "06_stationary_alignment": ("latitude [deg]", "duration [min]"),
     "07_assess_flight": ("η (excitability)", "ν (sensability)", "boundaries [s]"),
-    "09_plan_mission": ("ν (sensability)", "sensible if s ≥", "outage start [s]"),
+    "09_plan_mission": ("ν (sensability)", "sensible if s ≥", "outage length [s]"),
 }
 
 
@@ -73,6 +73,10 @@ def main(argv: list[str]) -> int:
                         for k in range(args.repeats):
                             move = nb.move(0, control, "keyboard", first=first,
                                            undo=k % 2 == 1)
+                            if move is None:  # disabled
+                                print(f"  {control['description']}: cannot move",
+                                      file=sys.stderr)
+                                break
                             moves.append(move)
                             if move.failed():
                                 print(f"  {control['description']}: {move.outcome}",
