@@ -175,6 +175,7 @@ def _transplant(new: Figure, kept: Figure) -> None:
             b.set_data(a.get_xdata(orig=True), a.get_ydata(orig=True))
             b.update({"label": a.get_label(), "visible": a.get_visible(),
                       "color": a.get_color(), "linestyle": a.get_linestyle(),
+                      "linewidth": a.get_linewidth(), "alpha": a.get_alpha(),
                       "marker": a.get_marker()})
         for a, b in zip(src.patches, dst.patches, strict=True):
             if isinstance(a, Rectangle):
