@@ -1,11 +1,14 @@
 """Panel latency in the browser: slider release -> new image on the page (issue 13).
 
 Starts JupyterLab (default settings, kernel comms over subshells) and Debian's chromium as
-the browser tests do (``tests/browser/labharness.py``), runs notebooks 03, 04 and 07 in
-quick mode and moves eta, a segment limit (tau2 on the rocket flight of 03, the boundaries
-of 07) and nu ten times each by keyboard, measuring in the page from the key press to the
-``load`` of the first and of the last new image. Prints the median and max per control
-beside the goals (eta, nu: 100 ms; segment limits: 300 ms) and the load average.
+the browser tests do (``tests/browser/labharness.py``), runs notebooks 01, 02, 03, 04, 06,
+07 and 09 in quick mode and moves their thresholds (eta, nu, rank tolerance, s threshold),
+segment limits (tau2 on the rocket flight of 03, the boundaries of 07) and trajectory,
+latitude, duration and outage-length sliders ten times each by keyboard, measuring in the page
+from the key press to the ``load`` of the first and of the last new image. Prints the
+median and max per control beside the panel's own update time in the kernel and the goals
+of issue 26 (thresholds: 100 ms; segments, trajectory, latitude, duration: 300 ms) and
+the load average. ``benchmarks/bench_panels.py`` times every control without a browser.
 
 Usage: ``python benchmarks/bench_browser.py [--repeats N]`` (needs the ``[browser]`` extra
 and /usr/bin/chromium; ``make test-browser`` prints the same table from its own moves).
@@ -21,9 +24,13 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 MOVES = {
+    "01_trajectory_synthesis": ("spin [Hz]", "burnout [s]"),
+    "02_observability_matrix": ("log10 rank rtol", "inspected time [s]"),
     "03_excitability": ("η", "τ2 [s]"),
     "04_sensability": ("ν",),
+    "06_stationary_alignment": ("latitude [deg]", "duration [min]"),
     "07_assess_flight": ("η (excitability)", "ν (sensability)", "boundaries [s]"),
+    "09_plan_mission": ("ν (sensability)", "sensible if s ≥", "outage length [s]"),
 }
 
 
@@ -66,6 +73,10 @@ def main(argv: list[str]) -> int:
                         for k in range(args.repeats):
                             move = nb.move(0, control, "keyboard", first=first,
                                            undo=k % 2 == 1)
+                            if move is None:  # disabled
+                                print(f"  {control['description']}: cannot move",
+                                      file=sys.stderr)
+                                break
                             moves.append(move)
                             if move.failed():
                                 print(f"  {control['description']}: {move.outcome}",

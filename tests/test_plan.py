@@ -179,9 +179,13 @@ def test_plan_panel_replans_only_for_the_mission_controls():
     model = panel.plan.model
     panel.controls["s_threshold"].value = 0.8
     assert panel.plan.model is model and panel.plan.settings["s_threshold"] == 0.8
+    assert panel.controls["outage_start"].disabled  # no outage: its start means nothing
+    plan = panel.plan
     panel.controls["outage_start"].value = 30.0
+    assert panel.plan is plan                       # nothing re-planned
     panel.controls["outage_length"].value = 10.0
     assert panel.plan.outages == ((30.0, 40.0),)
+    assert not panel.controls["outage_start"].disabled
     assert panel.plan.settings["s_threshold"] == 0.8            # kept across a re-plan
     panel.controls["outage_start"].value = 86.0                 # at the end: refused
     assert "Not applied" in panel.status.value and panel.plan.outages == ((30.0, 40.0),)

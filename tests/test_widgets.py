@@ -12,6 +12,7 @@ import nbformat
 import numpy as np
 import pytest
 from matplotlib._pylab_helpers import Gcf
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 
 from navlib.errors import NavlibInputError
 from navlib.plots import figure as figure_mod
@@ -74,6 +75,7 @@ def test_panel_shows_parts_counts_updates_and_keeps_last_view_on_refusal():
     assert panel.parts["kept"].value[:4] == b"\x89PNG"
     assert panel.status.value.startswith("ok: slope 1.0")
     assert 'data-count="1"' in panel.status.value and panel.updates == 1
+    assert f'data-ms="{panel.last_timing["total_ms"]:.1f}"' in panel.status.value
     first = panel.parts["kept"].value
     panel.controls["slope"].value = -2.0
     assert panel.parts["kept"].value != first and panel.updates == 2
@@ -81,6 +83,7 @@ def test_panel_shows_parts_counts_updates_and_keeps_last_view_on_refusal():
     kept = panel.parts["kept"].value
     panel.controls["kind"].value = "refuse"
     assert "Invalid input:</b> kind: refused on purpose" in panel.status.value
+    assert "data-ms" not in panel.status.value  # a refusal has no update time
     assert panel.parts["kept"].value == kept and panel.updates == 3
     with pytest.raises(ZeroDivisionError):
         panel.controls["kind"].value = "crash"
@@ -204,3 +207,71 @@ def test_ink_of_blank_figure_is_lower_than_drawn():
 
     blank.axes[0].set_axis_off()
     assert ink(blank) == 0.0 < ink(drawn)
+
+
+def _two_axes_figure(scale: float, label: str = "y", band: bool = False,
+                     dots: bool = False):
+    """A constrained-layout figure of lines, bars, a legend and titles, data times ``scale``."""
+    fig, (top, bottom) = figure_mod.subplots(2, 1, figsize=(4, 3), layout="constrained")
+    top.plot([0, 1, 2], [0, scale, 4 * scale], label=f"line {scale:g}")
+    top.axhline(2 * scale, color="k", linestyle="--")
+    top.legend()
+    top.set_ylabel(label)
+    top.set_title(f"scale {scale:g}")
+    bottom.bar([0, 1, 2], [1, -scale, 3 * scale], color=["C0", "C1", "C2"])
+    if band:
+        bottom.fill_between([0, 2], 0, scale, alpha=0.2)
+        bottom.broken_barh([(0.5 * scale, 1.0)], (0.5, 1.0), color="C3")
+    if dots:
+        bottom.scatter([0, 1], [scale, 2 * scale])
+    fig.suptitle("kept")
+    return fig
+
+
+def _pixels(png: bytes):
+    from io import BytesIO
+
+    from PIL import Image
+
+    return np.asarray(Image.open(BytesIO(png)).convert("RGB")).astype(int)
+
+
+def _in_layout_of(fig, kept_fig, dpi: float) -> bytes:
+    fig.set_layout_engine("none")
+    for ax, old in zip(fig.axes, kept_fig.axes, strict=True):
+        ax.set_position(old.get_position())
+    fig._suptitle.set_position(kept_fig._suptitle.get_position())
+    return render_png(fig, dpi)
+
+
+def test_kept_figure_redrawn_with_new_data_equals_a_new_figure_in_its_layout():
+    kept = base.KeptFigures()
+    with figure_mod.detached():
+        kept.render("part", _two_axes_figure(1.0, band=True), 50)
+        kept_fig = kept._kept["part"][1]
+        assert not isinstance(kept_fig.get_layout_engine(), ConstrainedLayoutEngine)
+        png = kept.render("part", _two_axes_figure(7.5, band=True), 50)
+        assert kept._kept["part"][1] is kept_fig  # the data moved into the kept figure
+        reference = _in_layout_of(_two_axes_figure(7.5, band=True), kept_fig, 50)
+    assert np.array_equal(_pixels(png), _pixels(reference))
+    assert kept_fig.axes[0].get_title() == "scale 7.5"
+    assert kept_fig.axes[0].get_legend().get_texts()[0].get_text() == "line 7.5"
+
+
+def test_kept_figure_with_markers_lends_its_layout_and_a_new_label_relayouts():
+    kept = base.KeptFigures()
+    with figure_mod.detached():
+        kept.render("part", _two_axes_figure(1.0, dots=True), 50)
+        first = kept._kept["part"][1]
+        second = _two_axes_figure(3.0, dots=True)
+        kept.render("part", second, 50)  # markers (not polygons): drawn in the kept layout
+        assert kept._kept["part"][1] is second
+        assert not isinstance(second.get_layout_engine(), ConstrainedLayoutEngine)
+        for ax, old in zip(second.axes, first.axes, strict=True):
+            assert np.allclose(ax.get_position().bounds, old.get_position().bounds)
+        relabelled = _two_axes_figure(3.0, label="a much longer label\nover two lines",
+                                      dots=True)
+        kept.render("part", relabelled, 50)  # new key: constrained layout runs again
+    assert kept._kept["part"][1] is relabelled
+    assert not np.allclose(relabelled.axes[0].get_position().bounds,
+                           first.axes[0].get_position().bounds)

@@ -32,10 +32,12 @@ def timeline_figure(plan, transient_s: float | None = None):
         ax.axvspan(a, b, color="0.85", zorder=0)
     ax.axvspan(t[0], t[0] + transient_s, facecolor="none", edgecolor="0.6", hatch="//",
                linewidth=0, zorder=0)
+    excitable = table[table["excitable"]]
+    spans = {name: list(zip(rows["t_start"], rows["t_end"] - rows["t_start"], strict=True))
+             for name, rows in excitable.groupby("state", sort=False)}
     for j, name in enumerate(names):
-        rows = table[(table["state"] == name) & table["excitable"]]
-        ax.broken_barh([(r.t_start, r.t_end - r.t_start) for r in rows.itertuples()],
-                       (j - 0.4, 0.8), color="tab:orange", alpha=0.35, linewidth=0)
+        ax.broken_barh(spans.get(name, []), (j - 0.4, 0.8), color="tab:orange", alpha=0.35,
+                       linewidth=0)
         ax.broken_barh([(t[a], t[b] - t[a] + step) for a, b in _runs(ok[:, j])],
                        (j - 0.2, 0.4), color="tab:blue", linewidth=0)
     for r in plan.segment_table.itertuples(index=False):

@@ -36,7 +36,9 @@ import ipywidgets as widgets
 import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
 from navlib.errors import NavlibInputError
 from navlib.plots.figure import detached
@@ -124,6 +126,131 @@ class Blitter:
         return _encode(self.canvas.buffer_rgba())
 
 
+_SUPER_TEXTS = ("_suptitle", "_supxlabel", "_supylabel")
+
+
+def _cell(ax):
+    spec = ax.get_subplotspec()
+    return None if spec is None else (spec.rowspan, spec.colspan)
+
+
+def layout_key(fig: Figure) -> tuple:
+    """What a figure's layout depends on beyond its data: size, the axes (grid cells,
+    scales, axis labels) and the figure titles.
+
+    Two figures of a builder with equal keys get equal layouts up to the width of their
+    tick labels, which :class:`KeptFigures` accepts when it reuses a layout
+    (docs/assumptions.md, "Panel figures").
+    """
+    texts = tuple(None if getattr(fig, name, None) is None else getattr(fig, name).get_text()
+                  for name in _SUPER_TEXTS)
+    return (tuple(fig.get_size_inches().round(4)), texts,
+            tuple((type(ax).__name__, _cell(ax), ax.get_visible(), ax.get_xscale(),
+                   ax.get_yscale(), ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes))
+
+
+def _artists(fig: Figure) -> tuple:
+    """Per axes: the number of lines, the patch, collection and text counts, the legend
+    entries, and whether it holds an image or a collection other than polygons (which
+    :func:`_transplant` does not copy)."""
+    def legend(ax):
+        found = ax.get_legend()
+        return None if found is None else len(found.get_texts())
+
+    return tuple((len(ax.lines), tuple(type(p).__name__ for p in ax.patches),
+                  len(ax.collections), len(ax.texts), legend(ax),
+                  bool(ax.images) or not all(isinstance(c, PolyCollection)
+                                             for c in ax.collections)) for ax in fig.axes)
+
+
+def _transplant(new: Figure, kept: Figure) -> None:
+    """Give ``kept`` the data of ``new`` (same layout key and artists, no images and only
+    polygon collections): line data and styles, rectangles, polygons (bars, bands), texts,
+    titles, legends, tick locators and formatters, axis limits."""
+    for name in _SUPER_TEXTS:
+        if getattr(new, name, None) is not None:
+            getattr(kept, name).set_text(getattr(new, name).get_text())
+    for src, dst in zip(new.axes, kept.axes, strict=True):
+        for a, b in zip(src.lines, dst.lines, strict=True):
+            b.set_data(a.get_xdata(orig=True), a.get_ydata(orig=True))
+            b.update({"label": a.get_label(), "visible": a.get_visible(),
+                      "color": a.get_color(), "linestyle": a.get_linestyle(),
+                      "linewidth": a.get_linewidth(), "alpha": a.get_alpha(),
+                      "marker": a.get_marker()})
+        for a, b in zip(src.patches, dst.patches, strict=True):
+            if isinstance(a, Rectangle):
+                b.set_bounds(*a.get_bbox().bounds)
+            b.update({"facecolor": a.get_facecolor(), "edgecolor": a.get_edgecolor(),
+                      "visible": a.get_visible()})
+        for a, b in zip(src.collections, dst.collections, strict=True):
+            paths = a.get_paths()
+            b.set_verts_and_codes([p.vertices for p in paths], [p.codes for p in paths])
+            b.update({"facecolor": a.get_facecolor(), "edgecolor": a.get_edgecolor(),
+                      "visible": a.get_visible()})
+        for a, b in zip(src.texts, dst.texts, strict=True):
+            b.update({"text": a.get_text(), "position": a.get_position(),
+                      "visible": a.get_visible()})
+        for loc in ("left", "center", "right"):
+            dst.set_title(src.get_title(loc), loc=loc)
+        if src.get_legend() is not None:
+            for a, b in zip(src.get_legend().get_texts(), dst.get_legend().get_texts(),
+                            strict=True):
+                b.set_text(a.get_text())
+        for a, b in ((src.xaxis, dst.xaxis), (src.yaxis, dst.yaxis)):
+            b.set_major_locator(a.get_major_locator())
+            b.set_major_formatter(a.get_major_formatter())
+            b.set_minor_locator(a.get_minor_locator())
+            b.set_minor_formatter(a.get_minor_formatter())
+        dst.set_xlim(src.get_xlim())
+        dst.set_ylim(src.get_ylim())
+
+
+class KeptFigures:
+    """The rebuilt figures of a panel, drawn without re-running their layout.
+
+    A figure shown under a part name is kept once the layout engine (constrained layout)
+    has placed it, and its layout is frozen. A later figure for the same part with the same
+    :func:`layout_key`:
+
+    * hands its data to the kept figure (:func:`_transplant`) when both hold the same
+      artists without images or collections other than polygons, and the kept figure is
+      redrawn: its axes and
+      ticks already exist, about half the cost of drawing a new figure;
+    * otherwise gets the kept figure's axes and title positions and is drawn without a
+      layout engine (and kept in its place).
+
+    The layout engine measures every tick label of every axis: without it a rebuilt
+    figure draws in about half the time (docs/assumptions.md, "Panel figures").
+    """
+
+    def __init__(self):
+        self._kept: dict = {}
+
+    def render(self, name: str, fig: Figure, dpi: float) -> bytes:
+        """PNG bytes of ``fig`` shown as part ``name``, reusing the kept figure's layout
+        (and axes) when it fits."""
+        key = layout_key(fig)
+        kept = self._kept.get(name)
+        if kept is not None and kept[0] == key:
+            old = kept[1]
+            if _artists(fig) == _artists(old) and not any(a[-1] for a in _artists(fig)):
+                _transplant(fig, old)
+                return render_png(old, dpi)
+            fig.set_layout_engine("none")
+            for ax, position in zip(fig.axes, old.axes, strict=True):
+                ax.set_position(position.get_position())
+            for text in _SUPER_TEXTS:
+                if getattr(fig, text, None) is not None:
+                    getattr(fig, text).set_position(getattr(old, text).get_position())
+            self._kept[name] = (key, fig)
+            return render_png(fig, dpi)
+        png = render_png(fig, dpi)
+        if fig.get_layout_engine() is not None:
+            fig.set_layout_engine("none")
+            self._kept[name] = (key, fig)
+        return png
+
+
 def table_html(frame: pd.DataFrame, index: bool = False) -> str:
     """A DataFrame as a compact HTML table for a panel."""
     return ("<div style='font-size:11px;overflow-x:auto'>"
@@ -158,15 +285,19 @@ class Panel(widgets.VBox):
     controls : dict
     status : ipywidgets.HTML
         Summary of the last update, or the message of the refused input; it ends with a
-        hidden ``<span class="navlib-update" data-count="N">``, N counting the updates
-        handled (applied or refused), which tells a page (and the browser tests) that an
-        update is complete.
+        hidden ``<span class="navlib-update" data-count="N" data-ms="T">``, N counting the
+        updates handled (applied or refused), which tells a page (and the browser tests)
+        that an update is complete, and T the milliseconds the kernel spent on an applied
+        one (``last_timing["total_ms"]``; absent after a refusal).
     view : ipywidgets.VBox
         The parts, in the order they were first shown.
     parts : dict
         Name -> the Image or HTML widget of that part.
     last_timing : dict
         ``total_ms`` of the last applied update (subclasses may add their own keys).
+    figures : KeptFigures
+        The rebuilt figures shown, kept to reuse their layout (and axes) while their
+        layout key is unchanged.
     error_prefix : str
         Class attribute: the status prefix of a refused input.
     """
@@ -181,6 +312,7 @@ class Panel(widgets.VBox):
         self.view = widgets.VBox()
         self.parts: dict = {}
         self.last_timing: dict = {}
+        self.figures = KeptFigures()
         self.updates = 0
         for name, control in self.controls.items():
             control.observe(functools.partial(self._changed, name), names="value")
@@ -215,13 +347,14 @@ class Panel(widgets.VBox):
                        f'{html.escape(type(exc).__name__)}:</b> {html.escape(str(exc))}')
             raise
         self.last_timing["total_ms"] = 1e3 * (time.perf_counter() - start)
-        self._done(self.status.value)
+        self._done(self.status.value, self.last_timing["total_ms"])
         return True
 
-    def _done(self, status: str) -> None:
+    def _done(self, status: str, total_ms: float | None = None) -> None:
         self.updates += 1
+        ms = "" if total_ms is None else f' data-ms="{total_ms:.1f}"'
         self.status.value = (_MARK.sub("", status) + f'<span class="navlib-update" '
-                             f'data-count="{self.updates}" hidden></span>')
+                             f'data-count="{self.updates}"{ms} hidden></span>')
 
     def refresh(self, changed: set) -> None:
         """Recompute what the controls in ``changed`` touch and :meth:`show` it."""
@@ -239,7 +372,7 @@ class Panel(widgets.VBox):
                 self.parts[name].layout.display = "none"
             return
         if isinstance(content, Figure):
-            content = render_png(content, self.dpi)
+            content = self.figures.render(name, content, self.dpi)
         elif isinstance(content, Blitter):
             content = content.png()
         elif isinstance(content, pd.DataFrame):

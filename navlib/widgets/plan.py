@@ -20,8 +20,8 @@ class PlanPanel(Panel):
     controls : dict
         ``preset`` (dropdown of the shipped sensor presets and the plan's own, which may be
         a file), ``outage_start`` and
-        ``outage_length`` (s; length 0: no outage), ``spin_hz`` (rockets only; disabled
-        otherwise), ``e_threshold``, ``s_threshold`` and ``nu``.
+        ``outage_length`` (s; length 0: no outage, and the start is disabled), ``spin_hz``
+        (rockets only; disabled otherwise), ``e_threshold``, ``s_threshold`` and ``nu``.
     parts : dict
         ``timeline`` (image) and ``summary`` (table).
     plan : MissionPlan
@@ -70,6 +70,9 @@ class PlanPanel(Panel):
         """Re-plan (new trajectory or model) for the preset, outage and spin; re-read the
         thresholds only for the others."""
         c = {name: control.value for name, control in self.controls.items()}
+        self.controls["outage_start"].disabled = c["outage_length"] <= 0
+        if changed == {"outage_start"} and c["outage_length"] <= 0:
+            return  # the start of no outage: nothing to re-plan or redraw
         plan = self.plan
         if changed & {"preset", "outage_start", "outage_length", "spin_hz"}:
             outages = [(c["outage_start"], c["outage_start"] + c["outage_length"])] \
