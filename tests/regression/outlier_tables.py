@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -70,7 +71,9 @@ def notebook_values(quick: bool) -> pd.DataFrame:
     for i, obj in enumerate(shown):
         rows += _rows(f"shown {i}", obj)
     # the same results unrounded
-    rows.append(("panel", "", "status", scope["panel"].status.value))
+    # the status mark carries the update's own time (data-ms): a measurement, not a result
+    status = re.sub(r' data-ms="[^"]*"', "", scope["panel"].status.value)
+    rows.append(("panel", "", "status", status))
     rows += _rows("study claims", scope["study"].claims_frame())
     rows += _rows("study table", scope["study"].table())
     rows += _rows("capture", pd.Series(scope["study"].capture, name="value"))
