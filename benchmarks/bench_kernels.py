@@ -3,10 +3,10 @@ replaced (``tests/kalman_reference.py``):
 
 * ``kernels.riccati_28``: 2000 epochs of the covariance recursion with the Joseph update
   (28 states, 12 measurements at every epoch, the size of the launcher's INS/GPS/att + RT
-  model), compiled (:func:`navlib.filters.kalman.riccati_kernel`) and NumPy
+  model), compiled (:func:`navlib.kalman.riccati_kernel`) and NumPy
   (``numpy_riccati_28``). Goal 2000 x 14 us: the 2.9x of the issue's prototype over 42 us.
 * ``kernels.ekf_propagate_21``: the EKF's propagation between updates over 2000 IMU samples
-  of a 21-state model, compiled (:func:`navlib.filters.kalman.propagate_kernel`) and NumPy.
+  of a 21-state model, compiled (:func:`navlib.kalman.propagate_kernel`) and NumPy.
 * ``kernels.linear_block_28``: one block of the linear Monte-Carlo simulation (256 steps,
   100 runs, 28-state launcher INS/GPS/att + RT model, update at every step): the true-error
   and filter recursions, compiled (:func:`navlib.filters.linear.truth_kernel`,
@@ -42,7 +42,7 @@ import kalman_reference as ref  # noqa: E402
 import linear_reference  # noqa: E402
 
 from navlib.filters import linear, prepare_linear  # noqa: E402
-from navlib.filters.kalman import propagate_kernel, riccati_kernel  # noqa: E402
+from navlib.kalman import propagate_kernel, riccati_kernel  # noqa: E402
 from navlib.models import launcher  # noqa: E402
 from navlib.trajectory import launcher_ascent  # noqa: E402
 

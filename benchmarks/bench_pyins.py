@@ -67,7 +67,7 @@ from _harness import rocket_flight as _rocket
 from scipy.spatial.transform import Rotation
 
 from navlib import earth, filters, sensors, strapdown, units
-from navlib.filters.kalman import _psd_sqrt
+from navlib.kalman import _psd_sqrt
 from navlib.models import Ecef21ErrorState
 from navlib.models.base import Nominal
 from navlib.rotations import log_so3, skew

@@ -29,6 +29,13 @@ from scipy.optimize import linear_sum_assignment
 
 from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
+from navlib.kalman import (
+    Gains,
+    definite_noise,
+    kernel_array,
+    riccati_kernel,
+    symmetrize,
+)
 from navlib.models.base import DiscreteModel, _indices
 
 __all__ = [
@@ -46,12 +53,6 @@ __all__ = [
     "sigma_in_frame",
     "symmetrize",
 ]
-
-
-def symmetrize(P):
-    """The symmetric part ``(P + P') / 2`` of one matrix or a stack (..., n, n)."""
-    P = np.asarray(P)
-    return 0.5 * (P + P.swapaxes(-1, -2))
 
 
 def _names(state_names, n: int) -> tuple[str, ...]:
@@ -218,7 +219,7 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``.
 
     Each member runs the compiled recursion
-    :func:`navlib.filters.kalman.riccati_kernel` (the prediction and Joseph update of
+    :func:`navlib.kalman.riccati_kernel` (the prediction and Joseph update of
     every caller), so the members of a stack have the histories of their own runs, to the
     bit. The noise test of every epoch's ``R`` is one batched call before the loop. ``F``,
     ``H``, ``R`` and ``Q`` are read ``block`` steps at a time (``Q`` an array or a
@@ -228,12 +229,11 @@ def _recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = Tru
     ``priors``, ``P_post`` (B, N, n, n), or (B, K, n, n) at the K distinct epochs ``keep``
     in ascending order (negative indices from the end: a reader of a few epochs holds no
     history), and with ``gains`` the
-    :class:`~navlib.filters.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
+    :class:`~navlib.kalman.Gains` of the updates, (B, N, ...) stacks (zero gain,
     ``S_pinv`` and dof at epochs without update), else None. These are the gains
-    :func:`navlib.filters.kalman.kalman_gains` computes from the priors, to the bit (the
+    :func:`navlib.kalman.kalman_gains` computes from the priors, to the bit (the
     same compiled kernel; docs/assumptions.md "Compiled kernels").
     """
-    from navlib.filters.kalman import Gains, definite_noise, kernel_array, riccati_kernel
 
     count, (batch, n) = measured.size, P0.shape[:2]
     m = 0 if H is None else H.shape[-2]
@@ -348,7 +348,7 @@ def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool 
     The gain ``K = P- H' S^+`` with ``S = H P- H' + R``. When ``R`` is positive definite,
     ``S^+ = S^-1``; otherwise ``S^+`` is the eigen-decomposition pseudo-inverse, which
     gives the optimal update in the measured subspace and leaves directions with ``S`` = 0
-    unchanged (:func:`navlib.filters.kalman.joseph_update`, the one implementation of
+    unchanged (:func:`navlib.kalman.joseph_update`, the one implementation of
     this rule). The Joseph form holds for any gain, so the result
     stays symmetric positive semi-definite with ``R = 0`` (ideal measurements drive
     ``H P+ H'`` to zero exactly).

@@ -1,5 +1,5 @@
 """NumPy reference of the compiled Kalman kernels (issue 26): the step-by-step NumPy code the
-kernels of :mod:`navlib.filters.kalman` and :mod:`navlib.filters.ekf` replaced, kept here
+kernels of :mod:`navlib.kalman` and :mod:`navlib.filters.ekf` replaced, kept here
 (not in the library) to compare against (tests/test_kernels.py) and to time against
 (benchmarks/bench_kernels.py).
 """

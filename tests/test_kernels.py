@@ -11,7 +11,7 @@ import pytest
 
 from navlib import covariance
 from navlib.filters import joseph_update, kalman_gain, linear_steps
-from navlib.filters.kalman import definite_noise, predict_kernel, riccati_kernel
+from navlib.kalman import definite_noise, predict_kernel, riccati_kernel
 from navlib.models import launcher
 from navlib.trajectory import launcher_ascent
 

@@ -8,7 +8,7 @@ import pytest
 from paths import assert_same_numbers
 
 from navlib.filters import linear, prepare_linear, simulate_linear
-from navlib.filters.kalman import _psd_sqrt
+from navlib.kalman import _psd_sqrt
 from navlib.models import launcher
 from navlib.outliers import Outlier
 from navlib.trajectory import launcher_ascent

@@ -14,7 +14,7 @@ EKF mode — :func:`ekf`
 Consistency helpers: :func:`chi2_bounds` (two-sided bounds of the Monte-Carlo averaged NEES
 or NIS), :meth:`LinearSimulation.consistency`.
 
-Modules: :mod:`~navlib.filters.kalman` (gains, Joseph update, NEES), :mod:`~navlib.filters.linear`
+Modules: :mod:`~navlib.kalman` (gains, Joseph update, NEES), :mod:`~navlib.filters.linear`
 (linear mode), :mod:`~navlib.filters.ekf` (EKF mode), :mod:`~navlib.filters.measurements`
 (the EKF's measurement classes and input data). The aiding-sensor simulations moved to
 :mod:`navlib.sensors` (:func:`~navlib.sensors.simulate_attitude_sensor`,
@@ -22,7 +22,15 @@ Modules: :mod:`~navlib.filters.kalman` (gains, Joseph update, NEES), :mod:`~navl
 """
 
 from navlib.filters.ekf import EKFResult, EKFRun, ekf, simulate_ekf
-from navlib.filters.kalman import (
+from navlib.filters.linear import (
+    LinearFilter,
+    LinearSimulation,
+    LinearSteps,
+    linear_steps,
+    prepare_linear,
+    simulate_linear,
+)
+from navlib.kalman import (
     Gains,
     chi2_bounds,
     definite_noise,
@@ -31,14 +39,6 @@ from navlib.filters.kalman import (
     kalman_gains,
     nees_basis,
     nees_values,
-)
-from navlib.filters.linear import (
-    LinearFilter,
-    LinearSimulation,
-    LinearSteps,
-    linear_steps,
-    prepare_linear,
-    simulate_linear,
 )
 
 __all__ = [

@@ -24,14 +24,6 @@ from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import (
-    _PINV_RTOL,
-    _psd_sqrt,
-    definite_noise,
-    kernel_array,
-    propagate_kernel,
-    update_kernel,
-)
 from navlib.filters.linear import METHODS
 from navlib.filters.measurements import (
     FixedDesign,
@@ -39,6 +31,14 @@ from navlib.filters.measurements import (
     _epoch_index,
     _imu_arrays,
     ekf_measurements,
+)
+from navlib.kalman import (
+    _PINV_RTOL,
+    _psd_sqrt,
+    definite_noise,
+    kernel_array,
+    propagate_kernel,
+    update_kernel,
 )
 from navlib.models.base import ErrorStateModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
@@ -486,7 +486,7 @@ class _Epochs:
     Cached by the tuple of measurements updated together at an epoch: their rows in the
     results and, when all have a fixed design
     (:class:`~navlib.filters.measurements.FixedDesign`), their stacked ``H`` and ``R`` and
-    the definiteness of ``R`` (:func:`~navlib.filters.kalman.definite_noise`); the
+    the definiteness of ``R`` (:func:`~navlib.kalman.definite_noise`); the
     innovations of fixed designs are evaluated once per window (:meth:`innovations`).
 
     Attributes
@@ -538,7 +538,7 @@ def _fixed_design(measurements):
 
 class _Loop:
     """Updates sample by sample and the compiled propagation between them
-    (:func:`~navlib.filters.kalman.propagate_kernel`)
+    (:func:`~navlib.kalman.propagate_kernel`)
     over the windows of :func:`_run`."""
 
     def __init__(self, es, kept, observers, epochs):

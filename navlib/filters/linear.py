@@ -35,7 +35,7 @@ from navlib.covariance import CovarianceResult, FactoredNoise, symmetrize
 from navlib.covariance import _recursion as _covariance_recursion
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.filters.kalman import (
+from navlib.kalman import (
     _PINV_RTOL,
     Gains,
     _psd_sqrt,
@@ -44,7 +44,7 @@ from navlib.filters.kalman import (
     nees_basis,
     nees_values,
 )
-from navlib.filters.kalman import compile_kernels as _kalman_compile_kernels
+from navlib.kalman import compile_kernels as _kalman_compile_kernels
 from navlib.models.base import DiscreteModel, LinearModel
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
 
@@ -398,7 +398,7 @@ def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measu
 
     Parameters as in :func:`simulate_linear`. The covariance is that of
     :func:`navlib.covariance.kalman_covariance` (Joseph form), and the gains are those of
-    :func:`navlib.filters.kalman.kalman_gains` from its priors, both from one recursion
+    :func:`navlib.kalman.kalman_gains` from its priors, both from one recursion
     (:func:`_blockwise_covariance`). BLAS runs on one thread here (:data:`_ONE_THREAD`).
 
     ``compact=True`` keeps what :func:`simulate_linear` needs and drops the rest: the
@@ -424,7 +424,7 @@ def _blockwise_covariance(steps: LinearSteps, mask, block: int = 2048, priors: b
     """:func:`navlib.covariance.kalman_covariance` and its gains in one recursion.
 
     The recursion (:func:`navlib.covariance._recursion`) keeps the gain of each update
-    (the :func:`navlib.filters.kalman.kalman_gains` of its prior, to the bit) and reads the
+    (the :func:`navlib.kalman.kalman_gains` of its prior, to the bit) and reads the
     process noise ``block`` epochs at a time; when ``steps.Q`` is None it forms ``Q = L L'``
     one block at a time (:class:`navlib.covariance.FactoredNoise`), and without ``priors`` it
     keeps no prior covariances. Returns ``(CovarianceResult, Gains)``.
@@ -872,7 +872,7 @@ def _measure_block(prepared: LinearFilter, block: _Block, work: _Work, draws, z_
 
 
 def compile_kernels() -> None:
-    """:func:`navlib.filters.kalman.compile_kernels` and the linear simulation's
+    """:func:`navlib.kalman.compile_kernels` and the linear simulation's
     :func:`truth_kernel` and :func:`filter_kernel` on tiny inputs: compiles them on the
     first run on a machine, loads them from numba's disk cache afterwards (README
     "Compiled kernels")."""

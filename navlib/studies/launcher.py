@@ -815,7 +815,7 @@ def _evolution_rows(case: tuple, steps, P0s, C_e_b) -> list[dict]:
     reads: the same numbers, to the bit, without the (B, N, n, n) histories.
     """
     from navlib.covariance import FactoredNoise, _recursion, symmetrize
-    from navlib.filters.kalman import _PINV_RTOL
+    from navlib.kalman import _PINV_RTOL
 
     aiding = case[4]
     H, R = (None, None) if aiding == "ins_only" else \

@@ -1,8 +1,10 @@
 """Kalman-filter algebra shared by the linear simulator, the EKF and
-:func:`navlib.covariance.kalman_covariance`: gains with the pseudo-inverse rule, the
-Joseph-form update, NEES/NIS consistency statistics (spec launcher.md §6.2-6.4; issue 5).
+:func:`navlib.covariance.kalman_covariance`: :func:`symmetrize`, gains with the
+pseudo-inverse rule, the Joseph-form update, NEES/NIS consistency statistics (spec
+launcher.md §6.2-6.4). Below both ``navlib.covariance`` and ``navlib.filters``, which import
+it.
 
-The per-step algebra runs as compiled numba kernels (issue 26; docs/assumptions.md
+The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
 covariance recursion of :func:`navlib.covariance._recursion`), :func:`propagate_kernel`
@@ -21,7 +23,6 @@ import numpy as np
 from scipy import stats
 
 from navlib._validation import finite_scalar
-from navlib.covariance import symmetrize
 from navlib.errors import NavlibInputError
 
 _PINV_RTOL = 1e-12
@@ -29,6 +30,12 @@ _PINV_RTOL = 1e-12
 :func:`navlib.covariance.kalman_covariance` uses by default, so that the gains here
 reproduce its posterior covariances."""
 
+
+
+def symmetrize(P):
+    """The symmetric part ``(P + P') / 2`` of one matrix or a stack (..., n, n)."""
+    P = np.asarray(P)
+    return 0.5 * (P + P.swapaxes(-1, -2))
 
 def _psd_sqrt(M) -> np.ndarray:
     """Batched symmetric square root ``L`` with ``L L' = M`` for PSD ``M`` (..., n, n)."""
@@ -150,7 +157,7 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
 @numba.njit(cache=True)
 def _sym_sum(A, B, out):
     """``out = sym(A + B)``, i.e. ``M = A + B; (M + M') / 2`` entry by entry (the operations
-    of :func:`navlib.covariance.symmetrize`); ``out`` must be neither ``A`` nor ``B``."""
+    of :func:`symmetrize`); ``out`` must be neither ``A`` nor ``B``."""
     for i in range(out.shape[0]):
         for j in range(out.shape[1]):
             out[i, j] = 0.5 * ((A[i, j] + B[i, j]) + (A[j, i] + B[j, i]))
