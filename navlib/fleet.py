@@ -155,6 +155,42 @@ def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
             + "\n".join(parts) + "</body></html>")
 
 
+def _warning_text(w) -> str:
+    return f"{w.category.__name__}: {w.message}"
+
+
+def summary_row(label: str, columns: Sequence[str], build) -> tuple[dict, str | None]:
+    """One summary row of ``columns`` for ``label``; never raises for a bad input.
+
+    ``build(warning_texts)`` returns the :class:`~navlib.studies.assess.FlightAssessment`
+    (or mission plan) and its HTML page; ``warning_texts()`` gives the warnings caught so far.
+    The row gets the status, vehicle, duration, phases, excitable and sensible states per
+    segment, every warning caught and the seconds taken; a failure goes in ``error``.
+    """
+    start = time.perf_counter()
+    row = dict.fromkeys(columns, "")
+    row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0)
+    page = None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result, page = build(lambda: [_warning_text(w) for w in caught])
+            summary = result.summary()
+            seg = result.segment_table
+            row.update(status="ok", vehicle=result.vehicle,
+                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
+                       n_segments=len(seg),
+                       phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
+                                        for r in seg.itertuples(index=False)),
+                       excitable=_per_segment(summary, "excitable"),
+                       sensible=_per_segment(summary, "sensible"))
+        except Exception as exc:  # a bad input is reported, never stops the others
+            row["error"] = f"{type(exc).__name__}: {exc}"
+    row["warnings"] = " | ".join(sorted({_warning_text(w) for w in caught}))
+    row["seconds"] = round(time.perf_counter() - start, 2)
+    return row, page
+
+
 def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | None]:
     """Assess one flight; never raises for a bad flight.
 
@@ -167,33 +203,13 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
     """
     from navlib.studies.assess import assess_flight
 
-    start = time.perf_counter()
-    row = dict.fromkeys(SUMMARY_COLUMNS, "")
-    row.update(log=log, status="failed", duration_s=float("nan"), n_segments=0)
-    page = None
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            kind, paths = parse_log(log)
-            imu, gnss = _read(kind, paths)
-            result = assess_flight(imu, gnss, **dict(options or {}))
-            summary = result.summary()
-            texts = [f"{w.category.__name__}: {w.message}" for w in caught]
-            page = flight_page(log, result, texts)
-            seg = result.segment_table
-            row.update(status="ok", vehicle=result.vehicle,
-                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
-                       n_segments=len(seg),
-                       phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
-                                        for r in seg.itertuples(index=False)),
-                       excitable=_per_segment(summary, "excitable"),
-                       sensible=_per_segment(summary, "sensible"))
-        except Exception as exc:  # a bad flight is reported, never stops the fleet
-            row["error"] = f"{type(exc).__name__}: {exc}"
-    row["warnings"] = " | ".join(sorted({f"{w.category.__name__}: {w.message}"
-                                         for w in caught}))
-    row["seconds"] = round(time.perf_counter() - start, 2)
-    return row, page
+    def build(warning_texts):
+        kind, paths = parse_log(log)
+        imu, gnss = _read(kind, paths)
+        result = assess_flight(imu, gnss, **dict(options or {}))
+        return result, flight_page(log, result, warning_texts())
+
+    return summary_row(log, SUMMARY_COLUMNS, build)
 
 
 def _task(log: str, options: Mapping) -> tuple[dict, str | None]:

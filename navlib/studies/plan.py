@@ -23,8 +23,6 @@ from __future__ import annotations
 
 import html
 import inspect
-import time
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import ClassVar
@@ -397,31 +395,11 @@ def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = (),
 
 
 def _plan_row(label: str, options: Mapping, flight=None) -> tuple[dict, str | None]:
-    start = time.perf_counter()
-    row = dict.fromkeys(PLAN_COLUMNS, "")
-    row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0)
-    page = None
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            plan = plan_mission(label, **options)
-            summary = plan.summary()
-            page = plan_page(label, plan, [f"{w.category.__name__}: {w.message}"
-                                           for w in caught], flight)
-            seg = plan.segment_table
-            row.update(status="ok", vehicle=plan.mission.vehicle,
-                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
-                       n_segments=len(seg),
-                       phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
-                                        for r in seg.itertuples(index=False)),
-                       excitable=fleet._per_segment(summary, "excitable"),
-                       sensible=fleet._per_segment(summary, "sensible"))
-        except Exception as exc:  # a bad mission is reported, never stops the others
-            row["error"] = f"{type(exc).__name__}: {exc}"
-    row["warnings"] = " | ".join(sorted({f"{w.category.__name__}: {w.message}"
-                                         for w in caught}))
-    row["seconds"] = round(time.perf_counter() - start, 2)
-    return row, page
+    def build(warning_texts):
+        plan = plan_mission(label, **options)
+        return plan, plan_page(label, plan, warning_texts(), flight)
+
+    return fleet.summary_row(label, PLAN_COLUMNS, build)
 
 
 def plan_missions(missions: Sequence[str], options: Mapping | None = None,
