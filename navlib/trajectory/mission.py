@@ -48,6 +48,7 @@ from navlib import earth
 from navlib._validation import finite_scalar, latitude_deg, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir
+from navlib.segmentation import VEHICLES
 from navlib.trajectory._attitude import smoothstep, unit_and_rate, zyx_attitude
 from navlib.trajectory._flight import output_times, ramp_integral
 from navlib.trajectory.base import Trajectory, build_trajectory
@@ -60,8 +61,6 @@ __all__ = ["MISSION_DIR", "Mission", "from_mission", "list_missions", "load_miss
 MISSION_DIR = data_dir() / "missions"
 """Folder of the example missions (``data/missions/*.toml``, shipped in the wheel)."""
 
-VEHICLES = ("rocket", "multicopter", "fixed-wing", "ground")
-"""Vehicle classes a mission may name (the classes of :mod:`navlib.segmentation`)."""
 
 _TOP_KEYS = {"name", "description", "vehicle", "rate_hz", "sensors", "site", "gnss",
              "rocket", "phase", "limits", "waypoint"}
