@@ -90,3 +90,22 @@ def logged_attitude(truth, lat_deg=47.397, lon_deg=8.545, every=10):
     q = Rotation.from_matrix(C_b_n).as_quat()              # x, y, z, w
     return pd.DataFrame({"t": truth.t[idx], "qw": q[:, 3], "qx": q[:, 0], "qy": q[:, 1],
                          "qz": q[:, 2]})
+
+
+def exact_records(traj, *, sigma_f=0.0, sigma_w=0.0, sigma_p=0.0, gnss_hz=1.0,
+                  velocity=False, seed=0):
+    """IMU and GNSS frames of ``traj``'s exact signals plus white noise of ``sigma_f``
+    (m/s^2), ``sigma_w`` (rad/s) and ``sigma_p`` (m), GNSS at ``gnss_hz`` (with its velocity
+    columns when ``velocity``)."""
+    rng = np.random.default_rng(seed)
+    n = len(traj)
+    f = traj.specific_force + sigma_f * rng.standard_normal((n, 3))
+    w = traj.angular_rate + sigma_w * rng.standard_normal((n, 3))
+    imu = pd.DataFrame({"t": traj.t, "f_x": f[:, 0], "f_y": f[:, 1], "f_z": f[:, 2],
+                        "w_x": w[:, 0], "w_y": w[:, 1], "w_z": w[:, 2]})
+    g = traj.at_rate(gnss_hz)
+    P = traj.position[g] + sigma_p * rng.standard_normal((g.size, 3))
+    gnss = pd.DataFrame({"t": traj.t[g], "x": P[:, 0], "y": P[:, 1], "z": P[:, 2]})
+    if velocity:
+        gnss["vx"], gnss["vy"], gnss["vz"] = traj.velocity[g].T
+    return imu, gnss

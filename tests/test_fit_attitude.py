@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from flights import exact_records
 from scipy.interpolate import make_interp_spline
 from scipy.spatial.transform import Rotation
 
@@ -116,17 +117,8 @@ def rail_rocket(rest_s, roll_deg=0.0, pitch_over_deg=0.0):
                    name="rail")
 
 
-def _records(traj, *, sigma_f=0.0, sigma_w=0.0, gnss_hz=5.0, seed=3):
-    rng = np.random.default_rng(seed)
-    n = len(traj)
-    f = traj.specific_force + sigma_f * rng.standard_normal((n, 3))
-    w = traj.angular_rate + sigma_w * rng.standard_normal((n, 3))
-    imu = pd.DataFrame({"t": traj.t, "f_x": f[:, 0], "f_y": f[:, 1], "f_z": f[:, 2],
-                        "w_x": w[:, 0], "w_y": w[:, 1], "w_z": w[:, 2]})
-    g = traj.at_rate(gnss_hz)
-    P = traj.position[g]
-    gnss = pd.DataFrame({"t": traj.t[g], "x": P[:, 0], "y": P[:, 1], "z": P[:, 2]})
-    return imu, gnss
+def _records(traj, **kw):
+    return exact_records(traj, **{"gnss_hz": 5.0, "seed": 3, **kw})
 
 
 def _euler_deg(traj, k=0):

@@ -6,8 +6,8 @@ bad input must raise NavlibInputError naming the problem.
 """
 
 import numpy as np
-import pandas as pd
 import pytest
+from flights import exact_records
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, strapdown
@@ -15,20 +15,8 @@ from navlib.trajectory import fit as fit_mod
 from navlib.trajectory import fit_flight_data, sounding_rocket, stationary
 
 
-def _records(traj, *, sigma_f=0.0, sigma_w=0.0, sigma_p=0.0, gnss_hz=1.0, velocity=False,
-             seed=0):
-    rng = np.random.default_rng(seed)
-    n = len(traj)
-    f = traj.specific_force + sigma_f * rng.standard_normal((n, 3))
-    w = traj.angular_rate + sigma_w * rng.standard_normal((n, 3))
-    imu = pd.DataFrame({"t": traj.t, "f_x": f[:, 0], "f_y": f[:, 1], "f_z": f[:, 2],
-                        "w_x": w[:, 0], "w_y": w[:, 1], "w_z": w[:, 2]})
-    g = traj.at_rate(gnss_hz)
-    P = traj.position[g] + sigma_p * rng.standard_normal((g.size, 3))
-    gnss = pd.DataFrame({"t": traj.t[g], "x": P[:, 0], "y": P[:, 1], "z": P[:, 2]})
-    if velocity:
-        gnss["vx"], gnss["vy"], gnss["vz"] = traj.velocity[g].T
-    return imu, gnss
+def _records(traj, **kw):
+    return exact_records(traj, **{"gnss_hz": 1.0, "seed": 0, **kw})
 
 
 @pytest.fixture(scope="module")
