@@ -64,12 +64,16 @@ def _nudge_trajectories() -> None:
         return build
 
     for name in ("sounding_rocket", "launcher_ascent", "stationary"):
-        wrapped = nudged(getattr(trajectory_package, name))
-        setattr(trajectory_package, name, wrapped)
-        for module in list(sys.modules.values()):
-            if getattr(module, "__name__", "").startswith("navlib.") \
-                    and getattr(module, name, None) is not None:
-                setattr(module, name, wrapped)
+        generator = getattr(trajectory_package, name)
+        _rebind(name, generator, nudged(generator))
+
+
+def _rebind(name: str, old, new) -> None:
+    """Replace ``old`` by ``new`` in every navlib module that bound it as ``name``."""
+    for module in list(sys.modules.values()):
+        if getattr(module, "__name__", "").startswith("navlib") \
+                and getattr(module, name, None) is old:
+            setattr(module, name, new)
 
 
 def _scale_gnss_sigma(factor: float) -> None:
@@ -87,11 +91,7 @@ def _scale_gnss_sigma(factor: float) -> None:
         return dataclasses.replace(spec, gnss=dataclasses.replace(
             spec.gnss, position_sigma=spec.gnss.position_sigma * factor))
 
-    navlib.sensors.load_preset = scaled
-    for module in list(sys.modules.values()):
-        if getattr(module, "__name__", "").startswith("navlib.") \
-                and getattr(module, "load_preset", None) is load:
-            module.load_preset = scaled
+    _rebind("load_preset", load, scaled)
 
 
 def emit(golden: str, out: Path) -> None:

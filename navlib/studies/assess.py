@@ -375,10 +375,9 @@ def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.Dat
     return table
 
 
-def _epoch_counts(table: pd.DataFrame, t, measured=None) -> list[int]:
-    """Model epochs at ``t`` (where ``measured``, when given) inside each segment."""
-    keep = np.ones(np.shape(t), dtype=bool) if measured is None else measured
-    return [int(np.count_nonzero(keep & in_segment(t, a, b)))
+def _epoch_counts(table: pd.DataFrame, t) -> list[int]:
+    """Model epochs at ``t`` inside each segment."""
+    return [int(np.count_nonzero(in_segment(t, a, b)))
             for a, b in zip(table["t_start"], table["t_end"], strict=True)]
 
 
