@@ -409,3 +409,32 @@ class Scope:
         entry = self._entry(item)
         if entry is not None:
             _store(entry[1].parent, entry[1], entry[0], value)
+
+
+# --------------------------------------------------------------------------- in-process memos
+
+_MEMOS: list = []
+
+
+def memoized(maxsize: int = 4) -> Callable[[Callable], Callable]:
+    """Keep a study's last ``maxsize`` results in the process (:func:`functools.lru_cache`).
+
+    The one in-process memoisation of navlib: a study's experiment (a claims grid, a table at
+    every step) is computed once per argument set and shared by the claims, the notebook and
+    the panels that read it. Results are returned as built (not copied): callers must not
+    modify them. :func:`clear_memos` empties every memo (tests that change the environment
+    between calls use it). On-disk keeping across processes is :func:`cached`.
+    """
+
+    def decorate(fn: Callable) -> Callable:
+        memo = functools.lru_cache(maxsize=maxsize)(fn)
+        _MEMOS.append(memo)
+        return memo
+
+    return decorate
+
+
+def clear_memos() -> None:
+    """Empty every :func:`memoized` memo of this process."""
+    for memo in _MEMOS:
+        memo.cache_clear()
