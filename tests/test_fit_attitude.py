@@ -18,8 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, earth, strapdown
 from navlib.studies.assess import assess_flight
-from navlib.trajectory import fit as fit_mod
-from navlib.trajectory import fit_flight_data
+from navlib.trajectory import fit_flight_data, initial_attitude, position_spline
 from navlib.trajectory._attitude import smoothstep, zyx_attitude
 from navlib.trajectory._so3 import SO3Spline
 from navlib.trajectory.base import build_trajectory
@@ -148,7 +147,7 @@ def test_so3_spline_holds_a_steady_spin_exactly_and_its_rates_are_derivatives():
     axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     start = Rotation.from_rotvec([0.4, 1.2, -0.3])
     spin = start * Rotation.from_rotvec(np.outer(7.0 * t, axis))     # 7 rad/s, 28 rad
-    knots = fit_mod._knots(t, 0.1)
+    knots = position_spline.place_knots(t, 0.1)
     spline = SO3Spline.fit(t, spin, knots, 5)
     C, w = spline.evaluate(t)
     assert (Rotation.from_matrix(C).inv() * spin).magnitude().max() < 1e-9
@@ -217,10 +216,10 @@ def test_noisy_tumbling_descent_residuals_at_noise_level():
 
 def test_minimum_levelling_window_follows_the_preset_noise():
     # a MEMS IMU at 100 Hz reaches 0.1 deg with the 10-sample floor: 0.1 s
-    assert fit_mod.min_level_s("pixhawk_mems", 100.0, 0.1) == pytest.approx(0.1)
+    assert initial_attitude.min_level_s("pixhawk_mems", 100.0, 0.1) == pytest.approx(0.1)
     # a ten times tighter tilt needs a hundred times more samples once above the floor
-    long_ = fit_mod.min_level_s("pixhawk_mems", 100.0, 0.001)
-    longer = fit_mod.min_level_s("pixhawk_mems", 100.0, 0.0001)
+    long_ = initial_attitude.min_level_s("pixhawk_mems", 100.0, 0.001)
+    longer = initial_attitude.min_level_s("pixhawk_mems", 100.0, 0.0001)
     assert long_ > 0.1 and longer / long_ == pytest.approx(100.0, rel=0.01)
 
 

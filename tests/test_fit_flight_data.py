@@ -11,8 +11,7 @@ from flights import exact_records
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, strapdown
-from navlib.trajectory import fit as fit_mod
-from navlib.trajectory import fit_flight_data, sounding_rocket, stationary
+from navlib.trajectory import fit_flight_data, position_spline, sounding_rocket, stationary
 
 
 def _records(traj, **kw):
@@ -174,16 +173,16 @@ def test_bad_options(short_records, options, match):
 
 def test_knots_merge_over_holes_and_low_rates():
     def counts(t, knots):
-        inner = knots[fit_mod._K + 1:-fit_mod._K - 1]
+        inner = knots[position_spline.SPLINE_DEGREE + 1:-position_spline.SPLINE_DEGREE - 1]
         return inner, np.diff(np.searchsorted(t, np.r_[t[0], inner, t[-1] + 1e-9]))
 
     t = np.r_[np.arange(0.0, 2.0, 0.01), np.arange(2.7, 4.0, 0.01)]    # a 0.7 s hole
-    inner, n = counts(t, fit_mod._knots(t, 0.1))
-    assert n.min() >= fit_mod.SAMPLES_PER_KNOT
+    inner, n = counts(t, position_spline.place_knots(t, 0.1))
+    assert n.min() >= position_spline.SAMPLES_PER_KNOT
     assert np.sum((inner > 2.0) & (inner < 2.7)) <= 1                  # one piece spans it
     slow = np.arange(0.0, 10.0, 0.1)                                   # 10 Hz
-    inner, n = counts(slow, fit_mod._knots(slow, 0.1))
-    assert n.min() >= fit_mod.SAMPLES_PER_KNOT and inner.size < 60
+    inner, n = counts(slow, position_spline.place_knots(slow, 0.1))
+    assert n.min() >= position_spline.SAMPLES_PER_KNOT and inner.size < 60
 
 
 def test_hole_longer_than_bridge_and_slow_imu_are_named(short_records):

@@ -20,7 +20,8 @@ angular acceleration follow in closed form from the recursion
 with ``omega_0 = alpha_0 = 0``; no finite differences. A rotation at a constant rate about
 a fixed axis is represented exactly (the cumulative basis reproduces linear functions), so
 any amount of spin costs nothing; the increments ``d_i`` must stay below pi, which the
-caller's knots ensure (:func:`navlib.trajectory.fit._knots` with a turn budget).
+caller's knots ensure
+(:func:`navlib.trajectory.position_spline.place_knots` with a turn budget).
 """
 
 from __future__ import annotations

@@ -1,0 +1,250 @@
+"""The position spline of :func:`navlib.trajectory.fit_flight_data` and its attitude correction.
+
+Method step 3 of :mod:`navlib.trajectory.fit`: ``P(t)`` is a quintic B-spline whose
+coefficients solve one weighted least-squares problem with GNSS position (and velocity) rows
+and, at every IMU sample, the kinematic rows
+``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'`` (spec excitability.md Eq. 1).
+:class:`PositionRows` holds the banded normal equations (one Cholesky factorisation for the
+three axes); :class:`AttitudeCorrection` the slowly varying attitude correction ``eps(t)``
+and the constant accelerometer bias, eliminated through a Schur complement.
+:func:`place_knots` places the knots of both the position and the attitude spline.
+"""
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.interpolate import BSpline
+from scipy.linalg import solveh_banded
+
+from navlib import earth
+from navlib.trajectory._so3 import basis
+from navlib.units import DEG
+
+SPLINE_DEGREE = 5           # quintic splines: C^4 position, C^2 specific force
+_HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
+SAMPLES_PER_KNOT = 2
+"""Fewest IMU samples in each knot interval of the splines (knots are merged until so)."""
+MAX_KNOT_SPACING_S = 0.5
+"""Longest knot interval the fit accepts: a quintic B-spline follows features about two knot
+intervals long, so 0.5 s intervals still resolve the ~1 Hz manoeuvres of aircraft and
+multicopters (and the 0.5 s de-spin of the sounding rocket)."""
+MAX_TURN_PER_KNOT_RAD = 1.5
+"""Largest rotation of the body within one knot interval of the attitude spline, rad: its
+control rotations then differ by well under pi (the cumulative spline's increments are
+principal logarithms) and a tumble or fast spin gets denser knots."""
+ATTITUDE_SAMPLES_PER_KNOT = 6
+"""About this many attitude samples per knot interval enter the attitude spline's fit (every
+n-th of a denser interval): the samples are integrated gyro readings, smooth at that scale,
+and the Gauss-Newton cost grows with their number (a 250 Hz record has 25 per 0.1 s)."""
+MAX_CORRECTION_INTERVALS = 60
+"""Most knot intervals of the attitude correction: flights longer than 60
+``correction_knot_spacing_s`` get wider intervals (10 min at the default 10 s), which keeps
+its dense Schur complement small; a cubic spline still holds the linear drift of a gyro
+bias exactly."""
+
+
+# --- B-spline machinery ------------------------------------------------------------------
+
+def place_knots(t, spacing, turn=None):
+    """Clamped quintic knot vector on ``[t[0], t[-1]]``, interior knots about ``spacing`` apart.
+
+    Knots come from a uniform grid; a knot is dropped when fewer than ``SAMPLES_PER_KNOT``
+    samples ``t`` would lie between it and the previous knot kept (or after it), so holes
+    in the record and low rates merge knot intervals instead of leaving coefficients
+    without data (the normal equations stay definite). With ``turn`` (the cumulative
+    rotation angle of the body at ``t``, rad) the grid is uniform in
+    ``(t - t[0]) / spacing + turn / MAX_TURN_PER_KNOT_RAD`` instead, so no knot interval
+    turns the body by more than ``MAX_TURN_PER_KNOT_RAD`` (the attitude spline).
+    """
+    t0, t1 = float(t[0]), float(t[-1])
+    if turn is None:
+        n_int = max(int(np.ceil((t1 - t0) / spacing - 1e-9)), 1)
+        grid = np.linspace(t0, t1, n_int + 1)[1:-1]
+    else:
+        u = (t - t0) / spacing + (turn - turn[0]) / MAX_TURN_PER_KNOT_RAD
+        n_int = max(int(np.ceil(u[-1] - 1e-9)), 1)
+        grid = np.interp(np.linspace(0.0, u[-1], n_int + 1)[1:-1], u, t)
+    below = np.searchsorted(t, grid, side="left")     # samples before each candidate knot
+    keep, last = [], 0
+    for knot, count in zip(grid, below, strict=True):
+        if count - last >= SAMPLES_PER_KNOT and t.size - count >= SAMPLES_PER_KNOT:
+            keep.append(knot)
+            last = count
+    return np.r_[np.full(SPLINE_DEGREE + 1, t0), keep, np.full(SPLINE_DEGREE + 1, t1)]
+
+
+def thin(t, knots, per_interval):
+    """Indices of the samples kept for a fit on ``knots``: in each knot interval with ``c``
+    samples, every ``max(1, c // per_interval)``-th one (the first and last sample always)."""
+    inner = knots[SPLINE_DEGREE + 1:-SPLINE_DEGREE - 1]
+    interval = np.searchsorted(inner, t, side="right")
+    first = np.searchsorted(interval, np.arange(inner.size + 1), side="left")
+    count = np.diff(np.r_[first, t.size])
+    stride = np.maximum(count // per_interval, 1)
+    pos = np.arange(t.size) - first[interval]
+    keep = pos % stride[interval] == 0
+    keep[[0, -1]] = True
+    return np.flatnonzero(keep)
+
+
+def _basis(x, knots, nu):
+    """Sparse (N, m) matrix of the ``nu``-th derivatives of the quintic B-spline basis."""
+    return basis(x, knots, SPLINE_DEGREE, nu)
+
+
+def _banded(N):
+    """Upper banded storage of a symmetric sparse matrix with bandwidth ``SPLINE_DEGREE``."""
+    m = N.shape[0]
+    ab = np.zeros((SPLINE_DEGREE + 1, m))
+    for d in range(SPLINE_DEGREE + 1):
+        ab[SPLINE_DEGREE - d, d:] = N.diagonal(d)
+    return ab
+
+
+class PositionRows:
+    """The weighted least-squares rows of the position spline (method step 3).
+
+    Unknowns are the spline coefficients of ``P - P_ref`` for x, y, z (same basis) and,
+    optionally, the attitude correction. The three axes share the banded normal matrix.
+    """
+
+    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref):
+        self.P_ref = P_ref
+        self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
+        self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
+        self.sigma_f = p["sigma_specific_force_mps2"]
+        self.scaled = False
+        w_g2 = 1.0 / sigma**2
+        self.N_gnss = self.G0.T @ (self.G0 * w_g2[:, None])
+        rhs_gnss = self.G0.T @ (w_g2[:, None] * (P_g - P_ref))
+        if V_g is not None:
+            w_v2 = 1.0 / p["sigma_velocity_mps"] ** 2
+            self.N_gnss = self.N_gnss + w_v2 * (self.G1.T @ self.G1)
+            rhs_gnss = rhs_gnss + w_v2 * (self.G1.T @ V_g)
+        self.rhs_gnss = rhs_gnss
+        self.set_weights(np.ones(t.size))
+        # first linearisation point: GNSS positions interpolated to the IMU times
+        self.P0 = np.column_stack([np.interp(t, t_g, P_g[:, i]) for i in range(3)])
+        self.V0 = np.column_stack([np.interp(t, t_g, np.gradient(P_g[:, i], t_g))
+                                   for i in range(3)])
+
+    def set_weights(self, factor):
+        """IMU row weights ``factor / sigma_f^2`` and the banded normal matrix."""
+        self.w_f2 = factor / self.sigma_f**2
+        self.N = sp.csr_array(self.B2.T @ (self.B2 * self.w_f2[:, None]) + self.N_gnss)
+        self.ab = _banded(self.N)
+
+    def robust_weights(self, coef, f_e, eps):
+        """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma).
+
+        The first call also raises ``sigma_f`` to the robust scale of the residuals
+        (1.4826 x their median absolute value) when that is larger: vibration then weighs
+        as the noise it is against the GNSS rows.
+        """
+        P, V, a = self.evaluate(coef)
+        r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
+             - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
+        if not self.scaled:
+            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(np.abs(a - r))))
+            self.scaled = True
+        size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
+        self.set_weights(1.0 / np.maximum(size, 1.0))
+
+    def _solve(self, rhs):
+        x = solveh_banded(self.ab, rhs)
+        return x + solveh_banded(self.ab, rhs - self.N @ x)   # one refinement step
+
+    def evaluate(self, coef):
+        return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
+
+    def solve(self, f_e, coef, correction=None, C=None):
+        """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
+
+        With a :class:`AttitudeCorrection`, the specific force rows read
+        ``P'' = (I + S(eps(t))) C f + gamma - 2 Omega x V``; ``eps`` is eliminated through
+        its Schur complement (a small dense system) so the banded solve stays banded.
+        """
+        if coef is None:
+            P, V = self.P0, self.V0
+        else:
+            P, V, _ = self.evaluate(coef)
+        r = f_e + earth.normal_gravity_ecef(P) - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V)
+        w = self.w_f2[:, None]
+        rhs = self.B2.T @ (w * r) + self.rhs_gnss
+        if correction is None:
+            return self._solve(rhs), np.zeros_like(f_e)
+        G = correction.columns(f_e, C)                    # 3 x sparse (N, n_u)
+        Q = [sp.csr_array(self.B2.T @ (G[a] * w)) for a in range(3)]
+        n_u = G[0].shape[1]
+        sol = self._solve(np.hstack([rhs, *(q.toarray() for q in Q)]))
+        c0 = sol[:, :3]
+        S = [sol[:, 3 + a * n_u: 3 + (a + 1) * n_u] for a in range(3)]
+        lhs = correction.prior.copy()
+        b = -correction.prior @ correction.total      # the prior holds the accumulated sum
+        for a in range(3):
+            lhs += (G[a].T @ (G[a] * w)).toarray() - Q[a].T @ S[a]
+            b += Q[a].T @ c0[:, a] - G[a].T @ (w[:, 0] * r[:, a])
+        e = np.linalg.solve(lhs, b)
+        correction.total = correction.total + e
+        coef = c0 + np.column_stack([S[a] @ e for a in range(3)])
+        return coef, correction.evaluate(e)
+
+
+class AttitudeCorrection:
+    """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector, cubic B-spline)
+    and a constant accelerometer bias ``b_a`` (body axes).
+
+    ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
+    the recorded specific force and GNSS reveal; ``f <- f - b_a`` the accelerometer bias,
+    which would otherwise be taken for motion (a parked vehicle drifting at a few m/s).
+    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and neighbouring
+    coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2), so
+    stretches without attitude information (free fall) keep the gyro attitude; each bias
+    component ~ N(0, ``sigma_ba``^2), the preset's turn-on accelerometer bias.
+    """
+
+    def __init__(self, t, p, sigma_ba):
+        k = 3
+        n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
+        n_int = min(n_int, MAX_CORRECTION_INTERVALS)
+        inner = np.linspace(t[0], t[-1], n_int + 1)
+        knots = np.r_[np.full(k, t[0]), inner, np.full(k, t[-1])]
+        x = np.minimum(t, np.nextafter(t[-1], -np.inf))
+        self.beta = sp.csr_array(BSpline.design_matrix(x, knots, k))   # (N, n_c), sparse
+        n_c = self.beta.shape[1]
+        step = (t[-1] - t[0]) / n_int
+        D = np.diff(np.eye(n_c), axis=0)
+        per_axis = (np.eye(n_c) / (p["attitude_prior_deg"] * DEG) ** 2
+                    + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
+        # unknowns ordered (axis j, coef i) for eps, then the three bias components
+        n_b = 3 if sigma_ba > 0 else 0                  # no bias unknowns without a prior
+        self.prior = np.zeros((3 * n_c + n_b, 3 * n_c + n_b))
+        self.prior[:3 * n_c, :3 * n_c] = np.kron(np.eye(3), per_axis)
+        if n_b:
+            self.prior[3 * n_c:, 3 * n_c:] = np.eye(3) / sigma_ba**2
+        self.n_c = n_c
+        self.total = np.zeros(3 * n_c + n_b)             # sum of the increments applied
+
+    @property
+    def bias(self):
+        """Accumulated accelerometer bias estimate (body axes, m/s^2)."""
+        return self.total[3 * self.n_c:] if self.total.size > 3 * self.n_c else np.zeros(3)
+
+    def columns(self, f_e, C):
+        """Sparse ``G[a]`` (N, n_u) for the axes a: ``beta_i(t_k) (e_j x f_e(t_k))_a`` for
+        ``eps`` and ``-C_b_e[k, a, j]`` for the bias."""
+        out = []
+        for a in range(3):
+            blocks = []
+            for j in range(3):
+                e_j = np.zeros(3)
+                e_j[j] = 1.0
+                cross = np.cross(e_j, f_e)[:, a]          # (N,)
+                blocks.append(sp.diags_array(cross) @ self.beta)
+            if self.total.size > 3 * self.n_c:
+                blocks.append(sp.csr_array(-C[:, a, :]))
+            out.append(sp.csr_array(sp.hstack(blocks)))
+        return out
+
+    def evaluate(self, e):
+        return np.column_stack([self.beta @ e[j * self.n_c:(j + 1) * self.n_c]
+                                for j in range(3)])
