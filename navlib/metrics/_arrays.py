@@ -152,10 +152,12 @@ def fix_signs(V: np.ndarray) -> np.ndarray:
     pivot = np.take_along_axis(V, np.argmax(np.abs(V), axis=-2)[..., None, :], axis=-2)
     return V * np.where(pivot < 0, -1.0, 1.0)
 
+
 def n_states(n) -> int:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise NavlibInputError(f"n: expected a positive integer number of states, got {n!r}")
     return int(n)
+
 
 def check_d0(d0) -> str:
     if d0 not in D0_CHOICES:

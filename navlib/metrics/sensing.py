@@ -230,7 +230,6 @@ def nu_for(n: int, eps: float) -> float:
     return float(np.sqrt(1.0 - 1.0 / n + eps))
 
 
-
 def physical_bands(result: SensabilityResult, k: float = 2.0) -> pd.DataFrame:
     """Tidy frame of the physical ``±k sigma`` bands beside the sensability (Figs. 3-5).
 

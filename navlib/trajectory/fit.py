@@ -183,8 +183,8 @@ HOLE_FACTOR = 10.0
 """An IMU interval longer than this many median intervals is a hole (as the readers'
 ``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
 
-
 # --- input checking ----------------------------------------------------------------------
+
 
 def _columns(frame, name, required, optional=()):
     if not isinstance(frame, pd.DataFrame):
@@ -316,6 +316,7 @@ def hole_bounds(t, f_b, w_b, after):
 
 
 # --- the fit -----------------------------------------------------------------------------
+
 
 def fit_flight_data(imu, gnss, **options) -> Trajectory:
     """Least-squares B-spline reference trajectory with an exact IMU (Giribet et al. 2007).

@@ -30,8 +30,8 @@ specific force (its standard deviation from 10 samples is good to about 25 %).""
 REST_RATE_DEG_S = 3.0
 """Largest mean angular rate of a levelling window, deg/s (the segmentation's rest rate)."""
 
-
 # --- attitude ----------------------------------------------------------------------------
+
 
 def level_attitude(f_b, gamma_e, C_n_e):
     """Body -> ECEF attitude from the mean specific force at rest, heading still free.
@@ -51,8 +51,6 @@ def level_attitude(f_b, gamma_e, C_n_e):
     T_b = np.column_stack([d_b, t2_b, np.cross(d_b, t2_b)])
     T_e = np.column_stack([z_e, t2_e, np.cross(z_e, t2_e)])
     return Rotation.from_matrix(T_e @ T_b.T)
-
-
 
 
 TURN_ON_FALLBACK = {"gyro_bias_deg_s": 0.05, "accel_bias_m_s2": 0.02}
