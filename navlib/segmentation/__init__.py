@@ -84,6 +84,7 @@ from navlib.segmentation.edits import segments_table
 from navlib.segmentation.features import flight_features
 from navlib.segmentation.phases import (
     PHASES,
+    SEGMENT_COLUMNS,
     SEGMENT_DEFAULTS,
     Segmentation,
     segment_flight,
@@ -101,6 +102,7 @@ __all__ = [
     "MAV_TYPES",
     "PHASES",
     "RECOGNITION_DEFAULTS",
+    "SEGMENT_COLUMNS",
     "SEGMENT_DEFAULTS",
     "VEHICLES",
     "VEHICLE_PHASES",

@@ -347,7 +347,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         free, the elevation is used when neither levelling nor a logged tilt is possible),
         ``level_s=1`` (length of the rest window used for levelling),
         ``level_tilt_deg=0.1`` (tilt accuracy that sets the shortest levelling window
-        tried when no ``level_s`` window is at rest, :func:`min_level_s`),
+        tried when no ``level_s`` window is at rest,
+        :func:`~navlib.trajectory.initial_attitude.min_level_s`),
         ``level_tolerance=0.05`` (accepted relative difference between its median |f| and
         normal gravity: consumer MEMS scale factors reach a few percent),
         ``level_search_s=60`` (windows starting this long after the start are preferred),

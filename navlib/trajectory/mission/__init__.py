@@ -49,6 +49,9 @@ from navlib.trajectory.mission.reading import (
     read_mission,
     with_values,
 )
+from navlib.trajectory.mission.rockets import DESCENT_CAP_S, ROCKET_BODY, ROCKET_PHASES
+from navlib.trajectory.mission.waypoints import LIMIT_DEFAULTS, WAYPOINT_KEYS
 
-__all__ = ["MISSION_DIR", "Mission", "from_mission", "list_missions", "load_mission",
+__all__ = ["DESCENT_CAP_S", "LIMIT_DEFAULTS", "MISSION_DIR", "ROCKET_BODY", "ROCKET_PHASES",
+           "WAYPOINT_KEYS", "Mission", "from_mission", "list_missions", "load_mission",
            "mission_path", "read_mission", "waypoint_trajectory", "with_values"]
