@@ -95,6 +95,7 @@ def log_so3(C) -> np.ndarray:
     out = factor[..., None] * v
     near_pi = theta > 3.0
     if np.any(near_pi):
+        # heavy: scipy.spatial.transform takes about 1 s to import, only angles near pi need it
         from scipy.spatial.transform import Rotation
 
         out[near_pi] = Rotation.from_matrix(C[near_pi]).as_rotvec()

@@ -37,12 +37,12 @@ The body frame is FRD by default, as in :mod:`navlib.io.ulog` (``body_frame`` ch
 from __future__ import annotations
 
 import contextlib
-import functools
 import io
 import warnings
 
 import numpy as np
 import pandas as pd
+from pymavlink import DFReader
 from scipy.spatial.transform import Rotation
 
 from navlib import units
@@ -122,22 +122,17 @@ class _NoProgress(Exception):
     """pymavlink's parser returned a message without moving past it."""
 
 
-@functools.cache
-def _reader_class():
+class _GuardedReader(DFReader.DFReader_binary):
     """``DFReader_binary`` that refuses to return a message without advancing: a damaged FMT
     declaring a record length of 0 makes pymavlink parse the same bytes forever."""
-    from pymavlink import DFReader  # optional dependency, imported when a log is read
 
-    class GuardedReader(DFReader.DFReader_binary):
-        def _parse_next(self):
-            start = self.offset
-            message = super()._parse_next()
-            if message is not None and self.offset <= start:
-                raise _NoProgress(f"the record at byte {start} has a length that does not "
-                                  f"move the parser forward (a damaged FMT record?)")
-            return message
-
-    return GuardedReader
+    def _parse_next(self):
+        start = self.offset
+        message = super()._parse_next()
+        if message is not None and self.offset <= start:
+            raise _NoProgress(f"the record at byte {start} has a length that does not "
+                              f"move the parser forward (a damaged FMT record?)")
+        return message
 
 
 def _load(path) -> dict[str, dict]:
@@ -153,7 +148,7 @@ def _load(path) -> dict[str, dict]:
     try:
         # pymavlink prints notices on odd bytes; a library must not print, so catch them
         with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-            log = _reader_class()(str(p))
+            log = _GuardedReader(str(p))
             while True:
                 m = log.recv_match(type=list(_TYPES))
                 if m is None:

@@ -31,6 +31,7 @@ import warnings
 
 import numpy as np
 import pandas as pd
+from pyulog import ULog
 from scipy.spatial.transform import Rotation
 
 from navlib import units
@@ -109,8 +110,6 @@ class _BoundedFile(io.BufferedReader):
 
 
 def _load(path):
-    from pyulog import ULog
-
     p, label = existing_file(path)
     size = p.stat().st_size
     if size == 0:

@@ -52,6 +52,7 @@ from navlib.errors import NavlibInputError
 from navlib.models.base import ErrorState, LinearModel, MeasurementRows
 from navlib.rotations import skew
 from navlib.sensors import SensorSpec, load_preset
+from navlib.trajectory import launcher_ascent
 from navlib.units import DEG
 
 SOLUTIONS = ("ins_gps", "ins_gps_att", "ins_gps_rt", "ins_gps_att_rt")
@@ -250,8 +251,6 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
     reject_unknown(kw, _OPTIONS, "launcher")
     letters = _parse(solution, biases, bias_model)
     if trajectory is None:
-        from navlib.trajectory import launcher_ascent
-
         trajectory = launcher_ascent()
     try:
         t = np.asarray(trajectory.t, dtype=float)
