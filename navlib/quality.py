@@ -511,21 +511,26 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
     """
     p = load_thresholds(thresholds)
     saturated, sat = imu_saturation(imu, spec, p["saturation"])
-    fraction = np.count_nonzero(saturated) / saturated.size
-    if fraction > p["saturation"]["max_fraction"]:
-        raise NavlibInputError(
-            f"imu: {100 * fraction:.3g} % of the samples are saturated, more than the "
-            f"{100 * p['saturation']['max_fraction']:.3g} % an assessment accepts "
-            f"(data/quality.toml [saturation] max_fraction): {'; '.join(sat['message'])}")
+    _refuse_share(saturated, "imu: {} % of the samples are saturated",
+                  p["saturation"], "saturation", "max_fraction", sat["message"])
     clean_imu = _drop(imu, saturated)
     bad, faults = gnss_faults(clean_imu, gnss, sigma_m, p["gnss"])
-    fraction = np.count_nonzero(bad) / bad.size
-    if fraction > p["gnss"]["max_excluded_fraction"]:
-        raise NavlibInputError(
-            f"gnss: {100 * fraction:.3g} % of the fixes are faulty, more than the "
-            f"{100 * p['gnss']['max_excluded_fraction']:.3g} % an assessment accepts "
-            f"(data/quality.toml [gnss] max_excluded_fraction): {'; '.join(faults['message'])}")
+    _refuse_share(bad, "gnss: {} % of the fixes are faulty",
+                  p["gnss"], "gnss", "max_excluded_fraction", faults["message"])
     findings = pd.concat([f for f in (sat, faults) if len(f)] or [_frame([])],
                          ignore_index=True)
     return QualityCheck(imu=clean_imu, gnss=_drop(gnss, bad), findings=findings,
                         thresholds=p)
+
+
+def _refuse_share(flags, what: str, table: dict, section: str, key: str, messages) -> None:
+    """NavlibInputError when the share of ``flags`` exceeds ``table[key]`` (the
+    ``[section] key`` of data/quality.toml), naming the findings ``messages``."""
+    fraction = np.count_nonzero(flags) / flags.size
+    if fraction > table[key]:
+        share = f"{100 * fraction:.3g}"
+        raise NavlibInputError(
+            f"{what.format(share)}, more than the "
+            f"{100 * table[key]:.3g} % an assessment accepts "
+            f"(data/quality.toml [{section}] {key}): {'; '.join(messages)}")
+

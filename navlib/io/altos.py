@@ -29,7 +29,6 @@ import numpy as np
 import pandas as pd
 
 from navlib import units
-from navlib._validation import finite_scalar
 from navlib.earth import geodetic_to_ecef
 from navlib.errors import NavlibInputError
 from navlib.io._table import (
@@ -43,13 +42,13 @@ from navlib.io._table import (
 )
 from navlib.io.checks import (
     MAX_OUTLIER_FRACTION,
-    ON_GAP,
     SAMPLE_ACCEL_MAX,
     apply_gap_policy,
     check_overlap,
     check_positions,
     check_sample_interval,
     check_times,
+    reader_limits,
     validated_imu,
 )
 
@@ -229,16 +228,8 @@ max_outlier_fraction, require_overlap
         different values, fewer than two fixes, implausible magnitudes or positions,
         non-overlapping spans (naming column and line).
     """
-    if on_gap not in ON_GAP:
-        raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
-    for name, value in (("imu_max_gap_s", imu_max_gap_s), ("gnss_max_gap_s", gnss_max_gap_s)):
-        if value is not None:
-            finite_scalar(value, name, 0.0, low_open=True)
-    if max_rate_rad_s is not None:
-        max_rate_rad_s = finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0, low_open=True)
-    max_accel_m_s2 = finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0, low_open=True)
-    max_outlier_fraction = finite_scalar(max_outlier_fraction, "max_outlier_fraction", 0.0,
-                                         1.0)
+    limits = reader_limits(on_gap, imu_max_gap_s, gnss_max_gap_s, max_rate_rad_s,
+                           max_accel_m_s2, max_outlier_fraction)
     _, label = existing_file(path)
     table = read_text_table(path, ",", header_prefix=_HEADER_PREFIX)
     index = _layout(table, label)
@@ -260,10 +251,8 @@ max_outlier_fraction, require_overlap
 
     hardware = _hardware(table, index, path)
     sensor_range = dict(TELEMEGA_RANGE)  # _layout accepts gyro + GPS boards only: TeleMega
-    if max_rate_rad_s is None:
-        max_rate_rad_s = float(np.sqrt(3.0) * sensor_range["gyro_rad_s"])
-    limits = {"max_rate_rad_s": max_rate_rad_s, "max_accel_m_s2": max_accel_m_s2,
-              "max_fraction": max_outlier_fraction}
+    if limits["max_rate_rad_s"] is None:
+        limits["max_rate_rad_s"] = float(np.sqrt(3.0) * sensor_range["gyro_rad_s"])
     imu, imu_src = validated_imu(
         t, f_b, w_ib_b, imu_src, "'time'", "'accel_x/accel_y/accel_z'",
         "'gyro_roll/gyro_pitch/gyro_yaw'", check_magnitudes=check_magnitudes, limits=limits,

@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from navlib import units
+from navlib._validation import finite_scalar
 from navlib.earth import A
 from navlib.errors import NavlibInputError
 from navlib.io._table import Source
@@ -223,6 +224,30 @@ def validated_imu(t, f_b, w_ib_b, source: Source, time_label: str, f_labels: str
     if outliers and source.lines is not None:
         source = Source(source.label, source.lines[keep], row_word=source.row_word)
     return frame, source
+
+
+def reader_limits(on_gap: str, imu_max_gap_s, gnss_max_gap_s, max_rate_rad_s,
+                  max_accel_m_s2, max_outlier_fraction) -> dict:
+    """The keywords every log reader shares, checked, and the outlier ``limits`` of
+    :func:`validated_imu` they give.
+
+    ``on_gap`` one of :data:`ON_GAP`; the gap thresholds None or positive; ``max_rate_rad_s``
+    and ``max_accel_m_s2`` positive (``max_rate_rad_s`` may stay None for a reader that
+    derives it from the sensor's range); ``max_outlier_fraction`` in [0, 1]. Returns
+    ``{"max_rate_rad_s", "max_accel_m_s2", "max_fraction"}``.
+    """
+    if on_gap not in ON_GAP:
+        raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
+    for name, value in (("imu_max_gap_s", imu_max_gap_s), ("gnss_max_gap_s", gnss_max_gap_s)):
+        if value is not None:
+            finite_scalar(value, name, 0.0, low_open=True)
+    if max_rate_rad_s is not None:
+        max_rate_rad_s = finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0, low_open=True)
+    return {"max_rate_rad_s": max_rate_rad_s,
+            "max_accel_m_s2": finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0,
+                                            low_open=True),
+            "max_fraction": finite_scalar(max_outlier_fraction, "max_outlier_fraction", 0.0,
+                                          1.0)}
 
 
 def check_positions(r_e: np.ndarray, source: Source, labels: str,

@@ -46,13 +46,11 @@ from pymavlink import DFReader
 from scipy.spatial.transform import Rotation
 
 from navlib import units
-from navlib._validation import finite_scalar
 from navlib.earth import geodetic_to_ecef, ned_to_ecef_matrix
 from navlib.errors import NavlibInputError
 from navlib.io._table import Column, Source, check_finite, existing_file
 from navlib.io.checks import (
     MAX_OUTLIER_FRACTION,
-    ON_GAP,
     RATE_MAX_RAD_S,
     SAMPLE_ACCEL_MAX,
     FlightDataWarning,
@@ -62,6 +60,7 @@ from navlib.io.checks import (
     check_sample_interval,
     check_times,
     check_velocities,
+    reader_limits,
     validated_imu,
 )
 from navlib.io.csv_files import R_KEYS, V_KEYS
@@ -269,17 +268,8 @@ max_accel_m_s2, max_outlier_fraction, require_overlap
         implausible magnitudes, non-overlapping IMU and GNSS spans (naming message, field
         and message index).
     """
-    if on_gap not in ON_GAP:
-        raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
-    for name, value in (("imu_max_gap_s", imu_max_gap_s), ("gnss_max_gap_s", gnss_max_gap_s)):
-        if value is not None:
-            finite_scalar(value, name, 0.0, low_open=True)
-    limits = {"max_rate_rad_s": finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0,
-                                              low_open=True),
-              "max_accel_m_s2": finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0,
-                                              low_open=True),
-              "max_fraction": finite_scalar(max_outlier_fraction, "max_outlier_fraction",
-                                            0.0, 1.0)}
+    limits = reader_limits(on_gap, imu_max_gap_s, gnss_max_gap_s, max_rate_rad_s,
+                           max_accel_m_s2, max_outlier_fraction)
     C_b_frd = body_rotation(body_frame)
     columns, messages, label = _load(path)
     found = sorted({k for k, _ in columns})

@@ -35,13 +35,12 @@ from pyulog import ULog
 from scipy.spatial.transform import Rotation
 
 from navlib import units
-from navlib._validation import finite_array, finite_scalar
+from navlib._validation import finite_array
 from navlib.earth import geodetic_to_ecef, ned_to_ecef_matrix
 from navlib.errors import NavlibInputError
 from navlib.io._table import Column, Source, check_finite, existing_file
 from navlib.io.checks import (
     MAX_OUTLIER_FRACTION,
-    ON_GAP,
     RATE_MAX_RAD_S,
     SAMPLE_ACCEL_MAX,
     FlightDataWarning,
@@ -51,6 +50,7 @@ from navlib.io.checks import (
     check_sample_interval,
     check_times,
     check_velocities,
+    reader_limits,
     validated_imu,
 )
 from navlib.io.csv_files import NED_KEYS, R_KEYS, V_KEYS, combine_sigma
@@ -264,20 +264,13 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         duplicate or decreasing time stamps, gaps with ``on_gap="raise"``, implausible
         magnitudes, non-overlapping IMU and GNSS spans (all naming topic, field, message).
     """
-    if on_gap not in ON_GAP:
-        raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
-    for name, value in (("imu_max_gap_s", imu_max_gap_s), ("gnss_max_gap_s", gnss_max_gap_s)):
-        if value is not None:
-            finite_scalar(value, name, 0.0, low_open=True)
+    limits = reader_limits(on_gap, imu_max_gap_s, gnss_max_gap_s, max_rate_rad_s,
+                           max_accel_m_s2, max_outlier_fraction)
     if altitude not in ("ellipsoid", "msl"):
         raise NavlibInputError(f"altitude: expected 'ellipsoid' or 'msl', got {altitude!r}")
     if gps_topic is not None and gps_topic not in GPS_TOPICS:
         raise NavlibInputError(f"gps_topic: expected one of {list(GPS_TOPICS)} or None, got "
                                f"{gps_topic!r}")
-    max_rate_rad_s = finite_scalar(max_rate_rad_s, "max_rate_rad_s", 0.0, low_open=True)
-    max_accel_m_s2 = finite_scalar(max_accel_m_s2, "max_accel_m_s2", 0.0, low_open=True)
-    max_outlier_fraction = finite_scalar(max_outlier_fraction, "max_outlier_fraction", 0.0,
-                                         1.0)
     C_b_frd = body_rotation(body_frame)
     ulog, label = _load(path)
     topics = sorted({d.name for d in ulog.data_list})
@@ -307,8 +300,6 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     ts_gps = _gps_timestamps(d_gps, idx)[idx]
     t0 = int(min(ts_imu[0], ts_gps[0]))
 
-    limits = {"max_rate_rad_s": max_rate_rad_s, "max_accel_m_s2": max_accel_m_s2,
-              "max_fraction": max_outlier_fraction}
     imu, src_imu = _imu_frame(d_imu, label, ts_imu, t0, C_b_frd, check_magnitudes, limits)
     info = getattr(ulog, "msg_info_dict", {}) or {}
     imu.attrs.update(source=str(path), topic=IMU_TOPIC, t0_us=t0,

@@ -219,22 +219,36 @@ def _rest_window(t, f_b, w_b, g, p, gnss, length, short, early_only):
     return int(k0[i]), int(k1[j]), info
 
 
-def logged_attitude(imu, t0, C_n_e):
-    """Body -> ECEF attitude at ``t0`` from the autopilot attitude a reader attached
-    (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None."""
-    att = imu.attrs.get("attitude") if hasattr(imu, "attrs") else None
-    if not isinstance(att, pd.DataFrame) or len(att) == 0 or not {
-            "t", "qw", "qx", "qy", "qz"} <= set(att.columns):
+def _attached_near(imu, key, columns, t0, valid=None):
+    """The table a reader attached as ``imu.attrs[key]`` (columns ``t`` and ``columns``):
+    its finite rows (and those ``valid`` accepts) as ``t, values`` and the index of the row
+    nearest ``t0``; None when there is no such row within 1 s."""
+    table = imu.attrs.get(key) if hasattr(imu, "attrs") else None
+    if not isinstance(table, pd.DataFrame) or len(table) == 0 or not {
+            "t", *columns} <= set(table.columns):
         return None
-    t = att["t"].to_numpy(dtype=float)
-    q = att[["qx", "qy", "qz", "qw"]].to_numpy(dtype=float)
-    ok = np.all(np.isfinite(q), axis=1) & np.isfinite(t) & (np.linalg.norm(q, axis=1) > 0.5)
+    t = table["t"].to_numpy(dtype=float)
+    values = table[list(columns)].to_numpy(dtype=float)
+    ok = np.all(np.isfinite(values), axis=1) & np.isfinite(t)
+    if valid is not None:
+        ok &= valid(values)
     if not ok.any():
         return None
-    t, q = t[ok], q[ok]
+    t, values = t[ok], values[ok]
     k = int(np.argmin(np.abs(t - t0)))
     if abs(t[k] - t0) > 1.0:
         return None
+    return t, values, k
+
+
+def logged_attitude(imu, t0, C_n_e):
+    """Body -> ECEF attitude at ``t0`` from the autopilot attitude a reader attached
+    (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None."""
+    found = _attached_near(imu, "attitude", ("qx", "qy", "qz", "qw"), t0,
+                           valid=lambda q: np.linalg.norm(q, axis=1) > 0.5)
+    if found is None:
+        return None
+    t, q, k = found
     if k + 1 < t.size and t[k] < t0 < t[k + 1]:
         C_b_n = Slerp(t[k:k + 2], Rotation.from_quat(q[k:k + 2]))([t0])[0]
     else:
@@ -350,19 +364,11 @@ def start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relativ
 def _logged_tilt(imu, t0):
     """Body-x angle from the vertical (rad) at ``t0`` from the tilt a reader attached
     (``imu.attrs["tilt"]``: ``t, tilt`` in rad), or None (no tilt within 1 s)."""
-    tilt = imu.attrs.get("tilt") if hasattr(imu, "attrs") else None
-    if not isinstance(tilt, pd.DataFrame) or not {"t", "tilt"} <= set(tilt.columns):
+    found = _attached_near(imu, "tilt", ("tilt",), t0)
+    if found is None:
         return None
-    t = tilt["t"].to_numpy(dtype=float)
-    a = tilt["tilt"].to_numpy(dtype=float)
-    ok = np.isfinite(t) & np.isfinite(a)
-    if not ok.any():
-        return None
-    t, a = t[ok], a[ok]
-    k = int(np.argmin(np.abs(t - t0)))
-    if abs(t[k] - t0) > 1.0:
-        return None
-    return float(np.clip(a[k], 0.0, np.pi))
+    _, a, k = found
+    return float(np.clip(a[k, 0], 0.0, np.pi))
 
 
 def gyro_drift_deg_s(preset):
