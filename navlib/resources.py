@@ -12,6 +12,8 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
+from navlib.errors import NavlibInputError
+
 
 def _package_folder(name: str, checkout_folder: str) -> Path:
     """Folder of the (namespace) package ``name``; the checkout's folder when navlib is
@@ -39,3 +41,27 @@ def source_checkout() -> Path | None:
     """Root of the source checkout the notebooks come from, or None for an installed wheel."""
     root = notebooks_dir().parent
     return root if (root / "pyproject.toml").is_file() else None
+
+
+def toml_names(folder: Path) -> list[str]:
+    """Names (file stems) of the ``*.toml`` files shipped in ``folder``, sorted."""
+    return sorted(p.stem for p in folder.glob("*.toml"))
+
+
+def toml_path(folder: Path, name_or_path, argument: str, file_kind: str, kind: str) -> Path:
+    """The TOML file ``name_or_path`` names: a path (a ``.toml`` suffix or a folder part)
+    as given, else the shipped ``folder/<name>.toml``. A NavlibInputError starting with
+    ``argument`` says which ``file_kind`` is missing, or which ``kind`` is unknown and the
+    shipped names (:func:`toml_names`)."""
+    text = str(name_or_path)
+    path = Path(text)
+    if path.suffix == ".toml" or path.parent != Path("."):
+        if not path.is_file():
+            raise NavlibInputError(f"{argument}: {file_kind} {text!r} not found")
+        return path
+    path = folder / f"{text}.toml"
+    if not path.is_file():
+        raise NavlibInputError(f"{argument}: unknown {kind} {text!r}; available: "
+                               f"{toml_names(folder)}")
+    return path
+

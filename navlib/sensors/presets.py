@@ -19,7 +19,7 @@ import pandas as pd
 from navlib import units
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.resources import data_dir
+from navlib.resources import data_dir, toml_names, toml_path
 
 PRESET_DIR = data_dir() / "sensors"
 """Folder holding the ``*.toml`` sensor presets."""
@@ -224,22 +224,12 @@ class SensorSpec:
 
 def list_presets() -> list[str]:
     """Names of the presets shipped in ``data/sensors/`` (sorted)."""
-    return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
+    return toml_names(PRESET_DIR)
 
 
 def _preset_path(name_or_path) -> Path:
-    text = str(name_or_path)
-    path = Path(text)
-    if path.suffix == ".toml" or path.parent != Path("."):
-        if not path.is_file():
-            raise NavlibInputError(f"name_or_path: sensor preset file {text!r} not found")
-        return path
-    path = PRESET_DIR / f"{text}.toml"
-    if not path.is_file():
-        raise NavlibInputError(
-            f"name_or_path: unknown sensor preset {text!r}; available: {list_presets()}"
-        )
-    return path
+    return toml_path(PRESET_DIR, name_or_path, "name_or_path", "sensor preset file",
+                     "sensor preset")
 
 
 def _parse_section(table, section: str, where: str) -> dict[str, float]:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
-from navlib.resources import data_dir
+from navlib.resources import data_dir, toml_names, toml_path
 
 MISSION_DIR = data_dir() / "missions"
 """Folder of the example missions (``data/missions/*.toml``, shipped in the wheel)."""
@@ -61,22 +61,12 @@ class Mission:
 
 def list_missions() -> list[str]:
     """Names of the example missions shipped in ``data/missions/`` (sorted)."""
-    return sorted(p.stem for p in MISSION_DIR.glob("*.toml"))
+    return toml_names(MISSION_DIR)
 
 
 def mission_path(name_or_path) -> Path:
     """The file of an example mission name (``"multicopter_survey"``) or a path."""
-    text = str(name_or_path)
-    path = Path(text)
-    if path.suffix == ".toml" or path.parent != Path("."):
-        if not path.is_file():
-            raise NavlibInputError(f"mission: file {text!r} not found")
-        return path
-    path = MISSION_DIR / f"{text}.toml"
-    if not path.is_file():
-        raise NavlibInputError(f"mission: unknown example mission {text!r}; available: "
-                               f"{list_missions()}")
-    return path
+    return toml_path(MISSION_DIR, name_or_path, "mission", "file", "example mission")
 
 
 def read_mission(path_or_mapping) -> tuple[dict, str]:
