@@ -136,12 +136,12 @@ def allan_deviation(imu: pd.DataFrame, rate_hz: float | None = None,
     return frame
 
 
-def allan_model(tau, random_walk=0.0, bias_instability=0.0, rate_random_walk=0.0):
-    """Allan deviation of the three noise terms at ``tau`` (NaN terms count as zero)."""
-    tau = np.asarray(tau, dtype=float)
+def allan_model(tau_s, random_walk=0.0, bias_instability=0.0, rate_random_walk=0.0):
+    """Allan deviation of the three noise terms at ``tau_s`` (NaN terms count as zero)."""
+    tau_s = np.asarray(tau_s, dtype=float)
     n, b, k = (0.0 if not np.isfinite(x) else float(x)
                for x in (random_walk, bias_instability, rate_random_walk))
-    return np.sqrt(n**2 / tau + (BI_FACTOR * b) ** 2 + k**2 * tau / 3.0)
+    return np.sqrt(n**2 / tau_s + (BI_FACTOR * b) ** 2 + k**2 * tau_s / 3.0)
 
 
 def _fit_axis(tau, dev, duration):

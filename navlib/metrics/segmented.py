@@ -130,9 +130,9 @@ class SegmentedAnalysis:
         """Indices of the model epochs in ``[t_a, t_b]`` (``(t_a, t_b]`` with ``open_start``)."""
         return np.flatnonzero(in_segment(self.model.t, t_a, t_b, open_start))
 
-    def at(self, time: float) -> int:
-        """Index of the model epoch nearest ``time``."""
-        return int(np.argmin(np.abs(self.model.t - time)))
+    def at(self, t_s: float) -> int:
+        """Index of the model epoch nearest the time ``t_s``, s."""
+        return int(np.argmin(np.abs(self.model.t - t_s)))
 
     # ----- frame views
 

@@ -263,7 +263,7 @@ class MeasurementRows(NamedTuple):
 
 
 class ErrorStateModel(Protocol):
-    """What the closed-loop EKF needs from an error model (issue 10).
+    """What the closed-loop EKF (:mod:`navlib.filters.ekf`) needs from an error model.
 
     Attributes
     ----------

@@ -156,7 +156,8 @@ def closure_error_figure(closure, position_tol_m: float | None = 1.0,
     """Strapdown closure: position (m), velocity (m/s) and attitude (mrad) error vs time.
 
     Logarithmic axes (exact zeros, e.g. on the pad, are left out); dashed lines show the
-    tolerances (issue 2: 1 m and 0.1 mrad at the end of the flight).
+    tolerances a correct strapdown must meet on an exact-IMU trajectory (1 m and 0.1 mrad at
+    the end of the flight, ``tests/test_trajectory.py``).
     """
     fig, axes = subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
     series = [(closure.position_error, "position [m]", "C0", position_tol_m),

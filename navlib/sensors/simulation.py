@@ -44,17 +44,17 @@ def _trajectory_arrays(trajectory):
     return t, f_b, w_ib_b
 
 
-def gauss_markov(t, sigma: float, tau: float, rng: np.random.Generator, n_axes: int = 3):
+def gauss_markov(t, sigma: float, tau_s: float, rng: np.random.Generator, n_axes: int = 3):
     """Stationary first-order Gauss–Markov samples at times ``t`` (exact discretisation).
 
     ``x_0 ~ N(0, sigma^2)``, ``x_{k+1} = a_k x_k + sigma sqrt(1 - a_k^2) w_k`` with
-    ``a_k = exp(-(t_{k+1} - t_k) / tau)``. Returns (N, n_axes).
+    ``a_k = exp(-(t_{k+1} - t_k) / tau_s)``. Returns (N, n_axes).
     """
     t = np.asarray(t, dtype=float)
     w = rng.standard_normal((t.size, n_axes))
     if sigma == 0.0:
         return np.zeros_like(w)
-    a = np.exp(-np.diff(t) / tau)
+    a = np.exp(-np.diff(t) / tau_s)
     drive = w.copy()
     drive[1:] *= np.sqrt(1.0 - a * a)[:, None]
     if t.size > 1 and np.allclose(a, a[0], rtol=1e-9, atol=0.0):

@@ -150,9 +150,9 @@ def output_times(end_s, rate_hz, start_s=0.0):
     return start_s + np.arange(n) / rate_hz
 
 
-def step(t, start, duration):
-    """Scalar ``smoothstep((t - start) / duration)`` (fast path for ODE right-hand sides)."""
-    x = (t - start) / duration
+def step(t, start_s, duration_s):
+    """Scalar ``smoothstep((t - start_s) / duration_s)`` (fast path for ODE right-hand sides)."""
+    x = (t - start_s) / duration_s
     if x <= 0.0:
         return 0.0
     if x >= 1.0:

@@ -219,10 +219,10 @@ def _rest_window(t, f_b, w_b, g, p, gnss, length, short, early_only):
     return int(k0[i]), int(k1[j]), info
 
 
-def _attached_near(imu, key, columns, t0, valid=None):
+def _attached_near(imu, key, columns, t0_s, valid=None):
     """The table a reader attached as ``imu.attrs[key]`` (columns ``t`` and ``columns``):
     its finite rows (and those ``valid`` accepts) as ``t, values`` and the index of the row
-    nearest ``t0``; None when there is no such row within 1 s."""
+    nearest ``t0_s``; None when there is no such row within 1 s."""
     table = imu.attrs.get(key) if hasattr(imu, "attrs") else None
     if not isinstance(table, pd.DataFrame) or len(table) == 0 or not {
             "t", *columns} <= set(table.columns):
@@ -235,22 +235,22 @@ def _attached_near(imu, key, columns, t0, valid=None):
     if not ok.any():
         return None
     t, values = t[ok], values[ok]
-    k = int(np.argmin(np.abs(t - t0)))
-    if abs(t[k] - t0) > 1.0:
+    k = int(np.argmin(np.abs(t - t0_s)))
+    if abs(t[k] - t0_s) > 1.0:
         return None
     return t, values, k
 
 
-def logged_attitude(imu, t0, C_n_e):
-    """Body -> ECEF attitude at ``t0`` from the autopilot attitude a reader attached
+def logged_attitude(imu, t0_s, C_n_e):
+    """Body -> ECEF attitude at ``t0_s`` from the autopilot attitude a reader attached
     (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None."""
-    found = _attached_near(imu, "attitude", ("qx", "qy", "qz", "qw"), t0,
+    found = _attached_near(imu, "attitude", ("qx", "qy", "qz", "qw"), t0_s,
                            valid=lambda q: np.linalg.norm(q, axis=1) > 0.5)
     if found is None:
         return None
     t, q, k = found
-    if k + 1 < t.size and t[k] < t0 < t[k + 1]:
-        C_b_n = Slerp(t[k:k + 2], Rotation.from_quat(q[k:k + 2]))([t0])[0]
+    if k + 1 < t.size and t[k] < t0_s < t[k + 1]:
+        C_b_n = Slerp(t[k:k + 2], Rotation.from_quat(q[k:k + 2]))([t0_s])[0]
     else:
         C_b_n = Rotation.from_quat(q[k])
     return Rotation.from_matrix(C_n_e) * C_b_n
@@ -361,10 +361,10 @@ def start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relativ
     return att0, "level", note, info
 
 
-def _logged_tilt(imu, t0):
-    """Body-x angle from the vertical (rad) at ``t0`` from the tilt a reader attached
+def _logged_tilt(imu, t0_s):
+    """Body-x angle from the vertical (rad) at ``t0_s`` from the tilt a reader attached
     (``imu.attrs["tilt"]``: ``t, tilt`` in rad), or None (no tilt within 1 s)."""
-    found = _attached_near(imu, "tilt", ("tilt",), t0)
+    found = _attached_near(imu, "tilt", ("tilt",), t0_s)
     if found is None:
         return None
     _, a, k = found
