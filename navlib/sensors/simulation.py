@@ -17,8 +17,6 @@ from navlib._validation import finite_array, finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.sensors.presets import GnssSpec, ImuSpec, SensorSpec, TriadSpec
 
-# --- simulation ----------------------------------------------------------------------------
-
 
 def _generators(seed, rng, n: int) -> list[np.random.Generator]:
     """``n`` independent child generators from ``seed`` or ``rng`` (one per error source,

@@ -30,8 +30,6 @@ specific force (its standard deviation from 10 samples is good to about 25 %).""
 REST_RATE_DEG_S = 3.0
 """Largest mean angular rate of a levelling window, deg/s (the segmentation's rest rate)."""
 
-# --- attitude ----------------------------------------------------------------------------
-
 
 def level_attitude(f_b, gamma_e, C_n_e):
     """Body -> ECEF attitude from the mean specific force at rest, heading still free.

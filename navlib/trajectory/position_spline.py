@@ -41,8 +41,6 @@ MAX_CORRECTION_INTERVALS = 60
 its dense Schur complement small; a cubic spline still holds the linear drift of a gyro
 bias exactly."""
 
-# --- B-spline machinery ------------------------------------------------------------------
-
 
 def place_knots(t, spacing, turn=None):
     """Clamped quintic knot vector on ``[t[0], t[-1]]``, interior knots about ``spacing`` apart.

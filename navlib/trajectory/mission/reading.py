@@ -56,9 +56,6 @@ class Mission:
     where: str = "mission"
 
 
-# --------------------------------------------------------------------------- reading
-
-
 def list_missions() -> list[str]:
     """Names of the example missions shipped in ``data/missions/`` (sorted)."""
     return toml_names(MISSION_DIR)
