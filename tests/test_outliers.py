@@ -253,6 +253,6 @@ def test_assumption_sensitivity_reuses_filters_without_changing_results(flight):
     pd.testing.assert_frame_equal(fresh, reused)
     # the text's A1 variant takes the non-RT filters of the shared cache as they are
     other = study.FilterCache(flight, a1_sign=-1.0)
-    study._adopt(other, shared)
+    study.adopt_filters(other, shared)
     assert {k[0] for k in other._items} == {"ins_gps", "ins_gps_att"}
     assert other.get("ins_gps") is shared.get("ins_gps")

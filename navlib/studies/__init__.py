@@ -11,7 +11,17 @@ evaluates its claims in code (claim, our number, checks) and returns tidy tables
   checked on a synthesised trajectory (by construction: the generator's inputs).
 * ``assess``: the same analyses on a user's own recorded flight.
 * ``verdict``: compatibility names for the claim record.
+
+Importing this package imports the studies that register named evaluations of
+:func:`navlib.sweep.sweep` (``rocket``, ``outliers``), so a name resolves after
+``import navlib.studies``.
 """
+
+# the registration order is the order of ``python -m navlib sweep --list``
+# isort: off
+from navlib.studies import rocket  # noqa: F401 - registers its named sweep evaluations
+from navlib.studies import outliers  # noqa: F401 - registers its named sweep evaluations
+# isort: on
 
 
 def all_claims(quick: bool = False, only=None, robustness: bool = True):

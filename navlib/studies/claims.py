@@ -511,7 +511,9 @@ class Study:
 
     @property
     def module(self) -> str:
-        return getattr(self.baseline, "__module__", "").rsplit(".", 1)[-1]
+        """The study's module under :mod:`navlib.studies` (a package's name for its modules)."""
+        return getattr(self.baseline, "__module__", "").removeprefix("navlib.studies.") \
+            .split(".")[0]
 
 
 _REGISTRY: dict[str, Study] = {}
