@@ -16,9 +16,8 @@ Where it runs (``scheduler``) is the parallel engine's choice (:func:`navlib.par
 ``"threads"`` or ``"synchronous"``). Every task runs with BLAS limited to one thread, so
 serial and cluster sweeps agree exactly (``tests/test_sweep.py``).
 
-Named evaluations are registered from above: the studies that define them call
-:func:`register` when imported (``navlib.studies`` imports them all), and :func:`evaluation`
-looks a name up. The sweep itself knows no study.
+Named evaluations are registered from above (the sweep knows no study): the studies call
+:func:`register` when imported (``import navlib.studies`` imports them all).
 
 Heavy shared inputs. A named evaluation declares which of its parameters define its heavy
 input (:attr:`Evaluation.shared`: the trajectory, the sensor noise, the GNSS rate); that input

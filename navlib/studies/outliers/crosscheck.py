@@ -151,8 +151,9 @@ class EKFCrossCheck:
 
 def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
                    biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
-                   window: float = DEFAULTS["window"], window_s: float = 0.1,
-                   cache: FilterCache | None = None, **model_options) -> EKFCrossCheck:
+                   recovery_window_s: float = DEFAULTS["window"],
+                   feedback_window_s: float = 0.1, cache: FilterCache | None = None,
+                   **model_options) -> EKFCrossCheck:
     """Run the outlier through the closed-loop EKF (:func:`navlib.filters.simulate_ekf`,
     sensors at every sample as in the paper, noise-free so the response is isolated) and
     compare its roll response with the linear filter's.
@@ -162,12 +163,15 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     numbers as a run from the start, whose first part is the nominal run's), except for
     the RT solutions, whose closed-loop reference trajectory keeps a state of its own.
     ``cache``: prepared linear filters and responses to reuse for the linear response
-    when it holds the same trajectory and model options (else a fresh one is built)."""
+    when it holds the same trajectory and model options (else a fresh one is built).
+    ``recovery_window_s``: the recovery window of :func:`navlib.outliers.score_recovery`
+    (both responses); ``feedback_window_s``: the EKF's longest propagation window between
+    feedback corrections (``simulate_ekf(window_s=...)``)."""
     traj = trajectory if trajectory is not None else default_trajectory()
     bias_model = effective_bias_model(biases, bias_model)
     kw = dict(model="launcher", solution=solution, biases=biases, bias_model=bias_model,
               model_options=model_options or None, gnss_rate_hz=traj.rate_hz, noise=False,
-              initial_error=False, window_s=window_s)
+              initial_error=False, window_s=feedback_window_s)
     resumable = not solution.endswith("_rt")
     before = outlier.time - float(np.max(np.diff(traj.t)))
     with threadpool_limits(1):          # small matrices, one step at a time
@@ -182,14 +186,15 @@ def ekf_crosscheck(solution: str, outlier: Outlier, *, trajectory=None,
     if cache is not None:
         adopt_filters(lin_cache, cache)
     lin = outlier_response(solution, outlier, "roll", biases=biases, bias_model=bias_model,
-                           window=window, cache=lin_cache)
-    score = score_recovery(t, induced, t_outlier=outlier.time, window=window)
+                           window=recovery_window_s, cache=lin_cache)
+    score = score_recovery(t, induced, t_outlier=outlier.time, window=recovery_window_s)
     return EKFCrossCheck(t, induced, lin, score)
 
 
 def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
                       biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
-                      seed=0, window_s: float = 0.1, **model_options) -> pd.DataFrame:
+                      seed=0, feedback_window_s: float = 0.1, **model_options
+                      ) -> pd.DataFrame:
     """One noisy closed-loop EKF run next to the covariance analysis of the same model.
 
     The EKF (:func:`navlib.filters.simulate_ekf`, sensors at every sample) evaluates its
@@ -197,13 +202,15 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
     (:func:`navlib.covariance.kalman_covariance` via :func:`navlib.filters.prepare_linear`)
     along the true trajectory. Returns a tidy frame ``t, axis, sigma_ekf, sigma_cov, error``
     for the body-axis attitude errors (rad; ``error`` is the EKF's actual navigation error)
-    and the ECEF position errors (m, axes ``pos_x..z``).
+    and the ECEF position errors (m, axes ``pos_x..z``). ``feedback_window_s``: the EKF's
+    longest propagation window between feedback corrections (``simulate_ekf(window_s=...)``).
     """
     bias_model = effective_bias_model(biases, bias_model)
     with threadpool_limits(1):          # small matrices, one step at a time
         run = simulate_ekf(trajectory, solution=solution, biases=biases,
                            bias_model=bias_model, model_options=model_options or None,
-                           seed=seed, gnss_rate_hz=trajectory.rate_hz, window_s=window_s,
+                           seed=seed, gnss_rate_hz=trajectory.rate_hz,
+                           window_s=feedback_window_s,
                            keep_covariance=True)
     res = run.result
     k = np.searchsorted(trajectory.t, res.t)

@@ -57,7 +57,8 @@ SENSABILITY_DEPENDS = ("nu", "p0", "sigma_sg_ppm", "spin_hz")
 
 BASELINE = {"spin_hz": 2.0, "attitude_error": "ecef", "eta": 1e-3, "nu": 0.985,
             "d0": "global", "gnss_sigma_m": 5.0, **P0_DEFAULTS}
-"""Baseline settings (spec excitability.md §5, all assumed [A])."""
+"""Baseline settings: all assumed, the paper gives none (docs/assumptions.md, "excitability.md
+§5 — parameter values")."""
 
 PARAMETERS = STATE_NAMES[9:]
 """The 12 IMU parameter states (e10-e21)."""
