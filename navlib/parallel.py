@@ -132,7 +132,7 @@ def map_tasks(func: Callable, items: Sequence, scheduler=None, *, shared: Mappin
         if client is None:
             return [_call(func, item, shared) for item in
                     tqdm(items, desc=desc, disable=not progress)]
-        from distributed import as_completed  # heavy: the client above imported it already
+        from distributed import as_completed  # heavy (dask.distributed): only with a cluster
 
         # a one-element list: scatter() would split a dict or list value into items
         scattered = {k: client.scatter([v], broadcast=True)[0] for k, v in shared.items()}

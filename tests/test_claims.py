@@ -7,8 +7,9 @@ import pytest
 
 from navlib import NavlibInputError
 from navlib.studies import claims as engine
-from navlib.studies import launcher, outliers, rocket_profile
+from navlib.studies import launcher, outliers
 from navlib.studies.claims import Check, check, claim, verdict_of, with_failed_headline
+from navlib.studies.rocket import profile as rocket_profile
 
 
 # ---------------------------------------------------------------- checks and the rule

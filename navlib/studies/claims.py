@@ -527,7 +527,7 @@ def register(study: Study) -> Study:
     return study
 
 
-STUDY_MODULES = ("rocket_profile", "rocket", "launcher", "outliers", "ssac")
+STUDY_MODULES = ("rocket", "launcher", "outliers", "ssac")
 """The modules under :mod:`navlib.studies` that register claims, in table order."""
 
 

@@ -30,8 +30,10 @@ Modules: :mod:`~navlib.studies.rocket.flight` (trajectory, model, thresholds),
 counterfactual), :mod:`~navlib.studies.rocket.claims` (X1-X7, S1-S8),
 :mod:`~navlib.studies.rocket.sensitivity` (tension variants, sensitivity sweep),
 :mod:`~navlib.studies.rocket.measures` (simpler measures), :mod:`~navlib.studies.rocket.reading`,
-:mod:`~navlib.studies.rocket.assumptions` (robustness set, joint search, registration) and
-:mod:`~navlib.studies.rocket.evaluations` (the named sweep evaluations).
+:mod:`~navlib.studies.rocket.assumptions` (robustness set, joint search, registration),
+:mod:`~navlib.studies.rocket.evaluations` (the named sweep evaluations) and
+:mod:`~navlib.studies.rocket.profile` (the flight profile of §5.1 / Fig. 1 checked on a
+synthesised trajectory, registered as the study ``rocket_profile``).
 """
 
 from navlib.studies.rocket import evaluations  # noqa: F401 - registers the named sweep evaluations
@@ -110,6 +112,7 @@ from navlib.studies.rocket.measures import (
     measure_comparison,
     measure_disagreements,
 )
+from navlib.studies.rocket.profile import rocket_profile_claims
 from navlib.studies.rocket.reading import (
     reading_markdown,
 )
@@ -191,6 +194,7 @@ __all__ = [
     "reading_markdown",
     "robustness_variants",
     "rocket_chain",
+    "rocket_profile_claims",
     "rocket_trajectory",
     "search_points",
     "sensability_claims",

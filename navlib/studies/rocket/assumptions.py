@@ -124,4 +124,4 @@ engine.register(engine.Study(
     "rocket", "España, Carrizo & Giribet (2019)", _baseline_claims, ROBUSTNESS_GRID,
     _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions; "
     "each claim judged on the points varying its depends_on",
-    baseline_point=ROBUSTNESS_BASELINE))
+    order=1, baseline_point=ROBUSTNESS_BASELINE))

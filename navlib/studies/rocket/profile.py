@@ -157,4 +157,4 @@ def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
 
 
 engine.register(engine.Study("rocket_profile", "España, Carrizo & Giribet (2019)",
-                             _baseline_claims))
+                             _baseline_claims, order=0))
