@@ -171,8 +171,6 @@ def test_cluster_results_equal_serial_exactly(client):
 def test_map_tasks_in_order_with_shared(client):
     out = map_tasks(_scaled, [1.0, 2.0, 3.0], client, shared={"factor": np.arange(3.0)})
     assert [o.tolist() for o in out] == [[0.0, 1.0, 2.0], [0.0, 2.0, 4.0], [0.0, 3.0, 6.0]]
-    assert map_tasks(_scaled, [2.0], "synchronous",
-                     shared={"factor": np.ones(2)})[0].tolist() == [2.0, 2.0]
 
 
 def _scaled(x, factor):

@@ -290,7 +290,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     progress : callable, optional
         Called as ``progress(i, total, config)`` before each configuration (local run).
     scheduler : optional
-        Run the configurations as Dask tasks (:func:`navlib.sweep.map_tasks`: a Client, an
+        Run the configurations as Dask tasks (:func:`navlib.parallel.map_tasks`: a Client, an
         address ``tcp://host:port``, ``"processes"``...), the trajectory scattered once to
         the workers; default None: here, ``n_jobs`` threads per configuration.
     **model_kw
