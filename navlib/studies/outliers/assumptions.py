@@ -32,11 +32,11 @@ sign re-prepares only the two RT filters. Spike outliers only (notebook 05 adds 
 
 
 def study_claims(cache: FilterCache, window: float = DEFAULTS["window"],
-                 time: float | None = None, shapes: Sequence[str] = ("spike", "step"),
+                 outlier_time_s: float | None = None, shapes: Sequence[str] = ("spike", "step"),
                  reuse: OutlierStudy | None = None, **settings) -> tuple[OutlierStudy, list]:
     """T1-T4 and Figs. 7, 10, 11 on the filters of ``cache`` (``settings``: ``biases``,
     ``bias_model``): (the outlier study with its claims, the covariance claims)."""
-    st = paper_tests(cache=cache, window=window, time=time, shapes=shapes, reuse=reuse,
+    st = paper_tests(cache=cache, window=window, outlier_time_s=outlier_time_s, shapes=shapes, reuse=reuse,
                      **settings, **cache.model_options)
     corr = correlation_fig10(cache=cache, **settings)
     sig = roll_sigma(cache=cache, **settings)

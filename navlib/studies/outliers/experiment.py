@@ -48,7 +48,7 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                 window: float = DEFAULTS["window"], record_every: int | None = None,
                 cache: FilterCache | None = None, divergence: bool = True,
-                time: float | None = None, reuse: OutlierStudy | None = None,
+                outlier_time_s: float | None = None, reuse: OutlierStudy | None = None,
                 **model_options) -> OutlierStudy:
     """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
 
@@ -71,7 +71,7 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
         (and the disk cache): a later study of the same model that reports it (the claims
         engine's ``a1_sign = -1`` reading after :func:`assumption_sensitivity`) then
         prepares no filter.
-    time : float, optional
+    outlier_time_s : float, optional
         Outlier time, s (default the paper's 50 s).
     reuse : OutlierStudy, optional
         A study on the same trajectory and configuration whose model options differ at
@@ -108,13 +108,13 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
             raise NavlibInputError(f"reuse: the studies differ in {sorted(differ)}, not only "
                                    f"in the RT-only options {RT_ONLY_OPTIONS}")
         same = {k: r for k, r in reuse.responses.items() if not k[1].endswith("_rt")
-                and (time is None or r.outlier.time == time)}
+                and (outlier_time_s is None or r.outlier.time == outlier_time_s)}
     responses = {}
     for sol, tids in jobs.items():
-        requests = [(PAPER_TESTS[tid].outlier(shape, time=time), PAPER_TESTS[tid].watch)
+        requests = [(PAPER_TESTS[tid].outlier(shape, time=outlier_time_s), PAPER_TESTS[tid].watch)
                     for tid in tids for shape in shapes if (tid, sol, shape) not in same]
         if "T4" in tids and sol == "ins_gps_att_rt":
-            requests.append((PAPER_TESTS["T4"].outlier("spike", time=time), "ref_roll"))
+            requests.append((PAPER_TESTS["T4"].outlier("spike", time=outlier_time_s), "ref_roll"))
         if requests:              # one recursion for all of this filter's responses
             cache.unit_responses(sol, requests, biases=biases,
                                  bias_model=effective_bias_model(biases, bias_model),
@@ -131,12 +131,12 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                         sigma=sigma, averaging=DEFAULTS["averaging"]))
                     continue
                 responses[(tid, sol, shape)] = outlier_response(
-                    sol, test.outlier(shape, time=time), test.watch, biases=biases,
+                    sol, test.outlier(shape, time=outlier_time_s), test.watch, biases=biases,
                     bias_model=bias_model, window=window, record_every=record_every,
                     cache=cache)
             if tid == "T4" and sol == "ins_gps_att_rt" and divergence:
                 responses[("T4", sol, "divergence")] = outlier_response(
-                    sol, test.outlier("spike", time=time), "ref_roll", biases=biases,
+                    sol, test.outlier("spike", time=outlier_time_s), "ref_roll", biases=biases,
                     bias_model=bias_model, window=window, record_every=record_every,
                     cache=cache)
     capture = _capture(responses)

@@ -18,7 +18,8 @@ from navlib.studies.outliers.response import (
 
 def assumption_sensitivity(variants: dict, trajectory=None, *,
                            tests: Sequence[str] = ("T1", "T2", "T3", "T4"),
-                           window: float = DEFAULTS["window"], time: float | None = None,
+                           window: float = DEFAULTS["window"],
+                           outlier_time_s: float | None = None,
                            cache_size: int = 1, cache: FilterCache | None = None
                            ) -> pd.DataFrame:
     """Spike-outlier verdicts of T1-T4 under alternative readings of the paper.
@@ -57,7 +58,7 @@ def assumption_sensitivity(variants: dict, trajectory=None, *,
         for other in pool:
             adopt_filters(variant_cache, other)
         st = paper_tests(cache=variant_cache, shapes=("spike",), tests=tests, window=window,
-                         time=time, divergence=False, **study_kw, **kw)
+                         outlier_time_s=outlier_time_s, divergence=False, **study_kw, **kw)
         variant_cache.release()
         pool = [*pool[:1 if cache is not None else 0], variant_cache]
         claim = {c.claim_id: c.verdict for c in st.claims}
