@@ -36,8 +36,8 @@ def study_claims(cache: FilterCache, window: float = DEFAULTS["window"],
                  reuse: OutlierStudy | None = None, **settings) -> tuple[OutlierStudy, list]:
     """T1-T4 and Figs. 7, 10, 11 on the filters of ``cache`` (``settings``: ``biases``,
     ``bias_model``): (the outlier study with its claims, the covariance claims)."""
-    st = paper_tests(cache=cache, window=window, outlier_time_s=outlier_time_s, shapes=shapes, reuse=reuse,
-                     **settings, **cache.model_options)
+    st = paper_tests(cache=cache, window=window, outlier_time_s=outlier_time_s, shapes=shapes,
+                     reuse=reuse, **settings, **cache.model_options)
     corr = correlation_fig10(cache=cache, **settings)
     sig = roll_sigma(cache=cache, **settings)
     ratios = sigma_ratios("ins_gps", "ins_gps_rt", cache=cache, **settings)
