@@ -43,6 +43,10 @@ from navlib.studies.outliers.assumptions import (
 )
 from navlib.studies.outliers.claims import (
     AFFECTED,
+    claim_f10,
+    claim_roll_sigma,
+    claim_t4_detail,
+    claim_test,
     covariance_claims,
     outlier_claims,
 )
@@ -98,6 +102,10 @@ __all__ = [
     "UnitResponse",
     "adopt_filters",
     "assumption_sensitivity",
+    "claim_f10",
+    "claim_roll_sigma",
+    "claim_t4_detail",
+    "claim_test",
     "correlation_fig10",
     "covariance_claims",
     "default_trajectory",
