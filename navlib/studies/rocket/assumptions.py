@@ -9,9 +9,7 @@ import pandas as pd
 
 from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.models.ecef import (
-    P0_DEFAULTS,
-)
+from navlib.models.ecef import P0_DEFAULTS
 from navlib.resources import data_dir
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult

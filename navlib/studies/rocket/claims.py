@@ -10,10 +10,7 @@ import numpy as np
 import pandas as pd
 
 from navlib.errors import NavlibInputError
-from navlib.models.ecef import (
-    STATE_GROUPS,
-    STATE_NAMES,
-)
+from navlib.models.ecef import STATE_GROUPS, STATE_NAMES
 from navlib.resolution import relative_resolution
 from navlib.studies.claims import ClaimResult, check, claim, claims_frame
 from navlib.studies.rocket.experiment import (

@@ -7,9 +7,7 @@ import numpy as np
 import pandas as pd
 
 from navlib import covariance
-from navlib.models.ecef import (
-    PAPER_IDS,
-)
+from navlib.models.ecef import PAPER_IDS
 from navlib.studies.rocket.claims import sensible_time
 from navlib.studies.rocket.experiment import RocketAnalysis
 from navlib.studies.rocket.flight import IN_SO, SENSIBLE, TRANSIENT_S

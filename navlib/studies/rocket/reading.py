@@ -6,10 +6,7 @@ from navlib.errors import NavlibInputError
 from navlib.studies import claims as engine
 from navlib.studies.rocket.claims import excitability_claims, sensability_claims
 from navlib.studies.rocket.experiment import RocketAnalysis, tangent_projections
-from navlib.studies.rocket.sensitivity import (
-    sweep_pass_rates,
-    tension_findings,
-)
+from navlib.studies.rocket.sensitivity import sweep_pass_rates, tension_findings
 
 
 def reading_markdown(analysis: RocketAnalysis, which: str = "all", sweep=None,

@@ -13,11 +13,7 @@ from tqdm.auto import tqdm
 
 from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.models.ecef import (
-    STATE_NAMES,
-    imu_noise_densities,
-    parameter_sigmas,
-)
+from navlib.models.ecef import STATE_NAMES, imu_noise_densities, parameter_sigmas
 from navlib.parallel import map_tasks
 from navlib.studies.rocket.claims import (
     CLAIM_IDS,
