@@ -49,6 +49,7 @@ def _row(label, frame, start_s, base_wall=None) -> dict:
 def main(argv=None) -> int:
     from distributed import Client, LocalCluster
 
+    import navlib.studies  # noqa: F401 - registers the named evaluation "nees"
     from navlib.sweep import sweep
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -66,7 +67,7 @@ def main(argv=None) -> int:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                           dashboard_address=":0", silence_logs=logging.ERROR) as cluster, \
                 Client(cluster) as client:
-            client.run(lambda: __import__("navlib.sweep"))  # imports are start-up, not work
+            client.run(lambda: __import__("navlib.studies"))  # imports are start-up, not work
             startup = time.perf_counter() - t0
             frame = sweep(grid, "nees", scheduler=client, progress=False)
             frames[workers] = frame

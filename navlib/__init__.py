@@ -15,8 +15,8 @@ __version__ = "0.1.0"
 
 _SUBMODULES = (
     "covariance", "discretize", "earth", "filters", "fleet", "io", "metrics", "models",
-    "observability", "outliers", "plots", "reports", "rotations", "segmentation", "sensors",
-    "strapdown",
+    "observability", "outliers", "parallel", "plots", "reports", "rotations", "segmentation",
+    "sensors", "strapdown",
     "studies", "sweep", "trajectory", "units", "widgets",
 )
 

@@ -255,6 +255,7 @@ def _add_sweep(sub) -> None:
 def _sweep(args) -> int:
     import pandas as pd
 
+    import navlib.studies  # noqa: F401 - the studies register their named evaluations
     from navlib import sweep
 
     if args.list:

@@ -8,7 +8,7 @@ Each ``LOG`` is a PX4 ``.ulg`` file, an ArduPilot DataFlash ``.bin`` file (read 
 ``navlib.io.read_dataflash``), an Altus Metrum AltOS CSV export (recognised by its header,
 read with ``navlib.io.read_altos``) or an ``imu.csv,gnss.csv`` pair; each
 flight goes through :func:`navlib.studies.assess.assess_flight` as one task
-(:func:`navlib.sweep.map_tasks`), with the ``-p`` keywords (a ULog's ``MAV_TYPE`` parameter
+(:func:`navlib.parallel.map_tasks`), with the ``-p`` keywords (a ULog's ``MAV_TYPE`` parameter
 is attached as ``imu.attrs["mav_type"]`` so the vehicle class comes from the log,
 :func:`navlib.segmentation.vehicle_from_log`). :func:`assess_logs` returns one
 row per flight and :func:`write_fleet` writes ``DIR/summary.csv`` plus one HTML page per
@@ -30,8 +30,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from navlib import io
+from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.io.altos import looks_like_altos
+from navlib.parallel import map_tasks
+from navlib.studies.assess import assess_flight
 
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "flight_page", "parse_log",
            "write_fleet"]
@@ -71,8 +75,6 @@ def parse_log(spec: str) -> tuple[str, tuple[Path, ...]]:
 
 
 def _assess_keywords() -> tuple[str, ...]:
-    from navlib.studies.assess import assess_flight
-
     return tuple(p for p in inspect.signature(assess_flight).parameters if p not in
                  ("imu", "gnss"))
 
@@ -89,8 +91,6 @@ def _mav_type(path: Path) -> int | None:
 
 
 def _read(kind: str, paths: tuple[Path, ...]):
-    from navlib import io
-
     if kind == "ulog":
         imu, gnss = io.read_ulog(paths[0])
         if imu.attrs.get("mav_type") is None:
@@ -109,7 +109,7 @@ def _per_segment(summary: pd.DataFrame, column: str) -> str:
 
 
 def _figure_png(fig) -> str:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # heavy; flight_page selected the Agg backend first
 
     buf = _io.BytesIO()
     fig.savefig(buf, format="png", dpi=80)
@@ -119,11 +119,11 @@ def _figure_png(fig) -> str:
 
 def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
     """A self-contained HTML page of one assessed flight (tables, figures as PNG)."""
-    import matplotlib
+    import matplotlib  # heavy; the Agg backend must be chosen before pyplot is imported
 
     matplotlib.use("Agg", force=False)
-    from navlib.plots import assess as aplots
-    from navlib.plots.metrics import excitability_figure
+    from navlib.plots import assess as aplots  # imports pyplot: after the backend choice
+    from navlib.plots.metrics import excitability_figure  # imports pyplot, as above
 
     figures = [("Flight phases", aplots.phases_figure(result)),
                ("Excitability per segment", excitability_figure(result)),
@@ -201,8 +201,6 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
     page : str or None
         The flight's HTML page (None when it failed).
     """
-    from navlib.studies.assess import assess_flight
-
     def build(warning_texts):
         kind, paths = parse_log(log)
         imu, gnss = _read(kind, paths)
@@ -218,15 +216,12 @@ def _task(log: str, options: Mapping) -> tuple[dict, str | None]:
 
 def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=None,
                 progress: bool = False) -> tuple[pd.DataFrame, list]:
-    """Assess flights as Dask tasks (:func:`navlib.sweep.map_tasks`).
+    """Assess flights as Dask tasks (:func:`navlib.parallel.map_tasks`).
 
     ``options`` are keywords of :func:`navlib.studies.assess.assess_flight` (checked here,
     before any task runs). Returns the summary table (one row per log, in order) and the
     HTML pages (None for failed flights).
     """
-    from navlib._validation import reject_unknown
-    from navlib.sweep import map_tasks
-
     logs = list(logs)
     if not logs or not all(isinstance(x, str) for x in logs):
         raise NavlibInputError(f"logs: expected one or more file names, got {logs!r}")

@@ -1,4 +1,4 @@
-"""Design trade studies on Dask: a grid of parameters mapped over an evaluation as tasks.
+"""Design trade studies: a grid of parameters mapped over an evaluation as parallel tasks.
 
 Public contract (spec ``api.md``, "Scale")::
 
@@ -11,19 +11,13 @@ columns first. ``output`` (a ``.parquet`` file) makes the sweep resumable: each 
 task is written at once to ``<output>.parts/``, a rerun skips the points already there, and
 the complete table replaces ``output`` atomically at the end.
 
-Where it runs (``scheduler``):
+Where it runs (``scheduler``) is the parallel engine's choice (:func:`navlib.parallel.executor`:
+``$NAVLIB_SCHEDULER`` or a local Dask cluster, a Client, an address, ``"processes"``,
+``"threads"`` or ``"synchronous"``). Every task runs with BLAS limited to one thread, so
+serial and cluster sweeps agree exactly (``tests/test_sweep.py``).
 
-* ``None``: ``$NAVLIB_SCHEDULER`` if set, else a local Dask cluster sized to the machine
-  (one single-threaded worker process per core), started and closed by the call;
-* a ``dask.distributed.Client``, or an address ``"tcp://host:8786"`` of a running
-  scheduler whose workers have the same environment (the README explains the set-up);
-* ``"processes"`` / ``"threads"``: a local cluster of processes / of threads in this process;
-* ``"synchronous"``: no Dask at all, the same tasks one after the other in this process
-  (small grids, notebooks run headless, debugging).
-
-Every task runs with BLAS limited to one thread (``threadpoolctl``), so a point gives the
-same floating-point result whichever scheduler runs it: serial and cluster sweeps agree
-exactly (``tests/test_sweep.py``).
+Named evaluations are registered from above (the sweep knows no study): the studies call
+:func:`register` when imported (``import navlib.studies`` imports them all).
 
 Heavy shared inputs. A named evaluation declares which of its parameters define its heavy
 input (:attr:`Evaluation.shared`: the trajectory, the sensor noise, the GNSS rate); that input
@@ -33,10 +27,6 @@ task. Evaluations whose inputs are too big to move (the launcher's 200 Hz filter
 per-process cache instead, and the points are batched by shared input so that each batch
 builds it at most once. Callables keep their own caches (``functools.cache`` in the worker
 process); points reach them in grid order, batched.
-
-:func:`map_tasks` is the same engine for the existing heavy loops (Table 2, the rocket
-sensitivity sweep) and :func:`monte_carlo_linear` for the linear Monte Carlo, which accept
-``scheduler=`` and keep their local default.
 """
 
 from __future__ import annotations
@@ -48,215 +38,28 @@ import os
 import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
-from contextlib import contextmanager
-from dataclasses import dataclass, replace
-from functools import lru_cache
+from dataclasses import dataclass
 from pathlib import Path
 
+import cloudpickle
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+from tqdm.auto import tqdm
 
 from navlib._validation import reject_unknown
+from navlib.cache import memoized
 from navlib.errors import NavlibInputError
+from navlib.parallel import SCHEDULER_ENV, executor, n_workers, single_thread_blas
 
-__all__ = ["EVALUATIONS", "SCHEDULER_ENV", "Evaluation", "evaluations_frame", "executor",
-           "grid_points", "map_tasks", "monte_carlo_linear", "parameter_columns", "pivot",
-           "read", "sweep"]
+__all__ = ["AGGREGATES", "EVALUATIONS", "SCHEDULER_ENV", "Evaluation", "evaluation",
+           "evaluations_frame", "grid_points", "parameter_columns", "pivot", "read",
+           "register", "sweep"]
 
-SCHEDULER_ENV = "NAVLIB_SCHEDULER"
-"""Environment variable naming the default scheduler (an address or a keyword)."""
-LOCAL_SCHEDULERS = ("processes", "threads", "synchronous")
-"""Keywords accepted for ``scheduler`` besides a Client or an address."""
-_ADDRESS_PREFIXES = ("tcp://", "tls://", "inproc://", "ucx://", "ws://", "wss://")
 _METADATA_KEY = b"navlib.sweep"
 _PROGRESS_MIN_POINTS = 50
 """Pending points from which ``progress=None`` shows a progress bar."""
-
-
-# --------------------------------------------------------------------------- executor
-
-
-def _local_cluster(processes: bool, n_workers: int | None):
-    import logging
-
-    from distributed import LocalCluster
-
-    cores = max(1, os.cpu_count() or 1)
-    if processes:
-        return LocalCluster(n_workers=n_workers or cores, threads_per_worker=1, processes=True,
-                            dashboard_address=":0", silence_logs=logging.ERROR)
-    return LocalCluster(n_workers=1, threads_per_worker=n_workers or cores, processes=False,
-                        dashboard_address=":0", silence_logs=logging.ERROR)
-
-
-@contextmanager
-def executor(scheduler=None, *, n_workers: int | None = None):
-    """Resolve ``scheduler`` to a Dask client for the duration of a ``with`` block.
-
-    Parameters
-    ----------
-    scheduler : None, str or distributed.Client
-        See the module docstring. ``None`` reads :data:`SCHEDULER_ENV` first.
-    n_workers : int, optional
-        Workers of a local cluster started here (default one per core).
-
-    Yields
-    ------
-    distributed.Client or None
-        ``None`` for ``"synchronous"`` (run in this process). A cluster started here is
-        closed on exit; a Client passed in is left open.
-    """
-    if scheduler is None:
-        scheduler = os.environ.get(SCHEDULER_ENV) or "processes"
-    try:
-        from distributed import Client
-    except ImportError as exc:  # pragma: no cover - a core dependency
-        raise NavlibInputError("scheduler: dask.distributed is not installed") from exc
-    if isinstance(scheduler, Client):
-        yield scheduler
-        return
-    if not isinstance(scheduler, str):
-        raise NavlibInputError(f"scheduler: expected None, a dask.distributed.Client, an "
-                               f"address 'tcp://host:port' or one of {LOCAL_SCHEDULERS}, "
-                               f"got {type(scheduler).__name__}")
-    if scheduler == "synchronous":
-        yield None
-        return
-    if scheduler in ("processes", "threads"):
-        cluster = _local_cluster(scheduler == "processes", n_workers)
-        try:
-            with Client(cluster) as client:
-                yield client
-        finally:
-            cluster.close()
-        return
-    if not scheduler.startswith(_ADDRESS_PREFIXES):
-        raise NavlibInputError(f"scheduler: {scheduler!r} is neither an address "
-                               f"(tcp://host:port) nor one of {LOCAL_SCHEDULERS}")
-    try:
-        client = Client(scheduler, timeout="10s")
-    except (OSError, TimeoutError) as exc:
-        raise NavlibInputError(f"scheduler: cannot reach the Dask scheduler at {scheduler} "
-                               f"({exc})") from exc
-    with client:
-        yield client
-
-
-def _n_workers(client) -> int:
-    return 1 if client is None else max(1, sum(client.nthreads().values()))
-
-
-def _single_thread_blas():
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(1)
-
-
-def _call(func, item, shared):
-    with _single_thread_blas():
-        return func(item, **shared)
-
-
-def map_tasks(func: Callable, items: Sequence, scheduler=None, *, shared: Mapping | None = None,
-              progress: bool = False, desc: str = "tasks") -> list:
-    """``[func(item, **shared) for item in items]`` as Dask tasks, results in order.
-
-    The engine behind the ``scheduler=`` keyword of the heavy study loops. ``func`` must be
-    picklable (a module-level function or a ``functools.partial`` of one); ``shared``
-    values are scattered once to every worker (``Client.scatter(broadcast=True)``), not
-    pickled per task. BLAS is limited to one thread inside each task.
-    """
-    items = list(items)
-    shared = dict(shared or {})
-    from tqdm.auto import tqdm
-
-    with executor(scheduler) as client:
-        if client is None:
-            return [_call(func, item, shared) for item in
-                    tqdm(items, desc=desc, disable=not progress)]
-        from distributed import as_completed
-
-        # a one-element list: scatter() would split a dict or list value into items
-        scattered = {k: client.scatter([v], broadcast=True)[0] for k, v in shared.items()}
-        futures = [client.submit(_call, func, item, scattered, pure=False) for item in items]
-        order = {f.key: i for i, f in enumerate(futures)}
-        out: list = [None] * len(items)
-        try:
-            with tqdm(total=len(items), desc=desc, disable=not progress) as bar:
-                for fut in as_completed(futures):
-                    out[order[fut.key]] = fut.result()
-                    bar.update(1)
-        finally:
-            client.cancel(futures)
-        return out
-
-
-# --------------------------------------------------------------------------- Monte Carlo
-
-_PREPARE_KEYS = ("method", "update_every", "measured", "P0", "noise_input", "noise_names")
-_FILTERS: dict = {}
-"""This process's prepared filter: ``{id(model): (model, LinearFilter)}`` (one kept)."""
-
-
-def _prepared_filter(model, options: dict):
-    from navlib.filters import prepare_linear
-
-    key = (id(model), repr(sorted((k, repr(v)) for k, v in options.items())))
-    hit = _FILTERS.get(key)
-    if hit is None or hit[0] is not model:
-        _FILTERS.clear()
-        hit = (model, prepare_linear(model, **options))
-        _FILTERS[key] = hit
-    return hit[1]
-
-
-def _monte_carlo_chunk(chunk: tuple, model, prepare: dict, simulate: dict):
-    from navlib.filters import simulate_linear
-
-    seed, runs = chunk
-    return simulate_linear(_prepared_filter(model, prepare), runs=runs, seed=seed, **simulate)
-
-
-def monte_carlo_linear(model, *, runs: int, seed=None, runs_per_task: int = 25,
-                       scheduler=None, record_every: int | None = None,
-                       progress: bool = False, **options):
-    """:func:`navlib.filters.simulate_linear` with the runs split over Dask tasks.
-
-    The runs are cut into chunks of ``runs_per_task``; chunk ``i`` draws from the child
-    ``i`` of ``numpy.random.SeedSequence(seed)`` (so the result depends on ``seed`` and
-    ``runs_per_task``, never on the scheduler or the number of workers, but it is another
-    random stream than one ``simulate_linear(model, runs=runs, seed=seed)`` batch). The model
-    is scattered once to each worker, which discretises it and runs the covariance
-    recursion once (:func:`navlib.filters.prepare_linear`) for all its chunks. The chunks'
-    runs are joined on the run axis in order.
-
-    ``options``: the other keywords of ``simulate_linear`` (``outliers``, ``noise``,
-    ``method``, ``update_every``...); ``record_every`` defaults to the value
-    ``simulate_linear`` picks for all ``runs`` at once.
-    """
-    from navlib._validation import finite_scalar
-    from navlib.filters.linear import _MEMORY_BUDGET
-
-    runs = int(finite_scalar(runs, "runs", low=1))
-    per_task = int(finite_scalar(runs_per_task, "runs_per_task", low=1))
-    if "rng" in options:
-        raise NavlibInputError("rng: a split Monte Carlo draws from seed (SeedSequence)")
-    reject_unknown(options, (*_PREPARE_KEYS, "outliers", "noise", "initial_error"),
-                   "monte_carlo_linear")
-    if record_every is None:
-        n_epochs, n = np.asarray(model.t).size, len(model.state_names)
-        record_every = max(1, int(np.ceil(n_epochs * 2 * 8 * runs * n / _MEMORY_BUDGET)))
-    sizes = [min(per_task, runs - i) for i in range(0, runs, per_task)]
-    seeds = np.random.SeedSequence(seed).spawn(len(sizes))
-    prepare = {k: v for k, v in options.items() if k in _PREPARE_KEYS}
-    simulate = {k: v for k, v in options.items() if k not in _PREPARE_KEYS}
-    simulate["record_every"] = record_every
-    parts = map_tasks(_monte_carlo_chunk, list(zip(seeds, sizes, strict=True)), scheduler,
-                      shared={"model": model, "prepare": prepare, "simulate": simulate},
-                      progress=progress, desc="Monte Carlo")
-    first = parts[0]
-    return replace(first, **{name: np.concatenate([getattr(p, name) for p in parts], axis=1)
-                             for name in ("truth", "estimate", "nees", "nis", "innovation")})
 
 
 # --------------------------------------------------------------------------- grid
@@ -368,284 +171,52 @@ class Evaluation:
     def __call__(self, **point) -> dict:
         """Evaluate one point in this process (shared input from a process cache)."""
         full = self.complete(point)
-        return self.run(_prepared(self.name, self.shared_key(full)), **full)
+        prepared = None if self.prepare is None else _prepared(self.prepare,
+                                                                self.shared_key(full))
+        return self.run(prepared, **full)
 
 
-@lru_cache(maxsize=8)
-def _prepared(name: str, key: tuple):
-    ev = EVALUATIONS[name]
-    return None if ev.prepare is None else ev.prepare(**dict(key))
+@memoized(maxsize=8)
+def _prepared(prepare: Callable, key: tuple):
+    """The shared input ``prepare(**key)``, kept per process (module-level ``prepare``
+    functions unpickle to the same object, so a worker's tasks share it)."""
+    return prepare(**dict(key))
 
 
-def _prepare_task(name: str, key: tuple) -> tuple:
+def _prepare_task(ev: Evaluation, key: tuple) -> tuple:
     """The shared input of ``key`` and the seconds it took (0 when cached here)."""
     t0 = time.perf_counter()
-    with _single_thread_blas():
-        value = _prepared(name, key)
+    with single_thread_blas():
+        value = _prepared(ev.prepare, key)
     return value, time.perf_counter() - t0
 
 
-# ----- rocket family: the 21-state ECEF model on the sounding-rocket flight (España et al.)
-
-_ROCKET_SHARED = {"spin_hz": 2.0, "coning_deg": 0.0, "coning_hz": 0.5,
-                  "preset": "motionpak_tactical", "imu_grade": 1.0, "gnss_rate_hz": 1.0,
-                  "attitude_error": "ecef"}
-_ROCKET_POINT = {"gnss_sigma_m": 5.0, "sigma_p0_m": 30.0, "sigma_v0_m_s": 3.0,
-                 "sigma_theta0_deg": 1.0, "sigma_bg_deg_s": None, "sigma_ba_m_s2": None,
-                 "sigma_sg_ppm": None, "sigma_sa_ppm": None, "eta": 1e-3, "nu": 0.985,
-                 "d0": "global"}
+EVALUATIONS: dict[str, Evaluation] = {}
+"""The named evaluations of :func:`sweep`, by name (filled by :func:`register`)."""
 
 
-def _rocket_prepare(spin_hz, coning_deg, coning_hz, preset, imu_grade, gnss_rate_hz,
-                    attitude_error):
-    """The discretised 21-state model (no P0/R yet) and the body x axis at its epochs."""
-    from navlib._validation import finite_scalar
-    from navlib.models.ecef import ATTITUDE_ERRORS, ecef21_at_epochs, imu_noise_densities
-    from navlib.studies.rocket import rocket_trajectory
-
-    if attitude_error not in ATTITUDE_ERRORS:
-        raise NavlibInputError(f"attitude_error: expected one of {ATTITUDE_ERRORS}, got "
-                               f"{attitude_error!r}")
-    grade = finite_scalar(imu_grade, "imu_grade", 0.0, low_open=True)
-    coning = {"coning_deg": coning_deg, "coning_hz": coning_hz} if coning_deg else {}
-    traj = rocket_trajectory(spin_hz, **coning)
-    noise = preset if grade == 1.0 else {k: v * grade
-                                         for k, v in imu_noise_densities(preset).items()}
-    model = ecef21_at_epochs(traj, gnss_rate_hz, sensors=noise, attitude_error=attitude_error)
-    k = np.clip(np.searchsorted(traj.t, model.t - 1e-9), 0, traj.t.size - 1)
-    C = traj.C_b_e()[k]
-    roll_axis = C[:, :, 0] if attitude_error == "ecef" else np.tile([1.0, 0.0, 0.0],
-                                                                    (k.size, 1))
-    return model, roll_axis
+def register(ev: Evaluation) -> Evaluation:
+    """Add (or replace) a named evaluation; the studies call it when imported."""
+    if not isinstance(ev, Evaluation):
+        raise NavlibInputError(f"evaluation: expected a navlib.sweep.Evaluation, got "
+                               f"{type(ev).__name__}")
+    EVALUATIONS[ev.name] = ev
+    return ev
 
 
-def _rocket_model(prepared, full):
-    """The prepared model with this point's P0 and R."""
-    from navlib._validation import finite_scalar
-    from navlib.models.ecef import initial_covariance, parameter_sigmas
+def evaluation(name: str) -> Evaluation:
+    """The named evaluation ``name``.
 
-    base, _ = prepared
-    grade = float(full["imu_grade"])
-    sigmas = {k: v * grade for k, v in parameter_sigmas(full["preset"]).items()}
-    for name in _ROCKET_POINT:
-        if name.startswith("sigma_") and full[name] is not None:
-            sigmas[name] = full[name]
-    sigma = finite_scalar(full["gnss_sigma_m"], "gnss_sigma_m", 0.0, low_open=True)
-    R = np.broadcast_to(sigma**2 * np.eye(3), base.R.shape)
-    return replace(base, P0=initial_covariance(full["preset"], **sigmas), R=R)
-
-
-def _sensability(model, full):
-    from navlib.metrics import sensability_model
-
-    return sensability_model(model, nu=full["nu"])
-
-
-def _excitability_run(prepared, **full) -> dict:
-    from navlib.metrics import excitability_segments
-    from navlib.studies.rocket import SEGMENT_LABELS, SEGMENTS
-
-    model = _rocket_model(prepared, full)
-    se = _sensability(model, full) if full["d0"] == "filter" else None
-    ex = excitability_segments(model, SEGMENTS, full["eta"], full["d0"], se)
-    out = {}
-    for label, res in zip(SEGMENT_LABELS, ex, strict=True):
-        out[f"ne_{label}"] = int(res.ne)
-        out.update({f"e_{s}_{label}": float(v) for s, v in zip(model.state_names, res.e,
-                                                               strict=True)})
-    return out
-
-
-def _roll_sensability(se, roll_axis) -> tuple[np.ndarray, np.ndarray]:
-    """Sensability and 1-sigma (rad) of the attitude error about the body x (roll) axis."""
-    v = np.zeros((roll_axis.shape[0], se.n))
-    v[:, 6:9] = roll_axis
-    w = v / np.sqrt(se.d0)
-    w /= np.linalg.norm(w, axis=1, keepdims=True)
-    proj = np.einsum("kji,kj->ki", se.V, w) ** 2
-    keep = np.arange(se.n) < se.nr[:, None]
-    sigma = np.sqrt(np.einsum("ki,kij,kj->k", v, se.P, v))
-    return np.sqrt(np.sum(proj * keep, axis=1)), sigma
-
-
-def _sensability_run(prepared, **full) -> dict:
-    from navlib.metrics import S_THRESHOLD
-    from navlib.studies.rocket import TRANSIENT_S
-
-    model = _rocket_model(prepared, full)
-    se = _sensability(model, full)
-    later = se.t > se.t[0] + TRANSIENT_S
-    s_roll, sigma_roll = _roll_sensability(se, prepared[1])
-    out = {"nr_end": int(se.nr[-1]),
-           "n_sensible_end": int(np.sum(se.s[-1] >= S_THRESHOLD)),
-           "s_end_roll": float(s_roll[-1]),
-           "s_frac_roll": float(np.mean(s_roll[later] >= S_THRESHOLD)),
-           "sigma_end_roll_deg": float(np.degrees(sigma_roll[-1]))}
-    for j, s in enumerate(model.state_names):
-        out[f"s_end_{s}"] = float(se.s[-1, j])
-        out[f"s_frac_{s}"] = float(np.mean(se.s[later, j] >= S_THRESHOLD))
-    return out
-
-
-def _covariance_run(prepared, **full) -> dict:
-    model = _rocket_model(prepared, full)
-    se = _sensability(model, full)
-    sigma0 = np.sqrt(np.diag(model.P0))
-    out = {}
-    for j, s in enumerate(model.state_names):
-        out[f"sigma_end_{s}"] = float(se.sigma[-1, j])
-        out[f"ratio_{s}"] = float(sigma0[j] / se.sigma[-1, j])
-    return out
-
-
-def _nees_run(prepared, *, runs, seed, **full) -> dict:
-    from navlib.filters import simulate_linear
-
-    model = _rocket_model(prepared, full)
-    sim = simulate_linear(model, runs=int(runs), seed=int(seed))
-    c = sim.consistency()
-    frame = sim.nees_frame()
-    return {"nees_in_bounds": c["nees"], "nees_mean_over_dof": c["nees_mean_over_dof"],
-            "nis_in_bounds": c["nis"], "nis_mean_over_dof": c["nis_mean_over_dof"],
-            "nees_end": float(frame["nees"].iloc[-1]), "nees_dof_end": int(frame["dof"].iloc[-1])}
-
-
-def _claims_run(prepared, **full) -> dict:
-    from navlib.studies import rocket
-
-    coning = {"coning_deg": full["coning_deg"], "coning_hz": full["coning_hz"]} \
-        if full["coning_deg"] else {}
-    analysis = rocket.RocketAnalysis.build(
-        _rocket_model(prepared, full), rocket.SEGMENTS,
-        trajectory=rocket.rocket_trajectory(full["spin_hz"], **coning), eta=full["eta"],
-        nu=full["nu"], d0=full["d0"],
-        settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
-                                       "imu_grade", "coning_deg")})
-    claims = rocket.excitability_claims(analysis) + rocket.sensability_claims(
-        analysis, _quiet_gyro_analysis(full))
-    passed = {c.claim_id: c.verdict == "reproduced" for c in claims}
-    return {**passed, "n_reproduced": int(sum(passed.values()))}
-
-
-@lru_cache(maxsize=4)
-def _quiet_model(spin_hz, coning_deg, coning_hz, preset, imu_grade, gnss_rate_hz,
-                 attitude_error):
-    """The discretised model of :func:`_rocket_prepare` with the gyro noise scaled by
-    ``rocket.QUIET_GYRO_SCALE`` (kept per process: the points of a shared input reuse it)."""
-    from navlib.models.ecef import ecef21_at_epochs, imu_noise_densities
-    from navlib.studies import rocket
-
-    grade = float(imu_grade)
-    noise = {k: v * grade * (rocket.QUIET_GYRO_SCALE if k in rocket.GYRO_NOISE_KEYS else 1.0)
-             for k, v in imu_noise_densities(preset).items()}
-    coning = {"coning_deg": coning_deg, "coning_hz": coning_hz} if coning_deg else {}
-    traj = rocket.rocket_trajectory(spin_hz, **coning)
-    return traj, ecef21_at_epochs(traj, gnss_rate_hz, sensors=noise,
-                                  attitude_error=attitude_error)
-
-
-def _quiet_gyro_analysis(full):
-    """S5's counterfactual of a "claims" point: the same model with the gyro noise and the
-    initial gyro-bias sigma scaled by ``rocket.QUIET_GYRO_SCALE`` (docs/assumptions.md,
-    A-S5-cause)."""
-    from navlib.models.ecef import parameter_sigmas
-    from navlib.studies import rocket
-
-    scale, grade = rocket.QUIET_GYRO_SCALE, float(full["imu_grade"])
-    traj, model = _quiet_model(*(full[k] for k in _ROCKET_SHARED))
-    bg = full["sigma_bg_deg_s"]
-    bg = parameter_sigmas(full["preset"])["sigma_bg_deg_s"] * grade if bg is None else bg
-    quiet = {**full, "sigma_bg_deg_s": bg * scale}
-    return rocket.RocketAnalysis.build(
-        _rocket_model((model, None), quiet), rocket.SEGMENTS, trajectory=traj,
-        eta=full["eta"], nu=full["nu"], d0=full["d0"],
-        settings={k: full[k] for k in ("spin_hz", "attitude_error", "gnss_sigma_m", "preset",
-                                       "imu_grade", "coning_deg")})
-
-
-# ----- launcher family: Beaudoin et al.'s models along the launcher ascent
-
-_LAUNCHER = {"solution": "ins_gps_att", "biases": "GAP", "bias_model": "markov",
-             "duration_s": 150.0, "rate_hz": 200.0}
-
-
-@lru_cache(maxsize=2)
-def _launcher_trajectory(duration_s: float, rate_hz: float):
-    from navlib.trajectory import launcher_ascent
-
-    return launcher_ascent(duration_s=duration_s, rate_hz=rate_hz)
-
-
-def _observability_run(_, *, solution, biases, bias_model, duration_s, rate_hz, stride,
-                       variant) -> dict:
-    from navlib.models.launcher import launcher
-    from navlib.observability import analyze, local_matrix, local_observability
-
-    traj = _launcher_trajectory(float(duration_s), float(rate_hz))
-    model = launcher(solution, biases, bias_model, trajectory=traj)
-    res = local_observability(model, variant=variant, stride=int(stride), n_jobs=1)
-    k = int(res.step[res.step.size // 2])
-    mid = analyze(local_matrix(model, k, variant=variant), rtol=res.rtol,
-                  state_names=model.state_names)
-    out = {"n_states": int(model.n), "n_unobservable": int(res.n_unobservable),
-           "log10_cond": float(res.log10_max_cond), "rank_constant": bool(res.rank_constant)}
-    out.update({f"unobs_{s}": float(v) for s, v in zip(model.state_names,
-                                                       mid.unobservable_share, strict=True)})
-    return out
-
-
-@lru_cache(maxsize=1)
-def _outlier_cache(duration_s: float, rate_hz: float):
-    from navlib.studies.outliers import FilterCache
-
-    return FilterCache(_launcher_trajectory(duration_s, rate_hz), size=1)
-
-
-def _outliers_run(_, *, solution, biases, bias_model, duration_s, rate_hz, channel, magnitude,
-                  time_s, shape, pulse_s, watch, window_s) -> dict:
-    from navlib.outliers import Outlier
-    from navlib.studies.outliers import outlier_response
-
-    outlier = Outlier(channel, float(time_s), float(magnitude), shape,
-                      None if shape != "pulse" else float(pulse_s))
-    res = outlier_response(solution, outlier, watch, biases=biases, bias_model=bias_model,
-                           window=float(window_s),
-                           cache=_outlier_cache(float(duration_s), float(rate_hz)))
-    score = res.score
-    return {"applied": bool(res.applied), "verdict": str(score.verdict),
-            "recovers": score.verdict == "recovers", "peak": float(score.peak),
-            "residual": float(score.residual), "retained": float(score.retained)}
-
-
-EVALUATIONS: dict[str, Evaluation] = {ev.name: ev for ev in (
-    Evaluation("excitability", "rocket flight: e of the 21 states per segment (e_<state>_tauN, "
-               "ne_tauN)", {**_ROCKET_SHARED, **_ROCKET_POINT}, tuple(_ROCKET_SHARED),
-               _excitability_run, _rocket_prepare),
-    Evaluation("sensability", "rocket flight: sensability at the end and share of the epochs "
-               "after the transient with s >= 1/sqrt2, per state and for the roll axis",
-               {**_ROCKET_SHARED, **_ROCKET_POINT}, tuple(_ROCKET_SHARED), _sensability_run,
-               _rocket_prepare),
-    Evaluation("covariance", "rocket flight: physical 1-sigma at the end and sigma_0/sigma_end "
-               "per state", {**_ROCKET_SHARED, **_ROCKET_POINT}, tuple(_ROCKET_SHARED),
-               _covariance_run, _rocket_prepare),
-    Evaluation("nees", "rocket flight: linear Monte-Carlo filter consistency (NEES/NIS share "
-               "inside the 95 % chi-square bounds)",
-               {**_ROCKET_SHARED, **_ROCKET_POINT, "runs": 20, "seed": 0},
-               tuple(_ROCKET_SHARED), _nees_run, _rocket_prepare),
-    Evaluation("claims", "rocket flight: verdicts of the paper's X1-X7 and S1-S8 statements "
-               "(True = reproduced)", {**_ROCKET_SHARED, **_ROCKET_POINT},
-               tuple(_ROCKET_SHARED), _claims_run, _rocket_prepare),
-    Evaluation("observability", "launcher ascent: local observability (unobservable states, "
-               "log10 max condition number; unobservable share per state at mid-mission)",
-               {**_LAUNCHER, "stride": 200, "variant": "time_varying"},
-               ("duration_s", "rate_hz"), _observability_run),
-    Evaluation("outliers", "launcher ascent: outlier recovery verdict of the linear filter "
-               "(recovers / static error, peak, residual, retained)",
-               {**_LAUNCHER, "channel": "gyro_x", "magnitude": 0.002, "time_s": 50.0,
-                "shape": "spike", "pulse_s": 1.0, "watch": "roll", "window_s": 100.0},
-               ("duration_s", "rate_hz", "solution", "biases", "bias_model"), _outliers_run),
-)}
-"""The named evaluations of :func:`sweep`, by name."""
+    Raises
+    ------
+    NavlibInputError
+        For a name nobody registered, listing the known names (import ``navlib.studies``
+        first: the studies register theirs when imported).
+    """
+    if name not in EVALUATIONS:
+        raise NavlibInputError(f"evaluate: unknown evaluation {name!r}; named evaluations: "
+                               f"{sorted(EVALUATIONS)}")
+    return EVALUATIONS[name]
 
 
 # --------------------------------------------------------------------------- tasks
@@ -680,12 +251,11 @@ def _run_batch(evaluate, batch: list, prepared=None) -> tuple[list, float, float
     """
     t0, c0 = time.perf_counter(), time.process_time()
     rows = []
-    with _single_thread_blas():
+    with single_thread_blas():
         for index, point in batch:
-            if isinstance(evaluate, str):
-                ev = EVALUATIONS[evaluate]
-                full = ev.complete(point)
-                row = ev.run(None if prepared is None else prepared[0], **full)
+            if isinstance(evaluate, Evaluation):
+                full = evaluate.complete(point)
+                row = evaluate.run(None if prepared is None else prepared[0], **full)
             else:
                 row = evaluate(**point)
             rows.append((index, _check_row(row, point, point.keys())))
@@ -694,11 +264,11 @@ def _run_batch(evaluate, batch: list, prepared=None) -> tuple[list, float, float
 
 def _batches(evaluate, points: list[tuple[int, dict]], size: int) -> list[tuple]:
     """``(shared_key or None, [(index, point), ...])`` batches, never across shared inputs."""
-    if isinstance(evaluate, str):
-        ev = EVALUATIONS[evaluate]
+    if isinstance(evaluate, Evaluation):
         groups: dict = {}
         for index, point in points:
-            groups.setdefault(ev.shared_key(ev.complete(point)), []).append((index, point))
+            groups.setdefault(evaluate.shared_key(evaluate.complete(point)),
+                              []).append((index, point))
     else:
         groups = {None: points}
     out = []
@@ -734,9 +304,6 @@ def _metadata(evaluate, columns) -> dict:
 
 
 def _write(frame: pd.DataFrame, path: Path, meta: dict) -> None:
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
     table = pa.Table.from_pandas(frame, preserve_index=False)
     table = table.replace_schema_metadata({**(table.schema.metadata or {}),
                                            _METADATA_KEY: json.dumps(meta).encode()})
@@ -752,8 +319,6 @@ def _write(frame: pd.DataFrame, path: Path, meta: dict) -> None:
 
 def _parquet(path: Path, name: str) -> tuple[pd.DataFrame, dict | None]:
     """A Parquet file's table and its navlib sweep metadata (None when absent)."""
-    import pyarrow.parquet as pq
-
     try:
         table = pq.read_table(path)
     except Exception as exc:
@@ -784,30 +349,26 @@ def _load_done(output: Path, meta: dict) -> pd.DataFrame:
 # --------------------------------------------------------------------------- sweep
 
 
-def _validate_evaluate(evaluate, columns, local: bool):
+def _resolve(evaluate, columns, local: bool):
+    """The :class:`Evaluation` named ``evaluate``, or the callable itself, checked."""
     if isinstance(evaluate, str):
-        if evaluate not in EVALUATIONS:
-            raise NavlibInputError(f"evaluate: unknown evaluation {evaluate!r}; named "
-                                   f"evaluations: {sorted(EVALUATIONS)}")
-        reject_unknown(dict.fromkeys(columns), EVALUATIONS[evaluate].parameters,
+        ev = evaluation(evaluate)
+        reject_unknown(dict.fromkeys(columns), ev.parameters,
                        f"grid for evaluation {evaluate!r}")
-        return
+        return ev
     if not callable(evaluate):
         raise NavlibInputError(f"evaluate: expected a named evaluation {sorted(EVALUATIONS)} "
                                f"or a callable, got {type(evaluate).__name__}")
     if not local:
-        import cloudpickle
-
         try:
             cloudpickle.dumps(evaluate)
         except Exception as exc:
             raise NavlibInputError(f"evaluate: cannot be pickled for the Dask workers "
                                    f"({exc}); use a module-level function") from exc
+    return evaluate
 
 
 def _progress_bar(progress, total: int, desc: str):
-    from tqdm.auto import tqdm
-
     show = total >= _PROGRESS_MIN_POINTS if progress is None else bool(progress)
     return tqdm(total=total, desc=desc, disable=not show)
 
@@ -860,7 +421,7 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
     """
     points = grid_points(grid)
     columns = list(points.columns)
-    _validate_evaluate(evaluate, columns, local=scheduler == "synchronous")
+    task = _resolve(evaluate, columns, local=scheduler == "synchronous")
     meta = _metadata(evaluate, columns)
     output = None if output is None else Path(output)
     keys = [_key(row) for row in points.itertuples(index=False)]
@@ -902,26 +463,26 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
 
         desc = f"sweep {evaluate if isinstance(evaluate, str) else meta['evaluate']}"
         with executor(scheduler) as client:
-            n_workers = _n_workers(client)
-            size = _batch_size(len(todo), n_workers, batch_size)
-            batches = _batches(evaluate, todo, size)
-            stats.update(n_tasks=len(batches), n_workers=n_workers)
+            workers = n_workers(client)
+            size = _batch_size(len(todo), workers, batch_size)
+            batches = _batches(task, todo, size)
+            stats.update(n_tasks=len(batches), n_workers=workers)
             start = time.perf_counter()
             with _progress_bar(progress, len(todo), desc) as bar:
                 if client is None:
                     prepared: dict = {}
                     for key, batch in batches:
-                        if _needs_prepare(evaluate) and key not in prepared:
-                            prepared = {key: _prepare_task(evaluate, key)}
+                        if _needs_prepare(task) and key not in prepared:
+                            prepared = {key: _prepare_task(task, key)}
                             stats["prepare_s"] += prepared[key][1]
-                        batch_rows, seconds, cpu = _run_batch(evaluate, batch,
+                        batch_rows, seconds, cpu = _run_batch(task, batch,
                                                               prepared.get(key))
                         save(batch_rows)
                         stats["compute_s"] += seconds
                         stats["compute_cpu_s"] += cpu
                         bar.update(len(batch_rows))
                 else:
-                    _run_on(client, evaluate, batches, save, bar, stats)
+                    _run_on(client, task, batches, save, bar, stats)
             stats["wall_s"] = time.perf_counter() - start
     frame = pd.concat([points, pd.DataFrame([rows[i] for i in range(len(points))])], axis=1)
     if output is not None:
@@ -939,7 +500,7 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
 
 
 def _needs_prepare(evaluate) -> bool:
-    return isinstance(evaluate, str) and EVALUATIONS[evaluate].prepare is not None
+    return isinstance(evaluate, Evaluation) and evaluate.prepare is not None
 
 
 def _seconds(prepared: tuple) -> float:
@@ -948,7 +509,7 @@ def _seconds(prepared: tuple) -> float:
 
 def _run_on(client, evaluate, batches, save, bar, stats) -> None:
     """Submit the batches (after their shared inputs) and save results as they arrive."""
-    from distributed import as_completed
+    from distributed import as_completed  # heavy (dask.distributed): only with a cluster
 
     prepared = {}
     if _needs_prepare(evaluate):

@@ -336,14 +336,14 @@ def test_claims_reading_of_a_sensitivity_variant_prepares_no_filter(cache_on, mo
     from navlib.studies import outliers as study
 
     traj = launcher_ascent(duration_s=20.0, rate_hz=20.0)
-    options = dict(time=8.0, window=5.0)
+    options = dict(outlier_time_s=8.0, window=5.0)
     study.assumption_sensitivity({"text's A1": {"a1_sign": -1.0}}, traj, **options)
 
     def no_preparation(*args, **kwargs):
         raise AssertionError("a filter was prepared")
 
     with monkeypatch.context() as m:
-        m.setattr(study, "prepare_linear", no_preparation)
+        m.setattr(study.response, "prepare_linear", no_preparation)
         st, _ = study.study_claims(study.FilterCache(traj, a1_sign=-1.0), shapes=("spike",),
                                    **options)
     assert ("T4", "ins_gps_att_rt", "divergence") in st.responses

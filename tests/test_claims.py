@@ -7,8 +7,9 @@ import pytest
 
 from navlib import NavlibInputError
 from navlib.studies import claims as engine
-from navlib.studies import launcher, outliers, rocket_profile
+from navlib.studies import launcher, outliers
 from navlib.studies.claims import Check, check, claim, verdict_of, with_failed_headline
+from navlib.studies.rocket import profile as rocket_profile
 
 
 # ---------------------------------------------------------------- checks and the rule
@@ -233,7 +234,7 @@ def test_table2_claims_can_fail():
 def test_outlier_claims_can_fail_and_t3_does_not_count_the_absent_channel():
     traj = outliers.default_trajectory(quick=True)
     cache = outliers.FilterCache(traj, size=4)
-    st, cov = outliers.study_claims(cache, window=20.0, time=30.0, shapes=("spike",))
+    st, cov = outliers.study_claims(cache, window=20.0, outlier_time_s=30.0, shapes=("spike",))
     t3 = next(c for c in st.claims if c.claim_id == "T3")
     assert len(t3.checks) == 1 and "INS/GPS + RT" in t3.checks[0].name
     assert "not checked" in t3.assumption
@@ -244,9 +245,9 @@ def test_outlier_claims_can_fail_and_t3_does_not_count_the_absent_channel():
     r = next(iter(longer.responses.values()))
     assert r.score.window == 40.0
     # the non-RT responses of a study that differs only in RT-only options are reused
-    again = outliers.paper_tests(cache=cache, window=20.0, time=30.0, shapes=("spike",),
+    again = outliers.paper_tests(cache=cache, window=20.0, outlier_time_s=30.0, shapes=("spike",),
                                  reuse=st)
     key = ("T2", "ins_gps", "spike")
     assert again.responses[key].score == st.responses[key].score
     with pytest.raises(NavlibInputError, match="reuse"):
-        outliers.paper_tests(cache=cache, window=20.0, time=30.0, biases="GA", reuse=st)
+        outliers.paper_tests(cache=cache, window=20.0, outlier_time_s=30.0, biases="GA", reuse=st)

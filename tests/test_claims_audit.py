@@ -157,15 +157,15 @@ def test_t3_affected_is_measured_against_the_filter_sigma():
         score = types.SimpleNamespace(peak=peak, sigma_end=1.0)
         return types.SimpleNamespace(solution="ins_gps_rt", score=score)
 
-    assert not outliers._outcome_check(response(1e-6), "affected").passed
-    assert outliers._outcome_check(response(0.5), "affected").passed
-    assert outliers._outcome_check(response(1e-6), "unaffected").passed
+    assert not outliers.claims._outcome_check(response(1e-6), "affected").passed
+    assert outliers.claims._outcome_check(response(0.5), "affected").passed
+    assert outliers.claims._outcome_check(response(1e-6), "unaffected").passed
 
 
 # ---------------------------------------------------------------- España rocket
 @pytest.fixture(scope="module")
 def analysis():
-    return rocket.analyze()
+    return rocket.excitability_study()
 
 
 def test_s5_tests_its_cause(analysis):
@@ -225,7 +225,7 @@ def test_conclusions_1_and_3_follow_the_table():
 def test_espana_rank_claim_is_by_construction(analysis):
     c = rocket.claim_xrank(analysis)
     assert c.basis == "by construction" and not c.reproduced
-    assert "X-rank" in [r.claim_id for r in rocket._baseline_claims()]
+    assert "X-rank" in [r.claim_id for r in rocket.assumptions._baseline_claims()]
 
 
 @pytest.fixture(scope="module")

@@ -95,9 +95,9 @@ def test_rocket_robustness_equals_separate_analyses():
     assert len(variants) == len(points)
     for (sg, eta, nu), (point, results) in zip(points, variants, strict=True):
         assert (point["sigma_sg_ppm"], point["eta"], point["nu"]) == (sg, eta, nu)
-        a = rocket.analyze(eta=eta, nu=nu, sigma_sg_ppm=sg)
+        a = rocket.excitability_study(eta=eta, nu=nu, sigma_sg_ppm=sg)
         direct = rocket.excitability_claims(a) + rocket.sensability_claims(
-            a, rocket.quiet_gyro_analysis(rocket.analyze(sigma_sg_ppm=sg)).with_settings(
+            a, rocket.quiet_gyro_analysis(rocket.excitability_study(sigma_sg_ppm=sg)).with_settings(
                 eta=eta, nu=nu))
         assert [(r.claim_id, r.ours, r.checks_text()) for r in results] == \
             [(r.claim_id, r.ours, r.checks_text()) for r in direct]

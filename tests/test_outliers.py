@@ -169,7 +169,8 @@ def test_gyro_spike_truth_jump_is_rate_times_step(cache, flight):
 
 
 def test_t1_to_t4_structure_on_a_short_flight(cache):
-    st_ = study.paper_tests(cache=cache, window=15.0, shapes=("spike", "step"), time=20.0)
+    st_ = study.paper_tests(cache=cache, window=15.0, shapes=("spike", "step"),
+                             outlier_time_s=20.0)
     table = st_.table()
     assert set(table.test) == {"T1", "T2", "T3", "T4"}
     t3 = table[(table.test == "T3")]
@@ -245,14 +246,14 @@ def test_rt_only_options_leave_the_non_rt_models_unchanged(flight):
 def test_assumption_sensitivity_reuses_filters_without_changing_results(flight):
     variants = {"printed": dict(a1_sign=1.0), "text": dict(a1_sign=-1.0),
                 "calm": dict(a1_sign=1.0, sigma_wind=0.001)}
-    kw = dict(tests=("T2", "T4"), window=15.0, time=20.0)
+    kw = dict(tests=("T2", "T4"), window=15.0, outlier_time_s=20.0)
     fresh = study.assumption_sensitivity(variants, flight, **kw)
     shared = study.FilterCache(flight, size=4, a1_sign=1.0)
-    study.paper_tests(cache=shared, tests=("T2", "T4"), window=15.0, time=20.0)
+    study.paper_tests(cache=shared, tests=("T2", "T4"), window=15.0, outlier_time_s=20.0)
     reused = study.assumption_sensitivity(variants, **kw, cache=shared)
     pd.testing.assert_frame_equal(fresh, reused)
     # the text's A1 variant takes the non-RT filters of the shared cache as they are
     other = study.FilterCache(flight, a1_sign=-1.0)
-    study._adopt(other, shared)
+    study.adopt_filters(other, shared)
     assert {k[0] for k in other._items} == {"ins_gps", "ins_gps_att"}
     assert other.get("ins_gps") is shared.get("ins_gps")

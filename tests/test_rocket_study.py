@@ -15,7 +15,7 @@ from navlib.studies.verdict import VERDICTS
 
 @pytest.fixture(scope="module")
 def baseline():
-    return rocket.analyze()
+    return rocket.excitability_study()
 
 
 def test_chain_shapes_and_cache(baseline):
@@ -57,7 +57,7 @@ def test_baseline_outcomes(baseline):
     # s(theta_x), s(theta_y) already rise on the pad: "only after" fails (A-S4-only-after)
     assert verdicts["S4"] == "partly"
     assert verdicts["S7"] == "not reproduced"  # sg_x becomes sensible: the tension
-    s_sgx = baseline.sensability.s[:, rocket.STATE_NAMES.index("sg_x")]
+    s_sgx = baseline.sensability.s[:, rocket.flight.STATE_NAMES.index("sg_x")]
     assert np.all(s_sgx[40:] > 0.99)
 
 
@@ -104,7 +104,7 @@ def test_direction_sensability_matches_canonical_components(baseline):
 
 def test_with_eta_and_nu_equal_recomputation(baseline):
     fast = baseline.with_eta(1e-2).with_nu(0.99)
-    slow = rocket.analyze(eta=1e-2, nu=0.99)
+    slow = rocket.excitability_study(eta=1e-2, nu=0.99)
     np.testing.assert_allclose(fast.e(), slow.e())
     np.testing.assert_allclose(fast.sensability.s, slow.sensability.s)
     assert fast.settings["eta"] == 1e-2 and fast.settings["nu"] == 0.99
@@ -119,7 +119,7 @@ def test_filter_d0_uses_the_covariance_at_each_segment_start(baseline):
 
 
 def test_frames_give_the_same_position_velocity_metrics(baseline):
-    body = rocket.analyze(attitude_error="body")
+    body = rocket.excitability_study(attitude_error="body")
     # psi = C dtheta is a time-varying change of the attitude coordinates only, so P/V
     # sensability (all epochs) agrees closely; attitude components differ (spec A4)
     np.testing.assert_allclose(body.sensability.sigma[:, :6], baseline.sensability.sigma[:, :6],
@@ -192,10 +192,10 @@ def test_sweep_grid_mode_and_bad_input():
 
 
 def test_imu_grade_scales_noise_and_parameter_sigmas():
-    scaled, sigmas = rocket._graded(None, 10.0)
+    scaled, sigmas = rocket.sensitivity._graded(None, 10.0)
     assert scaled["arw_rad_sqrt_s"][0] == pytest.approx(10 * 1.454e-4, rel=1e-3)
     assert sigmas["sigma_sg_ppm"] == pytest.approx(50000.0)
-    assert rocket._graded("motionpak_tactical", 1.0) == ("motionpak_tactical", {})
+    assert rocket.sensitivity._graded("motionpak_tactical", 1.0) == ("motionpak_tactical", {})
 
 
 def test_measure_comparison(baseline):
@@ -228,23 +228,23 @@ def test_frames_are_tidy(baseline):
 
 def test_bad_input(baseline):
     with pytest.raises(NavlibInputError, match="attitude_error"):
-        rocket.analyze(attitude_error="ned")
+        rocket.excitability_study(attitude_error="ned")
     with pytest.raises(NavlibInputError, match="segments"):
-        rocket.analyze(segments=[(10.0, 5.0)])
+        rocket.excitability_study(segments=[(10.0, 5.0)])
     with pytest.raises(NavlibInputError, match="segments"):
-        rocket.analyze(segments=[(0.0, 100.0)])
+        rocket.excitability_study(segments=[(0.0, 100.0)])
     two = replace(baseline, segments=baseline.segments[:2],
                   excitability=baseline.excitability[:2])
     with pytest.raises(NavlibInputError, match="three segments"):
         rocket.claim_x1(two)
     with pytest.raises(NavlibInputError, match="unknown"):
-        rocket.analyze(sigma_pos=3.0)
+        rocket.excitability_study(sigma_pos=3.0)
     with pytest.raises(NavlibInputError, match="spin_hz"):
         rocket.rocket_trajectory(-1.0)
 
 
 def test_metrics_on_custom_segments():
-    a = rocket.analyze(segments=[(0, 10), (10, 30)], eta=1e-2)
+    a = rocket.excitability_study(segments=[(0, 10), (10, 30)], eta=1e-2)
     assert a.labels == ("tau1", "tau2") and len(a.excitability) == 2
     assert isinstance(a.excitability[0], metrics.ExcitabilityResult)
 

@@ -9,9 +9,11 @@ import pandas as pd
 import pytest
 
 from navlib import NavlibInputError, sweep
+from navlib.filters.monte_carlo import monte_carlo_linear
 from navlib.metrics import sensability_model
 from navlib.models.launcher import launcher
 from navlib.observability import local_observability
+from navlib.parallel import map_tasks
 from navlib.studies.rocket import rocket_chain
 from navlib.trajectory import launcher_ascent
 
@@ -63,8 +65,10 @@ def test_grid_validation(grid, match):
 
 
 def test_evaluate_and_scheduler_validation(tmp_path):
-    with pytest.raises(NavlibInputError, match="unknown evaluation"):
+    with pytest.raises(NavlibInputError, match=r"unknown evaluation.*'sensability'"):
         sweep.sweep(GRID, "no_such_thing", scheduler="synchronous")
+    with pytest.raises(NavlibInputError, match=r"expected a navlib\.sweep\.Evaluation"):
+        sweep.register(_quadratic)
     with pytest.raises(NavlibInputError, match="unknown keyword"):
         sweep.sweep({"spin_hz": [1.0], "gyro_colour": ["red"]}, "sensability",
                     scheduler="synchronous")
@@ -165,10 +169,8 @@ def test_cluster_results_equal_serial_exactly(client):
 
 
 def test_map_tasks_in_order_with_shared(client):
-    out = sweep.map_tasks(_scaled, [1.0, 2.0, 3.0], client, shared={"factor": np.arange(3.0)})
+    out = map_tasks(_scaled, [1.0, 2.0, 3.0], client, shared={"factor": np.arange(3.0)})
     assert [o.tolist() for o in out] == [[0.0, 1.0, 2.0], [0.0, 2.0, 4.0], [0.0, 3.0, 6.0]]
-    assert sweep.map_tasks(_scaled, [2.0], "synchronous",
-                           shared={"factor": np.ones(2)})[0].tolist() == [2.0, 2.0]
 
 
 def _scaled(x, factor):
@@ -244,8 +246,8 @@ def test_monte_carlo_split_over_tasks(client):
 
     model = launcher("ins_gps", "G", "markov",
                      trajectory=launcher_ascent(duration_s=10.0, rate_hz=20.0))
-    serial = simulate_linear(model, runs=7, seed=3, scheduler="synchronous", runs_per_task=3)
-    remote = simulate_linear(model, runs=7, seed=3, scheduler=client, runs_per_task=3)
+    serial = monte_carlo_linear(model, runs=7, seed=3, scheduler="synchronous", runs_per_task=3)
+    remote = monte_carlo_linear(model, runs=7, seed=3, scheduler=client, runs_per_task=3)
     assert serial.runs == 7
     for name in ("truth", "estimate", "nees", "nis", "innovation", "P"):
         np.testing.assert_array_equal(getattr(serial, name), getattr(remote, name))
@@ -254,7 +256,7 @@ def test_monte_carlo_split_over_tasks(client):
     alone = simulate_linear(model, runs=3, seed=child, record_every=1)
     np.testing.assert_array_equal(serial.truth[:, 3:6], alone.truth)
     with pytest.raises(NavlibInputError, match="rng"):
-        simulate_linear(model, runs=4, rng=np.random.default_rng(0), scheduler="synchronous")
+        monte_carlo_linear(model, runs=4, rng=np.random.default_rng(0), scheduler="synchronous")
 
 
 # --------------------------------------------------------------------------- heat maps
@@ -357,7 +359,7 @@ def test_named_claims_and_outliers_match_the_studies():
     from navlib.studies.outliers import outlier_response
 
     claims = sweep.EVALUATIONS["claims"](nu=0.99)
-    analysis = rocket.analyze(nu=0.99)
+    analysis = rocket.excitability_study(nu=0.99)
     table = rocket.claims_table(analysis)
     expected = dict(zip(table["claim_id"], table["verdict"] == "reproduced", strict=True))
     assert {k: claims[k] for k in expected} == expected

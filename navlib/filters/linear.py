@@ -442,8 +442,8 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
                     noise: bool = True, initial_error: bool = True, method: str = "euler",
                     update_every: int = 1, measured=None, record_every: int | None = None,
                     P0=None, noise_input=None, noise_names: Sequence[str] = (),
-                    progress: Callable[[int, int], None] | None = None, scheduler=None,
-                    runs_per_task: int = 25, nees: bool = True) -> LinearSimulation:
+                    progress: Callable[[int, int], None] | None = None,
+                    nees: bool = True) -> LinearSimulation:
     """Monte-Carlo simulation of the linear error-state Kalman filter, runs vectorised.
 
     Parameters
@@ -479,11 +479,6 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
         Noise input matrices for a DiscreteModel (IMU outliers only).
     progress : callable(done, total), optional
         Called every few hundred steps (e.g. to advance a progress bar).
-    scheduler : optional
-        Split the runs into Dask tasks of ``runs_per_task`` runs
-        (:func:`navlib.sweep.monte_carlo_linear`: seeds from ``SeedSequence(seed)``, results
-        independent of the scheduler; ``progress`` is then a progress bar of the tasks);
-        default None: one vectorised batch here.
     nees : bool
         Compute the NEES of the recorded epochs (default). False leaves ``nees`` and
         ``nees_dof`` None: a noise-free response has no use for them, and their
@@ -499,15 +494,6 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     Propagation over step k uses ``F_k``, the noise ``L_k xi_k`` and the IMU outlier input
     ``Gamma_k u(t_k)``. The covariance and gains are the same for every run.
     """
-    if scheduler is not None:
-        from navlib.sweep import monte_carlo_linear
-
-        return monte_carlo_linear(model, runs=runs, seed=seed, runs_per_task=runs_per_task,
-                                  scheduler=scheduler, record_every=record_every,
-                                  **({"rng": rng} if rng is not None else {}),
-                                  outliers=outliers, noise=noise, initial_error=initial_error,
-                                  method=method, update_every=update_every, measured=measured,
-                                  P0=P0, noise_input=noise_input, noise_names=noise_names)
     outliers = as_outliers(outliers)
     prepared = prepare_linear(model, method=method, update_every=update_every,
                               measured=measured, P0=P0, noise_input=noise_input,

@@ -7,11 +7,21 @@ evaluates its claims in code (claim, our number, checks) and returns tidy tables
 * ``ssac``: Silva et al. (2017), stationary self-alignment and calibration.
 * ``rocket``: España, Carrizo & Giribet (2019), excitability and sensability (X1-X7, S1-S8).
 * ``outliers``: Beaudoin et al. (2018) outlier tests T1-T4 and Figs. 7, 10, 11.
-* ``rocket_profile``: the sounding-rocket profile of España et al. (2019) §5.1 / Fig. 1
+* ``rocket.profile``: the sounding-rocket profile of España et al. (2019) §5.1 / Fig. 1
   checked on a synthesised trajectory (by construction: the generator's inputs).
 * ``assess``: the same analyses on a user's own recorded flight.
 * ``verdict``: compatibility names for the claim record.
+
+Importing this package imports the studies that register named evaluations of
+:func:`navlib.sweep.sweep` (``rocket``, ``outliers``), so a name resolves after
+``import navlib.studies``.
 """
+
+# the registration order is the order of ``python -m navlib sweep --list``
+# isort: off
+from navlib.studies import rocket  # noqa: F401 - registers its named sweep evaluations
+from navlib.studies import outliers  # noqa: F401 - registers its named sweep evaluations
+# isort: on
 
 
 def all_claims(quick: bool = False, only=None, robustness: bool = True):

@@ -511,7 +511,9 @@ class Study:
 
     @property
     def module(self) -> str:
-        return getattr(self.baseline, "__module__", "").rsplit(".", 1)[-1]
+        """The study's module under :mod:`navlib.studies` (a package's name for its modules)."""
+        return getattr(self.baseline, "__module__", "").removeprefix("navlib.studies.") \
+            .split(".")[0]
 
 
 _REGISTRY: dict[str, Study] = {}
@@ -525,7 +527,7 @@ def register(study: Study) -> Study:
     return study
 
 
-STUDY_MODULES = ("rocket_profile", "rocket", "launcher", "outliers", "ssac")
+STUDY_MODULES = ("rocket", "launcher", "outliers", "ssac")
 """The modules under :mod:`navlib.studies` that register claims, in table order."""
 
 

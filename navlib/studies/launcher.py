@@ -290,7 +290,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     progress : callable, optional
         Called as ``progress(i, total, config)`` before each configuration (local run).
     scheduler : optional
-        Run the configurations as Dask tasks (:func:`navlib.sweep.map_tasks`: a Client, an
+        Run the configurations as Dask tasks (:func:`navlib.parallel.map_tasks`: a Client, an
         address ``tcp://host:port``, ``"processes"``...), the trajectory scattered once to
         the workers; default None: here, ``n_jobs`` threads per configuration.
     **model_kw
@@ -308,8 +308,8 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     configs = configurations(solutions)
     options = {"window": window, "variant": variant, "stride": stride, "rtol": rtol,
                "method": method}
-    if scheduler is not None:  # one task per configuration (navlib.sweep.map_tasks)
-        from navlib.sweep import map_tasks
+    if scheduler is not None:  # one task per configuration (navlib.parallel.map_tasks)
+        from navlib.parallel import map_tasks
 
         rows = map_tasks(partial(_config_row, n_jobs=1, model_kw=model_kw, **options),
                          configs, scheduler, shared={"trajectory": trajectory}, desc="Table 2")

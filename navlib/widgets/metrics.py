@@ -116,7 +116,7 @@ class ExcitabilityPanel(_ClaimsPanel):
 
     def _base(self, frame: str):
         if frame not in self._bases:  # model (cached chain) + sensability recursion
-            self._bases[frame] = rocket.analyze(attitude_error=frame, **self.options)
+            self._bases[frame] = rocket.excitability_study(attitude_error=frame, **self.options)
         return self._bases[frame]
 
     def compute(self):
@@ -166,7 +166,7 @@ class SensabilityPanel(_ClaimsPanel):
 
     def __init__(self, nu: float = 0.985, states=("P_x", "V_x"), dpi: float = 72.0,
                  **analyze_options):
-        self.base = rocket.analyze(nu=nu, **analyze_options)
+        self.base = rocket.excitability_study(nu=nu, **analyze_options)
         low, high = metrics.nu_range(len(STATE_NAMES))
         controls = {
             "nu": widgets.FloatSlider(value=nu, min=round(low + 5e-4, 4), max=0.9995,

@@ -4,7 +4,7 @@
 in this process (``display`` collects the shown objects instead of rendering them) and
 flattens every table, Markdown text and widget status the notebook shows into rows
 ``item, row, column, value``; :func:`claim_values` does the same for the claims engine's
-outlier study (:func:`navlib.studies.outliers._variants`: baseline and robustness set).
+outlier study (:func:`navlib.studies.outliers.assumptions._variants`: baseline and robustness set).
 Numbers are written with 17 significant digits, text as it is.
 
 ``python tests/outlier_tables.py`` rewrites the reference files in ``tests/regression/data/``
@@ -92,9 +92,9 @@ def claim_values(quick: bool) -> pd.DataFrame:
     from navlib.studies import outliers
     from navlib.studies.claims import claims_frame, studies, study_robustness
 
-    outliers._CACHE.clear()
+    outliers.assumptions._variants.cache_clear()
     rows = []
-    for (window, sign), claims in outliers._variants(quick).items():
+    for (window, sign), claims in outliers.assumptions._variants(quick).items():
         frame = claims_frame(claims)[["claim_id", "ours", "verdict", "checks"]]
         rows += _rows(f"variant {window:g} {sign:+g}", frame.set_index("claim_id"))
     robustness = study_robustness(studies()["outliers"], quick)

@@ -22,6 +22,7 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim
+from navlib.studies.rocket.flight import rocket_trajectory
 
 PAPER = {"ignition_s": 18.0, "burnout_s": 46.0, "free_flight_s": 60.0, "despin_s": 73.0,
          "end_s": 86.0, "peak_f_x": 110.0, "free_flight_f": 0.5, "free_flight_alt_m": 40e3,
@@ -152,10 +153,8 @@ def rocket_profile_claims(traj, *, rel_tol: float = 0.05, time_tol_s: float = 1.
 
 
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
-    from navlib.studies.rocket import rocket_trajectory
-
     return rocket_profile_claims(rocket_trajectory())
 
 
 engine.register(engine.Study("rocket_profile", "España, Carrizo & Giribet (2019)",
-                             _baseline_claims))
+                             _baseline_claims, order=0))

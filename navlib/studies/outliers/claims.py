@@ -1,0 +1,191 @@
+"""T1-T4 (Beaudoin et al. 2018, §4.2) and Figs. 7, 10, 11 as claims judged by the one rule of
+:mod:`navlib.studies.claims`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from navlib.models.launcher import SOLUTION_LABELS
+from navlib.outliers import PAPER_TESTS
+from navlib.studies.claims import Check, ClaimResult, check, claim
+from navlib.studies.outliers.response import OutlierResponse, OutlierStudy
+
+
+def _fmt(r: OutlierResponse) -> str:
+    s = r.score
+    if s.verdict == "unaffected":
+        return f"{SOLUTION_LABELS[r.solution]}: unaffected (channel absent)"
+    return (f"{SOLUTION_LABELS[r.solution]}: {s.verdict} (retained {s.retained:.2f}, "
+            f"tau {s.time_constant:.0f} s, residual {s.residual:.2g} = "
+            f"{s.residual_vs_3sigma:.2g} x 3 sigma)")
+
+
+AFFECTED = 0.1
+"""An outlier "affects" a solution when the peak of the error it induces reaches this share
+of the filter's sigma at the end of the window (docs/assumptions.md, A-T3-affected): a
+non-zero peak alone would pass for any round-off."""
+
+
+def _outcome_check(r: OutlierResponse, want: str) -> Check:
+    """The paper's outcome for one solution as a check on our recovery score: "static
+    error" = retained fraction above 1/e, "recovers" = at most 1/e, "affected" = a peak of
+    at least :data:`AFFECTED` of the filter sigma, "unaffected" = below it."""
+    label = SOLUTION_LABELS[r.solution]
+    s = r.score
+    if want in ("affected", "unaffected"):
+        ratio = s.peak / s.sigma_end if s.sigma_end > 0 else float("nan")
+        return check(f"{label}: peak of the induced error / filter sigma", ratio,
+                     ">=" if want == "affected" else "<", AFFECTED, True)
+    op = ">" if want == "static error" else "<="
+    return check(f"{label}: retained fraction after {s.window:g} s ({want})", s.retained, op,
+                 s.recovered_fraction, True)
+
+
+def _base_assumption(study: OutlierStudy, shape: str) -> str:
+    settings = study.settings
+    return (f"linear KF, {settings.get('biases') or 'no'} biases "
+            f"({settings.get('bias_model')}), {shape} outlier, window "
+            f"{settings.get('window'):g} s, a1_sign {settings.get('a1_sign', 1):+g}; "
+            "'recovers' = retained <= 1/e")
+
+
+def claim_test(study: OutlierStudy, tid: str, shape: str = "spike") -> ClaimResult | None:
+    """One of T1-T4 from the study's ``shape`` runs (None when they were not run).
+
+    Each solution's reported outcome is a headline check on our recovery score (see
+    :func:`_outcome_check`). A solution the outlier cannot reach (T3's INS/GPS has no RT
+    channel) is shown but not checked: its "unaffected" holds by construction.
+    """
+    test = PAPER_TESTS[tid]
+    rs = [study.responses.get((tid, sol, shape)) for sol in test.solutions]
+    if any(r is None for r in rs):
+        return None
+    other = "step" if shape == "spike" else "spike"
+    checks = [_outcome_check(r, test.reported[r.solution]) for r in rs if r.applied]
+    ours = "; ".join(_fmt(r) for r in rs)
+    alt = [study.responses.get((tid, sol, other)) for sol in test.solutions]
+    if all(a is not None for a in alt):
+        ours += f". With a {other}: " + ", ".join(
+            f"{SOLUTION_LABELS[a.solution]} {a.score.verdict}" for a in alt)
+    paper = "; ".join(f"{SOLUTION_LABELS[s]}: {v}" for s, v in test.reported.items())
+    absent = [SOLUTION_LABELS[r.solution] for r in rs if not r.applied]
+    return claim(tid, test.description, paper, ours, checks,
+                 assumption=_base_assumption(study, shape) + (
+                     f"; not checked (channel absent, unaffected by construction): "
+                     f"{', '.join(absent)}" if absent else ""),
+                 depends_on=("window", "a1_sign"))
+
+
+def claim_t4_detail(study: OutlierStudy, shape: str = "spike") -> ClaimResult | None:
+    """T4's detail (Figs. 12-13): with RT the roll error is captured faster at first, then
+    corrected more slowly, and the divergence is underestimated (None without the T4
+    capture fractions)."""
+    cap = study.capture
+    if not {"ins_gps_att_first", "ins_gps_att_rt_first"} <= set(cap):
+        return None
+    return claim(
+        "T4-detail",
+        "With RT the roll error is captured faster at first, then corrected more slowly; "
+        "the launcher divergence is then underestimated (Figs. 12-13)",
+        "faster first capture, slower correction, divergence underestimated",
+        f"captured fraction after 0.05 s: RT {cap['ins_gps_att_rt_first']:.3f} vs "
+        f"{cap['ins_gps_att_first']:.3f}; after 5 s: RT {cap['ins_gps_att_rt_later']:.3f} "
+        f"vs {cap['ins_gps_att_later']:.3f}; estimated/true divergence (median after "
+        f"+5 s) {cap.get('divergence_ratio', np.nan):.2f}",
+        [check("captured fraction after 0.05 s, RT minus no RT",
+               cap["ins_gps_att_rt_first"] - cap["ins_gps_att_first"], ">", 0.0, True),
+         check("captured fraction after 5 s, RT minus no RT",
+               cap["ins_gps_att_rt_later"] - cap["ins_gps_att_later"], "<", 0.0),
+         check("estimated / true divergence after +5 s",
+               cap.get("divergence_ratio", np.nan), "<", 1.0)],
+        assumption=_base_assumption(study, shape), depends_on=("a1_sign",))
+
+
+def outlier_claims(study: OutlierStudy, shape: str = "spike") -> list[ClaimResult]:
+    """T1-T4 (:func:`claim_test`) and the T4 detail (:func:`claim_t4_detail`) from a
+    study's ``shape`` runs, judged by the claims engine."""
+    claims = [claim_test(study, tid, shape) for tid in PAPER_TESTS]
+    claims.append(claim_t4_detail(study, shape))
+    return [c for c in claims if c is not None]
+
+
+def claim_f10(correlation: pd.DataFrame, rho_threshold: float = -0.9) -> ClaimResult:
+    """Fig. 10: attitude error (body axes) and launcher divergence almost perfectly
+    negatively correlated over the first 5 s (median rho at most ``rho_threshold`` on every
+    axis)."""
+    rho = correlation.dropna().groupby("axis")["rho"]
+    worst = rho.max()                      # closest to zero over the window
+    median = rho.median()
+    axes = [a for a in ("roll", "pitch", "yaw") if a in median]
+    return claim(
+        "F10", "Attitude error (body axes) and launcher divergence are almost perfectly "
+        "negatively correlated over the first 5 s (INS/GPS + RT)", "rho ~ -1",
+        ", ".join(f"{a}: median {median[a]:+.3f} (max {worst[a]:+.3f})" for a in axes),
+        [check("largest per-axis median rho", float(median[axes].max()) if axes else np.nan,
+               "<=", rho_threshold, True)], basis="by construction",
+        assumption=f"'almost perfect' = median rho <= {rho_threshold} on every axis; by "
+                   "construction (A-F10): the RT measures attitude error plus divergence "
+                   "without noise, so rho is -1 whatever the wind (x1, x100, x1e4 give -1.000)",
+        depends_on=("sigma_wind",))
+
+
+def _rms_sigma(sigma: pd.DataFrame, solution: str, axis: str) -> float:
+    """RMS of a solution's sigma about ``axis`` after its first 10 s."""
+    sel = sigma[(sigma.solution == solution) & (sigma.axis == axis)]
+    late = sel[sel.t >= sel.t.min() + 10.0]
+    return float(np.sqrt(np.mean(late.sigma ** 2))) if len(late) else np.nan
+
+
+def claim_roll_sigma(cid: str, sigma: pd.DataFrame, ratios: pd.Series | None = None,
+                     ratio_threshold: float = 0.5, improved: float = 0.9
+                     ) -> ClaimResult | None:
+    """Fig. 7 (``cid`` "F7", INS/GPS) or Fig. 11 ("F11", INS/GPS/att): the RT greatly lowers
+    the roll sigma (RMS ratio RT / no RT at most ``ratio_threshold``); for Fig. 7 pitch, yaw
+    and (with ``ratios`` from :func:`sigma_ratios`) every non-attitude state keep a ratio of
+    at least ``improved``. None when ``sigma`` lacks the two solutions."""
+    (a, b), text = {"F7": (("ins_gps", "ins_gps_rt"), "INS/GPS"),
+                    "F11": (("ins_gps_att", "ins_gps_att_rt"), "INS/GPS/att")}[cid]
+    if not {a, b} <= set(sigma.solution):
+        return None
+    r = {ax: _rms_sigma(sigma, b, ax) / _rms_sigma(sigma, a, ax)
+         for ax in ("roll", "pitch", "yaw")}
+    ours = "RMS sigma after 10 s, RT / no RT: " + ", ".join(
+        f"{ax} {v:.2g}" for ax, v in r.items())
+    checks = [check("roll sigma RT / no RT", r["roll"], "<=", ratio_threshold, True)]
+    paper = "roll sigma greatly reduced"
+    if cid == "F7":
+        paper += "; all other estimates not improved"
+        checks.append(check("smallest of pitch, yaw sigma RT / no RT",
+                            min(r["pitch"], r["yaw"]), ">=", improved))
+        if ratios is not None:
+            others = ratios[[not s.startswith("psi") for s in ratios.index]]
+            better = others[others < improved]
+            checks.append(check("non-attitude states improved by the RT", len(better),
+                                "==", 0))
+            ours += (f"; other states improved (ratio < {improved}): "
+                     + (", ".join(f"{s} {v:.2f}" for s, v in better.items())
+                        if len(better) else "none"))
+    else:
+        paper += " even with attitude sensors"
+    return claim(
+        cid, f"The RT greatly lowers the roll sigma of {text}", paper, ours, checks,
+        assumption=f"'greatly' = ratio <= {ratio_threshold}; 'not improved' = ratio >= "
+                   f"{improved}", depends_on=("a1_sign",))
+
+
+def covariance_claims(correlation: pd.DataFrame, sigma: pd.DataFrame,
+                      ratios: pd.Series | None = None, rho_threshold: float = -0.9,
+                      ratio_threshold: float = 0.5, improved: float = 0.9
+                      ) -> list[ClaimResult]:
+    """Fig. 10 (:func:`claim_f10`) and Figs. 7 / 11 (:func:`claim_roll_sigma`), judged by
+    the claims engine.
+
+    "Greatly reduced" = an RMS sigma ratio RT / no RT at most ``ratio_threshold``; Fig. 7's
+    "all other estimates are not improved" = pitch, yaw and (with ``ratios`` from
+    :func:`sigma_ratios`) every non-attitude state keep a ratio of at least ``improved``.
+    """
+    claims = [claim_f10(correlation, rho_threshold)]
+    claims += [claim_roll_sigma(cid, sigma, ratios, ratio_threshold, improved)
+               for cid in ("F7", "F11")]
+    return [c for c in claims if c is not None]

@@ -1,0 +1,125 @@
+"""The declared assumption set of the rocket claims (robustness), the stored joint search of
+that space, and the study's registration with the claims engine."""
+
+from __future__ import annotations
+
+import itertools
+
+import pandas as pd
+
+from navlib._validation import reject_unknown
+from navlib.errors import NavlibInputError
+from navlib.models.ecef import P0_DEFAULTS
+from navlib.resources import data_dir
+from navlib.studies import claims as engine
+from navlib.studies.claims import ClaimResult
+from navlib.studies.rocket.claims import claim_xrank, excitability_claims, sensability_claims
+from navlib.studies.rocket.experiment import excitability_study, quiet_gyro_analysis
+from navlib.studies.rocket.flight import BASELINE
+from navlib.studies.rocket.sensitivity import P0_SETS
+from navlib.sweep import sweep
+
+ROBUSTNESS_GRID = {
+    "eta": (1e-2, 1e-3, 1e-4),
+    "nu": (0.98, 0.985, 0.99),
+    "p0": tuple(P0_SETS),
+    "sigma_sg_ppm": (1000.0, 5000.0),
+    "spin_hz": (1.0, 2.0),
+}
+"""The plausible assumption set of X1-X7 / S1-S8 (full factorial, 108 points): the paper
+gives none of eta, nu, P0, sigma_sg or the spin. 12 discretised analyses (spin x P0 x
+sigma_sg); eta and nu re-threshold the stored SVDs and eigen-decompositions."""
+QUICK_ROBUSTNESS_GRID = {"eta": (1e-2, 1e-3, 1e-4), "nu": (0.98, 0.985, 0.99),
+                         "p0": ("baseline (30 m, 3 m/s)",), "sigma_sg_ppm": (5000.0,),
+                         "spin_hz": (2.0,)}
+"""Quick mode: eta x nu at the baseline P0, sigma_sg and spin (no new discretisation)."""
+
+
+def robustness_variants(grid: dict | None = None, sensors=None
+                        ) -> list[tuple[dict, list[ClaimResult]]]:
+    """``(point, X1-X7 and S1-S8)`` at every point of ``grid`` (default
+    :data:`ROBUSTNESS_GRID`; a key left out keeps its :data:`BASELINE` value)."""
+    grid = ROBUSTNESS_GRID if grid is None else dict(grid)
+    reject_unknown(grid, ROBUSTNESS_GRID, "grid")
+    grid = {"eta": (BASELINE["eta"],), "nu": (BASELINE["nu"],),
+            "p0": ("baseline (30 m, 3 m/s)",), "sigma_sg_ppm": (BASELINE["sigma_sg_ppm"],),
+            "spin_hz": (BASELINE["spin_hz"],), **grid}
+    out = []
+    for spin, p0, sg in itertools.product(grid["spin_hz"], grid["p0"], grid["sigma_sg_ppm"]):
+        if p0 not in P0_SETS:
+            raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
+        base = excitability_study(spin, sensors=sensors, sigma_sg_ppm=sg, **P0_SETS[p0])
+        quiet = quiet_gyro_analysis(base, sensors=sensors)
+        for eta, nu in itertools.product(grid["eta"], grid["nu"]):
+            a = base.with_settings(eta=eta, nu=nu)
+            point = {"eta": eta, "nu": nu, "p0": p0, "sigma_sg_ppm": sg, "spin_hz": spin}
+            out.append((point, excitability_claims(a)
+                        + sensability_claims(a, quiet.with_settings(eta=eta, nu=nu))))
+    return out
+
+
+ROBUSTNESS_BASELINE = {"eta": BASELINE["eta"], "nu": BASELINE["nu"],
+                       "p0": "baseline (30 m, 3 m/s)", "sigma_sg_ppm": BASELINE["sigma_sg_ppm"],
+                       "spin_hz": BASELINE["spin_hz"]}
+"""The baseline point of :data:`ROBUSTNESS_GRID`."""
+
+
+SEARCH_FILE = "claims_search_rocket.csv"
+"""The stored joint search of the España assumption space (``data/``, written by
+``scripts/claims_search.py``)."""
+SEARCH_PARAMETERS = ("eta", "nu", "sigma_p0_m", "sigma_v0_m_s", "sigma_sg_ppm", "spin_hz")
+
+
+def search_points(grid: dict | None = None) -> pd.DataFrame:
+    """The points of :data:`ROBUSTNESS_GRID` (the declared assumption space, full factorial)
+    as :func:`navlib.sweep.sweep` points of its ``"claims"`` evaluation."""
+    grid = ROBUSTNESS_GRID if grid is None else dict(grid)
+    reject_unknown(grid, ROBUSTNESS_GRID, "grid")
+    grid = {**{k: (v,) for k, v in ROBUSTNESS_BASELINE.items()}, **grid}
+    rows = []
+    for eta, nu, p0, sg, spin in itertools.product(grid["eta"], grid["nu"], grid["p0"],
+                                                   grid["sigma_sg_ppm"], grid["spin_hz"]):
+        if p0 not in P0_SETS:
+            raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
+        p = {**P0_DEFAULTS, **P0_SETS[p0]}
+        rows.append({"eta": eta, "nu": nu, "sigma_p0_m": p["sigma_p0_m"],
+                     "sigma_v0_m_s": p["sigma_v0_m_s"], "sigma_sg_ppm": sg, "spin_hz": spin})
+    return pd.DataFrame(rows, columns=list(SEARCH_PARAMETERS))
+
+
+def assumption_search(grid: dict | None = None, scheduler=None, output=None) -> pd.DataFrame:
+    """X1-X7 and S1-S8 at every point of the declared assumption space, through
+    :func:`navlib.sweep.sweep` (``scheduler``: as there, e.g. ``"synchronous"`` or a Dask
+    client); judge it with :func:`navlib.studies.claims.joint_search`."""
+    return sweep(search_points(grid), "claims", scheduler=scheduler, output=output)
+
+
+def stored_search() -> tuple[pd.DataFrame, dict]:
+    """The stored search table and its header (``command``, ``navlib`` version)."""
+    path = data_dir() / SEARCH_FILE
+    if not path.exists():
+        raise NavlibInputError(f"{path} is missing: run scripts/claims_search.py")
+    header = {}
+    with path.open(encoding="utf-8") as handle:
+        for line in handle:
+            if not line.startswith("#"):
+                break
+            key, _, value = line[1:].partition(":")
+            header[key.strip()] = value.strip()
+    return pd.read_csv(path, comment="#"), header
+
+
+def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
+    a = excitability_study()
+    return [*excitability_claims(a), claim_xrank(a), *sensability_claims(a)]
+
+
+def _robustness(quick: bool = False) -> list:
+    return robustness_variants(QUICK_ROBUSTNESS_GRID if quick else ROBUSTNESS_GRID)
+
+
+engine.register(engine.Study(
+    "rocket", "España, Carrizo & Giribet (2019)", _baseline_claims, ROBUSTNESS_GRID,
+    _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions; "
+    "each claim judged on the points varying its depends_on",
+    order=1, baseline_point=ROBUSTNESS_BASELINE))
