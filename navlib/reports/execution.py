@@ -179,8 +179,8 @@ class Kernels:
 
 
 def execute(info: NotebookInfo, staging: Path, params: dict, settings: Settings,
-             kernels: Kernels, on_restart: Callable[[CellFailure], None] | None = None
-             ) -> NotebookRun:
+            kernels: Kernels, on_restart: Callable[[CellFailure], None] | None = None
+            ) -> NotebookRun:
     """Run one notebook; a stalled kernel gets one restart of the whole notebook. A run cut
     short by :meth:`Kernels.stop` (another notebook failed under ``fail_fast``) is
     ``"stopped"``."""

@@ -128,7 +128,7 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
 
     jobs = min(jobs, len(selected))
     settings = Settings(quick, parameters, fail_fast, timeout_s, jobs,
-                         kernel_environment(jobs, cache))
+                        kernel_environment(jobs, cache))
     queue = queue_order(selected, output) if jobs > 1 else list(selected)
     remove_orphaned_staging(output)
     staging = staging_folder(output)
@@ -181,7 +181,8 @@ def queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[Notebook
 
 class _Pending:
     """The queue of :func:`_run_all`: each worker takes the first notebook whose
-    :func:`_dependencies` have finished, waiting while none is ready."""
+    :func:`~navlib.reports.discovery.dependencies` have finished, waiting while none is
+    ready."""
 
     def __init__(self, queue: Sequence[NotebookInfo]):
         self._items = list(queue)
