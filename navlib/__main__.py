@@ -40,11 +40,9 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument("--only", nargs="+", action="extend", metavar="NAME",
                      help="run only these notebooks: stem (07_assess_flight), number (07) "
                           "or file name; other pages of an existing report are kept")
-    rep.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
-                     metavar=("KEY", "VALUE"),
-                     help="inject a parameter into the notebooks whose parameters cell "
-                          "defines KEY; VALUE is parsed as JSON or a Python literal, else "
-                          "taken as a string; existing relative paths are made absolute")
+    _add_parameter_option(rep, "inject a parameter into the notebooks whose parameters cell "
+                               "defines KEY; VALUE is parsed as JSON or a Python literal, else "
+                               "taken as a string; existing relative paths are made absolute")
     rep.add_argument("--output", type=Path, default=None, metavar="DIR",
                      help="report folder (default: reports/ of the navlib checkout)")
     rep.add_argument("--notebooks", type=Path, default=None, metavar="DIR",
@@ -70,6 +68,13 @@ def _parser() -> argparse.ArgumentParser:
     _add_plan(sub)
     _add_sweep(sub)
     return parser
+
+
+def _add_parameter_option(parser, help_text: str, nargs: int | str = 2) -> None:
+    """The repeatable ``-p KEY VALUE`` option of the ``report``, ``assess`` and ``plan``
+    commands (``nargs="+"``: a JSON value may be split over several shell words)."""
+    parser.add_argument("-p", "--parameter", nargs=nargs, action="append", default=[],
+                        metavar=("KEY", "VALUE"), help=help_text)
 
 
 def _add_scheduler(parser) -> None:
@@ -108,12 +113,11 @@ def _add_assess(sub) -> None:
     ass.add_argument("--launch-azimuth", type=float, default=None, metavar="DEG",
                      help="launch-rail azimuth from North, degrees (fit option "
                           "launch_azimuth_deg)")
-    ass.add_argument("-p", "--parameter", nargs="+", action="append", default=[],
-                     metavar=("KEY", "VALUE"),
-                     help="a keyword of assess_flight (eta, nu, gnss_rate_hz, fit_options, "
-                          "segment_options, quality_thresholds, ...); VALUE parsed as JSON or a "
-                          "Python literal, else a string; a JSON value may be split over "
-                          "several shell words (they are joined with spaces)")
+    _add_parameter_option(ass, "a keyword of assess_flight (eta, nu, gnss_rate_hz, "
+                               "fit_options, segment_options, quality_thresholds, ...); VALUE "
+                               "parsed as JSON or a Python literal, else a string; a JSON value "
+                               "may be split over several shell words (they are joined with "
+                               "spaces)", nargs="+")
 
 
 def _parameter_words(key: str, words: list[str]):
@@ -174,6 +178,21 @@ def assess_options(args) -> dict:
     return options
 
 
+def _outcome(table, path: Path, done: str, describe_ok=None) -> int:
+    """Print the outcome of an ``assess`` or ``plan`` table on stderr: one line per failed
+    row, one per ok row when ``describe_ok(row)`` is given, then ``K of N <done>; summary:
+    <path>``. Returns the exit status: 1 when any row failed."""
+    failed = table[table["status"] != "ok"]
+    for row in failed.itertuples(index=False):
+        print(f"failed: {row.log}: {row.error}", file=sys.stderr)
+    if describe_ok is not None:
+        for row in table[table["status"] == "ok"].itertuples(index=False):
+            print(describe_ok(row), file=sys.stderr)
+    print(f"{len(table) - len(failed)} of {len(table)} {done}; summary: {path.resolve()}",
+          file=sys.stderr)
+    return 1 if len(failed) else 0
+
+
 def _assess(args) -> int:
     from navlib import fleet
 
@@ -181,12 +200,7 @@ def _assess(args) -> int:
     table, pages = fleet.assess_logs(args.logs, options, scheduler=args.scheduler,
                                      progress=True)
     path = fleet.write_fleet(table, pages, args.output)
-    failed = table[table["status"] != "ok"]
-    for row in failed.itertuples(index=False):
-        print(f"failed: {row.log}: {row.error}", file=sys.stderr)
-    print(f"{len(table) - len(failed)} of {len(table)} flight(s) assessed; summary: "
-          f"{path.resolve()}", file=sys.stderr)
-    return 1 if len(failed) else 0
+    return _outcome(table, path, "flight(s) assessed")
 
 
 def _add_plan(sub) -> None:
@@ -208,11 +222,9 @@ def _add_plan(sub) -> None:
     pln.add_argument("--flight", default=None, metavar="LOG",
                      help="a recorded flight of the same vehicle (a LOG as for assess): its "
                           "assessment is shown beside each plan, per phase")
-    pln.add_argument("-p", "--parameter", nargs=2, action="append", default=[],
-                     metavar=("KEY", "VALUE"),
-                     help="a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
-                          "s_threshold, ...); VALUE parsed as JSON or a Python literal, else "
-                          "a string")
+    _add_parameter_option(pln, "a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
+                               "s_threshold, ...); VALUE parsed as JSON or a Python literal, "
+                               "else a string")
 
 
 def _plan(args) -> int:
@@ -223,15 +235,8 @@ def _plan(args) -> int:
         options["sensors_preset"] = args.sensors
     table, pages = plan.plan_missions(args.missions, options, flight=args.flight)
     path = plan.write_plans(table, pages, args.output)
-    failed = table[table["status"] != "ok"]
-    for row in failed.itertuples(index=False):
-        print(f"failed: {row.log}: {row.error}", file=sys.stderr)
-    for row in table[table["status"] == "ok"].itertuples(index=False):
-        print(f"{row.log}: {row.vehicle}, {row.n_segments} segment(s), {row.seconds:.1f} s",
-              file=sys.stderr)
-    print(f"{len(table) - len(failed)} of {len(table)} mission(s) planned; summary: "
-          f"{path.resolve()}", file=sys.stderr)
-    return 1 if len(failed) else 0
+    return _outcome(table, path, "mission(s) planned", lambda row: (
+        f"{row.log}: {row.vehicle}, {row.n_segments} segment(s), {row.seconds:.1f} s"))
 
 
 def _add_sweep(sub) -> None:

@@ -11,6 +11,10 @@ G0 = 9.80665
 
 DEG = np.pi / 180.0
 """One degree in radians."""
+MILLIRADIAN = 1e-3
+"""One milliradian in radians."""
+MINUTE = 60.0
+"""One minute in seconds."""
 HOUR = 3600.0
 """One hour in seconds."""
 

@@ -8,13 +8,14 @@ stopped answering). Used to find the cause of the hangs of issue 9 and to show t
     python scripts/stress_notebooks.py --runs 20 --only 02 --runner papermill
     python scripts/stress_notebooks.py ... --load 1                    # + 1 busy process
 
-``--runner bounded`` (default) is the report runner (:mod:`navlib.kernel_watch`): stalls are
-the watchdog's restarts, *lost* the kernel messages whose ZeroMQ wake-up never came (found when
-a 0.25 s poll slice expired; recovered, not stalls). ``--runner papermill`` is plain papermill
-with jupyter_client's channels (the runner before the fix), given a per-cell limit so a stall
-ends: a stall there is a cell whose client-side duration exceeds the kernel's own reply time by
-more than ``--lag`` seconds (the reply sat unread: *lost* counts those cells), or a timed-out
-cell. ``--load N`` starts N busy processes for the duration (the issue's "other core busy").
+``--runner bounded`` (default) is the report runner (:mod:`navlib.reports.kernel_watch`): stalls
+are the watchdog's restarts, *lost* the kernel messages whose ZeroMQ wake-up never came (found
+when a 0.25 s poll slice expired; recovered, not stalls). ``--runner papermill`` is plain
+papermill with jupyter_client's channels (the runner before the fix), given a per-cell limit so
+a stall ends: a stall there is a cell whose client-side duration exceeds the kernel's own reply
+time by more than ``--lag`` seconds (the reply sat unread: *lost* counts those cells), or a
+timed-out cell. ``--load N`` starts N busy processes for the duration (the issue's "other core
+busy").
 Prints one row per run and a summary table; not part of the test suite.
 """
 
@@ -31,7 +32,8 @@ from pathlib import Path
 import nbformat
 
 from navlib import reports
-from navlib.kernel_watch import KernelWatch
+from navlib.reports.execution import Kernels, Settings, execute
+from navlib.reports.kernel_watch import KernelWatch
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -67,7 +69,7 @@ def run_papermill(info, out: Path, timeout_s: float, min_lag_s: float) -> dict:
     import papermill
     from jupyter_client.manager import AsyncKernelManager
 
-    from navlib import kernel_watch
+    from navlib.reports import kernel_watch
 
     base = kernel_watch._classes().kernel_manager  # same kernel command, plain client and channels
     plain = type("PlainKernelManager", (base,), {
@@ -88,7 +90,9 @@ def run_papermill(info, out: Path, timeout_s: float, min_lag_s: float) -> dict:
 
 def run_bounded(info, out: Path, timeout_s: float) -> dict:
     """One run through the report runner's execution (watchdog + sliced polling)."""
-    run = reports._execute(info, out, {"quick": True}, timeout_s)
+    settings = Settings(quick=True, parameters={}, fail_fast=False, timeout_s=timeout_s,
+                        jobs=1, env={})
+    run = execute(info, out, {"quick": True}, settings, Kernels())
     error = "" if run.ok else run.failure.describe()
     return {"stalls": len(run.stalls) + int(not run.ok and "Stalled" in error),
             "lost": run.lost_wakeups, "error": error, "detail": list(run.stalls)}

@@ -1,9 +1,10 @@
-"""Bounded notebook runs (navlib.kernel_watch): no wait without bound, stalls restarted once.
+"""Bounded notebook runs (navlib.reports.kernel_watch): no wait without bound, stalls
+restarted once.
 
 The stalls are produced on purpose: a cell that makes its kernel withhold the execute reply
 (the kernel goes idle, the client would wait for ever), a cell that sleeps past the per-cell
 limit, and a ZeroMQ wake-up consumed before the event loop sees it (the runner-side cause of
-issue 9's hangs).
+report runs that hung until the per-cell limit).
 """
 
 import asyncio
@@ -19,7 +20,8 @@ import pytest
 import zmq
 import zmq.asyncio
 
-from navlib import kernel_watch, reports
+from navlib import reports
+from navlib.reports import kernel_watch, publishing
 
 WITHHOLD_REPLY = """\
 import os
@@ -136,7 +138,8 @@ def test_sliced_poll_recovers_a_lost_wakeup_and_counts_it():
 
 
 def test_jupyter_client_channel_loses_that_wakeup():
-    """The mechanism behind issue 9: the plain channel waits for ever (here: 3 s)."""
+    """The mechanism behind report runs that hung: the plain channel waits for ever (here:
+    3 s)."""
     from jupyter_client.channels import AsyncZMQSocketChannel
 
     if asyncio.run(_lost_wakeup(AsyncZMQSocketChannel)) is not None:
@@ -243,5 +246,5 @@ def test_staging_of_a_killed_run_is_removed_by_the_next_run(tmp_path):
     orphan.mkdir()
     alive = tmp_path / f".out.tmp-{psutil.Process().pid}-efgh"  # a live run's: kept
     alive.mkdir()
-    reports._remove_orphaned_staging(tmp_path / "out")
+    publishing.remove_orphaned_staging(tmp_path / "out")
     assert not orphan.exists() and alive.exists()

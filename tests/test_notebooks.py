@@ -6,6 +6,7 @@ so they always run. Each execution goes through the report runner in quick mode 
 test's own tmp folder, so ``pytest -n 2`` is safe.
 """
 
+import ast
 import json
 import logging
 from pathlib import Path
@@ -62,6 +63,16 @@ def test_parameters_cell_parses_for_papermill(path, caplog):
         found = papermill.inspect_notebook(str(path))
     assert "quick" in found
     assert not [r.getMessage() for r in caplog.records if "Unable to parse" in r.getMessage()]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
+def test_notebook_defines_no_function(path):
+    """Notebooks are thin: figure display, conversions and readings come from navlib."""
+    nb = nbformat.read(path, as_version=4)
+    defined = [node.name for c in nb.cells if c.cell_type == "code"
+               for node in ast.walk(ast.parse(c.source))
+               if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef)]
+    assert not defined, f"{path.name}: defines {defined}; put them in navlib"
 
 
 @pytest.mark.notebook

@@ -18,6 +18,7 @@ import pytest
 
 from navlib import NavlibInputError, reports
 from navlib.__main__ import main
+from navlib.reports import execution, runner
 
 PROBE = (
     "import os, sys  # probe-input-marker\n"
@@ -383,8 +384,8 @@ def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path, monkeyp
     out, default = tmp_path / "out", tmp_path / "reports"
     out.mkdir()
     default.mkdir()
-    monkeypatch.setattr(reports, "default_output_dir", lambda: default)
-    order = lambda: [i.name for i in reports._queue_order(infos, out)]  # noqa: E731
+    monkeypatch.setattr(runner, "default_output_dir", lambda: default)
+    order = lambda: [i.name for i in runner.queue_order(infos, out)]  # noqa: E731
     assert order() == ["01_good", "02_other", "03_bad"]  # no manifest: name order
     (default / "manifest.json").write_text(json.dumps({"notebooks": {
         "01_good": {"seconds": 9.0}, "02_other": {"seconds": 1.0}, "03_bad": {"seconds": 5.0}}}))
@@ -397,7 +398,7 @@ def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path, monkeyp
 def test_kernel_environment_shares_the_cores(monkeypatch):
     for name in (*reports.BLAS_THREAD_VARIABLES, *reports.MALLOC_VARIABLES):
         monkeypatch.delenv(name, raising=False)
-    monkeypatch.setattr(reports, "available_cpus", lambda: 4)
+    monkeypatch.setattr(execution, "available_cpus", lambda: 4)
     assert reports.kernel_environment(2) == {
         **dict.fromkeys(reports.BLAS_THREAD_VARIABLES, "2"), **reports.MALLOC_VARIABLES}
     monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "0")
@@ -464,7 +465,7 @@ def test_a_notebook_after_others_starts_when_they_have_finished(tmp_path):
     nbformat.write(nb, nbdir / "00_summary.ipynb")
     infos = reports.list_notebooks(nbdir)
     assert [i.after for i in infos] == [("01",), (), ()]
-    assert [i.name for i in reports._queue_order(infos, tmp_path / "out")][-1] == "00_summary"
+    assert [i.name for i in runner.queue_order(infos, tmp_path / "out")][-1] == "00_summary"
     runs = reports.run_reports(nbdir, tmp_path / "out", jobs=2)
     assert all(r.ok for r in runs)
     stamps = {n: float((tmp_path / n).read_text()) for n in ("00", "01", "02")}

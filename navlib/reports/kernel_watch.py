@@ -36,7 +36,10 @@ import time
 import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
+from queue import Empty
 from typing import NamedTuple
+
+import psutil
 
 POLL_SLICE_S = 0.25
 """Longest wait on a kernel socket before it is polled again, s."""
@@ -194,8 +197,6 @@ class KernelWatch:
 
     def kill_kernel(self) -> None:
         """Kill the kernel process and everything it started (no-op when already gone)."""
-        import psutil
-
         if self.pid is None:
             return
         try:
@@ -232,6 +233,7 @@ class _Classes(NamedTuple):
 @functools.cache
 def _classes() -> _Classes:
     """The watched channel, client and kernel-manager classes (imported lazily)."""
+    # the Jupyter stack is heavy: loaded when the first kernel starts, not on import
     from ipykernel.kernelspec import get_kernel_dict
     from jupyter_client.asynchronous import AsyncKernelClient
     from jupyter_client.channels import AsyncZMQSocketChannel
@@ -245,8 +247,6 @@ def _classes() -> _Classes:
         watch: KernelWatch | None = None
 
         async def get_msg(self, timeout: float | None = None) -> dict:
-            from queue import Empty
-
             deadline = None if timeout is None else time.monotonic() + timeout
             while True:
                 left = POLL_SLICE_S if deadline is None else deadline - time.monotonic()
@@ -327,6 +327,7 @@ def kernel_manager_class(watch: KernelWatch, env: Mapping[str, str] | None = Non
 @functools.cache
 def _register_engine() -> None:
     """Register the ``navlib-bounded`` papermill engine (once per process)."""
+    # papermill and nbclient are heavy: loaded when the first notebook runs, not on import
     import nbformat
     from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
     from papermill.clientwrap import PapermillNotebookClient
@@ -403,7 +404,7 @@ def execute_notebook(input_path, output_path, *, parameters: dict, cwd,
     papermill.PapermillExecutionError
         A cell raised an exception.
     """
-    import papermill
+    import papermill  # heavy: loaded when the first notebook runs, not on import
 
     _register_engine()
     try:
