@@ -75,7 +75,7 @@ The result is an editable table (:meth:`Segmentation.to_frame`: ``phase, t_start
 
 Modules: :mod:`~navlib.segmentation.features` (per-sample kinematics and their window
 means), :mod:`~navlib.segmentation.phases` (the labelling),
-:mod:`~navlib.segmentation.vehicles` and :mod:`~navlib.segmentation.recognition` (vehicle
+:mod:`~navlib.vehicles` and :mod:`~navlib.segmentation.recognition` (vehicle
 classes) and :mod:`~navlib.segmentation.edits` (a user's segments); the public names are
 re-exported here.
 """
@@ -90,7 +90,7 @@ from navlib.segmentation.phases import (
     segment_flight,
 )
 from navlib.segmentation.recognition import RECOGNITION_DEFAULTS, recognise_vehicle
-from navlib.segmentation.vehicles import (
+from navlib.vehicles import (
     MAV_TYPES,
     VEHICLE_PHASES,
     VEHICLES,

@@ -14,8 +14,8 @@ import pandas as pd
 
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.segmentation.features import flight_features, window_means
-from navlib.segmentation.vehicles import VEHICLE_PHASES, check_vehicle
 from navlib.units import DEG
+from navlib.vehicles import VEHICLE_PHASES, check_vehicle
 
 PHASES = ("rest", "powered", "turn", "free_fall", "coast", "cruise")
 """Phase labels in priority order (module docstring)."""

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from navlib._validation import latitude_deg, reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.segmentation import VEHICLES
 from navlib.trajectory.base import Trajectory
 from navlib.trajectory.mission.reading import (
     Mission,
@@ -20,6 +19,7 @@ from navlib.trajectory.mission.reading import (
 )
 from navlib.trajectory.mission.rockets import rocket_keywords, rocket_trajectory
 from navlib.trajectory.mission.waypoints import waypoint_flight, waypoint_plan
+from navlib.vehicles import VEHICLES
 
 _TOP_KEYS = {"name", "description", "vehicle", "rate_hz", "sensors", "site", "gnss",
              "rocket", "phase", "limits", "waypoint"}

@@ -1,6 +1,6 @@
 """Vehicle classes, their phase words and the vehicle a log names (``docs/assumptions.md`` V1-V2).
 
-:data:`VEHICLES` and :data:`VEHICLE_PHASES` name what :func:`~navlib.segmentation.segment_flight`
+:data:`VEHICLES` and :data:`VEHICLE_PHASES` name what :func:`navlib.segmentation.segment_flight`
 calls the phases of each class; :func:`vehicle_from_log` reads the class from a reader's
 ``attrs`` (MAVLink ``MAV_TYPE``, the firmware name).
 """
@@ -12,7 +12,7 @@ import numpy as np
 from navlib.errors import NavlibInputError
 
 VEHICLES = ("rocket", "multicopter", "fixed-wing", "ground")
-"""Vehicle classes whose phases :func:`segment_flight` names (module docstring)."""
+"""Vehicle classes whose phases :func:`navlib.segmentation.segment_flight` names."""
 VEHICLE_PHASES = {
     "rocket": ("rest", "powered", "coast", "free_fall", "descent"),
     "multicopter": ("rest", "hover", "climb", "descent", "turn", "cruise"),
