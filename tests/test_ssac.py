@@ -17,7 +17,7 @@ from navlib.units import DEG, DEG_PER_HOUR, MG
 
 @pytest.fixture(scope="module")
 def full_study():
-    return study_mod.run()  # 60 min at 1 Hz, matched P0
+    return study_mod.covariance_run()  # 60 min at 1 Hz, matched P0
 
 
 @pytest.fixture(scope="module")
@@ -145,7 +145,8 @@ def test_position_flat_and_ins_only_growth(full_study):
 
 @pytest.mark.parametrize("variant", ["matched", "generic"])
 def test_closed_form_limits_match_filter(variant, full_study):
-    study = full_study if variant == "matched" else study_mod.run(P0=variant, track=False)
+    study = full_study if variant == "matched" else study_mod.covariance_run(P0=variant,
+                                                                               track=False)
     limits = study_mod.closed_form_limits(study).set_index("state")
     np.testing.assert_allclose(limits["filter_over_eq44"], 1.0, rtol=5e-3)
     if variant == "generic":
@@ -207,13 +208,13 @@ def test_claims(claims):
     assert claims["SSAC-order"].verdict == "not reproduced"
     # the 12-state rank is the prototype's, not the paper's: no claim (issue 25)
     assert "SSAC-rank12" not in claims
-    frame = study_mod.claims_table(study_mod.run(duration_s=600, track=False))
+    frame = study_mod.claims_table(study_mod.covariance_run(duration_s=600, track=False))
     assert frame.set_index("claim_id").loc["SSAC-bgD", "verdict"] == "not evaluated"
 
 
 def test_claims_fail_under_a_generic_p0():
     """The 45° pairs are fitted: a generic 1° P0 does not give them."""
-    generic = study_mod.run(P0="generic", track=False)
+    generic = study_mod.covariance_run(P0="generic", track=False)
     claims = {c.claim_id: c for c in study_mod.ssac_claims(generic)}
     assert claims["SSAC-pairs"].verdict == "not reproduced"
 
@@ -229,7 +230,7 @@ def test_actual_error_is_linear_and_starts_at_the_truth(full_study):
 
 
 def test_figures_and_panel():
-    study = study_mod.run(duration_s=300, track=True)
+    study = study_mod.covariance_run(duration_s=300, track=True)
     for fig in (ssac_plots.ssac_sigma_figure(study, study_mod.closed_form_limits(study)),
                 ssac_plots.ssac_eigenvalues_figure(study),
                 ssac_plots.ssac_eigenvectors_figure(study, tracked=True),

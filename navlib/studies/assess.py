@@ -1,7 +1,7 @@
 """Assess a recorded flight: which navigation states could it estimate, segment by segment?
 
-The pipeline of issue 6, applied to a user's own IMU and GNSS records (España, Carrizo &
-Giribet 2019, §4-6, with the 21-state ECEF model)::
+The excitability and sensability pipeline applied to a user's own IMU and GNSS records
+(España, Carrizo & Giribet 2019, §4-6, with the 21-state ECEF model)::
 
     import (navlib.io)  ->  fit (navlib.trajectory.fit_flight_data)  ->  segment
     (navlib.segmentation)  ->  model (navlib.models.ecef.ecef21_at_epochs)  ->  metrics

@@ -511,7 +511,9 @@ class Study:
 
     @property
     def module(self) -> str:
-        return getattr(self.baseline, "__module__", "").rsplit(".", 1)[-1]
+        """The study module (or package) under :mod:`navlib.studies` that registered it."""
+        parts = getattr(self.baseline, "__module__", "").split(".")
+        return parts[2] if parts[:2] == ["navlib", "studies"] and len(parts) > 2 else parts[-1]
 
 
 _REGISTRY: dict[str, Study] = {}

@@ -300,7 +300,7 @@ def _by_phase(analysis) -> dict:
 
 def plan_beside_flight(plan: MissionPlan, flight: FlightAssessment) -> pd.DataFrame:
     """Which states the plan expected to be estimable and which the flight delivered, per
-    phase (issue 27 item 4).
+    phase (a planned mission beside the recorded flight of the same vehicle).
 
     One row per phase found in either (plan phases first): ``phase``, ``planned_segments``,
     ``flown_segments`` (their spans), ``planned_excitable``, ``flown_excitable``,
