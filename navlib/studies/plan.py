@@ -39,10 +39,10 @@ from navlib.segmentation import SEGMENT_DEFAULTS, segment_flight
 from navlib.studies.assess import (
     MODEL_STEP_S,
     FlightAssessment,
-    _pairs,
     assess_flight,
     automatic_segment_table,
     describe_inputs,
+    segment_pairs,
 )
 from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
 
@@ -274,7 +274,7 @@ model_options, model_step_s
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return MissionPlan.build(
-        model, _pairs(table), trajectory=trajectory, **thresholds, settings=settings,
+        model, segment_pairs(table), trajectory=trajectory, **thresholds, settings=settings,
         inputs=describe_inputs(imu, gnss), fit=_fit_columns(), automatic=automatic,
         segment_table=table, options=options, notes=tuple(notes), mission=mission,
         outages=windows)
