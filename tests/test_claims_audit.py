@@ -1,6 +1,6 @@
-"""The audit rows of issue 25: one test per defect that fails if the defect comes back, and
-for the measured claims fixed there, an input the claim depends on that moves its number
-(and flips its verdict at a value a reader of the paper could defend)."""
+"""The audit of claims that could not fail: one test per defect that fails if the defect
+comes back, and for the measured claims fixed there, an input the claim depends on that moves
+its number (and flips its verdict at a value a reader of the paper could defend)."""
 
 import types
 
@@ -204,7 +204,7 @@ def test_x_claims_move_with_eta(analysis):
 
 
 def test_conclusions_1_and_3_follow_the_table():
-    """Missing claims of issue 25: conclusion 1 (no solution observes b_p) and 3 (the RT
+    """Claims once missing: conclusion 1 (no solution observes b_p) and 3 (the RT
     does not improve observability), judged on Table 2 rows."""
     frame = _table2_frame(17.0)
     paper = {c.claim_id: c for c in launcher.conclusion_claims(frame)}

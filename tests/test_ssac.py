@@ -198,15 +198,15 @@ def test_claims(claims):
                 "SSAC-nine", "SSAC-nonzero"):
         assert claims[cid].verdict == "reproduced", (cid, claims[cid].ours)
     assert claims["SSAC-pairs"].basis == "fitted" and not claims["SSAC-pairs"].reproduced
-    # the exact null space has four blocks, not the paper's six groups (issue 11: the old
-    # "partly" could never say "reproduced")
+    # the exact null space has four blocks, not the paper's six groups (the headline check
+    # fails: a "partly" could never say "reproduced")
     assert claims["SSAC-groups"].verdict == "not reproduced"
     # the filter sits on sqrt(1/2) of the classic Jekeli limit; the Bayesian form of (44)
-    # equals the filter for any P0 and is no longer a check (issue 11)
+    # equals the filter for any P0 and is no longer a check
     assert claims["SSAC-eq44"].verdict == "not reproduced"
     # the honest difference: our position triple is the largest (ssac.md §7)
     assert claims["SSAC-order"].verdict == "not reproduced"
-    # the 12-state rank is the prototype's, not the paper's: no claim (issue 25)
+    # the 12-state rank is the prototype's, not the paper's: no claim
     assert "SSAC-rank12" not in claims
     frame = study_mod.claims_table(study_mod.covariance_run(duration_s=600, track=False))
     assert frame.set_index("claim_id").loc["SSAC-bgD", "verdict"] == "not evaluated"

@@ -346,12 +346,12 @@ def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = (),
     ``flight = (log, assessment)`` of a recorded flight of the same vehicle, also the
     planned-beside-flown table (:func:`plan_beside_flight`) and the flight's estimable
     states."""
-    import matplotlib
+    import matplotlib  # plotting is heavy: loaded only when a page is written
 
     matplotlib.use("Agg", force=False)
-    from navlib.plots import assess as aplots
-    from navlib.plots.metrics import excitability_figure
-    from navlib.plots.plan import timeline_figure
+    from navlib.plots import assess as aplots  # same reason
+    from navlib.plots.metrics import excitability_figure  # same reason
+    from navlib.plots.plan import timeline_figure  # same reason
 
     figures = [("Planned specific force and angular rate, with the phases",
                 aplots.phases_figure(plan)),

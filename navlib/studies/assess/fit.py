@@ -12,6 +12,7 @@ import pandas as pd
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning
+from navlib.models.ecef import imu_noise_densities
 from navlib.studies.assess.inputs import GNSS_KEYS, IMU_KEYS, check_frame
 from navlib.trajectory import fit_flight_data
 
@@ -110,8 +111,6 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame
 
 
 def _noise_floor(trajectory, preset) -> dict:
-    from navlib.models.ecef import imu_noise_densities
-
     dt = 1.0 / trajectory.rate_hz
     noise = imu_noise_densities(preset)
     return {"specific force": float(np.mean(noise["vrw_m_s_sqrt_s"])) / math.sqrt(dt),
