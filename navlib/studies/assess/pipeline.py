@@ -94,9 +94,9 @@ def _pieces(imu: pd.DataFrame, max_bridge_s: float) -> list[tuple[float, float]]
     return [(float(t[a]), float(t[b])) for a, b in zip(starts, ends, strict=True)]
 
 
-def _piece(frame: pd.DataFrame, t0: float, t1: float) -> pd.DataFrame:
+def _piece(frame: pd.DataFrame, t0_s: float, t1_s: float) -> pd.DataFrame:
     t = frame["t"].to_numpy(dtype=float)
-    out = frame[(t >= t0) & (t <= t1)].drop(columns="segment", errors="ignore")
+    out = frame[(t >= t0_s) & (t <= t1_s)].drop(columns="segment", errors="ignore")
     out = out.reset_index(drop=True)
     out.attrs = dict(frame.attrs)
     return out

@@ -80,7 +80,8 @@ def register(study: Study) -> Study:
 
 
 STUDY_MODULES = ("rocket_profile", "rocket", "launcher", "outliers", "ssac")
-"""The modules under :mod:`navlib.studies` that register claims, in table order."""
+"""The modules (or packages) under :mod:`navlib.studies` that register claims, in table
+order."""
 
 
 def studies() -> dict[str, Study]:
