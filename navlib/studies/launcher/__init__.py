@@ -16,7 +16,7 @@ the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md``
 * :mod:`.fig1` — the Fig. 1 analogue (simplified model, spec §3.7, §10a);
 * :mod:`.evolution` — the covariance runs of Figs. 2, 3, 5, 6 (spec §7.3);
 * :mod:`.claims` — the robust claims of spec §10c, conclusions 1-4, Fig. 1 and the
-  covariance evolution, one function per claim group;
+  covariance evolution, one function per claim;
 * :mod:`.assumptions` — the paper's words as numbers and the declared assumption sets;
   :mod:`.robustness` — the claims over them and the registration with the claims engine;
 * :mod:`.reading` — the notebook's generated reading.
