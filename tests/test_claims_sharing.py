@@ -61,7 +61,7 @@ def test_stacked_recursion_takes_a_model_and_rejects_bad_p0():
             kalman_covariances(F, Q, H, R, bad)
 
 
-def test_ssac_runs_equal_separate_runs():
+def test_ssac_p0_runs_equal_separate_runs():
     points = [("matched", 1.0), ("generic", 0.5), ("matched", 10.0)]
     for n_states in (15, 12):
         stacked = study_ssac.p0_runs(points, 300.0, n_states=n_states, track=True)
