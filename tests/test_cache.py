@@ -319,12 +319,12 @@ def test_covariance_evolution_variants_are_read_back_bitwise(cache_on, monkeypat
     kws = [{"sigma0_att": np.radians(0.03)}, {}]
     baseline = study.covariance_evolution(traj, cases=cases)
     before = cache.stats()
-    both = study._evolution_tables(traj, cases, False, kws)      # {} read, one built
+    both = study.evolution._evolution_tables(traj, cases, False, kws)      # {} read, one built
     assert cache.stats()["hits"] - before["hits"] == 1
     assert len(list(cache_on.glob("covariance_evolution-*"))) == 2
     with monkeypatch.context() as m:
         m.setenv(cache.ENV_OFF, "1")
-        fresh = study._evolution_tables(traj, cases, False, kws)
+        fresh = study.evolution._evolution_tables(traj, cases, False, kws)
     for got, want in zip([*both, baseline], [*fresh, fresh[1]], strict=True):
         pd.testing.assert_frame_equal(got, want, check_exact=True)
 

@@ -1,6 +1,6 @@
-"""The audit rows of issue 25: one test per defect that fails if the defect comes back, and
-for the measured claims fixed there, an input the claim depends on that moves its number
-(and flips its verdict at a value a reader of the paper could defend)."""
+"""The audit of claims that could not fail: one test per defect that fails if the defect
+comes back, and for the measured claims fixed there, an input the claim depends on that moves
+its number (and flips its verdict at a value a reader of the paper could defend)."""
 
 import types
 
@@ -16,7 +16,7 @@ from navlib.studies import ssac as study_ssac
 # ---------------------------------------------------------------- SSAC
 @pytest.fixture(scope="module")
 def short_study():
-    return study_ssac.run(duration_s=600.0, track=False)
+    return study_ssac.covariance_run(duration_s=600.0, track=False)
 
 
 def test_ssac_12state_is_judged_against_the_10_state_filter(short_study):
@@ -30,7 +30,7 @@ def test_ssac_12state_is_judged_against_the_10_state_filter(short_study):
     assert c12.verdict == c10.verdict == "not reproduced"    # ...so "optimal" is not shown
     assert f"{r10:.5f}" in c12.explanation and f"{r10:.5f}" in c10.explanation
     # a 10-state filter with noisier zero-velocity updates is worse: the claim then holds
-    worse = study_ssac.run(duration_s=600.0, n_states=10, sigma_nu=0.1, track=False)
+    worse = study_ssac.covariance_run(duration_s=600.0, n_states=10, sigma_nu=0.1, track=False)
     moved = {c.claim_id: c for c in study_ssac.ssac_claims(short_study, reduced10=worse)}
     assert moved["SSAC-10state"].verdict == "reproduced"
     assert moved["SSAC-10state"].checks[0].value > r10
@@ -56,7 +56,7 @@ def test_ssac_rank_claims_vary_the_rank_tolerance(short_study):
     ranks = [c for c in claims if c.claim_id.startswith("SSAC-rank")]
     assert ranks and all(c.depends_on == ("rank_rtol",) for c in ranks)
     variants = [({"rank_rtol": r}, study_ssac.ssac_claims(
-        short_study, rank_rtol=r, tables=study_ssac._static_tables(
+        short_study, rank_rtol=r, tables=study_ssac.static_tables(
             study_ssac.SITE_LAT_DEG, study_ssac.SITE_ALT_M, 600.0, r)))
         for r in (1e-12, 1e-8)]
     rob = engine.robustness_over(variants, study_ssac.BASELINE_POINT)
@@ -64,7 +64,7 @@ def test_ssac_rank_claims_vary_the_rank_tolerance(short_study):
     assert rob["SSAC-rank15"].note.startswith("insensitive")
     # a tolerance above the ninth singular value (7e-5 of the largest) moves the rank
     coarse = {c.claim_id: c for c in study_ssac.ssac_claims(
-        short_study, rank_rtol=1e-3, tables=study_ssac._static_tables(
+        short_study, rank_rtol=1e-3, tables=study_ssac.static_tables(
             study_ssac.SITE_LAT_DEG, study_ssac.SITE_ALT_M, 600.0, 1e-3))}
     assert coarse["SSAC-rank15"].verdict == "not reproduced"
 
@@ -204,7 +204,7 @@ def test_x_claims_move_with_eta(analysis):
 
 
 def test_conclusions_1_and_3_follow_the_table():
-    """Missing claims of issue 25: conclusion 1 (no solution observes b_p) and 3 (the RT
+    """Claims once missing: conclusion 1 (no solution observes b_p) and 3 (the RT
     does not improve observability), judged on Table 2 rows."""
     frame = _table2_frame(17.0)
     paper = {c.claim_id: c for c in launcher.conclusion_claims(frame)}

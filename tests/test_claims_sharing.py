@@ -61,13 +61,13 @@ def test_stacked_recursion_takes_a_model_and_rejects_bad_p0():
             kalman_covariances(F, Q, H, R, bad)
 
 
-def test_ssac_runs_equal_separate_runs():
+def test_ssac_p0_runs_equal_separate_runs():
     points = [("matched", 1.0), ("generic", 0.5), ("matched", 10.0)]
     for n_states in (15, 12):
-        stacked = study_ssac.runs(points, 300.0, n_states=n_states, track=True)
+        stacked = study_ssac.p0_runs(points, 300.0, n_states=n_states, track=True)
         for (P0, scale), study in zip(points, stacked, strict=True):
-            single = study_ssac.run(300.0, P0=P0, attitude_scale=scale, n_states=n_states,
-                                    track=True)
+            single = study_ssac.covariance_run(300.0, P0=P0, attitude_scale=scale,
+                                               n_states=n_states, track=True)
             _same(study.covariance, single.covariance)
             np.testing.assert_array_equal(study.eigen.eigenvalues, single.eigen.eigenvalues)
             np.testing.assert_array_equal(study.eigen.tracked_vectors,
@@ -75,12 +75,12 @@ def test_ssac_runs_equal_separate_runs():
             assert study.model.parameters["P0_variant"] == P0
     for bad in ([], ["matched"], 3):
         with pytest.raises(NavlibInputError, match="initial"):
-            study_ssac.runs(bad)
+            study_ssac.p0_runs(bad)
 
 
 def test_p0_sensitivity_reuses_the_rerun():
-    base, modified = study_ssac.runs([("generic", 2.0), ("matched", 10.0)], 300.0,
-                                     track=False)
+    base, modified = study_ssac.p0_runs([("generic", 2.0), ("matched", 10.0)], 300.0,
+                                        track=False)
     assert np.array_equal(study_ssac.modified_run(base).covariance.P_post,
                           modified.covariance.P_post)
     reused = study_ssac.p0_sensitivity(base, modified=modified)

@@ -1,4 +1,4 @@
-"""Issue 14: the covariance-evolution assumption set shares F, Q, H, R between its
+"""The covariance-evolution assumption set shares F, Q, H, R between its
 sigma0_att variants; every table must equal the one a separate run builds."""
 
 import numpy as np
@@ -14,7 +14,7 @@ CASES = {k: study.EVOLUTION_CASES[k] for k in
 def test_shared_steps_equal_separate_runs():
     traj = launcher_ascent(duration_s=20.0, rate_hz=10.0)
     kws = [{}, {"sigma0_att": np.radians(0.03)}, {"sigma0_att": np.radians(0.3)}]
-    shared = study._evolution_tables(traj, CASES, False, kws)
+    shared = study.evolution._evolution_tables(traj, CASES, False, kws)
     assert len(shared) == 3
     for kw, table in zip(kws, shared, strict=True):
         separate = study.covariance_evolution(traj, CASES, **kw)
@@ -24,8 +24,8 @@ def test_shared_steps_equal_separate_runs():
 
 
 def test_evolution_claims_unchanged_quick():
-    study._EVO_CACHE.clear()
-    claims = study._evolution_claims(quick=True)
+    study.evolution_variants.cache_clear()
+    claims = study.robustness.baseline_evolution_claims(quick=True)
     direct = study.evolution_claims(study.covariance_evolution(quick=True))
     assert [(c.claim_id, c.verdict, c.ours) for c in claims] == \
         [(c.claim_id, c.verdict, c.ours) for c in direct]
@@ -48,6 +48,6 @@ def test_rows_equal_those_of_the_full_public_recursion():
         H, R = (None, None) if aiding == "ins_only" else \
             (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
         covs = kalman_covariances(steps.F, steps.Q, H, R, np.stack(P0s), t=steps.t)
-        want = [study._evolution_row(*case, steps.state_names, cov.P_post[[0, -1]], C_e_b)
+        want = [study.evolution._evolution_row(*case, steps.state_names, cov.P_post[[0, -1]], C_e_b)
                 for cov in covs]
-        assert study._evolution_rows(case, steps, P0s, C_e_b) == want
+        assert study.evolution._evolution_rows(case, steps, P0s, C_e_b) == want

@@ -21,7 +21,7 @@ from navlib.outliers import (
     scores_frame,
 )
 from navlib.studies import outliers as study
-from navlib.studies.verdict import VERDICTS
+from navlib.studies.claims import STATUSES as VERDICTS
 from navlib.trajectory import launcher_ascent, sounding_rocket
 
 

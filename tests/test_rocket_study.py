@@ -10,7 +10,7 @@ import pytest
 from navlib import NavlibInputError, earth, metrics
 from navlib.rotations import unskew
 from navlib.studies import rocket
-from navlib.studies.verdict import VERDICTS
+from navlib.studies.claims import STATUSES as VERDICTS
 
 
 @pytest.fixture(scope="module")

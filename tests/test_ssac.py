@@ -17,7 +17,7 @@ from navlib.units import DEG, DEG_PER_HOUR, MG
 
 @pytest.fixture(scope="module")
 def full_study():
-    return study_mod.run()  # 60 min at 1 Hz, matched P0
+    return study_mod.covariance_run()  # 60 min at 1 Hz, matched P0
 
 
 @pytest.fixture(scope="module")
@@ -145,7 +145,8 @@ def test_position_flat_and_ins_only_growth(full_study):
 
 @pytest.mark.parametrize("variant", ["matched", "generic"])
 def test_closed_form_limits_match_filter(variant, full_study):
-    study = full_study if variant == "matched" else study_mod.run(P0=variant, track=False)
+    study = full_study if variant == "matched" else study_mod.covariance_run(P0=variant,
+                                                                               track=False)
     limits = study_mod.closed_form_limits(study).set_index("state")
     np.testing.assert_allclose(limits["filter_over_eq44"], 1.0, rtol=5e-3)
     if variant == "generic":
@@ -197,23 +198,23 @@ def test_claims(claims):
                 "SSAC-nine", "SSAC-nonzero"):
         assert claims[cid].verdict == "reproduced", (cid, claims[cid].ours)
     assert claims["SSAC-pairs"].basis == "fitted" and not claims["SSAC-pairs"].reproduced
-    # the exact null space has four blocks, not the paper's six groups (issue 11: the old
-    # "partly" could never say "reproduced")
+    # the exact null space has four blocks, not the paper's six groups (the headline check
+    # fails: a "partly" could never say "reproduced")
     assert claims["SSAC-groups"].verdict == "not reproduced"
     # the filter sits on sqrt(1/2) of the classic Jekeli limit; the Bayesian form of (44)
-    # equals the filter for any P0 and is no longer a check (issue 11)
+    # equals the filter for any P0 and is no longer a check
     assert claims["SSAC-eq44"].verdict == "not reproduced"
     # the honest difference: our position triple is the largest (ssac.md §7)
     assert claims["SSAC-order"].verdict == "not reproduced"
-    # the 12-state rank is the prototype's, not the paper's: no claim (issue 25)
+    # the 12-state rank is the prototype's, not the paper's: no claim
     assert "SSAC-rank12" not in claims
-    frame = study_mod.claims_table(study_mod.run(duration_s=600, track=False))
+    frame = study_mod.claims_table(study_mod.covariance_run(duration_s=600, track=False))
     assert frame.set_index("claim_id").loc["SSAC-bgD", "verdict"] == "not evaluated"
 
 
 def test_claims_fail_under_a_generic_p0():
     """The 45° pairs are fitted: a generic 1° P0 does not give them."""
-    generic = study_mod.run(P0="generic", track=False)
+    generic = study_mod.covariance_run(P0="generic", track=False)
     claims = {c.claim_id: c for c in study_mod.ssac_claims(generic)}
     assert claims["SSAC-pairs"].verdict == "not reproduced"
 
@@ -229,7 +230,7 @@ def test_actual_error_is_linear_and_starts_at_the_truth(full_study):
 
 
 def test_figures_and_panel():
-    study = study_mod.run(duration_s=300, track=True)
+    study = study_mod.covariance_run(duration_s=300, track=True)
     for fig in (ssac_plots.ssac_sigma_figure(study, study_mod.closed_form_limits(study)),
                 ssac_plots.ssac_eigenvalues_figure(study),
                 ssac_plots.ssac_eigenvectors_figure(study, tracked=True),

@@ -6,8 +6,8 @@ import pytest
 
 from navlib import NavlibInputError, earth, strapdown
 from navlib.plots import trajectory as plots
+from navlib.studies.claims import claims_frame
 from navlib.studies.rocket.profile import PAPER, rocket_profile_claims
-from navlib.studies.verdict import claims_frame
 from navlib.trajectory import sounding_rocket, stationary
 from navlib.widgets.trajectory import SITES, rocket_panel
 

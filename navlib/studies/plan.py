@@ -39,10 +39,10 @@ from navlib.segmentation import SEGMENT_DEFAULTS, segment_flight
 from navlib.studies.assess import (
     MODEL_STEP_S,
     FlightAssessment,
-    _pairs,
     assess_flight,
     automatic_segment_table,
     describe_inputs,
+    segment_pairs,
 )
 from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
 
@@ -274,7 +274,7 @@ model_options, model_step_s
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return MissionPlan.build(
-        model, _pairs(table), trajectory=trajectory, **thresholds, settings=settings,
+        model, segment_pairs(table), trajectory=trajectory, **thresholds, settings=settings,
         inputs=describe_inputs(imu, gnss), fit=_fit_columns(), automatic=automatic,
         segment_table=table, options=options, notes=tuple(notes), mission=mission,
         outages=windows)
@@ -300,7 +300,7 @@ def _by_phase(analysis) -> dict:
 
 def plan_beside_flight(plan: MissionPlan, flight: FlightAssessment) -> pd.DataFrame:
     """Which states the plan expected to be estimable and which the flight delivered, per
-    phase (issue 27 item 4).
+    phase (a planned mission beside the recorded flight of the same vehicle).
 
     One row per phase found in either (plan phases first): ``phase``, ``planned_segments``,
     ``flown_segments`` (their spans), ``planned_excitable``, ``flown_excitable``,
@@ -346,12 +346,12 @@ def plan_page(label: str, plan: MissionPlan, warning_texts: Sequence[str] = (),
     ``flight = (log, assessment)`` of a recorded flight of the same vehicle, also the
     planned-beside-flown table (:func:`plan_beside_flight`) and the flight's estimable
     states."""
-    import matplotlib
+    import matplotlib  # plotting is heavy: loaded only when a page is written
 
     matplotlib.use("Agg", force=False)
-    from navlib.plots import assess as aplots
-    from navlib.plots.metrics import excitability_figure
-    from navlib.plots.plan import timeline_figure
+    from navlib.plots import assess as aplots  # same reason
+    from navlib.plots.metrics import excitability_figure  # same reason
+    from navlib.plots.plan import timeline_figure  # same reason
 
     figures = [("Planned specific force and angular rate, with the phases",
                 aplots.phases_figure(plan)),

@@ -1,9 +1,10 @@
 """Interactive panel for notebook 06: rerun the SSAC covariance study and redraw.
 
 Sliders for the site latitude, the run duration and the P0 attitude scaling (1 = matched
-P0, ssac.md §4.4) plus a P0-variant dropdown call :func:`navlib.studies.ssac.run` and redraw
-the sigma panels, the normalised eigenvalues, the pair structure and the closed-form limits
-(render path of :mod:`navlib.widgets.base`: detached figures shown as PNG images).
+P0, ssac.md §4.4) plus a P0-variant dropdown call
+:func:`navlib.studies.ssac.covariance_run` and redraw the sigma panels, the normalised
+eigenvalues, the pair structure and the closed-form limits (render path of
+:mod:`navlib.widgets.base`: detached figures shown as PNG images).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import ipywidgets as widgets
 
 from navlib.models.ssac import SITE_LAT_DEG
 from navlib.plots.ssac import ssac_eigenvalues_figure, ssac_sigma_figure
-from navlib.studies.ssac import closed_form_limits, pair_structure, run
+from navlib.studies.ssac import closed_form_limits, covariance_run, pair_structure
 from navlib.widgets.base import Panel, look, table_html
 
 
@@ -49,7 +50,7 @@ class SSACPanel(Panel):
         super().__init__(controls, dpi=dpi)
 
     def keywords(self) -> dict:
-        """Keyword arguments of :func:`navlib.studies.ssac.run` from the controls."""
+        """Keyword arguments of :func:`navlib.studies.ssac.covariance_run` from the controls."""
         c = self.controls
         kw = {"lat_deg": c["lat_deg"].value, "duration_s": 60.0 * c["duration_min"].value,
               "attitude_scale": c["attitude_scale"].value, "P0": c["P0"].value,
@@ -59,7 +60,7 @@ class SSACPanel(Panel):
 
     def refresh(self, changed: set) -> None:
         """Rerun the study with the current controls and redraw."""
-        study = run(**self.keywords())
+        study = covariance_run(**self.keywords())
         self.study = study
         lam = study.eigen.eigenvalues[-1]
         self.status.value = (f"ok: {study.t.size} epochs; six largest normalised eigenvalues "
@@ -72,6 +73,7 @@ class SSACPanel(Panel):
 
 
 def ssac_panel(duration_min: float = 60.0, **fixed) -> SSACPanel:
-    """Build the SSAC panel; ``fixed`` keywords go to every :func:`~navlib.studies.ssac.run`
-    call (e.g. ``dt=2.0`` for a lighter session)."""
+    """Build the SSAC panel; ``fixed`` keywords go to every
+    :func:`~navlib.studies.ssac.covariance_run` call (e.g. ``dt_s=2.0`` for a lighter
+    session)."""
     return SSACPanel(duration_min=duration_min, **fixed)

@@ -12,8 +12,8 @@ from __future__ import annotations
 import ipywidgets as widgets
 
 from navlib.plots.trajectory import altitude_speed_figure, axial_imu_figure
+from navlib.studies.claims import claims_frame
 from navlib.studies.rocket import rocket_profile_claims
-from navlib.studies.verdict import claims_frame
 from navlib.trajectory import sounding_rocket
 from navlib.widgets.base import Panel, look
 

@@ -1,0 +1,180 @@
+"""The result of an assessment (:class:`FlightAssessment`) and its segment table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from navlib.errors import NavlibInputError
+from navlib.metrics import (
+    SegmentedAnalysis,
+    in_segment,
+)
+from navlib.models.ecef import PAPER_IDS, STATE_GROUPS
+from navlib.segmentation import (
+    Segmentation,
+    segments_table,
+)
+
+_GROUP_OF = {name: group for group, names in STATE_GROUPS.items() for name in names}
+
+
+def _label(row) -> str:
+    return f"{int(row.segment)} {row.phase} {row.t_start:.4g}-{row.t_end:.4g} s"
+
+
+@dataclass(frozen=True, eq=False)
+class FlightAssessment(SegmentedAnalysis):
+    """Everything :func:`assess_flight` computed, with tidy views.
+
+    A :class:`navlib.metrics.SegmentedAnalysis` (``model``: the 21-state ECEF model
+    discretised at the GNSS epochs; ``trajectory``: the fitted reference trajectory, exact
+    IMU, ``parameters["fit_residuals"]``; ``segments``; ``excitability`` one per segment in
+    the order of ``segment_table``; ``sensability`` over the whole flight, ``P0`` at the
+    first epoch; ``settings`` and ``thresholds``: ``eta``, ``nu``, ``e_threshold``,
+    ``s_threshold``, ``min_fraction``) whose segments carry the flight phases, with:
+
+    Attributes
+    ----------
+    inputs : DataFrame
+        :func:`describe_inputs` of the records.
+    fit : DataFrame
+        :func:`fit_report` of the residuals.
+    automatic : Segmentation
+        The automatic segmentation (features and phases), whatever segments were used.
+    segment_table : DataFrame
+        The segments assessed: ``segment`` (1-based), ``phase``, ``t_start``, ``t_end``,
+        ``duration``, ``n_epochs`` (GNSS epochs of the model inside).
+    options : dict
+        Assumed values: ``preset``, ``gnss_rate_hz``, ``gnss_sigma_m``, fit and segmentation
+        options, model options.
+    gnss_residuals, imu_residuals : DataFrame
+        Fit residuals over time (:func:`fit_residuals`).
+    notes : tuple of str
+        Assumptions and fallbacks taken (preset, initial attitude, levelling window, bridged
+        holes, excluded samples, an assumed heading, a split record).
+    spans : tuple of FlightAssessment
+        When the record was split at long holes: every span's assessment in time order
+        (this one among them); empty otherwise.
+    quality : DataFrame or None
+        The data-quality findings of the whole record (:func:`navlib.quality.check_records`:
+        saturated IMU samples, frozen, disagreeing or jumping GNSS fixes, all dropped
+        before the fit); each ``message`` was also issued as a
+        :class:`~navlib.io.FlightDataWarning`.
+
+    The long frames name each segment by ``segment`` (1-based) and ``phase``, and each state
+    by ``state``, ``paper_id`` (e1..e21) and ``group``; the wide
+    :meth:`~navlib.metrics.SegmentedAnalysis.excitability_table` labels its columns
+    ``"<segment> <phase> <t_start>-<t_end> s"``; :meth:`to_frame` is the per-segment
+    :meth:`~navlib.metrics.SegmentedAnalysis.summary`.
+    """
+
+    inputs: pd.DataFrame
+    fit: pd.DataFrame
+    automatic: Segmentation
+    segment_table: pd.DataFrame
+    options: dict = field(default_factory=dict)
+    gnss_residuals: pd.DataFrame | None = None
+    imu_residuals: pd.DataFrame | None = None
+    notes: tuple[str, ...] = ()
+    spans: tuple = ()
+    quality: pd.DataFrame | None = None
+
+    @property
+    def vehicle(self) -> str:
+        """The vehicle class whose words name the phases (``options["vehicle"]``)."""
+        return self.options.get("vehicle", "")
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return tuple(_label(r) for r in self.segment_table.itertuples(index=False))
+
+    def _segment_keys(self) -> dict:
+        return {"segment": self.segment_table["segment"].to_numpy(),
+                "phase": self.segment_table["phase"].to_numpy()}
+
+    def _state_columns(self) -> dict:
+        return {**super()._state_columns(),
+                "paper_id": [PAPER_IDS[s] for s in self.state_names],
+                "group": [_GROUP_OF[s] for s in self.state_names]}
+
+    def to_frame(self) -> pd.DataFrame:
+        """The per-segment :meth:`~navlib.metrics.SegmentedAnalysis.summary`."""
+        return self.summary()
+
+    def _segment_changes(self, segments) -> dict:
+        """``segments`` as in :func:`assess_flight` (None keeps the current ones; ``"auto"``
+        returns to the automatic segmentation)."""
+        if segments is None:
+            return {}
+        if isinstance(segments, str) and segments == "auto":
+            segments = self.automatic.segments
+        table = _segment_table(segments, self.model, self.automatic, self.trajectory.t)
+        return {"segment_table": table, "segments": segment_pairs(table)}
+
+
+def segment_pairs(table: pd.DataFrame) -> tuple[tuple[float, float], ...]:
+    return tuple((float(a), float(b)) for a, b in zip(table["t_start"], table["t_end"],
+                                                      strict=True))
+
+
+def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.DataFrame:
+    """Normalise ``segments`` (inside the fitted flight ``t_flight``) and count the model
+    epochs each holds (at least 2 needed; the last epoch may precede the flight's end)."""
+    table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
+    counts = _epoch_counts(table, model.t)
+    for k, (count, row) in enumerate(zip(counts, table.itertuples(index=False), strict=True)):
+        if count < 2:
+            raise NavlibInputError(
+                f"segments: segment {k + 1} ({row.phase}, {row.t_start:.6g}..{row.t_end:.6g} s)"
+                f" holds {count} GNSS epoch(s) of the model; each segment needs at least 2 "
+                f"(epochs every {np.median(np.diff(model.t)):.3g} s)")
+    table.insert(0, "segment", np.arange(1, len(table) + 1))
+    table["n_epochs"] = counts
+    return table
+
+
+def _epoch_counts(table: pd.DataFrame, t) -> list[int]:
+    """Model epochs at ``t`` inside each segment."""
+    return [int(np.count_nonzero(in_segment(t, a, b)))
+            for a, b in zip(table["t_start"], table["t_end"], strict=True)]
+
+
+def automatic_segment_table(segments, model, automatic: Segmentation, t_flight, *,
+                            automatic_segments: bool) -> tuple[pd.DataFrame, list[str]]:
+    """:func:`_segment_table` of ``segments``, with each automatic segment that holds fewer
+    than two measured epochs of the model (a short phase between GNSS fixes, or one inside a
+    GNSS outage: rows of ``model.H`` that are zero) joined to the segment before it (after
+    it, for the first), with a note: excitability needs measurements (assumptions V1, M6).
+    Segments the user gave (``automatic_segments=False``) are refused instead, naming the
+    segment. Returns the table and the notes."""
+    t = np.asarray(model.t)
+    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
+    entries = [[r.phase, float(r.t_start), float(r.t_end)]
+               for r in table.itertuples(index=False)]
+    notes = []
+    k = 0
+    while k < len(entries) and len(entries) > 1:
+        phase, a, b = entries[k]
+        count = int(np.count_nonzero(measured & in_segment(t, a, b)))
+        if count >= 2:
+            k += 1
+            continue
+        outage = count < np.count_nonzero(in_segment(t, a, b))
+        why = ("lies inside a GNSS outage (no measurement, no excitability)" if outage else
+               f"holds {count} GNSS epoch(s) of the model; each segment needs at least 2")
+        if not automatic_segments:
+            raise NavlibInputError(f"segments: segment {k + 1} ({phase}, {a:.6g}..{b:.6g} s) "
+                                   f"{why}; join it to a neighbour")
+        other = k - 1 if k > 0 else k + 1
+        notes.append(f"segment {phase} {a:.6g}-{b:.6g} s {why}: joined to the "
+                     f"{entries[other][0]} segment next to it")
+        lo, hi = min(k, other), max(k, other)
+        entries[lo] = [entries[other][0], entries[lo][1], entries[hi][2]]
+        del entries[hi]
+        k = lo
+    return _segment_table([tuple(e) for e in entries], model, automatic, t_flight), notes
+

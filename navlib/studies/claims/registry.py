@@ -1,0 +1,165 @@
+"""The registry of studies and the one table of every claim (:func:`all_claims`, spec
+api.md, "Claims")."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from navlib.errors import NavlibInputError
+from navlib.studies.claims.robustness import Robustness, explain, robustness_over
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study registered with the engine.
+
+    Attributes
+    ----------
+    name : str
+        Short name (``"rocket"``, ``"table2"``, ...).
+    paper : str
+        Citation of the paper.
+    baseline : callable
+        ``baseline(quick) -> list[ClaimResult]`` at the study's baseline assumptions.
+    grid : mapping
+        The declared assumption set (data): name -> values. Empty when none applies.
+    robustness : callable, optional
+        ``robustness(quick) -> [(point, results), ...]``: the claims at points of
+        :attr:`grid` (each point a mapping of assumption name -> value), judged by
+        :func:`robustness_over`.
+    grid_note : str
+        How the grid is evaluated (factorial, one at a time, what is reused).
+    order : int
+        Position among the studies of the same module.
+    baseline_point : mapping or callable
+        The baseline value of every assumption of :attr:`grid` (a callable:
+        ``baseline_point(quick)``, for studies whose quick mode has another baseline).
+    """
+
+    name: str
+    paper: str
+    baseline: Callable
+    grid: Mapping = field(default_factory=dict)
+    robustness: Callable | None = None
+    grid_note: str = ""
+    order: int = 0
+    baseline_point: Mapping = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.robustness is not None:
+            for quick in (False, True):
+                missing = [k for k in self.grid if k not in self.baseline_at(quick)]
+                if missing:
+                    raise NavlibInputError(f"baseline_point: no baseline value for {missing}")
+
+    def baseline_at(self, quick: bool) -> Mapping:
+        """:attr:`baseline_point` in the given mode."""
+        point = self.baseline_point
+        return point(quick) if callable(point) else point
+
+    @property
+    def module(self) -> str:
+        """The study module (or package) under :mod:`navlib.studies` that registered it."""
+        parts = getattr(self.baseline, "__module__", "").split(".")
+        return parts[2] if parts[:2] == ["navlib", "studies"] and len(parts) > 2 else parts[-1]
+
+
+_REGISTRY: dict[str, Study] = {}
+
+
+def register(study: Study) -> Study:
+    """Add (or replace) a study in the registry."""
+    if not isinstance(study, Study):
+        raise NavlibInputError("study: expected a navlib.studies.claims.Study")
+    _REGISTRY[study.name] = study
+    return study
+
+
+STUDY_MODULES = ("rocket", "launcher", "outliers", "ssac")
+"""The modules (or packages) under :mod:`navlib.studies` that register claims, in table
+order."""
+
+
+def studies() -> dict[str, Study]:
+    """The registered studies (imports the :data:`STUDY_MODULES`, which register
+    themselves; imported here, not at the top, because they import this engine)."""
+    for name in STUDY_MODULES:
+        importlib.import_module(f"navlib.studies.{name}")
+    order = {name: i for i, name in enumerate(STUDY_MODULES)}
+    return dict(sorted(_REGISTRY.items(),
+                       key=lambda kv: (order.get(kv[1].module, len(order)), kv[1].order)))
+
+
+COLUMNS = ["study", "paper_ref", "claim_id", "statement", "paper", "ours", "verdict", "basis",
+           "robustness", "checks", "assumption", "depends_on", "explanation",
+           "robustness_note"]
+
+
+def study_robustness(study: Study, quick: bool = False) -> dict[str, Robustness]:
+    """:func:`robustness_over` the study's declared set (empty when it declares none)."""
+    if study.robustness is None:
+        return {}
+    return robustness_over(study.robustness(quick), study.baseline_at(quick))
+
+
+def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> pd.DataFrame:
+    """One study's claims in the :func:`all_claims` layout."""
+    results = study.baseline(quick)
+    rob = study_robustness(study, quick) if robustness else {}
+    rows = []
+    for r in results:
+        res = rob.get(r.claim_id)
+        if r.basis == "by construction":
+            frac, note = float("nan"), "by construction"
+        elif res is None:
+            frac, note = float("nan"), ("no assumption set declared" if robustness
+                                        else "not computed")
+        else:
+            frac, note = res.fraction, res.note
+        rows.append({"study": study.name, "paper_ref": study.paper, "claim_id": r.claim_id,
+                     "statement": r.claim, "paper": r.paper, "ours": r.ours,
+                     "verdict": r.verdict, "basis": r.basis, "robustness": frac,
+                     "checks": r.checks_text(), "assumption": r.assumption,
+                     "depends_on": "; ".join(r.depends_on), "explanation": explain(r, res),
+                     "robustness_note": note})
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def all_claims(quick: bool = False, only: Sequence[str] | None = None,
+               robustness: bool = True) -> pd.DataFrame:
+    """Every claim of every registered study, one row each (spec api.md, "Claims").
+
+    Parameters
+    ----------
+    quick : bool
+        Smoke-test mode: each study runs its quick settings (shorter runs, smaller grids);
+        claims a quick run cannot judge are "not evaluated".
+    only : sequence of str, optional
+        Study names (default all, see :func:`studies`).
+    robustness : bool
+        Evaluate each study's declared assumption set (the ``robustness`` column).
+
+    Returns
+    -------
+    DataFrame
+        ``study, paper_ref, claim_id, statement, paper, ours, verdict, basis, robustness,
+        checks, assumption, depends_on, explanation, robustness_note``; ``claim_id``
+        unique.
+    """
+    registry = studies()
+    names = list(registry) if only is None else list(only)
+    unknown = [n for n in names if n not in registry]
+    if unknown:
+        raise NavlibInputError(f"only: unknown studies {unknown}; expected some of "
+                               f"{list(registry)}")
+    frame = pd.concat([study_frame(registry[n], quick, robustness) for n in names],
+                      ignore_index=True)
+    dup = frame["claim_id"][frame["claim_id"].duplicated()].tolist()
+    if dup:  # pragma: no cover - registry integrity
+        raise NavlibInputError(f"claims: duplicate claim ids {dup}")
+    return frame
+

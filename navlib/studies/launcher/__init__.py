@@ -1,0 +1,83 @@
+"""Beaudoin et al. (2018) observability-matrix study: Table 2, Fig. 1, the covariance
+figures 2, 3, 5, 6 and their claims.
+
+Composes :func:`navlib.models.launcher`, :func:`navlib.observability.local_observability` and
+:func:`navlib.observability.analyze` into the paper's §4.1 experiment (spec launcher.md §6.1,
+§7.2): for each of the 60 configurations of Table 2 (4 solutions x (no bias + 7 bias sets x
+Markov / random walk)), the local observability matrix at every 200 Hz step of the ascent,
+the number of unobservable states (``n - min rank``; a state is observable only if it is at
+every step, §6.1 item 4) and log10 of the maximum condition number over the mission, next to
+the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md`` sidecar).
+
+* :mod:`.table2` — the Table 2 experiment (:func:`table2`, :class:`Table2Result`), the
+  readings of eq. (6) side by side (:func:`variant_comparison`: the INS/GPS-only rows
+  depend on the trajectory and on the frozen / time-varying reading) and one configuration
+  over the mission;
+* :mod:`.fig1` — the Fig. 1 analogue (simplified model, spec §3.7, §10a);
+* :mod:`.evolution` — the covariance runs of Figs. 2, 3, 5, 6 (spec §7.3);
+* :mod:`.claims` — the robust claims of spec §10c, conclusions 1-4, Fig. 1 and the
+  covariance evolution, one function per claim;
+* :mod:`.assumptions` — the paper's words as numbers and the declared assumption sets;
+  :mod:`.robustness` — the claims over them and the registration with the claims engine;
+* :mod:`.reading` — the notebook's generated reading.
+"""
+
+from navlib.studies.launcher.assumptions import (
+    BARELY,
+    COND_TOL,
+    EVOLUTION_BASELINE,
+    EVOLUTION_DEPENDS,
+    EVOLUTION_GRID,
+    HIGH_LOG10,
+    IDENTICAL,
+    LOW_LOG10,
+    RESOLVED_LOG10,
+    SINGULAR_LOG10,
+    STRONG,
+    TABLE2_BASELINE,
+    TABLE2_GRID,
+    TABLE2_RANK_RTOLS,
+    TABLE2_ROBUSTNESS_STRIDE,
+    TABLE2_STRIDE,
+    TOLERANCES,
+    log10_cond_text,
+)
+from navlib.studies.launcher.claims import (
+    conclusion_claims,
+    evolution_claims,
+    fig1_claims,
+    match_counts,
+    table2_claim_results,
+)
+from navlib.studies.launcher.evolution import (
+    EVOLUTION_CASES,
+    covariance_evolution,
+    evolution_grid,
+)
+from navlib.studies.launcher.fig1 import fig1_data
+from navlib.studies.launcher.reading import reading_markdown
+from navlib.studies.launcher.robustness import evolution_variants, table2_result
+from navlib.studies.launcher.table2 import (
+    DATA_DIR,
+    TABLE2_CSV,
+    Table2Result,
+    configurations,
+    describe_direction,
+    inspect_step,
+    mission_observability,
+    paper_table2,
+    table2,
+    variant_comparison,
+)
+
+__all__ = [
+    "BARELY", "COND_TOL", "DATA_DIR", "EVOLUTION_BASELINE", "EVOLUTION_CASES",
+    "EVOLUTION_DEPENDS", "EVOLUTION_GRID", "HIGH_LOG10", "IDENTICAL", "LOW_LOG10",
+    "RESOLVED_LOG10", "SINGULAR_LOG10", "STRONG", "TABLE2_BASELINE", "TABLE2_CSV",
+    "TABLE2_GRID", "TABLE2_RANK_RTOLS", "TABLE2_ROBUSTNESS_STRIDE", "TABLE2_STRIDE",
+    "TOLERANCES", "Table2Result", "conclusion_claims", "configurations",
+    "covariance_evolution", "describe_direction", "evolution_claims", "evolution_grid",
+    "evolution_variants", "fig1_claims", "fig1_data", "inspect_step", "log10_cond_text",
+    "match_counts", "mission_observability", "paper_table2", "reading_markdown", "table2",
+    "table2_claim_results", "table2_result", "variant_comparison",
+]

@@ -1,0 +1,95 @@
+"""Beaudoin et al. (2018) claims over the declared assumption sets
+(:mod:`navlib.studies.launcher.assumptions`) and the three studies' registration with the
+claims engine (Fig. 1, Table 2, covariance evolution). The Table 2 results and the evolution
+claims are kept in the process (:func:`navlib.cache.memoized`), shared by the baseline
+claims and the robustness."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from navlib import cache
+from navlib.models.launcher import ASSUMED
+from navlib.studies import claims as engine
+from navlib.studies.claims import ClaimResult
+from navlib.studies.launcher.assumptions import (
+    COND_TOL,
+    EVOLUTION_BASELINE,
+    EVOLUTION_GRID,
+    TABLE2_BASELINE,
+    TABLE2_GRID,
+    TABLE2_RANK_RTOLS,
+    TABLE2_ROBUSTNESS_STRIDE,
+    TABLE2_STRIDE,
+    TOLERANCES,
+)
+from navlib.studies.launcher.claims import conclusion_claims, evolution_claims, fig1_claims
+from navlib.studies.launcher.evolution import evolution_grid
+from navlib.studies.launcher.table2 import Table2Result, table2
+from navlib.trajectory import launcher_ascent
+
+
+def baseline_fig1_claims(quick: bool = False) -> list[ClaimResult]:
+    """The Fig. 1 claims (the same in both modes)."""
+    return fig1_claims()
+
+
+@cache.memoized(maxsize=3)
+def table2_result(quick: bool, rtol: float | None = None) -> Table2Result:
+    """The Table 2 of the claims: every step of the ascent (quick: 30 s at every 400th step),
+    at a rank tolerance of the declared set on the 5 Hz grid
+    (:data:`~navlib.studies.launcher.assumptions.TABLE2_ROBUSTNESS_STRIDE`). Kept in the
+    process for one mode's three tolerances."""
+    traj = launcher_ascent(duration_s=30.0) if quick else launcher_ascent()
+    stride = 400 if quick else TABLE2_STRIDE if rtol is None else TABLE2_ROBUSTNESS_STRIDE
+    return table2(traj, stride=stride, rtol=rtol)
+
+
+def _all_table2_claims(result: Table2Result, cond_tol: float = COND_TOL) -> list[ClaimResult]:
+    return result.claims(cond_tol) + conclusion_claims(result.frame, cond_tol)
+
+
+def baseline_table2_claims(quick: bool = False) -> list[ClaimResult]:
+    """The Table 2 and conclusion claims at the baseline tolerances."""
+    return _all_table2_claims(table2_result(quick))
+
+
+def table2_robustness(quick: bool = False) -> list:
+    """``(point, claims)`` over the Table 2 set, one assumption at a time."""
+    base = table2_result(quick)
+    out = [({"cond_tol": tol}, _all_table2_claims(base, tol)) for tol in TOLERANCES]
+    out += [({"rank_rtol": rtol}, _all_table2_claims(table2_result(quick, rtol)))
+            for rtol in TABLE2_RANK_RTOLS if not isinstance(rtol, str)]
+    return out
+
+
+@cache.memoized(maxsize=1)
+def evolution_variants(quick: bool) -> dict:
+    """The evolution claims per initial attitude sigma (deg) of
+    :func:`~navlib.studies.launcher.evolution_grid`, kept for the last mode asked."""
+    return {v: evolution_claims(table) for v, table in evolution_grid(quick).items()}
+
+
+def baseline_evolution_claims(quick: bool = False) -> list[ClaimResult]:
+    """The evolution claims at the model's initial attitude sigma."""
+    base = float(np.degrees(ASSUMED["sigma0_att"]))
+    return next(v for k, v in evolution_variants(quick).items() if np.isclose(k, base))
+
+
+def evolution_robustness(quick: bool = False) -> list:
+    """``(point, claims)`` over :data:`~navlib.studies.launcher.EVOLUTION_GRID`."""
+    base = EVOLUTION_BASELINE["sigma0_att_deg"]
+    return [({"sigma0_att_deg": base if np.isclose(k, base) else k}, v)
+            for k, v in evolution_variants(quick).items()]
+
+
+engine.register(engine.Study("fig1", "Beaudoin et al. (2018)", baseline_fig1_claims, order=0))
+engine.register(engine.Study(
+    "table2", "Beaudoin et al. (2018)", baseline_table2_claims, TABLE2_GRID, table2_robustness,
+    "one at a time: the tolerance re-judges the same table, each rank tolerance recomputes it",
+    order=1, baseline_point=TABLE2_BASELINE))
+engine.register(engine.Study("covariance", "Beaudoin et al. (2018)", baseline_evolution_claims,
+                             EVOLUTION_GRID, evolution_robustness,
+                             "one covariance-evolution table per initial attitude sigma; "
+                             "the sigmas' recursions stacked per case",
+                             order=2, baseline_point=EVOLUTION_BASELINE))

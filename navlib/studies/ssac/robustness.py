@@ -1,0 +1,107 @@
+"""Silva et al. (2017) claims over the declared assumption set
+(:mod:`navlib.studies.ssac.assumptions`) and the study's registration with the claims engine.
+
+The P0 points differ in P0 alone, so their 15-, 12- and 10-state runs are stacked
+recursions (:func:`~navlib.studies.ssac.p0_runs`); the grid is evaluated once per mode and
+kept in the process (:func:`navlib.cache.memoized`), shared by the baseline claims and the
+robustness.
+"""
+
+from __future__ import annotations
+
+from navlib import cache
+from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG
+from navlib.studies import claims as engine
+from navlib.studies.claims import ClaimResult
+from navlib.studies.ssac.assumptions import (
+    ARW_READINGS,
+    BASELINE_POINT,
+    QUICK_DURATION_S,
+    ROBUSTNESS_GRID,
+)
+from navlib.studies.ssac.claims import actual_claim, ssac_claims, static_tables
+from navlib.studies.ssac.experiment import (
+    CONVERGENCE_DEFAULT,
+    P0_MODIFIED_ATTITUDE_SCALE,
+    covariance_run,
+    p0_runs,
+    p0_sensitivity,
+    x0_draws,
+)
+from navlib.studies.ssac.observability import RANK_RTOL
+
+
+def _depending(results: list[ClaimResult], name: str) -> list[ClaimResult]:
+    return [r for r in results if name in r.depends_on]
+
+
+@cache.memoized(maxsize=1)
+def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
+    """``(point, claims)`` over :data:`~navlib.studies.ssac.ROBUSTNESS_GRID` (quick mode:
+    the P0 runs and the gyro-noise reading at the baseline only). The P0 points differ in P0
+    alone, so the 15-, 12- and 10-state runs (with the P0-sensitivity rerun, the same for
+    every point: :func:`~navlib.studies.ssac.modified_run`) are three stacked recursions
+    (:func:`~navlib.studies.ssac.p0_runs`); the convergence, rank-tolerance and x0 points
+    re-judge the baseline run. Kept in the process for the last mode asked."""
+    duration = QUICK_DURATION_S if quick else 3600.0
+    tables = static_tables(SITE_LAT_DEG, SITE_ALT_M, duration)
+    points = [(p0, scale) for p0 in ROBUSTNESS_GRID["P0"]
+              for scale in ROBUSTNESS_GRID["attitude_scale"]
+              if not quick or (p0, scale) == ("matched", 1.0)]
+    *full, modified = p0_runs([*points, ("matched", P0_MODIFIED_ATTITUDE_SCALE)], duration,
+                              track=False)
+    reduced = p0_runs(points, duration, n_states=12, track=False)
+    reduced10 = p0_runs(points, duration, n_states=10, track=False)
+    out, base = [], None
+    for (p0, scale), study, r12, r10 in zip(points, full, reduced, reduced10, strict=True):
+        kw = {"reduced": r12, "reduced10": r10,
+              "p0_table": p0_sensitivity(study, modified=modified)}
+        out.append(({"P0": p0, "attitude_scale": scale}, ssac_claims(study, tables=tables,
+                                                                    **kw)))
+        if (p0, scale) == ("matched", 1.0):
+            base = (study, kw)
+    study, kw = base
+    for reading in ROBUSTNESS_GRID["convergence"]:
+        if reading != CONVERGENCE_DEFAULT:
+            out.append(({"convergence": reading}, _depending(
+                ssac_claims(study, tables=tables, convergence=reading, **kw), "convergence")))
+    for rtol in ROBUSTNESS_GRID["rank_rtol"]:
+        if rtol != RANK_RTOL:
+            out.append(({"rank_rtol": rtol}, _depending(
+                ssac_claims(study, tables=static_tables(SITE_LAT_DEG, SITE_ALT_M, duration,
+                                                        rtol, tables[2]),
+                            rank_rtol=rtol, **kw), "rank_rtol")))
+    for label, x0 in zip(ROBUSTNESS_GRID["x0"][1:], x0_draws(study), strict=True):
+        out.append(({"x0": label}, [actual_claim(study, x0)]))
+    if not quick:
+        for reading, arw in ARW_READINGS.items():
+            if arw is None:
+                continue
+            imu = {"gyro_arw": arw}
+            *one, mod = p0_runs([("matched", 1.0), ("matched", P0_MODIFIED_ATTITUDE_SCALE)],
+                                duration, track=False, imu=imu)
+            study_arw = one[0]
+            out.append(({"arw_reading": reading}, _depending(ssac_claims(
+                study_arw, tables=tables,
+                reduced=covariance_run(duration, n_states=12, track=False, imu=imu),
+                reduced10=covariance_run(duration, n_states=10, track=False, imu=imu),
+                p0_table=p0_sensitivity(study_arw, modified=mod)), "arw_reading")))
+    return out
+
+
+def baseline_claims(quick: bool = False) -> list[ClaimResult]:
+    """The claims at the baseline point (matched P0, attitude scale 1)."""
+    return next(results for point, results in grid_claims(quick)
+                if point == {"P0": "matched", "attitude_scale": 1.0})
+
+
+def robustness_claims(quick: bool = False) -> list:
+    """Every ``(point, claims)`` of :func:`grid_claims`."""
+    return grid_claims(quick)
+
+
+engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", baseline_claims,
+                             ROBUSTNESS_GRID, robustness_claims,
+                             "P0 x attitude scale factorial (stacked recursions per state "
+                             "count); convergence reading, rank tolerance, gyro-noise unit and "
+                             "x0 one at a time from the baseline", baseline_point=BASELINE_POINT))
