@@ -18,11 +18,11 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.models.launcher import BIAS_SETS, SOLUTION_LABELS, SOLUTIONS, launcher
 from navlib.observability import analyze, local_matrix, local_observability
+from navlib.parallel import map_tasks
 from navlib.resources import data_dir
 from navlib.studies.claims import ClaimResult
 from navlib.studies.launcher.assumptions import COND_TOL, TOLERANCES
 from navlib.studies.launcher.claims import cond_match, match_counts, table2_claim_results
-from navlib.parallel import map_tasks
 from navlib.trajectory import launcher_ascent
 
 DATA_DIR = data_dir()
