@@ -20,7 +20,7 @@ from pathlib import Path
 
 from navlib import reports
 from navlib.errors import NavlibInputError
-from navlib.segmentation import VEHICLES
+from navlib.vehicles import VEHICLES
 
 _TRACEBACK_LINES = 12
 
@@ -194,7 +194,7 @@ def _outcome(table, path: Path, done: str, describe_ok=None) -> int:
 
 
 def _assess(args) -> int:
-    from navlib import fleet
+    from navlib.reports import fleet  # the studies are heavy: loaded by the commands using them
 
     options = assess_options(args)
     table, pages = fleet.assess_logs(args.logs, options, scheduler=args.scheduler,
@@ -228,13 +228,13 @@ def _add_plan(sub) -> None:
 
 
 def _plan(args) -> int:
-    from navlib.studies import plan
+    from navlib.reports import fleet  # the studies are heavy: loaded by the commands using them
 
     options = {key: reports.parse_parameter_value(text) for key, text in args.parameter}
     if args.sensors is not None:
         options["sensors_preset"] = args.sensors
-    table, pages = plan.plan_missions(args.missions, options, flight=args.flight)
-    path = plan.write_plans(table, pages, args.output)
+    table, pages = fleet.plan_missions(args.missions, options, flight=args.flight)
+    path = fleet.write_fleet(table, pages, args.output)
     return _outcome(table, path, "mission(s) planned", lambda row: (
         f"{row.log}: {row.vehicle}, {row.n_segments} segment(s), {row.seconds:.1f} s"))
 

@@ -11,9 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from navlib import fleet, io
+from navlib import io
 from navlib.__main__ import _negative_angles, _parser, assess_options, main
 from navlib.errors import NavlibInputError
+from navlib.reports import fleet
 from navlib.segmentation import VEHICLE_PHASES
 from navlib.studies.assess import assess_flight
 

@@ -1,4 +1,5 @@
-"""Fleet assessment: ``python -m navlib assess`` and navlib.fleet."""
+"""Fleet assessment: ``python -m navlib assess``, navlib.reports.fleet and the LOG argument
+(navlib.io.logs)."""
 
 from __future__ import annotations
 
@@ -7,8 +8,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from navlib import NavlibInputError, fleet
+from navlib import NavlibInputError, io
 from navlib.__main__ import main
+from navlib.reports import fleet
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "data" / "sample_flight"
@@ -19,14 +21,14 @@ SHARED = Path("/work/shared/data")
 @pytest.mark.parametrize("spec, kind, n", [("a.ulg", "ulog", 1), ("b.BIN", "dataflash", 1),
                                            ("i.csv,g.csv", "csv", 2)])
 def test_parse_log(spec, kind, n):
-    got_kind, paths = fleet.parse_log(spec)
+    got_kind, paths = io.parse_log(spec)
     assert got_kind == kind and len(paths) == n
 
 
 @pytest.mark.parametrize("spec", ["a.txt", "i.csv", "a.csv,b.txt", "a,b,c", ""])
 def test_parse_log_rejects(spec):
     with pytest.raises(NavlibInputError):
-        fleet.parse_log(spec)
+        io.parse_log(spec)
 
 
 @pytest.mark.parametrize("generation", ["version", "legacy"])
@@ -36,14 +38,14 @@ def test_altos_export_is_one_log_by_its_header(tmp_path, generation, name):
 
     path = tmp_path / name
     write_altos(path, rocket_rows(), generation=generation)
-    kind, paths = fleet.parse_log(str(path))
+    kind, paths = io.parse_log(str(path))
     assert kind == "altos" and paths == (path,)
-    imu, gnss = fleet._read(kind, paths)
+    imu, gnss = io.read_log(str(path))
     assert imu.attrs["autopilot"] == "altos" and len(gnss) > 5
     other = tmp_path / "imu.csv"
     other.write_text("t,f_x,f_y,f_z,w_x,w_y,w_z\n0,0,0,9.8,0,0,0\n")
     with pytest.raises(NavlibInputError, match=r"AltOS \.csv export"):
-        fleet.parse_log(str(other))
+        io.parse_log(str(other))
 
 
 def test_fleet_reports_bad_logs_and_keeps_going(tmp_path, capsys):

@@ -1,11 +1,32 @@
 """The import graph of navlib/ (every import, inside functions too, read with ``ast``) has no
-cycle: the parallel engine and the sweep know no study (the studies register their named
-evaluations from above) and the linear filter's Monte Carlo lives with the filters."""
+cycle and no arrow from a lower layer to a higher one (:data:`LAYERS`, the README's
+"Layers"): the parallel engine and the sweep know no study (the studies register their named
+evaluations from above), the linear filter's Monte Carlo lives with the filters, and the
+figures draw study results but no study draws a figure."""
 
 import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1] / "navlib"
+LAYERS = (
+    ("ground", ("navlib.errors", "navlib._validation", "navlib.units", "navlib.resolution",
+                "navlib.resources", "navlib.earth", "navlib.rotations", "navlib.quaternions",
+                "navlib.cache", "navlib.vehicles")),
+    ("numerics", ("navlib.kalman", "navlib.discretize", "navlib.allan", "navlib.parallel")),
+    ("world", ("navlib.outliers", "navlib.strapdown", "navlib.strapdown_kernel", "navlib.io",
+               "navlib.sensors", "navlib.models", "navlib.trajectory")),
+    ("analysis", ("navlib.covariance", "navlib.observability", "navlib.metrics",
+                  "navlib.estimability", "navlib.filters", "navlib.quality",
+                  "navlib.segmentation")),
+    ("sweep", ("navlib.sweep",)),
+    ("studies", ("navlib.studies",)),
+    ("figures", ("navlib.plots", "navlib.readings")),
+    ("panels", ("navlib.widgets",)),
+    ("entry", ("navlib.reports", "navlib.__main__", "navlib")),
+)
+"""Layers from the bottom up, each a tuple of module prefixes; a module belongs to the layer
+of its longest matching prefix (``navlib`` itself, the package with its lazy submodules, is
+the entry layer). Imports within a layer are free as long as they make no cycle."""
 
 
 def _modules() -> dict[str, Path]:
@@ -70,6 +91,34 @@ def _cyclic_groups(edges: dict[str, set[str]]) -> list[set[str]]:
         if v not in index:
             visit(v)
     return groups
+
+
+def _layer(module: str) -> int | None:
+    best = None
+    for level, (_, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if (module == prefix or module.startswith(prefix + ".")) and (
+                    best is None or len(prefix) > best[1]):
+                best = (level, len(prefix))
+    return None if best is None or (best[1] == len("navlib") and module != "navlib") \
+        else best[0]
+
+
+def test_every_module_has_a_layer():
+    assert [m for m in _modules() if _layer(m) is None] == []
+
+
+def test_no_arrow_points_up():
+    upward = [f"{a} ({LAYERS[_layer(a)][0]}) -> {b} ({LAYERS[_layer(b)][0]})"
+              for a, targets in _edges(_modules()).items() for b in targets
+              if _layer(a) is not None and _layer(b) is not None and _layer(b) > _layer(a)]
+    assert upward == []
+
+
+def test_the_layer_check_finds_an_arrow_up():
+    assert _layer("navlib.studies.rocket.claims") > _layer("navlib.filters.ekf")
+    assert _layer("navlib.plots.ssac") > _layer("navlib.studies.ssac")
+    assert _layer("navlib.new_module") is None
 
 
 def test_no_import_cycle():

@@ -13,7 +13,8 @@ plus :func:`check_overlap` (IMU and GNSS spans), :func:`split_at_gaps` (records 
 ``on_gap="split"``) and the inverse writers :func:`write_imu_csv`, :func:`write_gnss_csv`.
 Column names, aliases and unit keywords: :mod:`navlib.io.csv_files`; PX4 body frame and
 field mapping: :mod:`navlib.io.ulog`; DataFlash messages: :mod:`navlib.io.dataflash`; AltOS
-columns and axes: :mod:`navlib.io.altos`. Every
+columns and axes: :mod:`navlib.io.altos`; the kind of a ``LOG`` argument and its reader:
+:mod:`navlib.io.logs`. Every
 problem raises :class:`navlib.NavlibInputError` naming file, column and line (or topic,
 field and message).
 """
@@ -30,19 +31,23 @@ from navlib.io.csv_files import (
     write_imu_csv,
 )
 from navlib.io.dataflash import read_dataflash
+from navlib.io.logs import LOG_KINDS, parse_log, read_log
 from navlib.io.ulog import read_ulog
 
 __all__ = [
     "GNSS_COLUMNS",
     "IMU_COLUMNS",
+    "LOG_KINDS",
     "FlightDataWarning",
     "TimeOverlap",
     "check_overlap",
     "combine_sigma",
+    "parse_log",
     "read_altos",
     "read_dataflash",
     "read_gnss_csv",
     "read_imu_csv",
+    "read_log",
     "read_ulog",
     "split_at_gaps",
     "write_gnss_csv",

@@ -133,6 +133,13 @@ def _load(path):
     return ulog, label
 
 
+def _mav_type(ulog) -> int | None:
+    """The log's ``MAV_TYPE`` parameter (the vehicle type, read by
+    :func:`navlib.vehicles.vehicle_from_log`), or None when the log has none."""
+    value = (getattr(ulog, "initial_parameters", None) or {}).get("MAV_TYPE")
+    return None if value is None else int(value)
+
+
 def _dataset(ulog, name: str, instance: int | None) -> list:
     return [d for d in ulog.data_list
             if d.name == name and (instance is None or d.multi_id == instance)]
@@ -252,7 +259,8 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
         mean sea level from the standard atmosphere, or None; docs/assumptions.md IO6), and
         ``clipping``
         (samples flagged by PX4's ``accelerometer_clipping`` /
-        ``gyro_clipping``; any flag also warns). The IMU sample time is
+        ``gyro_clipping``; any flag also warns) and ``mav_type`` (the ``MAV_TYPE``
+        parameter, the vehicle type, or None). The IMU sample time is
         ``sensor_combined.timestamp`` (PX4 integrates the accelerometer over the gyro
         interval; ``accelerometer_timestamp_relative`` is not applied).
 
@@ -305,6 +313,7 @@ def read_ulog(path, *, body_frame="frd", gps_topic: str | None = None,
     imu.attrs.update(source=str(path), topic=IMU_TOPIC, t0_us=t0,
                      body_frame=body_frame if isinstance(body_frame, str) else "custom",
                      autopilot="px4", hardware=str(info.get("ver_hw", "")),
+                     mav_type=_mav_type(ulog),
                      attitude=_attitude(ulog, t0, C_b_frd), baro=_baro(ulog, t0))
     imu = apply_gap_policy(imu, src_imu, "'timestamp'", imu_max_gap_s, on_gap)
 

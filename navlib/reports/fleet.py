@@ -1,0 +1,179 @@
+"""Many flights or missions in one run: ``python -m navlib assess`` and ``python -m navlib
+plan`` (spec api.md "Scale" and "Planning").
+
+Each recorded flight (a ``LOG``: :func:`navlib.io.parse_log`) goes through
+:func:`navlib.studies.assess.assess_flight` as one task (:func:`navlib.parallel.map_tasks`)
+with the ``-p`` keywords; each mission file through
+:func:`navlib.studies.plan.plan_mission`. :func:`assess_logs` and :func:`plan_missions` return
+one :data:`SUMMARY_COLUMNS` row per flight or mission and its HTML page
+(:mod:`navlib.reports.pages`); :func:`write_fleet` writes ``DIR/summary.csv`` and the pages.
+A flight or mission that fails (unreadable log, too short, a fit that does not converge...)
+gets ``status = failed`` and its error in the table; it never stops the others.
+"""
+
+from __future__ import annotations
+
+import inspect
+import time
+import warnings
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from navlib._validation import reject_unknown
+from navlib.errors import NavlibInputError
+from navlib.io import read_log
+from navlib.parallel import map_tasks
+from navlib.reports.pages import flight_page, plan_page
+from navlib.studies.assess import assess_flight
+from navlib.studies.plan import plan_mission
+
+__all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
+
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
+                   "excitable", "sensible", "warnings", "seconds", "page")
+"""Columns of ``summary.csv``, in order (a mission's file name in ``log``)."""
+
+
+def _keywords(fn, *skip: str) -> tuple[str, ...]:
+    return tuple(p for p in inspect.signature(fn).parameters if p not in skip)
+
+
+def _per_segment(summary: pd.DataFrame, column: str) -> str:
+    return " | ".join(f"{r.segment} {r.phase}: {getattr(r, column)}"
+                      for r in summary.itertuples(index=False))
+
+
+def _warning_text(w) -> str:
+    return f"{w.category.__name__}: {w.message}"
+
+
+def summary_row(label: str, build) -> tuple[dict, str | None]:
+    """One :data:`SUMMARY_COLUMNS` row for ``label``; never raises for a bad input.
+
+    ``build(warning_texts)`` returns the :class:`~navlib.studies.assess.FlightAssessment`
+    (or mission plan) and its HTML page; ``warning_texts()`` gives the warnings caught so far.
+    The row gets the status, vehicle, duration, phases, excitable and sensible states per
+    segment, every warning caught and the seconds taken; a failure goes in ``error``.
+    """
+    start = time.perf_counter()
+    row = dict.fromkeys(SUMMARY_COLUMNS, "")
+    row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0)
+    page = None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result, page = build(lambda: [_warning_text(w) for w in caught])
+            summary = result.summary()
+            seg = result.segment_table
+            row.update(status="ok", vehicle=result.vehicle,
+                       duration_s=float(seg.t_end.max() - seg.t_start.min()),
+                       n_segments=len(seg),
+                       phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
+                                        for r in seg.itertuples(index=False)),
+                       excitable=_per_segment(summary, "excitable"),
+                       sensible=_per_segment(summary, "sensible"))
+        except Exception as exc:  # a bad input is reported, never stops the others
+            row["error"] = f"{type(exc).__name__}: {exc}"
+    row["warnings"] = " | ".join(sorted({_warning_text(w) for w in caught}))
+    row["seconds"] = round(time.perf_counter() - start, 2)
+    return row, page
+
+
+def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | None]:
+    """Assess one flight; never raises for a bad flight.
+
+    Returns
+    -------
+    row : dict
+        The :data:`SUMMARY_COLUMNS` (``page`` is filled in by :func:`write_fleet`).
+    page : str or None
+        The flight's HTML page (None when it failed).
+    """
+    def build(warning_texts):
+        imu, gnss = read_log(log)
+        result = assess_flight(imu, gnss, **dict(options or {}))
+        return result, flight_page(log, result, warning_texts())
+
+    return summary_row(log, build)
+
+
+def _task(log: str, options: Mapping) -> tuple[dict, str | None]:
+    return assess_log(log, options)
+
+
+def _checked_labels(labels, what: str) -> list:
+    labels = list(labels)
+    if not labels or not all(isinstance(x, str) for x in labels):
+        raise NavlibInputError(f"{what}: expected one or more file names, got {labels!r}")
+    return labels
+
+
+def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=None,
+                progress: bool = False) -> tuple[pd.DataFrame, list]:
+    """Assess flights as Dask tasks (:func:`navlib.parallel.map_tasks`).
+
+    ``options`` are keywords of :func:`navlib.studies.assess.assess_flight` (checked here,
+    before any task runs). Returns the summary table (one row per log, in order) and the
+    HTML pages (None for failed flights).
+    """
+    logs = _checked_labels(logs, "logs")
+    options = dict(options or {})
+    reject_unknown(options, _keywords(assess_flight, "imu", "gnss"), "assess options (-p)")
+    results = map_tasks(_task, logs, scheduler, shared={"options": options},
+                        progress=progress, desc="flights")
+    table = pd.DataFrame([row for row, _ in results], columns=list(SUMMARY_COLUMNS))
+    return table, [page for _, page in results]
+
+
+def plan_missions(missions: Sequence[str], options: Mapping | None = None,
+                  flight: str | None = None) -> tuple[pd.DataFrame, list]:
+    """Plan each mission file (in turn); returns the summary table (one row per mission)
+    and the HTML pages (None for a mission that failed).
+
+    ``options``: keywords of :func:`navlib.studies.plan.plan_mission`, checked before any
+    mission runs. ``flight``: a recorded flight (a ``LOG``) assessed once with the plan's
+    sensor preset and shown beside every plan
+    (:func:`navlib.studies.plan.plan_beside_flight`).
+    """
+    missions = _checked_labels(missions, "missions")
+    options = dict(options or {})
+    reject_unknown(options, _keywords(plan_mission, "mission"), "plan options (-p)")
+    flown = None
+    if flight is not None:
+        imu, gnss = read_log(flight)
+        flown = (flight, assess_flight(imu, gnss, preset=options.get("sensors_preset")))
+
+    def row(mission: str) -> tuple[dict, str | None]:
+        def build(warning_texts):
+            plan = plan_mission(mission, **options)
+            return plan, plan_page(mission, plan, warning_texts(), flown)
+
+        return summary_row(mission, build)
+
+    rows = [row(m) for m in missions]
+    table = pd.DataFrame([r for r, _ in rows], columns=list(SUMMARY_COLUMNS))
+    return table, [p for _, p in rows]
+
+
+def _page_name(index: int, log: str) -> str:
+    stem = Path(log.split(",")[0]).stem or "flight"
+    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in stem)
+    return f"{index + 1:03d}_{safe}.html"
+
+
+def write_fleet(table: pd.DataFrame, pages: Sequence, output) -> Path:
+    """Write ``output/summary.csv`` and one HTML page per assessed flight or planned
+    mission; returns the CSV."""
+    output = Path(output)
+    output.mkdir(parents=True, exist_ok=True)
+    table = table.copy()
+    for i, (log, page) in enumerate(zip(table["log"], pages, strict=True)):
+        if page is not None:
+            name = _page_name(i, log)
+            (output / name).write_text(page, encoding="utf-8")
+            table.loc[i, "page"] = name
+    path = output / "summary.csv"
+    table.to_csv(path, index=False)
+    return path
