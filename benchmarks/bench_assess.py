@@ -1,4 +1,4 @@
-"""Long-flight assessment in bounded memory (issue 12).
+"""Long-flight assessment in bounded memory.
 
 ``assess.long_flight_<N>s``: :func:`navlib.studies.assess.assess_flight` of a generated
 multicopter flight (``tests/flights.py``: pad, climb, figure-eight survey) of N seconds at

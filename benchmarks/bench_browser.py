@@ -1,4 +1,4 @@
-"""Panel latency in the browser: slider release -> new image on the page (issue 13).
+"""Panel latency in the browser: slider release -> new image on the page.
 
 Starts JupyterLab (default settings, kernel comms over subshells) and Debian's chromium as
 the browser tests do (``tests/browser/labharness.py``), runs notebooks 01, 02, 03, 04, 06,
@@ -7,7 +7,7 @@ segment limits (tau2 on the rocket flight of 03, the boundaries of 07) and traje
 latitude, duration and outage-length sliders ten times each by keyboard, measuring in the page
 from the key press to the ``load`` of the first and of the last new image. Prints the
 median and max per control beside the panel's own update time in the kernel and the goals
-of issue 26 (thresholds: 100 ms; segments, trajectory, latitude, duration: 300 ms) and
+(thresholds: 100 ms; segments, trajectory, latitude, duration: 300 ms) and
 the load average. ``benchmarks/bench_panels.py`` times every control without a browser.
 
 Usage: ``python benchmarks/bench_browser.py [--repeats N]`` (needs the ``[browser]`` extra

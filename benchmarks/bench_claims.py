@@ -1,4 +1,4 @@
-"""Per-study cost of :func:`navlib.studies.all_claims` in full mode (issue 14, notebook 00).
+"""Per-study cost of :func:`navlib.studies.all_claims` in full mode (notebook 00).
 
 Each case runs ``all_claims(only=[study])`` (baseline claims and the study's declared
 robustness set) in a fresh subprocess, so no cache of another case or run helps it; the

@@ -1,4 +1,4 @@
-"""Per-notebook cost of a full-mode report (issue 14, point 5): wall time and peak kernel
+"""Per-notebook cost of a full-mode report: wall time and peak kernel
 memory of each ``notebooks/NN_*.ipynb``, and the whole report cold and warm.
 
 Each ``notebook/`` case runs ``python -m navlib report --only NN --no-cache --output <temp

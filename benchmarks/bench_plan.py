@@ -1,4 +1,4 @@
-"""Benchmarks of mission planning (issue 27).
+"""Benchmarks of mission planning.
 
 * ``plan.from_mission_<example>``: build each example mission's trajectory with exact IMU
   (waypoint missions: 6000-7000 samples at 50 Hz; the rocket: 8601 at 100 Hz, its

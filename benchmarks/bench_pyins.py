@@ -1,4 +1,4 @@
-"""Accuracy and consistency parity of our EKF against python-ins (issue 10 point 6).
+"""Accuracy and consistency parity of our EKF against python-ins.
 
 ``filters.ekf_vs_pyins`` runs our closed-loop EKF (21-state ECEF model) and the feedback filter
 of ``python-ins`` (``pyins.filters.run_feedback_filter``: 9 NED navigation states, gyro and

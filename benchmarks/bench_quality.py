@@ -1,4 +1,4 @@
-"""Flight-data quality checks on a long flight (issue 23, items 4-5).
+"""Flight-data quality checks on a long flight (saturation, frozen GNSS, barometer).
 
 ``quality.check_records_1800s``: :func:`navlib.quality.check_records` (saturation, frozen
 fixes, barometer, jumps) of a generated 30-minute multicopter flight (``tests/flights.py``)

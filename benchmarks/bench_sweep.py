@@ -1,7 +1,7 @@
 """Scaling of navlib.sweep: a 200-point sweep on 1 and 2 local worker processes.
 
 Run it directly (``python benchmarks/bench_sweep.py [--points N]``); it starts its own
-clusters, so it is not one of the timed cases of ``benchmarks/run.py``. Goal (issue 15):
+clusters, so it is not one of the timed cases of ``benchmarks/run.py``. Goal:
 speed-up >= 1.8 on 2 cores. It prints, per configuration: wall time of the sweep (from
 submission to the last result; cluster start-up excluded and shown apart), the speed-up
 against 1 worker, time inside the evaluations and the shared-input builds, and the overhead

@@ -1,4 +1,4 @@
-"""Benchmarks of trajectory synthesis, IMU simulation and strapdown integration (issue 2).
+"""Benchmarks of trajectory synthesis, IMU simulation and strapdown integration.
 
 * ``trajectory.sounding_rocket`` / ``trajectory.launcher_ascent``: build the reference
   flights with exact IMU (8601 samples at 100 Hz; 150 s at 200 Hz). Goal 1 s each.

@@ -23,7 +23,7 @@ from pathlib import Path
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "regression" / "data"
 STUDIES = ("rocket", "covariance", "ssac")
-"""The studies whose robustness sets share builds (issue 14)."""
+"""The studies whose robustness sets share builds (one trajectory and model per robustness set)."""
 FIELDS = ("claim_id", "ours", "verdict", "basis", "robustness", "checks")
 
 

@@ -1,7 +1,7 @@
 """Stress the report runner: execute notebooks in quick mode many times and count stalls.
 
 A *stall* is a run in which the runner waited on a kernel that had already finished (or
-stopped answering). Used to find the cause of the hangs of issue 9 and to show the fix::
+stopped answering). Used to find why report runs hung (a lost kernel wake-up) and to show the fix::
 
     python scripts/stress_notebooks.py --runs 20 --only 02            # bounded runner
     python scripts/stress_notebooks.py --runs 5                        # every notebook 5x
@@ -65,7 +65,7 @@ def _reply_lags(executed: Path, min_lag_s: float) -> list[tuple[int, float, floa
 
 
 def run_papermill(info, out: Path, timeout_s: float, min_lag_s: float) -> dict:
-    """One run with plain papermill (the runner before issue 9's fix)."""
+    """One run with plain papermill (the runner before the bounded kernel watch)."""
     import papermill
     from jupyter_client.manager import AsyncKernelManager
 

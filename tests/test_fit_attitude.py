@@ -1,4 +1,4 @@
-"""The flight fit's attitude on SO(3) and its start without a long rest (issue 23, items 1, 3).
+"""The flight fit's attitude on SO(3) and its start without a long rest.
 
 Generated flights whose attitudes have no regular yaw/pitch/roll form in any fixed frame
 (a vertical ascent followed by a tumble and a swinging, spinning parachute descent; two

@@ -1,4 +1,4 @@
-"""The work the outlier study shares (issue 14): unit responses scaled by the magnitude, one
+"""The work the outlier study shares: unit responses scaled by the magnitude, one
 recursion for several responses, the compact block-wise filter preparation, the cache's
 kept responses and covariance summaries, and the EKF run resumed from a snapshot."""
 

@@ -276,7 +276,7 @@ def test_a_short_barometer_record_is_said_not_taken_for_a_disagreement(truth, re
 
 
 def test_sounding_rocket_with_a_frozen_receiver_keeps_its_phases():
-    """The case of issue 23: a receiver repeating one position for 26 s with a valid fix near
+    """A real receiver's failure: a receiver repeating one position for 26 s with a valid fix near
     apogee gave a second "powered" phase. Found by the spin the gyros read, dropped, and the
     phases are the paper's again; with the check switched off they are not."""
     from navlib import io

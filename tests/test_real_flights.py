@@ -1,4 +1,4 @@
-"""Failure classes of real logs (issue 12) on generated multicopter flights.
+"""Failure classes of real logs on generated multicopter flights.
 
 Each case is either assessed correctly or refused with a NavlibInputError naming the
 problem: IMU holes of 0.2, 0.7 and 10 s, 10 Hz and 2 Hz IMUs, motor vibration at rest, a

@@ -32,7 +32,7 @@ def test_profile_claims_judge_the_signals_not_the_keywords():
     verdicts = _verdicts(changed)
     assert verdicts["R5"] == "not reproduced"
     # 8 % below 110 m/s^2 and 7 s early: the headline (peak within 5 %) fails; the old
-    # "partly" came from a 3x-tolerance band the one verdict rule no longer has (issue 11)
+    # "partly" came from a 3x-tolerance band the one verdict rule no longer has
     assert verdicts["R2"] == "not reproduced"
     assert verdicts["R3"] == verdicts["R4"] == "not reproduced"
     assert verdicts["R1"] == "reproduced"
