@@ -1,4 +1,4 @@
-"""Search the España assumption space jointly and store the table (which assumptions reproduce the most claims at once).
+"""Search the España assumption space jointly for the set reproducing the most claims at once.
 
 Runs :func:`navlib.studies.rocket.assumption_search` (X1-X7 and S1-S8 at every point of the
 declared assumption set, through :func:`navlib.sweep.sweep`, so ``--scheduler`` may be a Dask
