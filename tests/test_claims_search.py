@@ -1,30 +1,38 @@
-"""The stored joint search of the España assumption space (scripts/claims_search.py): its
-header names the command and the navlib version, a random sample of its points recomputes
-to the same verdicts, and the search reads the best point and the conflicts from it."""
+"""The stored joint searches of the papers' assumption spaces (scripts/claims_search.py): each
+header names the command and the navlib version, a random sample of each stored search's
+points recomputes to the same verdicts, and the search reads the best point and the
+conflicts from it."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
+import navlib.studies  # noqa: F401 - the studies register their search spaces
 from navlib import NavlibInputError
 from navlib.studies import claims as engine
-from navlib.studies import rocket
 from navlib.sweep import sweep
 
 
-def test_stored_search_recomputes_on_a_random_sample():
-    frame, header = rocket.stored_search()
+@pytest.mark.parametrize("name", list(engine.SEARCH_SPACES))
+def test_stored_search_recomputes_on_a_random_sample(name):
+    space = engine.search_space(name)
+    frame, header = engine.stored_search(name)
     assert header["command"].startswith("python scripts/claims_search.py")
     assert header["navlib"]
-    points = rocket.search_points()
+    points = space.points()
     assert len(frame) == len(points)
-    pd.testing.assert_frame_equal(frame[list(rocket.SEARCH_PARAMETERS)], points,
-                                  check_dtype=False)
+    pd.testing.assert_frame_equal(frame[list(space.parameters)], points, check_dtype=False)
     rows = np.random.default_rng().choice(len(frame), size=2, replace=False)
-    again = sweep(points.iloc[rows].reset_index(drop=True), "claims", scheduler="synchronous")
-    ids = list(rocket.CLAIM_IDS)
+    again = sweep(points.iloc[rows].reset_index(drop=True), space.evaluation,
+                  scheduler="synchronous")
+    ids = list(space.claim_ids)
     stored = frame.iloc[rows].reset_index(drop=True)
     assert (again[ids].astype(bool).to_numpy() == stored[ids].astype(bool).to_numpy()).all()
+
+
+def test_unknown_search_is_named():
+    with pytest.raises(NavlibInputError, match="known"):
+        engine.search_space("no such paper")
 
 
 def test_joint_search_reads_best_point_and_conflicts():

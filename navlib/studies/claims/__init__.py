@@ -30,7 +30,8 @@ assumptions the claim declares in ``depends_on``, at which it is reproduced
 assumptions, and where its number and verdict do not move: "insensitive"), and the
 **explanation** of each partly / not reproduced claim (:func:`explain`). :func:`joint_search`
 reads a sweep of a whole assumption space: the point reproducing the most claims at once and
-the claims that hold together nowhere.
+the claims that hold together nowhere; the spaces searched are registered as
+:class:`SearchSpace` (:mod:`.search`: :func:`run_search`, :func:`stored_search`).
 
 Modules: :mod:`.records` (checks, the verdict rule, the claim record), :mod:`.robustness`
 (robustness, explanations, joint search), :mod:`.registry` (studies, :func:`all_claims`) and
@@ -69,13 +70,23 @@ from navlib.studies.claims.robustness import (
     joint_search,
     robustness_over,
 )
+from navlib.studies.claims.search import (
+    SEARCH_SPACES,
+    SearchSpace,
+    register_search,
+    run_search,
+    search_space,
+    stored_search,
+)
 from navlib.studies.claims.summary import counts, paper_summary, reading_markdown, summary_markdown
 
 __all__ = [
-    "BASES", "COLUMNS", "NOT_EVALUATED", "OPS", "STATUSES", "STUDY_MODULES", "VERDICTS",
-    "Check", "ClaimResult", "JointSearch", "Robustness", "Study", "all_claims", "check",
+    "BASES", "COLUMNS", "NOT_EVALUATED", "OPS", "SEARCH_SPACES", "STATUSES", "STUDY_MODULES",
+    "VERDICTS", "Check", "ClaimResult", "JointSearch", "Robustness", "SearchSpace", "Study",
+    "all_claims", "check",
     "claim", "claims_frame", "counts", "explain", "joint_search", "not_evaluated",
-    "paper_summary", "reading_markdown", "register", "robustness_over", "studies",
+    "paper_summary", "reading_markdown", "register", "register_search", "robustness_over",
+    "run_search", "search_space", "stored_search", "studies",
     "study_frame", "study_robustness", "summary_markdown", "verdict_of",
     "with_failed_headline",
 ]

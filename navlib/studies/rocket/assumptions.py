@@ -10,14 +10,18 @@ import pandas as pd
 from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.models.ecef import P0_DEFAULTS
-from navlib.resources import data_dir
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
-from navlib.studies.rocket.claims import claim_xrank, excitability_claims, sensability_claims
+from navlib.studies.claims.search import SearchSpace, register_search
+from navlib.studies.rocket.claims import (
+    CLAIM_IDS,
+    claim_xrank,
+    excitability_claims,
+    sensability_claims,
+)
 from navlib.studies.rocket.experiment import excitability_study, quiet_gyro_analysis
 from navlib.studies.rocket.flight import BASELINE
 from navlib.studies.rocket.sensitivity import P0_SETS
-from navlib.sweep import sweep
 
 ROBUSTNESS_GRID = {
     "eta": (1e-2, 1e-3, 1e-4),
@@ -64,10 +68,8 @@ ROBUSTNESS_BASELINE = {"eta": BASELINE["eta"], "nu": BASELINE["nu"],
 """The baseline point of :data:`ROBUSTNESS_GRID`."""
 
 
-SEARCH_FILE = "claims_search_rocket.csv"
-"""The stored joint search of the España assumption space (``data/``, written by
-``scripts/claims_search.py``)."""
 SEARCH_PARAMETERS = ("eta", "nu", "sigma_p0_m", "sigma_v0_m_s", "sigma_sg_ppm", "spin_hz")
+"""The assumption columns of a point of the España joint search (:data:`SEARCH`)."""
 
 
 def search_points(grid: dict | None = None) -> pd.DataFrame:
@@ -87,28 +89,6 @@ def search_points(grid: dict | None = None) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=list(SEARCH_PARAMETERS))
 
 
-def assumption_search(grid: dict | None = None, scheduler=None, output=None) -> pd.DataFrame:
-    """X1-X7 and S1-S8 at every point of the declared assumption space, through
-    :func:`navlib.sweep.sweep` (``scheduler``: as there, e.g. ``"synchronous"`` or a Dask
-    client); judge it with :func:`navlib.studies.claims.joint_search`."""
-    return sweep(search_points(grid), "claims", scheduler=scheduler, output=output)
-
-
-def stored_search() -> tuple[pd.DataFrame, dict]:
-    """The stored search table and its header (``command``, ``navlib`` version)."""
-    path = data_dir() / SEARCH_FILE
-    if not path.exists():
-        raise NavlibInputError(f"{path} is missing: run scripts/claims_search.py")
-    header = {}
-    with path.open(encoding="utf-8") as handle:
-        for line in handle:
-            if not line.startswith("#"):
-                break
-            key, _, value = line[1:].partition(":")
-            header[key.strip()] = value.strip()
-    return pd.read_csv(path, comment="#"), header
-
-
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
     a = excitability_study()
     return [*excitability_claims(a), claim_xrank(a), *sensability_claims(a)]
@@ -123,3 +103,9 @@ engine.register(engine.Study(
     _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions; "
     "each claim judged on the points varying its depends_on",
     order=1, baseline_point=ROBUSTNESS_BASELINE))
+
+SEARCH = register_search(SearchSpace(
+    "rocket", "España, Carrizo & Giribet (2019)", SEARCH_PARAMETERS, CLAIM_IDS, "claims",
+    search_points, "claims_search_rocket.csv"))
+"""The España assumption space searched jointly (X1-X7 and S1-S8 at every point of
+:data:`ROBUSTNESS_GRID`; stored in ``data/claims_search_rocket.csv``)."""

@@ -1,0 +1,96 @@
+"""Joint searches of the papers' assumption spaces: which declared assumptions reproduce the
+most claims at once, and which claims hold together nowhere.
+
+A study declares its space as a :class:`SearchSpace` (registered with
+:func:`register_search`): the sweep points of its declared assumptions, the named sweep
+evaluation (:func:`navlib.sweep.register`, one boolean column per claim) that judges the
+claims at a point, and the ``data/`` file that stores the full search.
+``scripts/claims_search.py`` runs :func:`run_search` (through :func:`navlib.sweep.sweep`, so on
+a Dask cluster as well as here) and writes the file with the command line and the navlib
+version; notebook 00 reads it with :func:`stored_search` and judges it with
+:func:`~navlib.studies.claims.joint_search`; a test recomputes a random sample of its points.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import pandas as pd
+
+from navlib.errors import NavlibInputError
+from navlib.resources import data_dir
+from navlib.sweep import sweep
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """The declared assumption space of one paper's claims, searched jointly.
+
+    Attributes
+    ----------
+    name : str
+        The search's name (a paper's study, e.g. ``"rocket"``).
+    paper : str
+        The paper, as in the claims table's ``paper_ref``.
+    parameters : tuple of str
+        The assumption columns of a point.
+    claim_ids : tuple of str
+        The claims judged at each point (one boolean column each).
+    evaluation : str
+        The named sweep evaluation judging the claims at a point.
+    points : callable
+        ``points(grid=None)``: the points of the space as a DataFrame of ``parameters``
+        (``grid`` narrows it, for tests and samples; ``points({})`` is the baseline point
+        alone).
+    file : str
+        The stored search's file name under ``data/``.
+    """
+
+    name: str
+    paper: str
+    parameters: tuple
+    claim_ids: tuple
+    evaluation: str
+    points: Callable
+    file: str
+
+
+SEARCH_SPACES: dict[str, SearchSpace] = {}
+"""Registered spaces by name, in registration order."""
+
+
+def register_search(space: SearchSpace) -> SearchSpace:
+    """Register ``space`` under its name (a study's package does this on import)."""
+    SEARCH_SPACES[space.name] = space
+    return space
+
+
+def search_space(name: str) -> SearchSpace:
+    """The registered space ``name``; NavlibInputError naming the known ones otherwise."""
+    if name not in SEARCH_SPACES:
+        raise NavlibInputError(f"search {name!r}: unknown; known: {list(SEARCH_SPACES)}")
+    return SEARCH_SPACES[name]
+
+
+def run_search(name: str, grid: dict | None = None, scheduler=None,
+               output=None) -> pd.DataFrame:
+    """The claims of search ``name`` at every point of its space (or of ``grid``), through
+    :func:`navlib.sweep.sweep` (``scheduler`` and ``output`` as there)."""
+    space = search_space(name)
+    return sweep(space.points(grid), space.evaluation, scheduler=scheduler, output=output)
+
+
+def stored_search(name: str) -> tuple[pd.DataFrame, dict]:
+    """The stored search table of ``name`` and its header (``command``, ``navlib`` version)."""
+    path = data_dir() / search_space(name).file
+    if not path.exists():
+        raise NavlibInputError(f"{path} is missing: run scripts/claims_search.py --study {name}")
+    header = {}
+    with path.open(encoding="utf-8") as handle:
+        for line in handle:
+            if not line.startswith("#"):
+                break
+            key, _, value = line[1:].partition(":")
+            header[key.strip()] = value.strip()
+    return pd.read_csv(path, comment="#"), header
