@@ -258,6 +258,7 @@ def _add_sweep(sub) -> None:
 
 
 def _sweep(args) -> int:
+    # the sweep loads the studies (heavy): only when this command runs
     import pandas as pd
 
     import navlib.studies  # noqa: F401 - the studies register their named evaluations

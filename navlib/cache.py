@@ -53,6 +53,9 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from navlib import __version__
+from navlib.resources import data_dir
+
 DEFAULT_MAX_MB = 1024.0
 """Default size bound of the cache folder, MB."""
 
@@ -214,9 +217,6 @@ def salt(module: str) -> str:
     """Hex digest of the navlib version, the source of :func:`source_closure` of
     ``module`` and the shipped sensor presets: entries made under another salt are never
     read."""
-    from navlib import __version__
-    from navlib.resources import data_dir
-
     digest = hashlib.sha256(f"navlib {__version__};".encode())
     for name in source_closure(module):
         digest.update(f"{name}:".encode())
