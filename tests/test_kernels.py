@@ -16,7 +16,7 @@ from navlib.models import launcher
 from navlib.trajectory import launcher_ascent
 
 STEP_RTOL = 1e-12
-ekf_module = importlib.import_module("navlib.filters.ekf")
+ekf_updates = importlib.import_module("navlib.filters.ekf_updates")
 
 
 def rel(a, b) -> float:
@@ -149,8 +149,8 @@ def test_paper_recursion_30001_epochs_equals_numpy(launcher_steps):
     1e-12 on this model), the gains within 1e-9 of their largest entry."""
     s = launcher_steps
     measured = np.ones(s.t.size, dtype=bool)
-    P_prior, P_post, gains = covariance._recursion(s.F, s.Q, s.H, s.R, s.P0[None], measured,
-                                                   1e-12, gains=True)
+    P_prior, P_post, gains = covariance.covariance_recursion(s.F, s.Q, s.H, s.R, s.P0[None],
+                                                             measured, 1e-12, gains=True)
     want_prior, want_post, want_K, _, want_dof = ref.recursion(
         s.F, s.Q, s.H, s.R, s.P0, measured, definite_noise(s.R))
     sigma = np.sqrt(np.diagonal(P_post[0], axis1=1, axis2=2))
@@ -191,8 +191,8 @@ def test_rocket_ekf_86_s_equals_numpy_loop(monkeypatch):
                    model="ecef21", model_options={"sensors": "motionpak_tactical"})
 
     compiled = run()
-    monkeypatch.setattr(ekf_module, "propagate_kernel", _numpy_propagate)
-    monkeypatch.setattr(ekf_module, "update_kernel", _numpy_update)
+    monkeypatch.setattr(ekf_updates, "propagate_kernel", _numpy_propagate)
+    monkeypatch.setattr(ekf_updates, "update_kernel", _numpy_update)
     numpy_run = run()
     assert np.abs(compiled.position - numpy_run.position).max() < 1e-3
     assert np.max(np.abs(compiled.sigma - numpy_run.sigma) / numpy_run.sigma) < 1e-9

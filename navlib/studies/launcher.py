@@ -814,15 +814,16 @@ def _evolution_rows(case: tuple, steps, P0s, C_e_b) -> list[dict]:
     a time, keeping the posteriors of the first and the last epoch only, the two a row
     reads: the same numbers, to the bit, without the (B, N, n, n) histories.
     """
-    from navlib.covariance import FactoredNoise, _recursion, symmetrize
-    from navlib.kalman import _PINV_RTOL
+    from navlib.covariance import FactoredNoise, covariance_recursion, symmetrize
+    from navlib.kalman import PINV_RTOL
 
     aiding = case[4]
     H, R = (None, None) if aiding == "ins_only" else \
         (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
     measured = np.full(steps.t.size, H is not None)
-    _, ends, _ = _recursion(steps.F, FactoredNoise(steps.L), H, R, symmetrize(np.stack(P0s)),
-                            measured, _PINV_RTOL, priors=False, keep=[0, -1])
+    _, ends, _ = covariance_recursion(steps.F, FactoredNoise(steps.L), H, R,
+                                      symmetrize(np.stack(P0s)), measured, PINV_RTOL,
+                                      priors=False, keep=[0, -1])
     return [_evolution_row(*case, steps.state_names, P, C_e_b) for P in ends]
 
 
