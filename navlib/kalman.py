@@ -8,7 +8,8 @@ The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
 covariance recursion of :func:`covariance_recursion`), :func:`propagate_kernel`
-(the EKF between updates) and :func:`update_kernel` (the EKF's updates).
+(the EKF between updates), :func:`update_kernel` (the EKF's updates) and
+:func:`fixed_updates_kernel` (the EKF's runs of updates with one fixed design).
 :func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
 batch) around them; :func:`compile_kernels` compiles or loads
 them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
@@ -398,6 +399,28 @@ def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: 
             Gains(K, S_pinv, dof) if gains else None)
 
 
+@numba.njit(cache=True)
+def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
+                         innovations, nis, dofs):
+    """The EKF over a run of updates with one fixed design (:mod:`navlib.filters.ekf_updates`):
+    from sample ``j0`` of a window, for each update ``u``, :func:`propagate_kernel` to
+    sample ``samples[u]`` and :func:`update_kernel` with ``z[u]``, ``H``, ``R``; the
+    posterior mean, covariance, innovation, NIS and dof of update ``u`` into ``xs[u]``,
+    ``Ps[u]``, ``innovations[u]``, ``nis[u]``, ``dofs[u]``. The same compiled steps as one
+    call per update, without Python between them (docs/assumptions.md "Compiled kernels").
+    Returns the last posterior ``(x, P)``."""
+    n, m = P.shape[0], H.shape[0]
+    K, S_pinv = np.empty((n, m)), np.empty((m, m))
+    for u in range(samples.size):
+        x, P = propagate_kernel(x, P, F, Q, kept, j0, samples[u])
+        j0 = samples[u]
+        x, innovation, nis_u, dof = update_kernel(x, P, z[u], H, R, definite, pinv_rtol,
+                                                  Ps[u], K, S_pinv)
+        xs[u], innovations[u], nis[u], dofs[u] = x, innovation, nis_u, dof
+        P = Ps[u]
+    return x, P
+
+
 def compile_kernels() -> None:
     """Run each compiled kernel once on tiny inputs: compiles them on the first run on a
     machine (README "Compiled kernels" gives the cost) and loads them from numba's
@@ -415,6 +438,10 @@ def compile_kernels() -> None:
     update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, PINV_RTOL, np.empty((n, n)),
                   np.empty((n, m)), np.empty((m, m)))
     propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
+    fixed_updates_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, np.ones(1, dtype=np.int64),
+                         np.zeros((1, m)), H[0], R[0], True, PINV_RTOL, np.empty((1, n)),
+                         np.empty((1, n, n)), np.empty((1, m)), np.empty(1),
+                         np.empty(1, dtype=np.int64))
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains:

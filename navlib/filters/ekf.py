@@ -420,7 +420,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
             results = update_records(rec, nominal, es, kept, keep_covariance, len(names))
             for key, value in zip(out, results, strict=True):
                 out[key].append(value)
-            if rec[-1][0] == F.shape[0]:       # the last update is the window end's state
+            if rec[-1][0][-1] == F.shape[0]:    # the last update is the window end's state
                 end = results[0].at(slice(-1, None))
         if end is None:
             end = es.correct(nominal.at(slice(-1, None)), x[None])

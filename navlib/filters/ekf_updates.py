@@ -18,6 +18,7 @@ from navlib.filters.measurements import FixedDesign
 from navlib.kalman import (
     PINV_RTOL,
     definite_noise,
+    fixed_updates_kernel,
     kernel_array,
     propagate_kernel,
     update_kernel,
@@ -91,32 +92,58 @@ class WindowUpdates:
 
     def window(self, x, P, F, Q, w0, nominal):
         """``x``, ``P`` at the end of the window that starts at sample ``w0`` and the
-        records ``(j, x, P, innovation, columns, NIS, dof)`` of its updates."""
+        records of its updates: runs ``(samples, x, P, innovations, columns, NIS, dof)`` of
+        consecutive updates with the same measurement rows (arrays with one row per
+        update).
+
+        A run of fixed-design updates (when no measurement watches the posterior) is one
+        call of :func:`~navlib.kalman.fixed_updates_kernel`; any other update is a run of
+        one, evaluated at its sample."""
         x, P, F, Q = kernel_array(x), kernel_array(P), kernel_array(F), kernel_array(Q)
         z_fixed = self.epochs.innovations(w0, nominal)
-        by_rows = {}                           # the innovations in the rows of each pattern
         at = self.epochs.at
         steps = F.shape[0]
         updates = [j for j in range(steps + 1) if (j or not w0) and w0 + j in at]
-        rec, j0 = [], 0
-        for j in updates:
+        rec, j0, i = [], 0, 0
+        while i < len(updates):
+            epoch, cols, fixed = at[w0 + updates[i]]
+            if fixed is not None and not self.observers:
+                end = i + 1
+                while end < len(updates) and at[w0 + updates[end]][1] is cols:
+                    end += 1
+                samples = np.array(updates[i:end], dtype=np.int64)
+                x, P, run = _fixed_run(x, P, F, Q, self.kept, j0, samples,
+                                       z_fixed[samples[:, None], cols], fixed)
+                rec.append((samples, *run[:3], cols, *run[3:]))
+                j0, i = updates[end - 1], end
+                continue
+            j = updates[i]
             x, P = propagate_kernel(x, P, F, Q, self.kept, j0, j)
-            j0 = j
-            epoch, cols, fixed = at[w0 + j]
-            if fixed is not None:
-                if id(cols) not in by_rows:
-                    by_rows[id(cols)] = z_fixed[:, cols]
-                z, H, R, definite = by_rows[id(cols)][j], *fixed
-            else:
-                z, H, R, definite = _evaluated(epoch, nominal, j)
+            z, H, R, definite = (_evaluated(epoch, nominal, j) if fixed is None
+                                 else (z_fixed[j, cols], *fixed))
             x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
-            rec.append((j, x, P, innov, cols, nis, dof))
+            rec.append((np.array([j]), x[None], P[None], innov[None], cols, np.array([nis]),
+                        np.array([dof])))
             if self.observers:                 # posterior navigation attitude
                 C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
                 for meas in self.observers:
                     meas.observe(C_post)
+            j0, i = j, i + 1
         x, P = propagate_kernel(x, P, F, Q, self.kept, j0, steps)
         return x, P, rec
+
+
+def _fixed_run(x, P, F, Q, kept, j0, samples, z, fixed):
+    """:func:`~navlib.kalman.fixed_updates_kernel` over the updates at ``samples`` with
+    innovations ``z`` (u, m) and the design ``fixed`` ``(H, R, definite)``: the last
+    posterior and the run's ``(x, P, innovations, NIS, dof)`` by update."""
+    H, R, definite = fixed
+    u, n, m = samples.size, P.shape[0], z.shape[1]
+    run = (np.empty((u, n)), np.empty((u, n, n)), np.empty((u, m)), np.empty(u),
+           np.empty(u, dtype=np.int64))
+    x, P = fixed_updates_kernel(x, P, F, Q, kept, j0, samples, kernel_array(z), kernel_array(H),
+                                kernel_array(R), bool(definite), PINV_RTOL, *run)
+    return x, P, run
 
 
 def update_records(rec, nominal, es, kept, keep_covariance, m_all):
@@ -125,17 +152,15 @@ def update_records(rec, nominal, es, kept, keep_covariance, m_all):
     when not kept), sigma, innovations in the model's rows (NaN where not measured), NIS
     and its dof."""
     j_up, dx, P, innov, cols, nis, dof = zip(*rec, strict=True)
-    dx, P = np.array(dx), np.array(P)
-    full = np.full((len(rec), m_all), np.nan)
-    groups = {}                                # updates with the same rows (cached arrays)
-    for u, c in enumerate(cols):
-        groups.setdefault(id(c), (c, []))[1].append(u)
-    for c, us in groups.values():
-        full[np.ix_(us, c)] = np.array([innov[u] for u in us])
+    j_up, dx, P = np.concatenate(j_up), np.concatenate(dx), np.concatenate(P)
+    full = np.full((j_up.size, m_all), np.nan)
+    ends = np.cumsum([0] + [a.shape[0] for a in innov])
+    for (a, b), c, values in zip(itertools.pairwise(ends), cols, innov, strict=True):
+        full[a:b, c] = values
     sigma = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0, None))
-    return (es.correct(nominal.at(np.array(j_up)), dx), dx[:, kept],
-            P if keep_covariance else np.array([None] * len(rec)), sigma, full,
-            np.array(nis), np.array(dof))
+    return (es.correct(nominal.at(j_up), dx), dx[:, kept],
+            P if keep_covariance else np.array([None] * j_up.size), sigma, full,
+            np.concatenate(nis), np.concatenate(dof))
 
 
 def _evaluated(epoch, nominal, j):
