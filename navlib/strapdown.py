@@ -53,6 +53,7 @@ from navlib._validation import finite_array, finite_scalar, increasing_times
 from navlib.errors import NavlibInputError
 from navlib.quaternions import earth_quat, prefix_products, quat_from_rotvec, quat_mul, quat_rotate
 from navlib.rotations import bortz_rate, cross
+from navlib.strapdown_kernel import PICARD_MAX_ITER, integrate_kernel
 
 _OMEGA = earth.OMEGA_E
 
@@ -210,37 +211,6 @@ def _translation(h, r0, v0, a, a_mid, steps=None):
     r_mid = r[:-1] + steps.h24 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
     return r + r0, v, r_mid + r0
 
-
-_WINDOW_S = 10.0
-"""Length of the windows in which the translational recursion is solved by fixed-point
-iteration on gravity; the contraction factor is about ``|Gamma| T^2 / 2`` (1.5e-4 at the
-surface for 10 s)."""
-_PICARD_TOL_M = 1e-8
-_PICARD_MAX_ITER = 30
-
-
-def _translation_window(h, r0, v0, f_e, f_e_mid):
-    """Translation over one window with gravity at the solution's own positions.
-
-    Fixed-point (Picard) iteration: start from gravity frozen at ``r0``, integrate with
-    :func:`_translation`, re-evaluate gravity at the resulting sample and mid-step
-    positions, and repeat until the positions change by less than 1e-8 m.
-    """
-    g = np.broadcast_to(earth.normal_gravity_ecef(r0), f_e.shape)
-    g_mid = g[:-1]
-    steps = _Steps.of(h)
-    previous = None
-    for _ in range(_PICARD_MAX_ITER):
-        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid, steps)
-        if previous is not None and np.max(np.abs(r - previous)) < _PICARD_TOL_M:
-            return r, v
-        previous = r
-        g_all = earth.normal_gravity_ecef(np.concatenate([r, r_mid]))   # row by row
-        g, g_mid = g_all[:r.shape[0]], g_all[r.shape[0]:]
-    raise NavlibInputError(
-        f"t: the gravity iteration did not converge within {_PICARD_MAX_ITER} passes over "
-        f"{h.sum():.3g} s; sample steps this long ({h.max():.3g} s) are not supported"
-    )
 
 
 # --- public API ---------------------------------------------------------------------------------
@@ -448,41 +418,26 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
         raise NavlibInputError("position0: expected an ECEF position in m (|r| >= 100 km)")
     return _integrate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
 
-
 def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
-    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): for
+    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): the
+    compiled mechanisation (:func:`navlib.strapdown_kernel.integrate_kernel`), also for
     loops that propagate many short blocks from states they computed themselves (the
     EKF's windows, :func:`navlib.filters.ekf`, with their :func:`_block_clocks`)."""
     n = t.size
-    h = np.diff(t)
-    lagrange, earth, earth_mid = _clock(t) if clock is None else clock
-    w_mid = _interpolate(t, w_ib_b, 0.5, lagrange)
-    f_mid = _interpolate(t, f_b, 0.5, lagrange)
-    phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
-
-    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments; the
-    # samples (n) and mid-steps (n - 1) rotated together
-    dq = quat_from_rotvec(np.concatenate([phi, phi_half]))
-    body = _body_products(dq[:n - 1])
-    half = quat_mul(body[:-1], dq[n - 1:])
-    both = quat_mul(np.concatenate([earth, earth_mid]),
-                     quat_mul(q0, np.concatenate([body, half])))
-    f_e_both = quat_rotate(both, np.concatenate([f_b, f_mid]))
-    q, f_e, f_e_mid = both[:n], f_e_both[:n], f_e_both[n:]
-
-    position = np.empty((n, 3))
-    velocity = np.empty((n, 3))
-    position[0], velocity[0] = r, v
-    i0 = 0
-    while i0 < n - 1:
-        i1 = max(int(np.searchsorted(t, t[i0] + _WINDOW_S, side="right")) - 1, i0 + 1)
-        position[i0:i1 + 1], velocity[i0:i1 + 1] = _translation_window(
-            h[i0:i1], position[i0], velocity[i0], f_e[i0:i1 + 1], f_e_mid[i0:i1])
-        i0 = i1
+    (idx, weights), earth_q, earth_mid = _clock(t) if clock is None else clock
+    position, velocity, q = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4))
+    inputs = (np.ascontiguousarray(a, dtype=float)
+              for a in (t, f_b, w_ib_b, r, v, q0, weights, earth_q, earth_mid))
+    t_c, f_c, w_c, r_c, v_c, q_c, weights_c, earth_c, earth_mid_c = inputs
+    failed = integrate_kernel(t_c, f_c, w_c, r_c, v_c, q_c, idx, weights_c, earth_c,
+                              earth_mid_c, position, velocity, q)
+    if failed >= 0:
+        h = np.diff(t[failed:])
+        raise NavlibInputError(
+            f"t: the gravity iteration did not converge within {PICARD_MAX_ITER} passes from "
+            f"{t[failed]:.6g} s; sample steps this long ({h.max():.3g} s) are not supported")
     return StrapdownResult(t=t, position=position, velocity=velocity,
                            attitude=Rotation.from_quat(q))
-
-
 @dataclass(frozen=True, eq=False)
 class ClosureError:
     """Difference between a strapdown re-integration and the trajectory it came from.

@@ -39,6 +39,7 @@ from navlib.filters.linear_recursion import compile_recursion_kernels, run_recur
 from navlib.kalman import _psd_sqrt, chi2_bounds, nees_values
 from navlib.kalman import compile_kernels as _kalman_compile_kernels
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
+from navlib.strapdown_kernel import compile_kernel as compile_strapdown_kernel
 
 _MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
@@ -427,9 +428,11 @@ def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, app
 
 
 def compile_kernels() -> None:
-    """:func:`navlib.kalman.compile_kernels` and the linear simulation's kernels
-    (:func:`~navlib.filters.linear_recursion.compile_recursion_kernels`): compiles them on
-    the first run on a machine, loads them from numba's disk cache afterwards (README
-    "Compiled kernels")."""
+    """Every compiled kernel of navlib: :func:`navlib.kalman.compile_kernels`, the linear
+    simulation's (:func:`~navlib.filters.linear_recursion.compile_recursion_kernels`) and
+    the strapdown mechanisation (:func:`navlib.strapdown_kernel.compile_kernel`): compiles
+    them on the first run on a machine, loads them from numba's disk cache afterwards
+    (README "Compiled kernels")."""
     _kalman_compile_kernels()
     compile_recursion_kernels()
+    compile_strapdown_kernel()
