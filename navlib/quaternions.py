@@ -6,13 +6,14 @@ mechanisation (:mod:`navlib.strapdown`, spec excitability.md A2) and the SO(3) s
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from navlib import earth
 from navlib.rotations import cross
-
-_EYE3 = np.eye(3)
 
 
 def quat_mul(p, q):
@@ -67,8 +68,53 @@ def prefix_products(q):
 
 
 def quat_from_matrix(C) -> np.ndarray:
-    """``Rotation.from_matrix(C).as_quat()`` of one attitude matrix, without scipy's
-    orthogonality check and projection when ``C`` is a rotation to 1e-13 (far inside
-    scipy's own tolerance, so scipy would not project it either: the same quaternion)."""
-    valid = bool(np.max(np.abs(C @ C.T - _EYE3)) < 1e-13 and np.linalg.det(C) > 0)
-    return Rotation.from_matrix(C, assume_valid=valid).as_quat()
+    """``Rotation.from_matrix(C).as_quat()`` of one attitude matrix: compiled
+    (:func:`_matrix_quat_kernel`, scipy's formulas in scipy's order, the same quaternion to
+    the bit) when ``C`` is a rotation to 1e-13 (far inside scipy's own tolerance, so scipy
+    would not project it either), else scipy with its projection."""
+    C = np.ascontiguousarray(C, dtype=float)
+    quat = np.empty(4)
+    if _matrix_quat_kernel(C, quat):
+        return quat
+    return Rotation.from_matrix(C).as_quat()
+
+
+@numba.njit(cache=True)
+def _matrix_quat_kernel(C, quat):
+    """The quaternion of a rotation matrix ``C`` into ``quat`` by scipy's
+    ``Rotation.from_matrix`` formulas for an orthogonal matrix (the largest of the diagonal
+    and the trace chooses the formula, then normalised); False, ``quat`` unset, when ``C``
+    is not a proper rotation to 1e-13 (``|C C' - I|`` and the sign of the determinant)."""
+    for i in range(3):
+        for j in range(3):
+            gram = C[i, 0] * C[j, 0] + C[i, 1] * C[j, 1] + C[i, 2] * C[j, 2]
+            if not abs(gram - (1.0 if i == j else 0.0)) < 1e-13:
+                return False
+    det = (C[0, 0] * (C[1, 1] * C[2, 2] - C[1, 2] * C[2, 1])
+           - C[0, 1] * (C[1, 0] * C[2, 2] - C[1, 2] * C[2, 0])
+           + C[0, 2] * (C[1, 0] * C[2, 1] - C[1, 1] * C[2, 0]))
+    if not det > 0:
+        return False
+    trace = C[0, 0] + C[1, 1] + C[2, 2]
+    choice, best = 0, C[0, 0]
+    for i in range(1, 3):
+        if C[i, i] > best:
+            choice, best = i, C[i, i]
+    if trace > best:
+        quat[0] = C[2, 1] - C[1, 2]
+        quat[1] = C[0, 2] - C[2, 0]
+        quat[2] = C[1, 0] - C[0, 1]
+        quat[3] = 1.0 + trace
+    else:
+        i = choice
+        j = (i + 1) % 3
+        k = (j + 1) % 3
+        quat[i] = 1.0 - trace + 2.0 * C[i, i]
+        quat[j] = C[j, i] + C[i, j]
+        quat[k] = C[k, i] + C[i, k]
+        quat[3] = C[k, j] - C[j, k]
+    norm = math.sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2]
+                     + quat[3] * quat[3])
+    for i in range(4):
+        quat[i] /= norm
+    return True

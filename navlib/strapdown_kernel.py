@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from navlib import earth
+from navlib.quaternions import quat_from_matrix
 
 WINDOW_S = 10.0
 """Length of the windows in which the translational recursion is solved by fixed-point
@@ -309,9 +310,10 @@ def integrate_kernel(t, f_b, w_b, r0, v0, q0, idx, weights, earth_q, earth_mid, 
 
 
 def compile_kernel() -> None:
-    """Run :func:`integrate_kernel` once on a two-sample block: compiles it on the first
-    run on a machine, loads it from numba's disk cache afterwards (README "Compiled
-    kernels")."""
+    """Run :func:`integrate_kernel` once on a two-sample block (and the compiled
+    :func:`navlib.quaternions.quat_from_matrix` the EKF calls at each window): compiles
+    them on the first run on a machine, loads them from numba's disk cache afterwards
+    (README "Compiled kernels")."""
     t = np.array([0.0, 0.01])
     zeros = np.zeros((2, 3))
     r0 = np.array([earth.A, 0.0, 0.0])
@@ -319,3 +321,4 @@ def compile_kernel() -> None:
                      np.zeros((1, 2), dtype=np.int64), np.full((1, 2), 0.5),
                      np.tile([0.0, 0.0, 0.0, 1.0], (2, 1)), np.array([[0.0, 0.0, 0.0, 1.0]]),
                      np.empty((2, 3)), np.empty((2, 3)), np.empty((2, 4)))
+    quat_from_matrix(np.eye(3))

@@ -54,3 +54,17 @@ def test_86_s_flight_equals_numpy(rocket):
     assert np.abs(got.position - want.position).max() < 1e-9
     assert np.abs(got.velocity - want.velocity).max() < 1e-11
     assert (got.attitude.inv() * want.attitude).magnitude().max() < 1e-13
+
+
+def test_quaternion_of_a_matrix_is_scipys():
+    """The compiled :func:`navlib.quaternions.quat_from_matrix` gives scipy's quaternion to
+    the bit on random rotations, and scipy's projection for a matrix that is not one."""
+    from scipy.spatial.transform import Rotation
+
+    from navlib.quaternions import quat_from_matrix
+
+    C = Rotation.random(2000, random_state=3).as_matrix()
+    got = np.array([quat_from_matrix(c) for c in C])
+    np.testing.assert_array_equal(got, Rotation.from_matrix(C).as_quat())
+    np.testing.assert_array_equal(quat_from_matrix(1.001 * C[0]),
+                                  Rotation.from_matrix(1.001 * C[0]).as_quat())
