@@ -26,12 +26,12 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
   Simpson's rule (exact for quadratic acceleration) and ``P`` by Simpson's rule on ``V``.
   Normal gravity (:func:`navlib.earth.normal_gravity_ecef`, spec A5) is evaluated at the
   solution's own sample and mid-step positions by fixed-point iteration over 10 s windows
-  (contraction ``|Gamma| T^2 / 2 ~ 1.5e-4``, stopped at 1e-8 m), so this part is
-  vectorised too.
+  (contraction ``|Gamma| T^2 / 2 ~ 1.5e-4``, stopped at 1e-8 m).
 
-The attitude recursion does not depend on position or velocity, so :func:`integrate`
-computes every step's rotation vector in one vectorised pass and chains them with a
-log-depth parallel prefix product of quaternions. :func:`step` is the same mechanisation for
+The attitude recursion does not depend on position or velocity, so every step's rotation
+vector is computed first and the steps are chained with a log-depth parallel prefix product
+of quaternions. :func:`integrate` runs all of it as one compiled kernel
+(:func:`navlib.strapdown_kernel.integrate_kernel`); :func:`step` is the same mechanisation for
 one interval (gravity at predicted points instead of the iteration), for filters that
 propagate sample by sample; for blocks of samples between measurement updates,
 :func:`integrate` from the current state is much faster.

@@ -6,8 +6,10 @@ rounding accumulates."""
 import numpy as np
 import pytest
 import strapdown_reference as ref
+from scipy.spatial.transform import Rotation
 
 from navlib import strapdown
+from navlib.quaternions import quat_from_matrix
 from navlib.trajectory import sounding_rocket
 
 STEP_RTOL = 1e-12
@@ -59,10 +61,6 @@ def test_86_s_flight_equals_numpy(rocket):
 def test_quaternion_of_a_matrix_is_scipys():
     """The compiled :func:`navlib.quaternions.quat_from_matrix` gives scipy's quaternion to
     the bit on random rotations, and scipy's projection for a matrix that is not one."""
-    from scipy.spatial.transform import Rotation
-
-    from navlib.quaternions import quat_from_matrix
-
     C = Rotation.random(2000, random_state=3).as_matrix()
     got = np.array([quat_from_matrix(c) for c in C])
     np.testing.assert_array_equal(got, Rotation.from_matrix(C).as_quat())
