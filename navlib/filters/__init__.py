@@ -19,14 +19,13 @@ Modules: :mod:`~navlib.kalman` (gains, Joseph update, NEES), linear mode in
 :mod:`~navlib.filters.linear` (the simulation) and :mod:`~navlib.filters.linear_recursion`
 (its compiled step recursion), EKF mode in :mod:`~navlib.filters.ekf` (the loop),
 :mod:`~navlib.filters.ekf_updates` (updates within a feedback window),
-:mod:`~navlib.filters.ekf_simulation` (simulated scenarios) and
+:mod:`~navlib.filters.simulate` (simulated scenarios) and
 :mod:`~navlib.filters.measurements` (the EKF's measurement classes and input data). The
 aiding-sensor simulations moved to :mod:`navlib.sensors`
 (:func:`~navlib.sensors.simulate_attitude_sensor`, :class:`~navlib.sensors.ReferenceTrajectory`).
 """
 
 from navlib.filters.ekf import EKFResult, ekf
-from navlib.filters.ekf_simulation import EKFRun, simulate_ekf
 from navlib.filters.linear import LinearSimulation, simulate_linear
 from navlib.filters.linear_preparation import (
     LinearFilter,
@@ -34,6 +33,7 @@ from navlib.filters.linear_preparation import (
     linear_steps,
     prepare_linear,
 )
+from navlib.filters.simulate import EKFRun, simulate_ekf
 from navlib.kalman import (
     Gains,
     chi2_bounds,

@@ -3,7 +3,7 @@
 :func:`ekf` is described in its docstring (ECEF strapdown nominal state, error-state
 covariance from the model's Jacobians along the estimate, GNSS / attitude /
 reference-trajectory updates, feedback resets); the updates within a feedback window are
-:mod:`navlib.filters.ekf_updates`, and :func:`navlib.filters.ekf_simulation.simulate_ekf`
+:mod:`navlib.filters.ekf_updates`, and :func:`navlib.filters.simulate.simulate_ekf`
 feeds it simulated sensors (:mod:`navlib.sensors`). The loop knows no model: the error
 model is an :class:`~navlib.models.base.ErrorStateModel` (layout, reset states,
 ``jacobians``, ``correct``, decay; :class:`~navlib.models.launcher.LauncherErrorState`,
