@@ -9,11 +9,16 @@ replaced (``tests/kalman_reference.py``):
   of a 21-state model, compiled (:func:`navlib.kalman.propagate_kernel`) and NumPy.
 * ``kernels.linear_block_28``: one block of the linear Monte-Carlo simulation (256 steps,
   100 runs, 28-state launcher INS/GPS/att + RT model, update at every step): the true-error
-  and filter recursions, compiled (:func:`navlib.filters.linear.truth_kernel`,
-  :func:`navlib.filters.linear.filter_kernel`) and NumPy (``numpy_linear_block_28``, the
+  and filter recursions, compiled (:func:`navlib.filters.linear_recursion.truth_kernel`,
+  :func:`navlib.filters.linear_recursion.filter_kernel`) and NumPy (``numpy_linear_block_28``, the
   block code in ``tests/linear_reference.py``); ``..._4runs`` the same with 4 runs (the size
   of a batch of unit outlier responses). No goal in the issue: 10 us (100 runs) and 2 us
   (4 runs) per step, about a quarter of the NumPy block's time.
+* ``kernels.strapdown_window_21``: 100 EKF feedback windows of the strapdown mechanisation
+  (0.1 s at 200 Hz, 21 samples each, along the launcher ascent), compiled
+  (:func:`navlib.strapdown_kernel.integrate_kernel` through ``strapdown._integrate``) and
+  NumPy (``numpy_strapdown_window_21``, ``tests/strapdown_reference.py``). No goal in the
+  issue: 1 us per sample.
 * ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
   :func:`navlib.filters.linear.compile_kernels` (every kernel), with an empty numba cache
   folder (the first run on a machine: every kernel compiled) and then with that folder filled (later
@@ -40,9 +45,11 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 import kalman_reference as ref  # noqa: E402
 import linear_reference  # noqa: E402
+import strapdown_reference  # noqa: E402
 
-from navlib.filters import linear, prepare_linear  # noqa: E402
-from navlib.kalman import propagate_kernel, riccati_kernel  # noqa: E402
+from navlib import strapdown  # noqa: E402
+from navlib.filters import linear_recursion, prepare_linear  # noqa: E402
+from navlib.kalman import _psd_sqrt, propagate_kernel, riccati_kernel  # noqa: E402
 from navlib.models import launcher  # noqa: E402
 from navlib.trajectory import launcher_ascent  # noqa: E402
 
@@ -97,29 +104,46 @@ def _linear_case(runs: int = 100):
     prepared = prepare_linear(launcher("ins_gps_att_rt", "GAP", "markov", flight))
     steps = prepared.steps
     rng = np.random.default_rng(2)
-    work = linear._Work.of(runs, steps.n, steps.H.shape[-2])
-    block = linear._Block(0, 0, linear._CHUNK, steps.t.size)
-    draws = (rng.standard_normal((linear._CHUNK, runs, steps.L.shape[-1])),
-             rng.standard_normal((linear._CHUNK, runs, steps.H.shape[-2])))
+    work = linear_recursion.Work.of(runs, steps.n, steps.H.shape[-2])
+    block = linear_recursion.Block(0, 0, linear_recursion.CHUNK, steps.t.size)
+    draws = (rng.standard_normal((linear_recursion.CHUNK, runs, steps.L.shape[-1])),
+             rng.standard_normal((linear_recursion.CHUNK, runs, steps.H.shape[-2])))
     work.truth[0] = rng.standard_normal((runs, steps.n))
     work.prior[0] = 0.0
-    meas = np.flatnonzero(prepared.measured[:linear._CHUNK])
-    linear._measure_block(prepared, block, work, draws,
+    meas = np.flatnonzero(prepared.measured[:linear_recursion.CHUNK])
+    linear_recursion.measure_block(prepared, block, work, draws,
                           np.zeros((steps.t.size, steps.H.shape[-2])),
-                          linear._psd_sqrt(steps.R[:1]))
+                          _psd_sqrt(steps.R[:1]))
     return prepared, block, work, draws, meas
 
 
 def _linear_compiled(runs: int = 100):
     prepared, block, work, draws, meas = _linear_case(runs)
-    linear._truth_block(prepared.steps, block, work, draws, None)
-    linear._filter_block(prepared, block, work, meas)
+    linear_recursion.truth_block(prepared.steps, block, work, draws, None)
+    linear_recursion.filter_block(prepared, block, work, meas)
 
 
 def _linear_numpy(runs: int = 100):
     prepared, block, work, draws, meas = _linear_case(runs)
     linear_reference.truth_block(prepared.steps, block, work, draws, None)
     linear_reference.filter_block(prepared, block, work, meas)
+
+
+@cache
+def _strapdown_windows(windows: int = 100, samples: int = 21):
+    flight = launcher_ascent()
+    out = []
+    for w in range(windows):
+        sl = slice(w * (samples - 1), w * (samples - 1) + samples)
+        out.append((flight.t[sl], flight.specific_force[sl], flight.angular_rate[sl],
+                    np.array(flight.position[sl.start]), np.array(flight.velocity[sl.start]),
+                    flight.attitude[sl.start].as_quat()))
+    return out
+
+
+def _strapdown(integrate):
+    for window in _strapdown_windows():
+        integrate(*window)
 
 
 _WARM_UP = "from navlib.filters.linear import compile_kernels; compile_kernels()"
@@ -170,5 +194,9 @@ def cases() -> list[Case]:
              lambda: _linear_compiled(4), 256 * 2e-6),
         Case("kernels.numpy_linear_block_28_4runs", "the same (NumPy reference)",
              lambda: _linear_numpy(4), 256 * 2e-6),
+        Case("kernels.strapdown_window_21", "100 windows x 21 samples (0.1 s at 200 Hz)",
+             lambda: _strapdown(strapdown._integrate), 100 * 21 * 1e-6),
+        Case("kernels.numpy_strapdown_window_21", "the same (NumPy reference)",
+             lambda: _strapdown(strapdown_reference.integrate), 100 * 21 * 1e-6),
         *_compile_cases(),
     ]

@@ -7,8 +7,9 @@ it.
 The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
-covariance recursion of :func:`navlib.covariance._recursion`), :func:`propagate_kernel`
-(the EKF between updates) and :func:`update_kernel` (the EKF's updates).
+covariance recursion of :func:`covariance_recursion`), :func:`propagate_kernel`
+(the EKF between updates), :func:`update_kernel` (the EKF's updates) and
+:func:`fixed_updates_kernel` (the EKF's runs of updates with one fixed design).
 :func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
 batch) around them; :func:`compile_kernels` compiles or loads
 them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
@@ -25,7 +26,7 @@ from scipy import stats
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 
-_PINV_RTOL = 1e-12
+PINV_RTOL = 1e-12
 """Relative cut-off of the innovation-covariance pseudo-inverse; the value
 :func:`navlib.covariance.kalman_covariance` uses by default, so that the gains here
 reproduce its posterior covariances."""
@@ -62,7 +63,7 @@ class Gains:
     dof: np.ndarray        # (...,) rank of S used (0 at epochs without update)
 
 
-def kalman_gain(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None) -> Gains:
+def kalman_gain(P_prior, H, R, *, pinv_rtol: float = PINV_RTOL, definite=None) -> Gains:
     """Gain ``K = P- H' S^+`` with ``S = H P- H' + R``, for one epoch or a batch.
 
     ``S^+`` is the inverse when ``R`` is positive definite (:func:`definite_noise`) and the
@@ -245,7 +246,7 @@ def _each(P, H, R, definite, pinv_rtol: float, update: bool):
     return P_post, K, S_pinv, dof
 
 
-def joseph_update(P_prior, H, R, *, pinv_rtol: float = _PINV_RTOL, definite=None):
+def joseph_update(P_prior, H, R, *, pinv_rtol: float = PINV_RTOL, definite=None):
     """Joseph-form measurement update ``P+ = (I - K H) P- (I - K H)' + K R K'`` with the
     gain of :func:`kalman_gain` (one epoch or a batch); returns ``(P_post, Gains)``.
 
@@ -279,7 +280,7 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     (when it has rows), the posteriors to ``P_post[slot[i]]`` where ``slot[i] >= 0`` and the
     gains to ``K[i], S_pinv[i], dof[i]`` (when ``K`` has rows). Returns the last posterior.
 
-    The recursion of :func:`navlib.covariance._recursion` (spec launcher.md §6.2), compiled
+    The recursion of :func:`covariance_recursion` (spec launcher.md §6.2), compiled
     (docs/assumptions.md "Compiled kernels")."""
     n = P.shape[0]
     m = H.shape[1]
@@ -329,6 +330,97 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
     return x, P
 
 
+class FactoredNoise:
+    """Process noise ``Q_k = L_k L_k'`` held as its factor ``L`` (N-1, n, q) and formed a
+    slice of steps at a time (``noise[a:b]``), so a long high-rate model never holds the
+    whole ``Q`` stack (:func:`navlib.filters.linear.prepare_linear` with ``compact=True``)."""
+
+    def __init__(self, L):
+        self.L = np.asarray(L, dtype=float)
+
+    def __getitem__(self, steps: slice) -> np.ndarray:
+        L = self.L[steps]
+        return L @ L.swapaxes(-1, -2)
+
+
+def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
+                         gains: bool = False, block: int = 2048, keep=None):
+    """The Joseph-form covariance recursion (spec launcher.md §6.2) for a stack of initial
+    covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: the one recursion of
+    :func:`navlib.covariance.kalman_covariance`, :func:`navlib.filters.prepare_linear` and
+    the studies.
+
+    Each member runs the compiled recursion
+    :func:`riccati_kernel` (the prediction and Joseph update of
+    every caller), so the members of a stack have the histories of their own runs, to the
+    bit. The noise test of every epoch's ``R`` is one batched call before the loop. ``F``,
+    ``H``, ``R`` and ``Q`` are read ``block`` steps at a time (``Q`` an array or a
+    :class:`FactoredNoise`; a broadcast matrix is copied one block at a time).
+
+    Returns ``(P_prior, P_post, Gains)``: ``P_prior`` (B, N, n, n) or None without
+    ``priors``, ``P_post`` (B, N, n, n), or (B, K, n, n) at the K distinct epochs ``keep``
+    in ascending order (negative indices from the end: a reader of a few epochs holds no
+    history), and with ``gains`` the
+    :class:`Gains` of the updates, (B, N, ...) stacks (zero gain,
+    ``S_pinv`` and dof at epochs without update), else None. These are the gains
+    :func:`kalman_gains` computes from the priors, to the bit (the
+    same compiled kernel; docs/assumptions.md "Compiled kernels").
+    """
+    count, (batch, n) = measured.size, P0.shape[:2]
+    m = 0 if H is None else H.shape[-2]
+    if H is None:
+        r_definite = np.zeros(count, dtype=bool)
+    else:
+        r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
+    update, r_definite = kernel_array(measured, np.bool_), kernel_array(r_definite, np.bool_)
+    P_prior = np.empty((batch, count, n, n)) if priors else np.empty((batch, 0, n, n))
+    kept = range(count) if keep is None else np.unique(np.asarray(keep, dtype=int) % max(count, 1))
+    slot = np.full(count, -1, dtype=np.int64)
+    slot[kept] = np.arange(len(kept))
+    P_post = np.empty((batch, len(kept), n, n))
+    rows = count if gains else 0
+    K = np.zeros((batch, rows, n, m))
+    S_pinv = np.zeros((batch, rows, m, m))
+    dof = np.zeros((batch, rows), dtype=np.int64)
+    P = np.array(P0, dtype=float)
+    for a in range(0, count, block):
+        b, q0 = min(count, a + block), max(a - 1, 0)
+        F_block, Q_block = kernel_array(F[q0:b - 1]), kernel_array(Q[q0:b - 1])
+        if H is None:
+            H_block, R_block = np.zeros((b - a, 0, n)), np.zeros((b - a, 0, 0))
+        else:
+            H_block, R_block = kernel_array(H[a:b]), kernel_array(R[a:b])
+        for j in range(batch):
+            P[j] = riccati_kernel(P[j], F_block, Q_block, H_block, R_block, r_definite[a:b],
+                                  update[a:b], pinv_rtol, a, P_prior[j, a:b] if priors
+                                  else P_prior[j], slot[a:b], P_post[j], K[j, a:b],
+                                  S_pinv[j, a:b], dof[j, a:b])
+    return (P_prior if priors else None, P_post,
+            Gains(K, S_pinv, dof) if gains else None)
+
+
+@numba.njit(cache=True)
+def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
+                         innovations, nis, dofs):
+    """The EKF over a run of updates with one fixed design (:mod:`navlib.filters.ekf_updates`):
+    from sample ``j0`` of a window, for each update ``u``, :func:`propagate_kernel` to
+    sample ``samples[u]`` and :func:`update_kernel` with ``z[u]``, ``H``, ``R``; the
+    posterior mean, covariance, innovation, NIS and dof of update ``u`` into ``xs[u]``,
+    ``Ps[u]``, ``innovations[u]``, ``nis[u]``, ``dofs[u]``. The same compiled steps as one
+    call per update, without Python between them (docs/assumptions.md "Compiled kernels").
+    Returns the last posterior ``(x, P)``."""
+    n, m = P.shape[0], H.shape[0]
+    K, S_pinv = np.empty((n, m)), np.empty((m, m))
+    for u in range(samples.size):
+        x, P = propagate_kernel(x, P, F, Q, kept, j0, samples[u])
+        j0 = samples[u]
+        x, innovation, nis_u, dof = update_kernel(x, P, z[u], H, R, definite, pinv_rtol,
+                                                  Ps[u], K, S_pinv)
+        xs[u], innovations[u], nis[u], dofs[u] = x, innovation, nis_u, dof
+        P = Ps[u]
+    return x, P
+
+
 def compile_kernels() -> None:
     """Run each compiled kernel once on tiny inputs: compiles them on the first run on a
     machine (README "Compiled kernels" gives the cost) and loads them from numba's
@@ -338,17 +430,21 @@ def compile_kernels() -> None:
     P, H, R = np.eye(n), np.ones((1, m, n)), np.ones((1, m, m))
     steps = np.eye(n)[None]
     riccati_kernel(P, steps, steps, H, R, np.ones(1, dtype=np.bool_), np.ones(1, dtype=np.bool_),
-                   _PINV_RTOL, 0, np.empty((0, n, n)), np.zeros(1, dtype=np.int64),
+                   PINV_RTOL, 0, np.empty((0, n, n)), np.zeros(1, dtype=np.int64),
                    np.empty((1, n, n)), np.empty((1, n, m)), np.empty((1, m, m)),
                    np.empty(1, dtype=np.int64))
     joseph_update(P, H[0], R[0])
     kalman_gain(P, H[0], R[0])
-    update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, _PINV_RTOL, np.empty((n, n)),
+    update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, PINV_RTOL, np.empty((n, n)),
                   np.empty((n, m)), np.empty((m, m)))
     propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
+    fixed_updates_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, np.ones(1, dtype=np.int64),
+                         np.zeros((1, m)), H[0], R[0], True, PINV_RTOL, np.empty((1, n)),
+                         np.empty((1, n, n)), np.empty((1, m)), np.empty(1),
+                         np.empty(1, dtype=np.int64))
 
 
-def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = _PINV_RTOL) -> Gains:
+def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains:
     """Batched gains of :func:`kalman_gain` at all epochs at once (P_prior (N, n, n)).
 
     The rule of :func:`navlib.covariance.kalman_covariance`, so the Joseph update with these

@@ -26,12 +26,12 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
   Simpson's rule (exact for quadratic acceleration) and ``P`` by Simpson's rule on ``V``.
   Normal gravity (:func:`navlib.earth.normal_gravity_ecef`, spec A5) is evaluated at the
   solution's own sample and mid-step positions by fixed-point iteration over 10 s windows
-  (contraction ``|Gamma| T^2 / 2 ~ 1.5e-4``, stopped at 1e-8 m), so this part is
-  vectorised too.
+  (contraction ``|Gamma| T^2 / 2 ~ 1.5e-4``, stopped at 1e-8 m).
 
-The attitude recursion does not depend on position or velocity, so :func:`integrate`
-computes every step's rotation vector in one vectorised pass and chains them with a
-log-depth parallel prefix product of quaternions. :func:`step` is the same mechanisation for
+The attitude recursion does not depend on position or velocity, so every step's rotation
+vector is computed first and the steps are chained with a log-depth parallel prefix product
+of quaternions. :func:`integrate` runs all of it as one compiled kernel
+(:func:`navlib.strapdown_kernel.integrate_kernel`); :func:`step` is the same mechanisation for
 one interval (gravity at predicted points instead of the iteration), for filters that
 propagate sample by sample; for blocks of samples between measurement updates,
 :func:`integrate` from the current state is much faster.
@@ -51,63 +51,11 @@ from scipy.spatial.transform import Rotation
 from navlib import earth
 from navlib._validation import finite_array, finite_scalar, increasing_times
 from navlib.errors import NavlibInputError
+from navlib.quaternions import earth_quat, prefix_products, quat_from_rotvec, quat_mul, quat_rotate
 from navlib.rotations import bortz_rate, cross
+from navlib.strapdown_kernel import PICARD_MAX_ITER, integrate_kernel
 
 _OMEGA = earth.OMEGA_E
-
-
-# --- quaternion arithmetic on (..., 4) scalar-last arrays ------------------------------------
-
-
-def _quat_mul(p, q):
-    """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``)."""
-    px, py, pz, pw = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-    qx, qy, qz, qw = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    out = np.empty(p.shape if p.shape == q.shape else np.broadcast_shapes(p.shape, q.shape))
-    out[..., 0] = pw * qx + px * qw + py * qz - pz * qy
-    out[..., 1] = pw * qy - px * qz + py * qw + pz * qx
-    out[..., 2] = pw * qz + px * qy - py * qx + pz * qw
-    out[..., 3] = pw * qw - px * qx - py * qy - pz * qz
-    return out
-
-
-def _quat_from_rotvec(phi):
-    """Unit quaternion of ``exp(S(phi))`` with a series for small angles."""
-    angle = np.linalg.norm(phi, axis=-1)
-    half = 0.5 * angle
-    small = angle < 1e-4
-    safe = np.where(small, 1.0, angle)
-    # sin(a/2)/a, with its Taylor series 1/2 - a^2/48 below 1e-4 rad.
-    k = np.where(small, 0.5 - angle**2 / 48.0, np.sin(half) / safe)
-    return np.concatenate([k[..., None] * phi, np.cos(half)[..., None]], axis=-1)
-
-
-def _quat_rotate(q, v):
-    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4): ``C(q) v``."""
-    u = q[..., :3]
-    w = q[..., 3:]
-    uv = cross(u, v)
-    return v + 2.0 * (w * uv + cross(u, uv))
-
-
-def _earth_quat(tau):
-    """Quaternion of ``exp(-S(Omega) tau)``: rotation by ``-Omega tau`` about ECEF z."""
-    half = -0.5 * _OMEGA * np.asarray(tau, dtype=float)
-    zero = np.zeros_like(half)
-    return np.stack([zero, zero, np.sin(half), np.cos(half)], axis=-1)
-
-
-def _prefix_products(q):
-    """Running products ``q_0 ⊗ q_1 ⊗ ... ⊗ q_k`` of (N, 4) quaternions (Hillis–Steele scan).
-
-    Log-depth and vectorised: ``ceil(log2 N)`` batched products instead of N scalar ones.
-    """
-    out = np.array(q, dtype=float, copy=True)
-    shift = 1
-    while shift < len(out):
-        out[shift:] = _quat_mul(out[:-shift], out[shift:])
-        shift *= 2
-    return out / np.linalg.norm(out, axis=-1, keepdims=True)
 
 
 # --- inter-sample reconstruction --------------------------------------------------------------
@@ -147,8 +95,8 @@ def _clock(t):
     :func:`_lagrange` weights and the Earth rotations since ``t[0]`` at the samples and
     mid-steps (several blocks of one length at once, the same numbers as one by one)."""
     t0 = t[..., :1]
-    return (_lagrange(t, 0.5), _earth_quat(t - t0),
-            _earth_quat(t[..., :-1] + 0.5 * np.diff(t, axis=-1) - t0))
+    return (_lagrange(t, 0.5), earth_quat(t - t0),
+            earth_quat(t[..., :-1] + 0.5 * np.diff(t, axis=-1) - t0))
 
 
 def _block_clocks(t, bounds) -> list:
@@ -264,37 +212,6 @@ def _translation(h, r0, v0, a, a_mid, steps=None):
     return r + r0, v, r_mid + r0
 
 
-_WINDOW_S = 10.0
-"""Length of the windows in which the translational recursion is solved by fixed-point
-iteration on gravity; the contraction factor is about ``|Gamma| T^2 / 2`` (1.5e-4 at the
-surface for 10 s)."""
-_PICARD_TOL_M = 1e-8
-_PICARD_MAX_ITER = 30
-
-
-def _translation_window(h, r0, v0, f_e, f_e_mid):
-    """Translation over one window with gravity at the solution's own positions.
-
-    Fixed-point (Picard) iteration: start from gravity frozen at ``r0``, integrate with
-    :func:`_translation`, re-evaluate gravity at the resulting sample and mid-step
-    positions, and repeat until the positions change by less than 1e-8 m.
-    """
-    g = np.broadcast_to(earth.normal_gravity_ecef(r0), f_e.shape)
-    g_mid = g[:-1]
-    steps = _Steps.of(h)
-    previous = None
-    for _ in range(_PICARD_MAX_ITER):
-        r, v, r_mid = _translation(h, r0, v0, f_e + g, f_e_mid + g_mid, steps)
-        if previous is not None and np.max(np.abs(r - previous)) < _PICARD_TOL_M:
-            return r, v
-        previous = r
-        g_all = earth.normal_gravity_ecef(np.concatenate([r, r_mid]))   # row by row
-        g, g_mid = g_all[:r.shape[0]], g_all[r.shape[0]:]
-    raise NavlibInputError(
-        f"t: the gravity iteration did not converge within {_PICARD_MAX_ITER} passes over "
-        f"{h.sum():.3g} s; sample steps this long ({h.max():.3g} s) are not supported"
-    )
-
 
 # --- public API ---------------------------------------------------------------------------------
 
@@ -371,11 +288,11 @@ def step(state: StrapdownState, f_b, w_ib_b, dt: float, *, f_mid=None, w_mid=Non
 
     phi, phi_half = _attitude_increments(w_ib_b[0], w_mid, w_ib_b[1], dt)
     q0 = state.q_b_e
-    q_mid = _quat_mul(_earth_quat(0.5 * dt), _quat_mul(q0, _quat_from_rotvec(phi_half)))
-    q1 = _quat_mul(_earth_quat(dt), _quat_mul(q0, _quat_from_rotvec(phi)))
+    q_mid = quat_mul(earth_quat(0.5 * dt), quat_mul(q0, quat_from_rotvec(phi_half)))
+    q1 = quat_mul(earth_quat(dt), quat_mul(q0, quat_from_rotvec(phi)))
     q1 = q1 / np.linalg.norm(q1)
-    f_e = np.stack([_quat_rotate(q0, f_b[0]), _quat_rotate(q1, f_b[1])])
-    f_e_mid = _quat_rotate(q_mid, f_mid)
+    f_e = np.stack([quat_rotate(q0, f_b[0]), quat_rotate(q1, f_b[1])])
+    f_e_mid = quat_rotate(q_mid, f_mid)
     # Gravity at the points predicted from the start state (no Picard iteration here).
     tau = np.array([0.0, 0.5 * dt, dt])[:, None]
     g = earth.normal_gravity_ecef(state.position + tau * state.velocity + 0.5 * tau**2 * f_e[0])
@@ -446,7 +363,7 @@ def _body_products(dq):
     """The chain ``B_k`` (N + 1, 4) of body increments ``dq`` (N, 4), ``B_0 = 1``."""
     body = np.empty((dq.shape[0] + 1, 4))
     body[0] = (0.0, 0.0, 0.0, 1.0)
-    body[1:] = _prefix_products(dq)
+    body[1:] = prefix_products(dq)
     return body
 
 
@@ -462,7 +379,7 @@ def body_attitude(t, w_ib_b) -> Rotation:
     w_ib_b = finite_array(w_ib_b, "w_ib_b", (t.size, 3))
     h = np.diff(t)
     phi, _ = _attitude_increments(w_ib_b[:-1], _interpolate(t, w_ib_b, 0.5), w_ib_b[1:], h)
-    return Rotation.from_quat(_body_products(_quat_from_rotvec(phi)))
+    return Rotation.from_quat(_body_products(quat_from_rotvec(phi)))
 
 
 def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResult:
@@ -501,41 +418,26 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
         raise NavlibInputError("position0: expected an ECEF position in m (|r| >= 100 km)")
     return _integrate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
 
-
 def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
-    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): for
+    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): the
+    compiled mechanisation (:func:`navlib.strapdown_kernel.integrate_kernel`), also for
     loops that propagate many short blocks from states they computed themselves (the
     EKF's windows, :func:`navlib.filters.ekf`, with their :func:`_block_clocks`)."""
     n = t.size
-    h = np.diff(t)
-    lagrange, earth, earth_mid = _clock(t) if clock is None else clock
-    w_mid = _interpolate(t, w_ib_b, 0.5, lagrange)
-    f_mid = _interpolate(t, f_b, 0.5, lagrange)
-    phi, phi_half = _attitude_increments(w_ib_b[:-1], w_mid, w_ib_b[1:], h)
-
-    # C_k = E(t_k - t_0) C_0 B_k with B_k the running product of body increments; the
-    # samples (n) and mid-steps (n - 1) rotated together
-    dq = _quat_from_rotvec(np.concatenate([phi, phi_half]))
-    body = _body_products(dq[:n - 1])
-    half = _quat_mul(body[:-1], dq[n - 1:])
-    both = _quat_mul(np.concatenate([earth, earth_mid]),
-                     _quat_mul(q0, np.concatenate([body, half])))
-    f_e_both = _quat_rotate(both, np.concatenate([f_b, f_mid]))
-    q, f_e, f_e_mid = both[:n], f_e_both[:n], f_e_both[n:]
-
-    position = np.empty((n, 3))
-    velocity = np.empty((n, 3))
-    position[0], velocity[0] = r, v
-    i0 = 0
-    while i0 < n - 1:
-        i1 = max(int(np.searchsorted(t, t[i0] + _WINDOW_S, side="right")) - 1, i0 + 1)
-        position[i0:i1 + 1], velocity[i0:i1 + 1] = _translation_window(
-            h[i0:i1], position[i0], velocity[i0], f_e[i0:i1 + 1], f_e_mid[i0:i1])
-        i0 = i1
+    (idx, weights), earth_q, earth_mid = _clock(t) if clock is None else clock
+    position, velocity, q = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4))
+    inputs = (np.ascontiguousarray(a, dtype=float)
+              for a in (t, f_b, w_ib_b, r, v, q0, weights, earth_q, earth_mid))
+    t_c, f_c, w_c, r_c, v_c, q_c, weights_c, earth_c, earth_mid_c = inputs
+    failed = integrate_kernel(t_c, f_c, w_c, r_c, v_c, q_c, idx, weights_c, earth_c,
+                              earth_mid_c, position, velocity, q)
+    if failed >= 0:
+        h = np.diff(t[failed:])
+        raise NavlibInputError(
+            f"t: the gravity iteration did not converge within {PICARD_MAX_ITER} passes from "
+            f"{t[failed]:.6g} s; sample steps this long ({h.max():.3g} s) are not supported")
     return StrapdownResult(t=t, position=position, velocity=velocity,
                            attitude=Rotation.from_quat(q))
-
-
 @dataclass(frozen=True, eq=False)
 class ClosureError:
     """Difference between a strapdown re-integration and the trajectory it came from.

@@ -11,12 +11,19 @@ import pytest
 
 from navlib import covariance
 from navlib.filters import joseph_update, kalman_gain, linear_steps
-from navlib.kalman import definite_noise, predict_kernel, riccati_kernel
+from navlib.kalman import (
+    definite_noise,
+    fixed_updates_kernel,
+    predict_kernel,
+    propagate_kernel,
+    riccati_kernel,
+    update_kernel,
+)
 from navlib.models import launcher
 from navlib.trajectory import launcher_ascent
 
 STEP_RTOL = 1e-12
-ekf_module = importlib.import_module("navlib.filters.ekf")
+ekf_updates = importlib.import_module("navlib.filters.ekf_updates")
 
 
 def rel(a, b) -> float:
@@ -149,8 +156,8 @@ def test_paper_recursion_30001_epochs_equals_numpy(launcher_steps):
     1e-12 on this model), the gains within 1e-9 of their largest entry."""
     s = launcher_steps
     measured = np.ones(s.t.size, dtype=bool)
-    P_prior, P_post, gains = covariance._recursion(s.F, s.Q, s.H, s.R, s.P0[None], measured,
-                                                   1e-12, gains=True)
+    P_prior, P_post, gains = covariance.covariance_recursion(s.F, s.Q, s.H, s.R, s.P0[None],
+                                                             measured, 1e-12, gains=True)
     want_prior, want_post, want_K, _, want_dof = ref.recursion(
         s.F, s.Q, s.H, s.R, s.P0, measured, definite_noise(s.R))
     sigma = np.sqrt(np.diagonal(P_post[0], axis1=1, axis2=2))
@@ -173,6 +180,48 @@ def _numpy_update(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     return x + K @ innov, innov, innov @ S_pinv @ innov, dof
 
 
+def _numpy_fixed_updates(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
+                         innovations, nis, dofs):
+    K, S_pinv = np.empty((H.shape[1], H.shape[0])), np.empty((H.shape[0], H.shape[0]))
+    for u, j in enumerate(samples):
+        x, P = _numpy_propagate(x, P, F, Q, kept, j0, j)
+        j0 = j
+        x, innovations[u], nis[u], dofs[u] = _numpy_update(x, P, z[u], H, R, definite,
+                                                           pinv_rtol, Ps[u], K, S_pinv)
+        xs[u], P = x, Ps[u]
+    return x, P
+
+
+def test_fixed_updates_kernel_equals_one_call_per_update():
+    """A run of updates with one design in one kernel call equals the propagation and
+    update called once per update, to the bit (the same compiled steps)."""
+    rng = np.random.default_rng(4)
+    n, m, steps = 6, 3, 9
+    F = np.eye(n) + 0.05 * rng.standard_normal((steps, n, n))
+    Q = np.stack([np.eye(n) * 1e-3] * steps)
+    A = rng.standard_normal((n, n))
+    P = A @ A.T + np.eye(n)
+    H, R = rng.standard_normal((m, n)), np.eye(m) * 0.1
+    kept, samples = np.array([5]), np.array([0, 2, 3, 7], dtype=np.int64)
+    z, x = rng.standard_normal((samples.size, m)), rng.standard_normal(n)
+    out = (np.empty((4, n)), np.empty((4, n, n)), np.empty((4, m)), np.empty(4),
+           np.empty(4, dtype=np.int64))
+    x_end, P_end = fixed_updates_kernel(x, P, F, Q, kept, 0, samples, z, H, R, True, 1e-12,
+                                        *out)
+    K, S_pinv = np.empty((n, m)), np.empty((m, m))
+    j0 = 0
+    for u, j in enumerate(samples):
+        x, P = propagate_kernel(x, P, F, Q, kept, j0, j)
+        j0 = j
+        P_post = np.empty((n, n))
+        x, innov, nis, dof = update_kernel(x, P, z[u], H, R, True, 1e-12, P_post, K, S_pinv)
+        P = P_post
+        for got, want in zip(out, (x, P, innov, nis, dof), strict=True):
+            np.testing.assert_array_equal(got[u], want)
+    np.testing.assert_array_equal(x_end, x)
+    np.testing.assert_array_equal(P_end, P)
+
+
 def test_rocket_ekf_86_s_equals_numpy_loop(monkeypatch):
     """The 86 s sounding-rocket EKF (21 states, 100 Hz IMU, 1 Hz GNSS) with the compiled
     propagation and update against the same loop with the NumPy steps: position within
@@ -191,8 +240,9 @@ def test_rocket_ekf_86_s_equals_numpy_loop(monkeypatch):
                    model="ecef21", model_options={"sensors": "motionpak_tactical"})
 
     compiled = run()
-    monkeypatch.setattr(ekf_module, "propagate_kernel", _numpy_propagate)
-    monkeypatch.setattr(ekf_module, "update_kernel", _numpy_update)
+    monkeypatch.setattr(ekf_updates, "propagate_kernel", _numpy_propagate)
+    monkeypatch.setattr(ekf_updates, "update_kernel", _numpy_update)
+    monkeypatch.setattr(ekf_updates, "fixed_updates_kernel", _numpy_fixed_updates)
     numpy_run = run()
     assert np.abs(compiled.position - numpy_run.position).max() < 1e-3
     assert np.max(np.abs(compiled.sigma - numpy_run.sigma) / numpy_run.sigma) < 1e-9

@@ -1,5 +1,5 @@
-"""The compiled linear-simulation kernels (:func:`navlib.filters.linear.truth_kernel`,
-:func:`navlib.filters.linear.filter_kernel`, issue 26) equal the NumPy block code they
+"""The compiled linear-simulation kernels (:func:`navlib.filters.linear_recursion.truth_kernel`,
+:func:`navlib.filters.linear_recursion.filter_kernel`, issue 26) equal the NumPy block code they
 replaced (tests/linear_reference.py) on a block of the paper's launcher model: noisy runs,
 a per-run or shared state input, sparse updates."""
 
@@ -7,7 +7,8 @@ import linear_reference as ref
 import numpy as np
 import pytest
 
-from navlib.filters import linear, prepare_linear
+from navlib.filters import linear_recursion, prepare_linear
+from navlib.kalman import _psd_sqrt
 from navlib.models import launcher
 from navlib.trajectory import launcher_ascent
 
@@ -29,14 +30,14 @@ def rel(a, b) -> float:
 
 def _start(prepared, runs, seed):
     rng = np.random.default_rng(seed)
-    work = linear._Work.of(runs, prepared.steps.n, prepared.steps.H.shape[-2])
+    work = linear_recursion.Work.of(runs, prepared.steps.n, prepared.steps.H.shape[-2])
     for a in (work.truth, work.prior):
         a[...] = np.nan                        # unwritten rows stay NaN in both paths
-    block = linear._Block(256, 260, 401, 401)  # last block: the final step does not move
+    block = linear_recursion.Block(256, 260, 401, 401)  # last block: the final step does not move
     work.truth[block.j0] = rng.standard_normal((runs, prepared.steps.n))
     work.prior[block.j0] = 0.5 * work.truth[block.j0]
-    xi = rng.standard_normal((linear._CHUNK, runs, prepared.steps.L.shape[-1]))
-    nu = rng.standard_normal((linear._CHUNK, runs, prepared.steps.H.shape[-2]))
+    xi = rng.standard_normal((linear_recursion.CHUNK, runs, prepared.steps.L.shape[-1]))
+    nu = rng.standard_normal((linear_recursion.CHUNK, runs, prepared.steps.H.shape[-2]))
     return work, block, (xi, nu)
 
 
@@ -49,7 +50,7 @@ def test_truth_kernel_equals_numpy(prepared, input_shape):
                "per_run": rng.standard_normal((400, runs, n))}[input_shape]
     work, block, draws = _start(prepared, runs, 1)
     want, _, _ = _start(prepared, runs, 1)
-    linear._truth_block(steps, block, work, draws, x_input)
+    linear_recursion.truth_block(steps, block, work, draws, x_input)
     ref.truth_block(steps, block, want, draws, x_input)
     moved = slice(block.j0, block.j1)
     assert np.isfinite(work.truth[moved]).all()
@@ -60,14 +61,14 @@ def test_filter_kernel_equals_numpy(prepared):
     runs = 3
     work, block, draws = _start(prepared, runs, 2)
     want, _, _ = _start(prepared, runs, 2)
-    linear._truth_block(prepared.steps, block, work, draws, None)
+    linear_recursion.truth_block(prepared.steps, block, work, draws, None)
     ref.truth_block(prepared.steps, block, want, draws, None)
     z_add = np.zeros((401, prepared.steps.H.shape[-2]))
-    R_sqrt = linear._psd_sqrt(prepared.steps.R[:1])
-    meas = linear._measure_block(prepared, block, work, draws, z_add, R_sqrt)
-    linear._measure_block(prepared, block, want, draws, z_add, R_sqrt)
+    R_sqrt = _psd_sqrt(prepared.steps.R[:1])
+    meas = linear_recursion.measure_block(prepared, block, work, draws, z_add, R_sqrt)
+    linear_recursion.measure_block(prepared, block, want, draws, z_add, R_sqrt)
     assert meas.size == 47
-    linear._filter_block(prepared, block, work, meas)
+    linear_recursion.filter_block(prepared, block, work, meas)
     ref.filter_block(prepared, block, want, meas)
     updated = meas
     assert rel(work.innov[:meas.size], want.innov[:meas.size]) < RTOL

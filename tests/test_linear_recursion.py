@@ -3,11 +3,13 @@
 drawn block by block in the same stream, the truth, the measurements and the NIS formed in
 batched products, the filter step by step."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from paths import assert_same_numbers
 
-from navlib.filters import linear, prepare_linear, simulate_linear
+from navlib.filters import linear, linear_preparation, prepare_linear, simulate_linear
 from navlib.kalman import _psd_sqrt
 from navlib.models import launcher
 from navlib.outliers import Outlier
@@ -71,8 +73,8 @@ def test_noisy_runs_equal_the_plain_loop(flight, update_every, record_every):
     model = launcher("ins_gps_att", "GAP", "markov", flight)
     prepared = prepare_linear(model, update_every=update_every)
     scale = 1.0 + 0.3 * np.sin(np.arange(flight.t.size))[:, None, None]
-    prepared = linear.LinearFilter(
-        linear.replace(prepared.steps, R=prepared.steps.R * scale), prepared.measured,
+    prepared = linear_preparation.LinearFilter(
+        dataclasses.replace(prepared.steps, R=prepared.steps.R * scale), prepared.measured,
         prepared.gains, prepared.covariance)
     outs = (Outlier("gyro_x", 9.0, 0.01), Outlier("gnss_vel", 16.0, 3.0, "step"))
     mine = np.random.default_rng(3)

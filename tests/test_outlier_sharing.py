@@ -7,7 +7,7 @@ import pytest
 from paths import assert_same_numbers
 
 from navlib import NavlibInputError
-from navlib.filters import linear, prepare_linear, simulate_ekf, simulate_linear
+from navlib.filters import linear, linear_preparation, prepare_linear, simulate_ekf, simulate_linear
 from navlib.models import launcher
 from navlib.outliers import Outlier
 from navlib.studies import outliers as study
@@ -98,7 +98,8 @@ def test_compact_preparation_is_the_same_filter(flight, solution):
     for name in ("K", "S_pinv", "dof"):
         assert_same_numbers(getattr(compact.gains, name), getattr(full.gains, name), name)
     for block in (7, 800):            # 801 epochs: a last block of one epoch
-        cov, gains = linear._blockwise_covariance(full.steps, full.measured, block=block)
+        cov, gains = linear_preparation._blockwise_covariance(full.steps, full.measured,
+                                                              block=block)
         assert_same_numbers(cov.P_post, full.covariance.P_post, f"P_post, block {block}")
         assert_same_numbers(gains.K, full.gains.K, f"K, block {block}")
     a = simulate_linear(compact, runs=4, seed=2, outliers=Outlier("gyro_x", 10.0, 0.01))

@@ -1,5 +1,5 @@
 """Navigation filters: a closed-loop INS/GNSS error-state EKF and a linear error-state
-Monte-Carlo simulator (spec launcher.md §6.2-6.4; issue 5).
+Monte-Carlo simulator (spec launcher.md §6.2-6.4).
 
 Linear mode — :func:`simulate_linear` (:func:`prepare_linear` caches the covariance)
     Monte-Carlo runs of the Kalman filter of a linear error model on sampled truth errors,
@@ -14,22 +14,26 @@ EKF mode — :func:`ekf`
 Consistency helpers: :func:`chi2_bounds` (two-sided bounds of the Monte-Carlo averaged NEES
 or NIS), :meth:`LinearSimulation.consistency`.
 
-Modules: :mod:`~navlib.kalman` (gains, Joseph update, NEES), :mod:`~navlib.filters.linear`
-(linear mode), :mod:`~navlib.filters.ekf` (EKF mode), :mod:`~navlib.filters.measurements`
-(the EKF's measurement classes and input data). The aiding-sensor simulations moved to
-:mod:`navlib.sensors` (:func:`~navlib.sensors.simulate_attitude_sensor`,
-:class:`~navlib.sensors.ReferenceTrajectory`).
+Modules: :mod:`~navlib.kalman` (gains, Joseph update, NEES), linear mode in
+:mod:`~navlib.filters.linear_preparation` (discretisation, covariance and gains),
+:mod:`~navlib.filters.linear` (the simulation) and :mod:`~navlib.filters.linear_recursion`
+(its compiled step recursion), EKF mode in :mod:`~navlib.filters.ekf` (the loop),
+:mod:`~navlib.filters.ekf_updates` (updates within a feedback window),
+:mod:`~navlib.filters.simulate` (simulated scenarios) and
+:mod:`~navlib.filters.measurements` (the EKF's measurement classes and input data). The
+aiding-sensor simulations moved to :mod:`navlib.sensors`
+(:func:`~navlib.sensors.simulate_attitude_sensor`, :class:`~navlib.sensors.ReferenceTrajectory`).
 """
 
-from navlib.filters.ekf import EKFResult, EKFRun, ekf, simulate_ekf
-from navlib.filters.linear import (
+from navlib.filters.ekf import EKFResult, ekf
+from navlib.filters.linear import LinearSimulation, simulate_linear
+from navlib.filters.linear_preparation import (
     LinearFilter,
-    LinearSimulation,
     LinearSteps,
     linear_steps,
     prepare_linear,
-    simulate_linear,
 )
+from navlib.filters.simulate import EKFRun, simulate_ekf
 from navlib.kalman import (
     Gains,
     chi2_bounds,

@@ -1,4 +1,4 @@
-"""Linear error-state Monte-Carlo simulator (spec launcher.md §6.2-6.4; issue 5).
+"""Linear error-state Monte-Carlo simulator (spec launcher.md §6.2-6.4).
 
 :func:`simulate_linear` (:func:`prepare_linear` caches the covariance).
 
@@ -8,7 +8,7 @@ same model. The covariance recursion is data independent, so it is computed once
 (:func:`navlib.covariance.kalman_covariance`, Joseph form) and shared by every run; the
 gains follow from the priors in one batched pass; the runs sit on a batch axis, and the
 step-by-step recursions of the truth and of the filter run as compiled kernels
-(:func:`truth_kernel`, :func:`filter_kernel`; issue 26), one BLAS product per step and no
+(:mod:`navlib.filters.linear_recursion`), one BLAS product per step and no
 Python between them. Because
 everything is linear, the estimation error of a run with an outlier is the error of the
 same run without it plus the noise-free outlier response (``noise=False``), exactly —
@@ -22,168 +22,28 @@ IMU outliers enter as a known input on the matching noise channel,
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 
-import numba
 import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
-from navlib._validation import finite_array
-from navlib.covariance import CovarianceResult, FactoredNoise, symmetrize
-from navlib.covariance import _recursion as _covariance_recursion
-from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.kalman import (
-    _PINV_RTOL,
-    Gains,
-    _psd_sqrt,
-    chi2_bounds,
-    kernel_array,
-    nees_basis,
-    nees_values,
+from navlib.filters.linear_preparation import (
+    _ONE_THREAD,
+    LinearFilter,
+    LinearSteps,
+    prepare_linear,
 )
+from navlib.filters.linear_recursion import compile_recursion_kernels, run_recursion
+from navlib.kalman import _psd_sqrt, chi2_bounds, nees_values
 from navlib.kalman import compile_kernels as _kalman_compile_kernels
-from navlib.models.base import DiscreteModel, LinearModel
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
-
-METHODS = ("euler", "expm")
-
-_ONE_THREAD = 1
-"""BLAS threads of the covariance recursion and of the simulation (``threadpoolctl``).
-Their matrices are small (n <= 30) and come one step or one epoch at a time: OpenBLAS's
-threads inside each of those calls only synchronise, and on a loaded machine a batched
-eigen-decomposition of the recorded covariances ran up to 25 times slower with them
-(notebook 05 profile, issue 14). One thread gives the same numbers."""
+from navlib.strapdown_kernel import compile_kernel as compile_strapdown_kernel
 
 _MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
 chooses ``record_every`` itself."""
-
-
-def _phi1_series(A, dt, order: int = 6) -> np.ndarray:
-    """``int_0^dt expm(A s) ds = dt sum_j (A dt)^j / (j+1)!`` by its series, (K, n, n)."""
-    step = np.asarray(dt, dtype=float)[:, None, None]
-    X = A * step
-    term = np.broadcast_to(np.eye(A.shape[-1]), A.shape).copy()
-    total = term.copy()
-    for j in range(1, order + 1):
-        term = X @ term / (j + 1)
-        total = total + term
-    return total * step
-
-
-@dataclass(frozen=True, eq=False)
-class LinearSteps:
-    """A linear error model at its steps, ready for simulation.
-
-    Attributes
-    ----------
-    t : ndarray (N,)
-    F, Q : ndarray (N-1, n, n)
-    L : ndarray (N-1, n, q)
-        Process-noise factor, ``Q_k = L_k L_k'``.
-    Gamma : ndarray (N-1, n, q_in) or None
-        Noise input matrices (deterministic input ``u`` on the noise channels adds
-        ``Gamma_k u_k`` over step k); None when the model has no ``G``.
-    H : ndarray (N, m, n)
-    R : ndarray (N, m, m)
-    P0 : ndarray (n, n)
-    state_names, measurement_names, noise_names : tuple of str
-    """
-
-    t: np.ndarray
-    F: np.ndarray
-    Q: np.ndarray
-    L: np.ndarray
-    Gamma: np.ndarray | None
-    H: np.ndarray
-    R: np.ndarray
-    P0: np.ndarray
-    state_names: tuple[str, ...]
-    measurement_names: tuple[str, ...]
-    noise_names: tuple[str, ...]
-
-    @property
-    def n(self) -> int:
-        return len(self.state_names)
-
-
-def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
-                 noise_names: Sequence[str] = (), with_q: bool = True) -> LinearSteps:
-    """Per-step ``F, Q`` (and the noise factor / input) of a model for :func:`simulate_linear`.
-
-    Parameters
-    ----------
-    model : LinearModel (trajectory model) or DiscreteModel
-    method : {"euler", "expm"}
-        For a LinearModel: the papers' ``F = I + A dt``, ``Q = G Qc G' dt`` (Beaudoin eq. 1,
-        ``A_lc = I + s_t F``; default), or the zero-order-hold exponential with the Van
-        Loan ``Q`` (batched series, :func:`navlib.discretize.discretize_steps`). The
-        matrices over step k are those of sample k.
-    P0 : ndarray (n, n), optional
-        Initial covariance (default the model's).
-    noise_input, noise_names
-        For a DiscreteModel: ``Gamma`` (N-1, n, q) and its channel names, needed only for
-        IMU outliers.
-    with_q : bool
-        False: no ``Q`` for the Euler form of a LinearModel (``steps.Q`` None), where it is
-        ``L_k L_k'`` and can be formed a block of steps at a time.
-    """
-    if method not in METHODS:
-        raise NavlibInputError(f"method: expected one of {METHODS}, got {method!r}")
-    if isinstance(model, LinearModel):
-        if model.t is None:
-            raise NavlibInputError(
-                "model: a constant LinearModel has no time axis; call model.discretize(dt=..., "
-                "n_epochs=...) and pass the DiscreteModel"
-            )
-        t = np.asarray(model.t, dtype=float)
-        N, n = t.size, model.n
-        A = np.broadcast_to(model.A, (N, n, n))[:-1]
-        G = np.broadcast_to(model.G, (N, *model.G.shape[-2:]))[:-1]
-        dt = np.diff(t)
-        Qc = np.asarray(model.Qc, dtype=float)
-        if method == "euler":
-            F = A * dt[:, None, None]
-            F += np.eye(n)                   # in place: the same sums as eye + A dt
-            Gamma = G * dt[:, None, None]
-            L = G @ _psd_sqrt(Qc)
-            L *= np.sqrt(dt)[:, None, None]  # in place: one (N-1, n, q) array, not two
-            Q = FactoredNoise(L)[:] if with_q else None
-        else:
-            F, Q = discretize_steps(A, G, Qc, dt, method="series")
-            Gamma = _phi1_series(A, dt) @ G
-            L = _psd_sqrt(Q)
-        H = np.broadcast_to(model.H, (N, *model.H.shape[-2:]))
-        R = np.broadcast_to(model.R, (N, *model.R.shape[-2:]))
-        P0 = model.P0 if P0 is None else P0
-        names = (model.state_names, tuple(model.measurement_names), tuple(model.noise_names))
-    elif isinstance(model, DiscreteModel):
-        t, F, Q, H, R = model.t, model.F, model.Q, model.H, model.R
-        L = _psd_sqrt(Q)
-        Gamma = None
-        if noise_input is not None:
-            Gamma = finite_array(noise_input, "noise_input")
-            if Gamma.ndim != 3 or Gamma.shape[:2] != F.shape[:2]:
-                raise NavlibInputError(
-                    f"noise_input: expected shape ({F.shape[0]}, {F.shape[1]}, q), got "
-                    f"{Gamma.shape}"
-                )
-            if len(noise_names) != Gamma.shape[2]:
-                raise NavlibInputError("noise_names: one name per noise_input column needed")
-        P0 = model.P0 if P0 is None else P0
-        names = (model.state_names, tuple(model.measurement_names), tuple(noise_names))
-    else:
-        raise NavlibInputError(
-            f"model: expected a navlib LinearModel or DiscreteModel, got {type(model).__name__}"
-        )
-    if P0 is None:
-        raise NavlibInputError("P0: the model has no default initial covariance; pass P0")
-    n = F.shape[-1]
-    P0 = finite_array(P0, "P0", (n, n))
-    return LinearSteps(np.asarray(t, dtype=float), F, Q, L, Gamma, H, R, symmetrize(P0), *names)
 
 
 @dataclass(frozen=True, eq=False)
@@ -331,111 +191,6 @@ class LinearSimulation:
         lo, hi = chi2_bounds(self.nis_dof, self.runs)
         return pd.DataFrame({"t": self.nis_t, "nis": self.nis.mean(axis=1),
                              "dof": self.nis_dof, "lower": lo, "upper": hi})
-
-
-def _measured_mask(N: int, update_every, measured) -> np.ndarray:
-    if measured is not None:
-        mask = np.asarray(measured, dtype=bool)
-        if mask.shape != (N,):
-            raise NavlibInputError(f"measured: expected {N} booleans, got shape {mask.shape}")
-        return mask.copy()
-    every = int(update_every)
-    if every < 1:
-        raise NavlibInputError(f"update_every: expected an integer >= 1, got {update_every}")
-    mask = np.zeros(N, dtype=bool)
-    mask[::every] = True
-    return mask
-
-
-@dataclass(frozen=True, eq=False)
-class LinearFilter:
-    """A linear model with its (data-independent) Kalman covariance and gains.
-
-    Built by :func:`prepare_linear`; :func:`simulate_linear` reuses it across calls (the
-    covariance recursion dominates the cost of a short Monte-Carlo batch).
-
-    Attributes
-    ----------
-    steps : LinearSteps
-    measured : ndarray (N,) of bool
-        Update epochs.
-    gains : Gains
-    covariance : navlib.covariance.CovarianceResult
-        Prior and posterior covariances at every epoch (posteriors only, ``P_prior``
-        None, when prepared with ``compact=True``).
-    """
-
-    steps: LinearSteps
-    measured: np.ndarray
-    gains: Gains
-    covariance: object
-    _nees_bases: dict = field(default_factory=dict, init=False, repr=False)
-
-    @property
-    def t(self) -> np.ndarray:
-        return self.steps.t
-
-    def nees_basis(self, index) -> tuple:
-        """:func:`nees_basis` of the posterior covariances at the epochs ``index``, cached
-        (it does not depend on the data, so every simulation recorded at the same epochs
-        shares it)."""
-        index = np.asarray(index)
-        key = index.tobytes()
-        if key not in self._nees_bases:
-            self._nees_bases.clear()          # keep one: (K, n, n) eigenvectors are large
-            self._nees_bases[key] = nees_basis(self.covariance.P_post[index])
-        return self._nees_bases[key]
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return tuple(self.steps.state_names)
-
-
-def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measured=None,
-                   P0=None, noise_input=None, noise_names: Sequence[str] = (),
-                   compact: bool = False) -> LinearFilter:
-    """Discretise a model and run its Kalman covariance recursion once.
-
-    Parameters as in :func:`simulate_linear`. The covariance is that of
-    :func:`navlib.covariance.kalman_covariance` (Joseph form), and the gains are those of
-    :func:`navlib.kalman.kalman_gains` from its priors, both from one recursion
-    (:func:`_blockwise_covariance`). BLAS runs on one thread here (:data:`_ONE_THREAD`).
-
-    ``compact=True`` keeps what :func:`simulate_linear` needs and drops the rest: the
-    filter keeps no prior covariances
-    (``covariance.P_prior`` is None) and no process noise (``steps.Q`` is None; the noise
-    is sampled through ``steps.L``; the Euler ``Q`` is never formed whole). For a 28-state
-    model at 200 Hz over 150 s that is about 0.8 GB held instead of 1.2 GB, and about
-    1.2 GB at most while preparing (the model's own matrices included) instead of 1.7 GB.
-    """
-    if isinstance(model, LinearFilter):
-        return model
-    steps = linear_steps(model, method=method, P0=P0, noise_input=noise_input,
-                         noise_names=noise_names, with_q=not compact)
-    mask = _measured_mask(steps.t.size, update_every, measured)
-    with threadpool_limits(_ONE_THREAD):
-        cov, gains = _blockwise_covariance(steps, mask, priors=not compact)
-    if compact:
-        steps = replace(steps, Q=None)
-    return LinearFilter(steps, mask, gains, cov)
-
-
-def _blockwise_covariance(steps: LinearSteps, mask, block: int = 2048, priors: bool = False):
-    """:func:`navlib.covariance.kalman_covariance` and its gains in one recursion.
-
-    The recursion (:func:`navlib.covariance._recursion`) keeps the gain of each update
-    (the :func:`navlib.kalman.kalman_gains` of its prior, to the bit) and reads the
-    process noise ``block`` epochs at a time; when ``steps.Q`` is None it forms ``Q = L L'``
-    one block at a time (:class:`navlib.covariance.FactoredNoise`), and without ``priors`` it
-    keeps no prior covariances. Returns ``(CovarianceResult, Gains)``.
-    """
-    noise = FactoredNoise(steps.L) if steps.Q is None else steps.Q
-    P_prior, P_post, gains = _covariance_recursion(
-        steps.F, noise, steps.H, steps.R, steps.P0[None], mask, _PINV_RTOL, priors=priors,
-        gains=True, block=block)
-    cov = CovarianceResult(steps.t, None if P_prior is None else P_prior[0], P_post[0],
-                           mask.copy(), tuple(steps.state_names))
-    return cov, Gains(gains.K[0], gains.S_pinv[0], gains.dof[0])
 
 
 def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
@@ -642,7 +397,7 @@ def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, app
         nis[upd_slot[upd_before]] = 0.0
         innov_rec[slot[upd_before[slot[upd_before] >= 0]]] = 0.0
     with threadpool_limits(_ONE_THREAD):
-        _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot,
+        run_recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot,
                    (truth_rec, est_rec, innov_rec, nis))
         P_post = prepared.covariance.P_post
         P_rec = P_post if rec.size == N else P_post[rec]
@@ -658,274 +413,12 @@ def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, app
     )
 
 
-_CHUNK = 256
-"""Steps per block of :func:`_recursion`: its noise is drawn a block at a time (this fixes
-the random stream), and the block's truth, measurements and NIS are formed together."""
-
-
-def _recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot, out):
-    """Steps ``k0 ..`` of :func:`_simulate`, writing into ``out`` (truth, estimate and
-    innovation at the recorded epochs, NIS at the updates).
-
-    A block of :data:`_CHUNK` steps at a time: the true errors first (they do not depend on
-    the estimate; :func:`truth_kernel`), then their measurements and noise in batched
-    products, then the filter step by step (:func:`filter_kernel`), then the NIS and the
-    recorded epochs in batched products, into preallocated work arrays. Every product and
-    sum is the one a step-by-step loop forms, with the same operands; the compiled kernels
-    call the BLAS numba links (SciPy's) where NumPy calls its own, so the numbers equal
-    those of the plain loop to rounding (issue 14, issue 26; docs/assumptions.md "Compiled
-    kernels").
-    """
-    steps = prepared.steps
-    runs, m = x.shape[0], steps.H.shape[-2]
-    N = steps.t.size
-    R_sqrt = _psd_sqrt(steps.R[:1]) if np.all(steps.R == steps.R[:1]) else _psd_sqrt(steps.R)
-    work = _Work.of(runs, steps.n, m)
-    current = (x, x_hat)
-    blocks = _noise_blocks(rng, N, (runs, steps.L.shape[-1]), (runs, m))
-    for c0, draws in zip(range(0, N, _CHUNK), blocks, strict=True):
-        c1 = min(N, c0 + _CHUNK)
-        if c1 > k0:
-            block = _Block(c0, max(c0, k0), c1, N)
-            np.copyto(work.truth[block.j0], current[0])
-            np.copyto(work.prior[block.j0], current[1])
-            _truth_block(steps, block, work, draws, x_input)
-            meas = _measure_block(prepared, block, work, draws, z_add, R_sqrt)
-            _filter_block(prepared, block, work, meas)
-            _record_block(prepared, block, work, meas, slot, upd_slot, out)
-            current = (work.truth[c1 - c0], work.prior[c1 - c0])
-        if progress is not None:
-            progress(c1, N)
-
-
-def _noise_blocks(rng, N: int, shape_w, shape_v):
-    """The noise draws ``(xi, nu)``, ``(c, *shape_w)`` and ``(c, *shape_v)``, of each block
-    of :func:`_recursion` (None for each without ``rng``).
-
-    Drawn in the order of the plain loop (``xi`` then ``nu`` of each block, so the random
-    stream is the same), into two alternating pairs of arrays, the next block on a worker
-    thread while the caller runs the current one (``Generator.standard_normal`` releases
-    the GIL while it fills; the draws of a 100-run batch cost about as much as its
-    filter). No more is drawn than the blocks need.
-    """
-    starts = range(0, N, _CHUNK)
-    if rng is None:
-        yield from (None for _ in starts)
-        return
-    pairs = [(np.empty((_CHUNK, *shape_w)), np.empty((_CHUNK, *shape_v))) for _ in range(2)]
-
-    def draw(i: int):
-        size = min(N, starts[i] + _CHUNK) - starts[i]
-        xi, nu = (a[:size] for a in pairs[i % 2])
-        rng.standard_normal(out=xi)
-        rng.standard_normal(out=nu)
-        return xi, nu
-
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        pending = pool.submit(draw, 0)
-        for i in range(len(starts)):
-            draws = pending.result()
-            if i + 1 < len(starts):
-                pending = pool.submit(draw, i + 1)
-            yield draws
-
-
-@dataclass(frozen=True)
-class _Work:
-    """Work arrays of :func:`_recursion`, by step of a block: ``truth`` and ``prior``
-    (estimate before the update) one step longer than the block, ``post`` (estimate after
-    an update) and ``noise`` (the process noise over the step); ``z``, ``innov`` and
-    ``product`` (a measurement noise or ``innov S^+``) by update of the block; ``hx`` and
-    ``gain_step`` for one step."""
-
-    truth: np.ndarray
-    prior: np.ndarray
-    post: np.ndarray
-    noise: np.ndarray
-    z: np.ndarray
-    innov: np.ndarray
-    product: np.ndarray
-    hx: np.ndarray
-    gain_step: np.ndarray
-
-    @classmethod
-    def of(cls, runs: int, n: int, m: int) -> _Work:
-        states, measured = (_CHUNK, runs, n), (_CHUNK, runs, m)
-        return cls(np.empty((_CHUNK + 1, runs, n)), np.empty((_CHUNK + 1, runs, n)),
-                   np.empty(states), np.empty(states), np.empty(measured),
-                   np.empty(measured), np.empty(measured), np.empty((runs, m)),
-                   np.empty((runs, n)))
-
-
-@dataclass(frozen=True)
-class _Block:
-    """Steps ``k0 .. k1-1`` of the block starting at ``c0`` (work index ``j = k - c0``),
-    of ``N`` in all; ``j0``, ``j1`` their work indices and ``moves`` the steps that
-    propagate (all but the last of the run)."""
-
-    c0: int
-    k0: int
-    k1: int
-    N: int
-
-    @property
-    def j0(self) -> int:
-        return self.k0 - self.c0
-
-    @property
-    def j1(self) -> int:
-        return self.k1 - self.c0
-
-    @property
-    def moves(self) -> slice:
-        return slice(self.k0, min(self.k1, self.N - 1))
-
-
-def _rows(index: np.ndarray):
-    """``index`` (ascending) as a slice when it is evenly spaced (a view instead of a
-    copy), else itself."""
-    if index.size < 2:
-        return slice(int(index[0]), int(index[0]) + 1) if index.size else index
-    step = int(index[1] - index[0])
-    if step > 0 and np.all(np.diff(index) == step):
-        return slice(int(index[0]), int(index[-1]) + 1, step)
-    return index
-
-
-def _truth_block(steps: LinearSteps, block: _Block, work: _Work, draws, x_input) -> None:
-    """True errors ``x_{k+1} = x_k F_k' (+ xi_k L_k') (+ u_k)`` of a block, into
-    ``work.truth`` (``work.truth[j0]`` holds ``x_{k0}``): the process noise of the block in
-    one batched product, the recursion in :func:`truth_kernel`."""
-    moves = block.moves
-    F = kernel_array(steps.F[moves])
-    j0 = block.j0
-    noise = _NONE
-    if draws is not None:
-        noise = np.matmul(draws[0][j0:j0 + F.shape[0]], steps.L[moves].swapaxes(-1, -2),
-                          out=work.noise[:F.shape[0]])
-    inputs = _NONE
-    if x_input is not None:
-        u = x_input[moves]
-        inputs = kernel_array(u if u.ndim == 3 else u[:, None, :])
-    truth_kernel(work.truth, F, noise, inputs, j0)
-
-
-_NONE = np.zeros((0, 1, 0))
-"""An absent noise or input of :func:`truth_kernel` (no rows)."""
-
-
-@numba.njit(cache=True)
-def _rows_times(X, A, out):
-    """``out = X A'`` for rows ``X`` (R, n) and ``A`` (p, n), one BLAS product (we tried
-    skipping the zeros of the sparse ``A``: no faster for 100 runs, docs/assumptions.md
-    "Compiled kernels")."""
-    np.dot(X, A.T, out)
-
-
-@numba.njit(cache=True)
-def truth_kernel(x, F, noise, inputs, j0):
-    """The true-error recursion of a block, compiled (docs/assumptions.md "Compiled
-    kernels"): ``x[j0+i+1] = x[j0+i] F[i]' (+ noise[i]) (+ inputs[i])`` for each step ``i``
-    of ``F`` (s, n, n); ``x`` (., R, n), ``noise`` (s, R, n) or no rows, ``inputs``
-    (s, R, n) or (s, 1, n) (the same input for every run) or no rows. The NumPy code it
-    replaced is ``tests/linear_reference.py``."""
-    runs = x.shape[1]
-    for i in range(F.shape[0]):
-        j = j0 + i
-        _rows_times(x[j], F[i], x[j + 1])
-        if noise.shape[0]:
-            x[j + 1] += noise[i]
-        if inputs.shape[0]:
-            for r in range(runs):
-                x[j + 1, r] += inputs[i, 0 if inputs.shape[1] == 1 else r]
-
-
-def _measure_block(prepared: LinearFilter, block: _Block, work: _Work, draws, z_add,
-                   R_sqrt) -> np.ndarray:
-    """Measurements ``z_k = x_k H_k' + z_add_k (+ nu_k R_k^(1/2)')`` at the block's
-    updates, into ``work.z`` (one row per update); returns the updates' work indices."""
-    steps = prepared.steps
-    meas = np.flatnonzero(prepared.measured[block.k0:block.k1]) + block.j0
-    if meas.size:
-        z, k, j = work.z[:meas.size], _rows(meas + block.c0), _rows(meas)
-        np.matmul(work.truth[j], steps.H[k].swapaxes(-1, -2), out=z)
-        add = z_add[k]
-        np.add(z, add[:, None, :] if add.ndim == 2 else add, out=z)
-        if draws is not None:
-            Rs = R_sqrt[0].T if R_sqrt.shape[0] == 1 else R_sqrt[k].swapaxes(-1, -2)
-            np.add(z, np.matmul(draws[1][j], Rs, out=work.product[:meas.size]), out=z)
-    return meas
-
-
 def compile_kernels() -> None:
-    """:func:`navlib.kalman.compile_kernels` and the linear simulation's
-    :func:`truth_kernel` and :func:`filter_kernel` on tiny inputs: compiles them on the
-    first run on a machine, loads them from numba's disk cache afterwards (README
-    "Compiled kernels")."""
+    """Every compiled kernel of navlib: :func:`navlib.kalman.compile_kernels`, the linear
+    simulation's (:func:`~navlib.filters.linear_recursion.compile_recursion_kernels`) and
+    the strapdown mechanisation (:func:`navlib.strapdown_kernel.compile_kernel`): compiles
+    them on the first run on a machine, loads them from numba's disk cache afterwards
+    (README "Compiled kernels")."""
     _kalman_compile_kernels()
-    x = np.zeros((2, 1, 1))
-    F = np.ones((1, 1, 1))
-    truth_kernel(x, F, _NONE, _NONE, 0)
-    filter_kernel(x, x.copy(), x.copy(), x.copy(), F, F, F, np.zeros(1, dtype=np.int64), 0, 1)
-
-
-def _filter_block(prepared: LinearFilter, block: _Block, work: _Work, meas) -> None:
-    """The filter over a block (:func:`filter_kernel`; ``work.prior[j0]`` holds the prior
-    at ``k0``)."""
-    steps = prepared.steps
-    update = np.full(block.j1 - block.j0, -1, dtype=np.int64)
-    update[meas - block.j0] = np.arange(meas.size)
-    moves = block.moves
-    filter_kernel(work.prior, work.post, work.innov, work.z,
-                  kernel_array(steps.H[block.k0:block.k1]),
-                  kernel_array(prepared.gains.K[block.k0:block.k1]),
-                  kernel_array(steps.F[moves]), update, block.j0, moves.stop - block.c0)
-
-
-@numba.njit(cache=True)
-def filter_kernel(prior, post, innov, z, H, K, F, update, j0, last):
-    """The linear Kalman filter over the steps of a block, compiled (docs/assumptions.md
-    "Compiled kernels"). At step ``i`` (work index ``j = j0 + i``) with
-    ``update[i] = p >= 0``: ``innov[p] = z[p] - x^- H[i]'`` and
-    ``x^+ = x^- + innov[p] K[i]'`` into ``post[j]`` (rows are runs); then, while
-    ``j < last``, ``x^-_{j+1} = x F[i]'`` into ``prior[j + 1]``. The NumPy code it replaced
-    is ``tests/linear_reference.py``."""
-    runs, n = prior.shape[1], prior.shape[2]
-    step = np.empty((runs, n))
-    for i in range(update.size):
-        j = j0 + i
-        estimate = prior[j]
-        p = update[i]
-        if p >= 0:
-            _rows_times(estimate, H[i], innov[p])
-            for r in range(runs):
-                for c in range(innov.shape[2]):
-                    innov[p, r, c] = z[p, r, c] - innov[p, r, c]
-            _rows_times(innov[p], K[i], step)
-            for r in range(runs):
-                for c in range(n):
-                    post[j, r, c] = estimate[r, c] + step[r, c]
-            estimate = post[j]
-        if j < last:
-            _rows_times(estimate, F[i], prior[j + 1])
-
-
-def _record_block(prepared: LinearFilter, block: _Block, work: _Work, meas, slot, upd_slot,
-                  out) -> None:
-    """NIS ``(z - x^- H') S^+ (z - x^- H')'`` at the block's updates and the recorded
-    truth, estimate and innovation of the block into ``out``."""
-    truth_rec, est_rec, innov_rec, nis = out
-    c0 = block.c0
-    if meas.size:
-        innov = work.innov[:meas.size]
-        weighted = np.matmul(innov, prepared.gains.S_pinv[_rows(meas + c0)],
-                             out=work.product[:meas.size])
-        nis[_rows(upd_slot[meas + c0])] = np.sum(np.multiply(weighted, innov, out=weighted),
-                                                 axis=2)
-        kept = slot[meas + c0] >= 0
-        innov_rec[_rows(slot[meas[kept] + c0])] = innov[_rows(np.flatnonzero(kept))]
-    rec = np.flatnonzero(slot[block.k0:block.k1] >= 0) + block.j0
-    truth_rec[_rows(slot[rec + c0])] = work.truth[_rows(rec)]
-    updated = prepared.measured[rec + c0]
-    for pick, source in ((updated, work.post), (~updated, work.prior)):
-        est_rec[_rows(slot[rec[pick] + c0])] = source[_rows(rec[pick])]
+    compile_recursion_kernels()
+    compile_strapdown_kernel()

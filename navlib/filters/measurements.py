@@ -1,7 +1,7 @@
-"""Measurements of the EKF (issue 10): GNSS position and velocity, the attitude sensor and
-the reference-trajectory pseudo-measurement, each giving its innovation, ``H`` and ``R`` for
-the current nominal state; and the input parsing (IMU samples, epochs on the IMU clock,
-attitude series).
+"""Measurements of the EKF (spec launcher.md §6.3): GNSS position and velocity, the attitude
+sensor and the reference-trajectory pseudo-measurement, each giving its innovation, ``H``
+and ``R`` for the current nominal state; and the input parsing (IMU samples, epochs on the
+IMU clock, attitude series).
 
 A measurement is built with the error model (:class:`navlib.models.base.ErrorStateModel`),
 whose ``measurements`` name the kinds it uses with their rows and sigma, and its data on the

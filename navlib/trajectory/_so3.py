@@ -33,7 +33,7 @@ from scipy.linalg import cho_solve_banded, cholesky_banded
 from scipy.spatial.transform import Rotation, Slerp
 from threadpoolctl import threadpool_limits
 
-from navlib.strapdown import _quat_from_rotvec, _quat_mul, _quat_rotate
+from navlib.quaternions import quat_from_rotvec, quat_mul, quat_rotate
 
 _STEP = 1e-6
 """Rotation (rad) of the finite-difference Jacobian of the fit (its fixed point is exact:
@@ -120,7 +120,7 @@ class SO3Spline:
         """``d_i = log(C_{i-1}^T C_i)`` (m, 3), ``d_0 = 0``."""
         c = self.control if control is None else control
         d = np.zeros((c.shape[0], 3))
-        d[1:] = _qlog(_quat_mul(_qconj(c[:-1]), c[1:]))
+        d[1:] = _qlog(quat_mul(_qconj(c[:-1]), c[1:]))
         return d
 
     def _chain(self, s, lam, control, dlam=None, d2lam=None):
@@ -130,15 +130,15 @@ class SO3Spline:
         alpha = np.zeros((s.size, 3)) if d2lam is not None else None
         for j in range(self.k):
             dj = d[s + j + 1]
-            A = _quat_from_rotvec(lam[:, j, None] * dj)
-            q = _quat_mul(q, A)
+            A = quat_from_rotvec(lam[:, j, None] * dj)
+            q = quat_mul(q, A)
             if w is None:
                 continue
             At = _qconj(A)
             rate = dlam[:, j, None] * dj
-            w_turned = _quat_rotate(At, w)
+            w_turned = quat_rotate(At, w)
             if alpha is not None:
-                alpha = (_quat_rotate(At, alpha) + np.cross(w_turned, rate)
+                alpha = (quat_rotate(At, alpha) + np.cross(w_turned, rate)
                          + d2lam[:, j, None] * dj)
             w = w_turned + rate
         return q / np.linalg.norm(q, axis=1, keepdims=True), w, alpha
@@ -185,7 +185,7 @@ class SO3Spline:
 
         def residual(ctrl):
             q, _, _ = spline._chain(s, lam, ctrl)
-            return _qlog(_quat_mul(_qconj(q), q_n))
+            return _qlog(quat_mul(_qconj(q), q_n))
 
         r = residual(control)
         width = 3 * (k + 1)
@@ -199,14 +199,14 @@ class SO3Spline:
                 step = np.zeros(3)
                 step[a] = _STEP
                 ctrl = control.copy()
-                ctrl[chosen] = _quat_mul(ctrl[chosen], _quat_from_rotvec(step))
+                ctrl[chosen] = quat_mul(ctrl[chosen], quat_from_rotvec(step))
                 J[rows, :, 3 * offset[c] + a] = (residual(ctrl) - r) / _STEP
         with threadpool_limits(_ONE_THREAD):
             factor = cholesky_banded(_banded_normal(J, s, 3 * m))
         for _ in range(iterations):
             g = _gradient(J, r, s, 3 * m)
             delta = -cho_solve_banded((factor, False), g).reshape(m, 3)
-            control = _quat_mul(control, _quat_from_rotvec(delta))
+            control = quat_mul(control, quat_from_rotvec(delta))
             r = residual(control)
             if np.abs(delta).max() < 1e-12:
                 break

@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 
 from navlib import cache
-from navlib.covariance import FactoredNoise, _recursion, sigma_in_frame, symmetrize
+from navlib.covariance import FactoredNoise, covariance_recursion, sigma_in_frame, symmetrize
 from navlib.errors import NavlibInputError
 from navlib.filters import linear_steps
-from navlib.kalman import _PINV_RTOL
+from navlib.kalman import PINV_RTOL
 from navlib.models.launcher import ASSUMED, launcher, sensor_values
 from navlib.studies.launcher.assumptions import EVOLUTION_GRID
 from navlib.trajectory import launcher_ascent
@@ -137,8 +137,9 @@ def _evolution_rows(case: tuple, steps, P0s, C_e_b) -> list[dict]:
     H, R = (None, None) if aiding == "ins_only" else \
         (steps.H, steps.R if aiding == "kf" else np.zeros_like(steps.R))
     measured = np.full(steps.t.size, H is not None)
-    _, ends, _ = _recursion(steps.F, FactoredNoise(steps.L), H, R, symmetrize(np.stack(P0s)),
-                            measured, _PINV_RTOL, priors=False, keep=[0, -1])
+    _, ends, _ = covariance_recursion(steps.F, FactoredNoise(steps.L), H, R,
+                                      symmetrize(np.stack(P0s)), measured, PINV_RTOL,
+                                      priors=False, keep=[0, -1])
     return [_evolution_row(*case, steps.state_names, P, C_e_b) for P in ends]
 
 
