@@ -226,6 +226,12 @@ class KeptFigures:
     def __init__(self):
         self._kept: dict = {}
 
+    def figure(self, name: str) -> Figure | None:
+        """The figure on show as part ``name`` (the kept one after a transplant), or None
+        while no laid-out figure is kept for it."""
+        kept = self._kept.get(name)
+        return None if kept is None else kept[1]
+
     def render(self, name: str, fig: Figure, dpi: float) -> bytes:
         """PNG bytes of ``fig`` shown as part ``name``, reusing the kept figure's layout
         (and axes) when it fits."""
