@@ -58,8 +58,8 @@ def _qr_flops(p: int, n: int) -> float:
 def local_flops(n: int, m: int, n_steps: int, window: int | None = None) -> float:
     """Approximate floating-point operations of local_observability (time-varying, stride 1).
 
-    Per step (:func:`navlib.observability._sliding_singular_values`): the suffix update
-    ``R([H; Y F])`` and the prefix update ``R([P; H Psi])`` (two (m + n) x n QRs, three n x n
+    Per step (:func:`navlib.observability.sliding.sliding_singular_values`): the suffix
+    update ``R([H; Y F])`` and the prefix update ``R([P; H Psi])`` (two (m + n) x n QRs, three n x n
     products and one m x n product), the combine product ``P Phi`` and the SVD of the
     2n x n stack (QR, then bidiagonalisation of the n x n factor, ``8/3 n^3``).
     """
