@@ -139,11 +139,12 @@ def layout_key(fig: Figure) -> tuple:
     scales, axis labels) and the figure titles.
 
     Two figures of a builder with equal keys get equal layouts up to the width of their
-    tick labels, which :class:`KeptFigures` accepts when it reuses a layout
-    (docs/assumptions.md, "Panel figures").
+    tick labels and figure titles, which :class:`KeptFigures` accepts when it reuses a layout
+    (docs/assumptions.md, "Panel figures"): a figure title counts by its number of lines,
+    the height constrained layout reserves for it, not by its words.
     """
-    texts = tuple(None if getattr(fig, name, None) is None else getattr(fig, name).get_text()
-                  for name in _SUPER_TEXTS)
+    texts = tuple(None if getattr(fig, name, None) is None
+                  else getattr(fig, name).get_text().count("\n") + 1 for name in _SUPER_TEXTS)
     return (tuple(fig.get_size_inches().round(4)), texts,
             tuple((type(ax).__name__, _cell(ax), ax.get_visible(), ax.get_xscale(),
                    ax.get_yscale(), ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes))

@@ -92,7 +92,7 @@ class ObservabilityPanel(Panel):
     def refresh(self, changed: set) -> None:
         """Rebuild, re-rank and/or re-inspect, as the changed controls require."""
         if changed & set(_MODEL):
-            self.rebuild()
+            self.rebuild(rebuild_model=bool(changed & set(_MODEL[:3])))
         if self.model is None:
             return  # a refused configuration stays on show until a model control changes
         if changed & set(_MODEL):
@@ -103,13 +103,15 @@ class ObservabilityPanel(Panel):
             self.rerank()
         self.inspect()
 
-    def rebuild(self) -> None:
-        """New configuration: build the model and the 1 Hz curve (a refused one clears the
-        figures and raises its NavlibInputError)."""
+    def rebuild(self, rebuild_model: bool = True) -> None:
+        """New configuration: build the model (unless only the eq. (6) reading changed
+        and a model is kept) and the 1 Hz curve (a refused one clears the figures and raises
+        its NavlibInputError)."""
         c = self.controls
         try:
-            self.model = launcher(c["solution"].value, c["biases"].value,
-                                  c["bias_model"].value, trajectory=self.trajectory)
+            if rebuild_model or self.model is None:
+                self.model = launcher(c["solution"].value, c["biases"].value,
+                                      c["bias_model"].value, trajectory=self.trajectory)
             self._raw = local_observability(self.model, variant=c["variant"].value,
                                             stride=self.stride)
         except NavlibInputError:
