@@ -32,20 +32,20 @@ def assert_close(got, want, rtol=STEP_RTOL):
 @pytest.mark.parametrize("p, n", [(40, 28), (12, 28), (1, 5), (9, 9), (30, 4)])
 def test_triangularize_equals_numpy_qr(p, n):
     A = np.random.default_rng(p * n).normal(size=(p, n))
-    R = np.empty((n, n))
-    triangularize(A.copy(), R)
+    Rt = np.empty((n, n))
+    triangularize(A.T.copy(), Rt)          # both transposed
     want = np.zeros((n, n))
     want[:min(p, n)] = np.linalg.qr(A, mode="r")
-    assert_close(R, want)
+    assert_close(Rt.T, want)
 
 
 @pytest.mark.parametrize("p, n", [(12, 28), (28, 28), (1, 1), (3, 7)])
 def test_fold_equals_numpy_qr_of_the_stack(p, n):
     rng = np.random.default_rng(p + n)
     R, X = np.triu(rng.normal(size=(n, n))), rng.normal(size=(p, n))
-    got = R.copy()
-    fold(got, X.copy())
-    assert_close(got, np.linalg.qr(np.vstack([R, X]), mode="r"))
+    got = R.T.copy()
+    fold(got, X.T.copy())                  # both transposed
+    assert_close(got.T, np.linalg.qr(np.vstack([R, X]), mode="r"))
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 12, 28])

@@ -15,8 +15,12 @@ The whole recursion of a chunk of steps runs in one compiled kernel (numba, ``ca
 docs/assumptions.md, "Compiled kernels"): Householder reductions that use the triangular
 blocks (a fold of ``p`` rows into an n x n triangle costs ``2 (p + 1) n^2`` flops), a
 Golub-Kahan bidiagonalisation of the n x n factor and LAPACK's ``dlasq1`` (dqds, as in the
-``dgesdd`` NumPy calls) for its singular values; the products are BLAS calls. The NumPy code
-it replaced is kept in tests/sliding_reference.py to compare against.
+``dgesdd`` NumPy calls) for its singular values; the products are BLAS calls. The kernel
+keeps the factors transposed (``Y_r'``, ``P_j'``, lower triangular), so that each reflector
+works along contiguous memory: a dot product per column, which numba may vectorise
+(``fastmath={"reassoc"}`` in :func:`_reflect` only: the sums of one dot product in another
+order, a rounding-level change). The NumPy code it replaced is kept in
+tests/sliding_reference.py to compare against.
 """
 
 from __future__ import annotations
@@ -73,10 +77,27 @@ def householder(alpha, x):
     return beta, (beta - alpha) / beta
 
 
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+def _reflect(head, tails, v, tau):
+    """Apply the reflector ``(tau, [1; v])`` to columns given transposed: column ``c`` is
+    ``head[c]`` followed by the last ``v.size`` entries of ``tails[c]`` (a dot product and
+    an update along contiguous memory per column)."""
+    start = tails.shape[1] - v.size
+    for c in range(head.size):
+        row = tails[c, start:]
+        w = head[c]
+        for i in range(v.size):
+            w += row[i] * v[i]
+        w *= tau
+        head[c] -= w
+        for i in range(v.size):
+            row[i] -= w * v[i]
+
+
 @numba.njit(cache=True, nogil=True)
-def _reflect(top, rows, column, v, tau, work):
+def _reflect_rows(top, rows, column, v, tau, work):
     """Apply the reflector ``(tau, [1; v])`` to ``[top; rows[:p, column + 1:]]`` in place
-    (``p = v.size``, ``top`` the length-L row right of the pivot)."""
+    (``p = v.size``, ``top`` the length-L row right of the pivot), row by row."""
     L = top.size
     w = work[:L]
     for c in range(L):
@@ -97,39 +118,34 @@ def _reflect(top, rows, column, v, tau, work):
 
 
 @numba.njit(cache=True, nogil=True)
-def fold(R, X):
-    """``R`` (n, n, upper triangular) becomes the triangular factor of ``[R; X]``; ``X``
-    (p, n) is overwritten. One reflector per column over ``R``'s diagonal entry and ``X``'s
-    column: ``2 (p + 1) n^2`` flops."""
-    n, p = R.shape[0], X.shape[0]
-    v, work = np.empty(p), np.empty(n)
-    for j in range(n):
-        for i in range(p):
-            v[i] = X[i, j]
-        beta, tau = householder(R[j, j], v)
+def fold(Rt, Xt):
+    """``R`` becomes the triangular factor of ``[R; X]``, both given transposed: ``Rt``
+    (n, n, lower triangular) is updated, ``Xt`` (n, p) overwritten. One reflector per
+    column over ``R``'s diagonal entry and ``X``'s column: ``2 (p + 1) n^2`` flops."""
+    for j in range(Rt.shape[0]):
+        v = Xt[j]
+        beta, tau = householder(Rt[j, j], v)
         if tau != 0.0:
-            R[j, j] = beta
-            _reflect(R[j, j + 1:], X, j, v, tau, work)
+            Rt[j, j] = beta
+            _reflect(Rt[j + 1:, j], Xt[j + 1:], v, tau)
 
 
 @numba.njit(cache=True, nogil=True)
-def triangularize(A, R):
-    """``R`` (n, n) becomes the upper triangular factor of ``A`` (p, n), zero below row
-    ``min(p, n)`` (Householder QR); ``A`` is overwritten."""
-    p, n = A.shape
-    v, work = np.empty(p), np.empty(n)
+def triangularize(At, Rt):
+    """``Rt`` (n, n) becomes the transposed upper triangular factor of ``A`` (p, n), given
+    transposed as ``At`` (n, p), zero beyond column ``min(p, n)`` (Householder QR); ``At`` is
+    overwritten."""
+    n, p = At.shape
     for j in range(min(p - 1, n)):
-        below = v[:p - j - 1]
-        for i in range(below.size):
-            below[i] = A[j + 1 + i, j]
-        beta, tau = householder(A[j, j], below)
+        v = At[j, j + 1:]
+        beta, tau = householder(At[j, j], v)
         if tau != 0.0:
-            A[j, j] = beta
-            _reflect(A[j, j + 1:], A[j + 1:], j, below, tau, work)
-    R[:] = 0.0
-    for i in range(min(p, n)):
-        for c in range(i, n):
-            R[i, c] = A[i, c]
+            At[j, j] = beta
+            _reflect(At[j + 1:, j], At[j + 1:], v, tau)
+    Rt[:] = 0.0
+    for c in range(n):
+        for i in range(min(c + 1, p)):
+            Rt[c, i] = At[c, i]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -147,7 +163,7 @@ def singular_values(A, s):
             below[i] = A[j + 1 + i, j]
         s[j], tau = householder(A[j, j], below)
         if tau != 0.0:
-            _reflect(A[j, j + 1:], A[j + 1:], j, below, tau, work)
+            _reflect_rows(A[j, j + 1:], A[j + 1:], j, below, tau, work)
         if j < n - 2:
             right = v[:n - j - 2]
             right[:] = A[j, j + 2:]
@@ -175,37 +191,39 @@ def sliding_kernel(Hb, Fb, K, out):
     ``Hb`` (nb + 1, w, m, n), ``Fb`` (nb + 1, w, n, n) of :func:`block_data` (module
     docstring). Returns the number of steps whose ``dlasq1`` did not converge."""
     w, m, n = Hb.shape[1], Hb.shape[2], Hb.shape[3]
-    Y, Phi = np.empty((w, n, n)), np.empty((w, n, n))
-    P = np.empty((max(w - 1, 1), n, n))
-    stack, rows = np.empty((m + n, n)), np.empty((m, n))
-    C, X, psi, product = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    Yt, Phi = np.empty((w, n, n)), np.empty((w, n, n))    # Yt[r] = Y_r', Phi[r] = Phi_r
+    Pt = np.empty((max(w - 1, 1), n, n))                    # Pt[j] = P_j'
+    stack, rows = np.empty((n, m + n)), np.empty((n, m))    # [H_r; Y F_r]', (H_j Psi_j)'
+    Ct, Xt, psi, product = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), \
+        np.empty((n, n))
     failed = 0
     for b in range(Hb.shape[0] - 1):
-        rows[:] = Hb[b, w - 1]
-        triangularize(rows, Y[w - 1])
+        rows[:] = Hb[b, w - 1].T
+        triangularize(rows, Yt[w - 1])
         Phi[w - 1] = Fb[b, w - 1]
         for r in range(w - 2, -1, -1):
-            stack[:m] = Hb[b, r]
-            np.dot(Y[r + 1], Fb[b, r], stack[m:])
-            triangularize(stack, Y[r])
+            stack[:, :m] = Hb[b, r].T
+            np.dot(Fb[b, r].T, Yt[r + 1], product)
+            stack[:, m:] = product
+            triangularize(stack, Yt[r])
             np.dot(Phi[r + 1], Fb[b, r], Phi[r])
         if w > 1:
-            rows[:] = Hb[b + 1, 0]
-            triangularize(rows, P[0])
+            rows[:] = Hb[b + 1, 0].T
+            triangularize(rows, Pt[0])
             psi[:] = Fb[b + 1, 0]
         for j in range(1, w - 1):
-            P[j] = P[j - 1]
-            np.dot(Hb[b + 1, j], psi, rows)
-            fold(P[j], rows)
+            Pt[j] = Pt[j - 1]
+            np.dot(psi.T, Hb[b + 1, j].T, rows)
+            fold(Pt[j], rows)
             if j < w - 2:
                 np.dot(Fb[b + 1, j], psi, product)
                 psi[:] = product
         for r in range(min(w, K - b * w)):
-            C[:] = Y[r]
+            Ct[:] = Yt[r]
             if r > 0:
-                np.dot(P[r - 1], Phi[r], X)
-                fold(C, X)
-            failed += singular_values(C, out[b * w + r]) != 0
+                np.dot(Phi[r].T, Pt[r - 1], Xt)
+                fold(Ct, Xt)
+            failed += singular_values(Ct, out[b * w + r]) != 0
     return failed
 
 
