@@ -169,15 +169,7 @@ def singular_values(A, s):
             right[:] = A[j, j + 2:]
             e[j], tau = householder(A[j, j + 1], right)
             if tau != 0.0:
-                for i in range(j + 1, n):
-                    row = A[i, j + 2:]
-                    w = A[i, j + 1]
-                    for c in range(right.size):
-                        w += row[c] * right[c]
-                    w *= tau
-                    A[i, j + 1] -= w
-                    for c in range(right.size):
-                        row[c] -= w * right[c]
+                _reflect(A[j + 1:, j + 1], A[j + 1:], right, tau)
         elif j == n - 2:
             e[j] = A[j, j + 1]
     size, info = np.full(1, n, np.int32), np.zeros(1, np.int32)
