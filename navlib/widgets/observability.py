@@ -97,8 +97,8 @@ class ObservabilityPanel(Panel):
             return  # a refused configuration stays on show until a model control changes
         if changed & set(_MODEL):
             self._curve, self._kept_curve = _released(self._curve), False
-            self._step = None if self._step is None else (*self._step[:3],
-                                                          _released(self._step[3]))
+            if self._step is not None:  # another model or reading: another O(k)
+                self._step = _released(self._step[3])
         if changed & {*_MODEL, "log10_rtol"}:
             self.rerank()
         self.inspect()
