@@ -226,6 +226,7 @@ class KeptFigures:
 
     def __init__(self):
         self._kept: dict = {}
+        self._blitters: dict = {}
 
     def figure(self, name: str) -> Figure | None:
         """The figure on show as part ``name`` (the kept one after a transplant), or None
@@ -236,6 +237,10 @@ class KeptFigures:
     def render(self, name: str, fig: Figure, dpi: float) -> bytes:
         """PNG bytes of ``fig`` shown as part ``name``, reusing the kept figure's layout
         (and axes) when it fits."""
+        blitter = self._blitters.pop(name, None)
+        if blitter is not None:  # its dynamic artists back to the full draw
+            for artist in blitter.dynamic:
+                artist.set_animated(False)
         key = layout_key(fig)
         kept = self._kept.get(name)
         if kept is not None and kept[0] == key:
@@ -256,6 +261,22 @@ class KeptFigures:
             fig.set_layout_engine("none")
             self._kept[name] = (key, fig)
         return png
+
+
+    def blitted(self, name: str, fig: Figure, dynamic, dpi: float) -> Blitter | None:
+        """The kept figure of part ``name`` with ``fig``'s data, as a :class:`Blitter` that
+        redraws only ``dynamic(kept_figure)`` (the artists a panel knows to have changed) on
+        the kept background; None when ``fig`` cannot move into it (another layout key or
+        other artists: show ``fig`` instead)."""
+        kept = self._kept.get(name)
+        if kept is None or kept[0] != layout_key(fig) or _artists(fig) != _artists(kept[1]) \
+                or any(a[-1] for a in _artists(fig)):
+            return None
+        blitter = self._blitters.get(name)
+        if blitter is None:
+            blitter = self._blitters[name] = Blitter(kept[1], dynamic(kept[1]), dpi)
+        _transplant(fig, kept[1])
+        return blitter
 
 
 def table_html(frame: pd.DataFrame, index: bool = False) -> str:
