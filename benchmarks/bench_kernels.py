@@ -20,7 +20,7 @@ replaced (``tests/kalman_reference.py``):
   NumPy (``numpy_strapdown_window_21``, ``tests/strapdown_reference.py``). No goal in the
   issue: 1 us per sample.
 * ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
-  :func:`navlib.filters.linear.compile_kernels` (every kernel), with an empty numba cache
+  :func:`navlib.compiled.compile_kernels` (every kernel), with an empty numba cache
   folder (the first run on a machine: every kernel compiled) and then with that folder filled (later
   runs: loaded from disk); the import alone is ``kernels.import_only``.
 
@@ -146,7 +146,7 @@ def _strapdown(integrate):
         integrate(*window)
 
 
-_WARM_UP = "from navlib.filters.linear import compile_kernels; compile_kernels()"
+_WARM_UP = "from navlib.compiled import compile_kernels; compile_kernels()"
 
 
 def _fresh_process(code: str, cache_dir: str) -> float:

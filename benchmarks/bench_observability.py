@@ -4,6 +4,9 @@
   200 Hz step of the 150 s Churchill ascent for all 60 configurations (the 32 x 3 cells of
   the paper's table less the 36 "not applicable" ones), goal < 60 s on the 2-core machine
   (issue 14; it was 5 min in issue 3);
+* the sliding window alone, one 28-state configuration at every step (30 001 steps), as the
+  compiled kernel (``navlib.observability.sliding``) and as its NumPy reference
+  (``tests/sliding_reference.py``), single-threaded, transitions included;
 * one configuration's rank / condition-number curve at 1 Hz (model build included: what a
   widget does on a dropdown change), goal < 1 s.
 
@@ -20,8 +23,10 @@ the ``w m x n`` matrix as before issue 14, so a lower FLOP fraction can be a fas
 from __future__ import annotations
 
 import os
+import sys
 import time
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 from _harness import Case
@@ -29,7 +34,12 @@ from _harness import launcher_flight as trajectory
 
 from navlib.models.launcher import launcher, state_names
 from navlib.observability import local_observability
+from navlib.observability.local import _model_arrays
+from navlib.observability.sliding import sliding_singular_values
 from navlib.studies.launcher import configurations, table2
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import sliding_reference
 
 _CPU_S: dict[str, float] = {}
 
@@ -58,8 +68,8 @@ def _qr_flops(p: int, n: int) -> float:
 def local_flops(n: int, m: int, n_steps: int, window: int | None = None) -> float:
     """Approximate floating-point operations of local_observability (time-varying, stride 1).
 
-    Per step (:func:`navlib.observability._sliding_singular_values`): the suffix update
-    ``R([H; Y F])`` and the prefix update ``R([P; H Psi])`` (two (m + n) x n QRs, three n x n
+    Per step (:func:`navlib.observability.sliding.sliding_singular_values`): the suffix
+    update ``R([H; Y F])`` and the prefix update ``R([P; H Psi])`` (two (m + n) x n QRs, three n x n
     products and one m x n product), the combine product ``P Phi`` and the SVD of the
     2n x n stack (QR, then bidiagonalisation of the n x n factor, ``8/3 n^3``).
     """
@@ -122,6 +132,21 @@ def run_curve():
     return local_observability(model, stride=200)
 
 
+@cache
+def _sliding_inputs():
+    model = launcher("ins_gps_att_rt", "GAP", "markov", trajectory=trajectory())
+    return _model_arrays(model, "euler")[1:], model.n
+
+
+def _sliding(function):
+    """Every step of the 28-state configuration in chunks of 36 windows, one thread."""
+    def run():
+        (transitions, H), n = _sliding_inputs()
+        K, chunk = H.shape[0] - n + 1, 36 * n
+        return [function(transitions, H, k, min(chunk, K - k), n) for k in range(0, K, chunk)]
+    return run
+
+
 def cases():
     trajectory()
     return [
@@ -129,6 +154,16 @@ def cases():
              "150 s @ 200 Hz", _cpu_timed("table2", run_table2), goal_s=60.0, repeat=1,
              warmup=False, extra=_rate_columns("table2", table2_flops()),
              notes="model builds and mid-mission null spaces included"),
+        Case("observability: sliding window, compiled kernel (ins_gps_att_rt GAP markov)",
+             "30001 steps, 28 states", _cpu_timed("sliding", _sliding(sliding_singular_values)),
+             goal_s=5.0, repeat=2, extra=_rate_columns("sliding", local_flops(28, 12, 30001)),
+             notes="one thread; transitions included"),
+        Case("observability: sliding window, NumPy reference (tests/sliding_reference.py)",
+             "30001 steps, 28 states",
+             _cpu_timed("sliding_numpy", _sliding(sliding_reference.sliding_singular_values)),
+             goal_s=5.0, repeat=2,
+             extra=_rate_columns("sliding_numpy", local_flops(28, 12, 30001)),
+             notes="one thread; transitions included"),
         Case("observability: 1 Hz rank/cond curve, ins_gps_att_rt GAP markov (28 states)",
              "150 points", _cpu_timed("curve", run_curve), goal_s=1.0, repeat=3,
              extra=_rate_columns("curve", curve_flops()), notes="model build included"),

@@ -17,7 +17,7 @@ LAYERS = (
                "navlib.sensors", "navlib.models", "navlib.trajectory")),
     ("analysis", ("navlib.covariance", "navlib.observability", "navlib.metrics",
                   "navlib.estimability", "navlib.filters", "navlib.quality",
-                  "navlib.segmentation")),
+                  "navlib.segmentation", "navlib.compiled")),
     ("sweep", ("navlib.sweep",)),
     ("studies", ("navlib.studies",)),
     ("figures", ("navlib.plots", "navlib.readings")),

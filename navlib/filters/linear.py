@@ -35,11 +35,9 @@ from navlib.filters.linear_preparation import (
     LinearSteps,
     prepare_linear,
 )
-from navlib.filters.linear_recursion import compile_recursion_kernels, run_recursion
+from navlib.filters.linear_recursion import run_recursion
 from navlib.kalman import _psd_sqrt, chi2_bounds, nees_values
-from navlib.kalman import compile_kernels as _kalman_compile_kernels
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
-from navlib.strapdown_kernel import compile_kernel as compile_strapdown_kernel
 
 _MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
@@ -411,14 +409,3 @@ def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, app
         state_names=tuple(steps.state_names), measurement_names=tuple(steps.measurement_names),
         outliers=tuple(outliers), applied=tuple(applied), index=rec,
     )
-
-
-def compile_kernels() -> None:
-    """Every compiled kernel of navlib: :func:`navlib.kalman.compile_kernels`, the linear
-    simulation's (:func:`~navlib.filters.linear_recursion.compile_recursion_kernels`) and
-    the strapdown mechanisation (:func:`navlib.strapdown_kernel.compile_kernel`): compiles
-    them on the first run on a machine, loads them from numba's disk cache afterwards
-    (README "Compiled kernels")."""
-    _kalman_compile_kernels()
-    compile_recursion_kernels()
-    compile_strapdown_kernel()

@@ -152,7 +152,7 @@ def _compile_kernels() -> None:
     that run at once start: otherwise each of them compiles the same kernels on a machine's
     first run (README "Compiled kernels")."""
     # imported here: the runner itself needs neither numba nor NumPy otherwise
-    from navlib.filters.linear import compile_kernels
+    from navlib.compiled import compile_kernels
 
     compile_kernels()
 

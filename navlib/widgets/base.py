@@ -139,11 +139,12 @@ def layout_key(fig: Figure) -> tuple:
     scales, axis labels) and the figure titles.
 
     Two figures of a builder with equal keys get equal layouts up to the width of their
-    tick labels, which :class:`KeptFigures` accepts when it reuses a layout
-    (docs/assumptions.md, "Panel figures").
+    tick labels and figure titles, which :class:`KeptFigures` accepts when it reuses a layout
+    (docs/assumptions.md, "Panel figures"): a figure title counts by its number of lines,
+    the height constrained layout reserves for it, not by its words.
     """
-    texts = tuple(None if getattr(fig, name, None) is None else getattr(fig, name).get_text()
-                  for name in _SUPER_TEXTS)
+    texts = tuple(None if getattr(fig, name, None) is None
+                  else getattr(fig, name).get_text().count("\n") + 1 for name in _SUPER_TEXTS)
     return (tuple(fig.get_size_inches().round(4)), texts,
             tuple((type(ax).__name__, _cell(ax), ax.get_visible(), ax.get_xscale(),
                    ax.get_yscale(), ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes))
@@ -225,10 +226,21 @@ class KeptFigures:
 
     def __init__(self):
         self._kept: dict = {}
+        self._blitters: dict = {}
+
+    def figure(self, name: str) -> Figure | None:
+        """The figure on show as part ``name`` (the kept one after a transplant), or None
+        while no laid-out figure is kept for it."""
+        kept = self._kept.get(name)
+        return None if kept is None else kept[1]
 
     def render(self, name: str, fig: Figure, dpi: float) -> bytes:
         """PNG bytes of ``fig`` shown as part ``name``, reusing the kept figure's layout
         (and axes) when it fits."""
+        blitter = self._blitters.pop(name, None)
+        if blitter is not None:  # its dynamic artists back to the full draw
+            for artist in blitter.dynamic:
+                artist.set_animated(False)
         key = layout_key(fig)
         kept = self._kept.get(name)
         if kept is not None and kept[0] == key:
@@ -249,6 +261,22 @@ class KeptFigures:
             fig.set_layout_engine("none")
             self._kept[name] = (key, fig)
         return png
+
+
+    def blitted(self, name: str, fig: Figure, dynamic, dpi: float) -> Blitter | None:
+        """The kept figure of part ``name`` with ``fig``'s data, as a :class:`Blitter` that
+        redraws only ``dynamic(kept_figure)`` (the artists a panel knows to have changed) on
+        the kept background; None when ``fig`` cannot move into it (another layout key or
+        other artists: show ``fig`` instead)."""
+        kept = self._kept.get(name)
+        if kept is None or kept[0] != layout_key(fig) or _artists(fig) != _artists(kept[1]) \
+                or any(a[-1] for a in _artists(fig)):
+            return None
+        blitter = self._blitters.get(name)
+        if blitter is None:
+            blitter = self._blitters[name] = Blitter(kept[1], dynamic(kept[1]), dpi)
+        _transplant(fig, kept[1])
+        return blitter
 
 
 def table_html(frame: pd.DataFrame, index: bool = False) -> str:

@@ -13,7 +13,9 @@ from navlib.widgets.base import Panel, look
 
 
 class PlanPanel(Panel):
-    """Controls of a mission plan; ``update()`` re-plans only for what changed.
+    """Controls of a mission plan; ``update()`` re-plans only for what changed, and a
+    threshold redraws only the timeline's bars and legend on its kept background
+    (:meth:`~navlib.widgets.base.KeptFigures.blitted`).
 
     Attributes
     ----------
@@ -74,7 +76,8 @@ class PlanPanel(Panel):
         if changed == {"outage_start"} and c["outage_length"] <= 0:
             return  # the start of no outage: nothing to re-plan or redraw
         plan = self.plan
-        if changed & {"preset", "outage_start", "outage_length", "spin_hz"}:
+        replanned = bool(changed & {"preset", "outage_start", "outage_length", "spin_hz"})
+        if replanned:
             outages = [(c["outage_start"], c["outage_start"] + c["outage_length"])] \
                 if c["outage_length"] > 0 else []
             changes = {"rocket.spin_hz": c["spin_hz"]} \
@@ -85,13 +88,25 @@ class PlanPanel(Panel):
         plan = plan.with_settings(e_threshold=c["e_threshold"], s_threshold=c["s_threshold"],
                                   nu=c["nu"])
         self.plan = plan
-        self.show("timeline", timeline_figure(plan))
+        fig = timeline_figure(plan)
+        blitter = None if replanned else self.figures.blitted("timeline", fig, _threshold_artists,
+                                                             self.dpi)
+        self.show("timeline", fig if blitter is None else blitter)
         summary = plan.summary()
         self.show("summary", summary[["segment", "phase", "t_start", "t_end", "n_excitable",
                                       "n_sensible", "sensible"]])
         self.status.value = (f"ok: {plan.mission.name}, preset {plan.options['preset']}, "
                              f"outages {list(plan.outages) or 'none'}; sensible states per "
                              f"segment: {summary['n_sensible'].tolist()}")
+
+
+def _threshold_artists(fig) -> list:
+    """What a threshold changes in :func:`~navlib.plots.plan.timeline_figure`: the
+    excitable and sensible bars (one collection each per state) and the legend that names
+    the thresholds; with them the segment-start lines and the spines drawn over the bars,
+    in the order of a full draw. Outages, transient, ticks and labels stay."""
+    ax = fig.axes[0]
+    return [*ax.collections, *ax.lines, *ax.spines.values(), ax.get_legend()]
 
 
 def plan_panel(plan) -> PlanPanel:

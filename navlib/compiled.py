@@ -1,0 +1,22 @@
+"""Every compiled (numba) kernel of navlib, warmed in one call.
+
+:func:`compile_kernels` runs each kernel once on tiny inputs: on the first run on a machine
+it compiles them, afterwards it loads them from numba's disk cache (``cache=True``), so the
+notebook kernels a report starts at once only load (README "Compiled kernels" gives the
+costs). The kernels live beside the NumPy code they replace: the Kalman algebra
+(:mod:`navlib.kalman`), the linear simulation (:mod:`navlib.filters.linear_recursion`), the
+strapdown mechanisation (:mod:`navlib.strapdown_kernel`) and the every-step observability
+test (:mod:`navlib.observability.sliding`).
+"""
+
+from navlib import kalman, strapdown_kernel
+from navlib.filters import linear_recursion
+from navlib.observability import sliding
+
+
+def compile_kernels() -> None:
+    """Compile (first run on a machine) or load (afterwards) every kernel of navlib."""
+    kalman.compile_kernels()
+    linear_recursion.compile_recursion_kernels()
+    strapdown_kernel.compile_kernel()
+    sliding.compile_kernel()
