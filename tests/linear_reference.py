@@ -1,7 +1,7 @@
 """NumPy reference of the compiled linear-simulation kernels (issue 26): the block functions
 of :mod:`navlib.filters.linear` that :func:`navlib.filters.linear.truth_kernel` and
 :func:`navlib.filters.linear.filter_kernel` replaced, kept here (not in the library) to
-compare against (tests/test_linear_kernels.py) and to time against
+compare against (tests/filters/test_linear_kernels.py) and to time against
 (benchmarks/bench_kernels.py). Same arguments as the library's block functions.
 """
 

@@ -1,6 +1,6 @@
 """NumPy reference of the compiled sliding window (issue 26): the batched NumPy code that
 :func:`navlib.observability.sliding.sliding_singular_values` replaced, kept here (not in the
-library) to compare against (tests/test_sliding_kernels.py) and to time against
+library) to compare against (tests/observability/test_sliding_kernels.py) and to time against
 (benchmarks/bench_observability.py).
 """
 
@@ -81,7 +81,8 @@ def sliding_singular_values(transitions, H, k0: int, K: int, window: int) -> np.
     SVD of one 2n x n stack, instead of forming the ``w m x n`` matrix (``w - 1`` block
     products) and factorising it. Each factor is a backward-stable QR and the transitions
     over a window are well scaled (Euler steps ``I + A dt``), so the singular values agree
-    with the direct ones to a few rounding units of ``sigma_max`` (tests/test_local_sliding.py).
+    with the direct ones to a few rounding units of ``sigma_max``
+    (tests/observability/test_local_sliding.py).
     """
     n = H.shape[2]
     n_blocks = -(-K // window)

@@ -227,7 +227,7 @@ def sliding_singular_values(transitions, H, k0: int, K: int, window: int) -> np.
     (``w - 1`` block products) and factorising it. Each reduction is backward stable and the
     transitions over a window are well scaled (Euler steps ``I + A dt``), so the singular
     values agree with the direct ones to a few rounding units of ``sigma_max``
-    (tests/test_local_sliding.py)."""
+    (tests/observability/test_local_sliding.py)."""
     n = H.shape[2]
     n_blocks = -(-K // window)
     Hb, Fb = block_data(transitions, H, k0, n_blocks, window)

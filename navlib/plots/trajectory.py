@@ -157,7 +157,7 @@ def closure_error_figure(closure, position_tol_m: float | None = 1.0,
 
     Logarithmic axes (exact zeros, e.g. on the pad, are left out); dashed lines show the
     tolerances a correct strapdown must meet on an exact-IMU trajectory (1 m and 0.1 mrad at
-    the end of the flight, ``tests/test_trajectory.py``).
+    the end of the flight, ``tests/trajectory/test_trajectory.py``).
     """
     fig, axes = subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
     series = [(closure.position_error, "position [m]", "C0", position_tol_m),

@@ -70,7 +70,7 @@ TABLE2_BASELINE = {"cond_tol": COND_TOL, "rank_rtol": "numpy default"}
 TABLE2_ROBUSTNESS_STRIDE = 40
 """Stride of the rank-tolerance points of the Table 2 assumption set: the 5 Hz grid, whose
 unobservable counts, match counts and verdicts at the baseline tolerance are those of every
-step (tested: tests/test_table2.py,
+step (tested: tests/studies/test_table2.py,
 ``test_every_step_table_keeps_the_counts_and_verdicts_of_the_5hz_grid``), at a fortieth of the
 cost of three more every-step tables; at the other tolerances that equality is assumed."""
 EVOLUTION_GRID = {"sigma0_att_deg": (0.03, 0.1, 0.3)}

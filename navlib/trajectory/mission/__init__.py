@@ -30,8 +30,8 @@ fixed-wing aircraft and ground vehicles give ``[limits]`` and ``[[waypoint]]`` t
 
 Every mission trajectory goes through :func:`navlib.trajectory.base.build_trajectory`, so
 its specific force and angular rate satisfy the ECEF kinematics exactly (the closure of
-``tests/test_trajectory.py``) and are continuous: every change of velocity or heading is a
-C^3 smoothstep blend whose length follows from the stated acceleration, turn-radius or bank
+``tests/trajectory/test_trajectory.py``) and are continuous: every change of velocity or
+heading is a C^3 smoothstep blend whose length follows from the stated acceleration, turn-radius or bank
 limits.
 
 Modules: :mod:`~navlib.trajectory.mission.reading` (the file and its tables),

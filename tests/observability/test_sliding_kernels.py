@@ -21,7 +21,7 @@ STEP_RTOL = 1e-12
 EPS = np.finfo(float).eps
 RUN_ULPS = 100.0
 """Whole runs: singular values within this many ulps of each step's sigma_max (as
-tests/test_local_sliding.py allows against a direct SVD); measured on all 60 Table 2
+tests/observability/test_local_sliding.py allows against a direct SVD); measured on all 60 Table 2
 configurations over the 150 s ascent: at most 39 ulps (2026-12-02)."""
 
 

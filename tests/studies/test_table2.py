@@ -1,11 +1,11 @@
 """Table 2 regeneration, its claims and the Fig. 1 analogue (navlib.studies.launcher)."""
 
 import csv
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from locations import REPO
 
 from navlib import NavlibInputError
 from navlib.models.launcher import launcher
@@ -200,7 +200,7 @@ def test_figure_builders_and_panel(result, short_ascent):
     plt.close("all")
 
 
-REFERENCE_5HZ = Path(__file__).parent / "regression" / "data" / "table2_counts_5hz.csv"
+REFERENCE_5HZ = REPO / "tests" / "regression" / "data" / "table2_counts_5hz.csv"
 """Unobservable counts, match counts and claim verdicts (at each tolerance) of Table 2 on the
 full ascent at stride 40 (5 Hz), the claims engine's grid before it moved to every step."""
 

@@ -1,11 +1,11 @@
 """Mission planning (navlib.studies.plan and python -m navlib plan): outages, timeline,
 the command line and the trade-study evaluation."""
 
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from locations import REPO
 
 from navlib import NavlibInputError
 from navlib.__main__ import main
@@ -137,7 +137,7 @@ def test_segment_inside_an_outage_is_joined_or_refused():
         plan_mission("ground_vehicle", segments=[(0.0, 42.0), (42.0, 50.0), (50.0, 121.0)])
 
 
-SAMPLE = Path(__file__).resolve().parents[1] / "data" / "sample_flight"
+SAMPLE = REPO / "data" / "sample_flight"
 
 
 @pytest.fixture(scope="module")

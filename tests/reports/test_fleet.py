@@ -7,12 +7,13 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from locations import REPO
 
 from navlib import NavlibInputError, io
 from navlib.__main__ import main
 from navlib.reports import fleet
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 SAMPLE = ROOT / "data" / "sample_flight"
 PAIR = f"{SAMPLE / 'imu.csv'},{SAMPLE / 'gnss.csv'}"
 SHARED = Path("/work/shared/data")

@@ -10,15 +10,16 @@ import pandas as pd
 import pytest
 from dataflash_writer import write_flight
 from flights import multicopter, records
+from locations import REPO
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, earth, io
 from navlib.studies.assess import assess_flight
 
-AP_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "ardupilot"
+AP_DIR = REPO.parent / "shared" / "data" / "ardupilot"
 if not AP_DIR.is_dir():
     AP_DIR = Path("/work/shared/data/ardupilot")
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 
 
 def _public(name):
@@ -265,7 +266,7 @@ def test_field_declared_as_text_is_refused(flight, tmp_path):
 def test_shifted_fmt_record_does_not_hang(bin4, tmp_path):
     """One byte inserted before the Length byte of the ATT FMT record (so it reads 0 and the
     rest of the record shifts) made pymavlink parse the same bytes forever (found by
-    tests/test_reader_robustness.py); the reader refuses such a log at once."""
+    tests/io/test_reader_robustness.py); the reader refuses such a log at once."""
     data = bin4.read_bytes()
     fmt_att = data.index(b"\xa3\x95\x80" + bytes([0x83]))
     assert data[fmt_att + 5:fmt_att + 9] == b"ATT\x00"

@@ -7,11 +7,12 @@ import numpy as np
 import pandas as pd
 import pytest
 from altos_writer import IMU, rocket_rows, write_altos
+from locations import REPO
 
 from navlib import NavlibInputError, earth, io, units
 from navlib.io.altos import TELEMEGA_RANGE, looks_like_altos
 
-ALTOS_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "altos"
+ALTOS_DIR = REPO.parent / "shared" / "data" / "altos"
 if not ALTOS_DIR.is_dir():
     ALTOS_DIR = Path("/work/shared/data/altos")
 SHARED = ("2018-04-08-serial-1257-flight-0014.csv", "2019-05-04-serial-1257-flight-0017.csv",

@@ -167,7 +167,7 @@ def test_landing_end_s_cuts_the_log_and_drogue_alone_lands():
 
 def test_without_a_drogue_nothing_changes():
     """The recovery keywords default to off: the built-in flight keeps its 86 s end and the
-    sounding_rocket.toml mission still reproduces it (tests/test_mission.py)."""
+    sounding_rocket.toml mission still reproduces it (tests/trajectory/test_mission.py)."""
     traj = sounding_rocket()
     assert traj.t[-1] == 86.0 and "apogee" not in traj.events
 

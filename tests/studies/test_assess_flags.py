@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from locations import REPO
 
 from navlib import io
 from navlib.__main__ import _negative_angles, _parser, assess_options, main
@@ -18,7 +19,7 @@ from navlib.reports import fleet
 from navlib.segmentation import VEHICLE_PHASES
 from navlib.studies.assess import assess_flight
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 SAMPLE = ROOT / "data" / "sample_flight"
 PAIR = f"{SAMPLE / 'imu.csv'},{SAMPLE / 'gnss.csv'}"
 SHARED = Path("/work/shared/data")

@@ -3,12 +3,12 @@
 import subprocess
 import sys
 import warnings
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
+from locations import REPO
 
 from navlib import io, sensors
 from navlib.errors import NavlibInputError
@@ -27,7 +27,7 @@ from navlib.studies.assess import (
 from navlib.trajectory import stationary
 from navlib.widgets.assess import AssessPanel, boundaries_text, parse_boundaries
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO
 SAMPLE = ROOT / "data" / "sample_flight"
 
 
