@@ -31,8 +31,8 @@ fixed-wing aircraft and ground vehicles give ``[limits]`` and ``[[waypoint]]`` t
 Every mission trajectory goes through :func:`navlib.trajectory.base.build_trajectory`, so
 its specific force and angular rate satisfy the ECEF kinematics exactly (the closure of
 ``tests/trajectory/test_trajectory.py``) and are continuous: every change of velocity or
-heading is a C^3 smoothstep blend whose length follows from the stated acceleration, turn-radius or bank
-limits.
+heading is a C^3 smoothstep blend whose length follows from the stated acceleration,
+turn-radius or bank limits.
 
 Modules: :mod:`~navlib.trajectory.mission.reading` (the file and its tables),
 :mod:`~navlib.trajectory.mission.rockets`, :mod:`~navlib.trajectory.mission.waypoints`
