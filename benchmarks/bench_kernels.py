@@ -49,7 +49,7 @@ import strapdown_reference  # noqa: E402
 
 from navlib import strapdown  # noqa: E402
 from navlib.filters import linear_recursion, prepare_linear  # noqa: E402
-from navlib.kalman import _psd_sqrt, propagate_kernel, riccati_kernel  # noqa: E402
+from navlib.kalman import propagate_kernel, psd_sqrt, riccati_kernel  # noqa: E402
 from navlib.models import launcher  # noqa: E402
 from navlib.trajectory import launcher_ascent  # noqa: E402
 
@@ -113,7 +113,7 @@ def _linear_case(runs: int = 100):
     meas = np.flatnonzero(prepared.measured[:linear_recursion.CHUNK])
     linear_recursion.measure_block(prepared, block, work, draws,
                           np.zeros((steps.t.size, steps.H.shape[-2])),
-                          _psd_sqrt(steps.R[:1]))
+                          psd_sqrt(steps.R[:1]))
     return prepared, block, work, draws, meas
 
 

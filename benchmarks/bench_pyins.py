@@ -67,7 +67,7 @@ from _harness import rocket_flight as _rocket
 from scipy.spatial.transform import Rotation
 
 from navlib import earth, filters, sensors, strapdown, units
-from navlib.kalman import _psd_sqrt
+from navlib.kalman import psd_sqrt
 from navlib.models import Ecef21ErrorState
 from navlib.models.base import Nominal
 from navlib.rotations import log_so3, skew
@@ -161,7 +161,7 @@ def _flight(seed: int, gyro_scale_ppm: float | None = None) -> Flight:
     P0 = np.array(es.P0)
     P0[:9, :9] = _nav_p0(traj)
     dx = np.zeros((1, 21))
-    dx[0, :9] = -(g_init.standard_normal(9) @ _psd_sqrt(P0[:9, :9]).T)
+    dx[0, :9] = -(g_init.standard_normal(9) @ psd_sqrt(P0[:9, :9]).T)
     hat = es.correct(Nominal(traj.t[:1], traj.position[:1], traj.velocity[:1],
                              traj.attitude[:1].as_matrix(), imu.f_b[:1], imu.w_ib_b[:1], {}),
                      dx)

@@ -38,7 +38,7 @@ def symmetrize(P):
     P = np.asarray(P)
     return 0.5 * (P + P.swapaxes(-1, -2))
 
-def _psd_sqrt(M) -> np.ndarray:
+def psd_sqrt(M) -> np.ndarray:
     """Batched symmetric square root ``L`` with ``L L' = M`` for PSD ``M`` (..., n, n)."""
     w, V = np.linalg.eigh(symmetrize(M))
     return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]

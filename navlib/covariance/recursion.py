@@ -16,7 +16,7 @@ import pandas as pd
 from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.kalman import covariance_recursion, symmetrize
-from navlib.models.base import DiscreteModel, _indices
+from navlib.models.base import DiscreteModel, state_indices
 
 
 def state_labels(state_names, n: int) -> tuple[str, ...]:
@@ -78,7 +78,7 @@ class CovarianceResult:
 
     def index(self, names: Sequence[str]) -> np.ndarray:
         """Positions of ``names`` in ``state_names``."""
-        return _indices(self.state_names, names)
+        return state_indices(self.state_names, names)
 
     def to_frame(self, which: str = "post") -> pd.DataFrame:
         """Tidy table with columns ``t, state, sigma`` (``which`` = "post" or "prior")."""

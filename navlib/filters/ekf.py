@@ -28,7 +28,7 @@ from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.filters.ekf_updates import Epochs, WindowUpdates, update_records
 from navlib.filters.linear_preparation import METHODS
-from navlib.filters.measurements import Measurement, _epoch_index, _imu_arrays, ekf_measurements
+from navlib.filters.measurements import Measurement, ekf_measurements, epoch_index, imu_arrays
 from navlib.models.base import ErrorStateModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
 from navlib.models.launcher import LauncherErrorState
@@ -160,7 +160,7 @@ class EKFResult:
         ``C_true = (I + S(psi)) C_hat``), ``roll, pitch, yaw`` (that vector in body axes,
         ``T_E^B psi``, spec launcher.md §6.2 item 6).
         """
-        k = _epoch_index(np.asarray(trajectory.t, dtype=float), self.t, "result")
+        k = epoch_index(np.asarray(trajectory.t, dtype=float), self.t, "result")
         C = trajectory.attitude[k].as_matrix()
         psi = log_so3(C @ np.swapaxes(self.C_b_e, 1, 2))
         body = np.einsum("kji,kj->ki", C, psi)
@@ -302,7 +302,7 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
     -------
     EKFResult
     """
-    t, f_meas, w_meas = _imu_arrays(imu)
+    t, f_meas, w_meas = imu_arrays(imu)
     es = error_model(model, t, solution, biases, bias_model, model_options,
                       gnss_velocity_sigma)
     method = method or es.default_method

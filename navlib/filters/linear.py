@@ -30,16 +30,16 @@ from threadpoolctl import threadpool_limits
 
 from navlib.errors import NavlibInputError
 from navlib.filters.linear_preparation import (
-    _ONE_THREAD,
+    ONE_THREAD,
     LinearFilter,
     LinearSteps,
     prepare_linear,
 )
 from navlib.filters.linear_recursion import run_recursion
-from navlib.kalman import _psd_sqrt, chi2_bounds, nees_values
+from navlib.kalman import chi2_bounds, nees_values, psd_sqrt
 from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
 
-_MEMORY_BUDGET = 100e6
+MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
 chooses ``record_every`` itself."""
 
@@ -261,9 +261,9 @@ def simulate_linear(model, *, runs: int = 1, seed=None, rng=None, outliers=None,
     z_add, x_input, applied = _outlier_inputs(steps, outliers)
     if record_every is None:
         per_epoch = 2 * 8 * runs * steps.n
-        record_every = max(1, int(np.ceil(steps.t.size * per_epoch / _MEMORY_BUDGET)))
+        record_every = max(1, int(np.ceil(steps.t.size * per_epoch / MEMORY_BUDGET)))
     if initial_error:
-        x = rng.standard_normal((runs, steps.n)) @ _psd_sqrt(steps.P0).T
+        x = rng.standard_normal((runs, steps.n)) @ psd_sqrt(steps.P0).T
     else:
         x = np.zeros((runs, steps.n))
     return _simulate(prepared, x, z_add, x_input, recorded_epochs(steps.t.size, record_every),
@@ -394,7 +394,7 @@ def _simulate(prepared: LinearFilter, x, z_add, x_input, rec, rng, outliers, app
         upd_before = upd[upd < k0]
         nis[upd_slot[upd_before]] = 0.0
         innov_rec[slot[upd_before[slot[upd_before] >= 0]]] = 0.0
-    with threadpool_limits(_ONE_THREAD):
+    with threadpool_limits(ONE_THREAD):
         run_recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, upd_slot,
                    (truth_rec, est_rec, innov_rec, nis))
         P_post = prepared.covariance.P_post

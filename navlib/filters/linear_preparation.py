@@ -19,12 +19,12 @@ from navlib._validation import finite_array
 from navlib.covariance import CovarianceResult, FactoredNoise, covariance_recursion, symmetrize
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.kalman import PINV_RTOL, Gains, _psd_sqrt, nees_basis
+from navlib.kalman import PINV_RTOL, Gains, nees_basis, psd_sqrt
 from navlib.models.base import DiscreteModel, LinearModel
 
 METHODS = ("euler", "expm")
 
-_ONE_THREAD = 1
+ONE_THREAD = 1
 """BLAS threads of the covariance recursion and of the simulation (``threadpoolctl``).
 Their matrices are small (n <= 30) and come one step or one epoch at a time: OpenBLAS's
 threads inside each of those calls only synchronise, and on a loaded machine a batched
@@ -119,20 +119,20 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
             F = A * dt[:, None, None]
             F += np.eye(n)                   # in place: the same sums as eye + A dt
             Gamma = G * dt[:, None, None]
-            L = G @ _psd_sqrt(Qc)
+            L = G @ psd_sqrt(Qc)
             L *= np.sqrt(dt)[:, None, None]  # in place: one (N-1, n, q) array, not two
             Q = FactoredNoise(L)[:] if with_q else None
         else:
             F, Q = discretize_steps(A, G, Qc, dt, method="series")
             Gamma = _phi1_series(A, dt) @ G
-            L = _psd_sqrt(Q)
+            L = psd_sqrt(Q)
         H = np.broadcast_to(model.H, (N, *model.H.shape[-2:]))
         R = np.broadcast_to(model.R, (N, *model.R.shape[-2:]))
         P0 = model.P0 if P0 is None else P0
         names = (model.state_names, tuple(model.measurement_names), tuple(model.noise_names))
     elif isinstance(model, DiscreteModel):
         t, F, Q, H, R = model.t, model.F, model.Q, model.H, model.R
-        L = _psd_sqrt(Q)
+        L = psd_sqrt(Q)
         Gamma = None
         if noise_input is not None:
             Gamma = finite_array(noise_input, "noise_input")
@@ -222,7 +222,7 @@ def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measu
     Parameters as in :func:`simulate_linear`. The covariance is that of
     :func:`navlib.covariance.kalman_covariance` (Joseph form), and the gains are those of
     :func:`navlib.kalman.kalman_gains` from its priors, both from one recursion
-    (:func:`_blockwise_covariance`). BLAS runs on one thread here (:data:`_ONE_THREAD`).
+    (:func:`_blockwise_covariance`). BLAS runs on one thread here (:data:`ONE_THREAD`).
 
     ``compact=True`` keeps what :func:`simulate_linear` needs and drops the rest: the
     filter keeps no prior covariances
@@ -236,7 +236,7 @@ def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measu
     steps = linear_steps(model, method=method, P0=P0, noise_input=noise_input,
                          noise_names=noise_names, with_q=not compact)
     mask = _measured_mask(steps.t.size, update_every, measured)
-    with threadpool_limits(_ONE_THREAD):
+    with threadpool_limits(ONE_THREAD):
         cov, gains = _blockwise_covariance(steps, mask, priors=not compact)
     if compact:
         steps = replace(steps, Q=None)

@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 from navlib.filters.linear_preparation import LinearFilter, LinearSteps
-from navlib.kalman import _psd_sqrt, kernel_array
+from navlib.kalman import kernel_array, psd_sqrt
 
 CHUNK = 256
 """Steps per block of :func:`run_recursion`: its noise is drawn a block at a time (this fixes
@@ -40,7 +40,7 @@ def run_recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, u
     steps = prepared.steps
     runs, m = x.shape[0], steps.H.shape[-2]
     N = steps.t.size
-    R_sqrt = _psd_sqrt(steps.R[:1]) if np.all(steps.R == steps.R[:1]) else _psd_sqrt(steps.R)
+    R_sqrt = psd_sqrt(steps.R[:1]) if np.all(steps.R == steps.R[:1]) else psd_sqrt(steps.R)
     work = Work.of(runs, steps.n, m)
     current = (x, x_hat)
     blocks = noise_blocks(rng, N, (runs, steps.L.shape[-1]), (runs, m))

@@ -194,7 +194,7 @@ def ekf_measurements(model, t, gnss=None, attitude=None, reference=None) -> list
     if gnss is not None:
         if not isinstance(gnss, pd.DataFrame) or not {"t", "x", "y", "z"} <= set(gnss.columns):
             raise NavlibInputError("gnss: expected a DataFrame with columns t, x, y, z")
-        kg = _epoch_index(t, gnss["t"].to_numpy(float), "gnss")
+        kg = epoch_index(t, gnss["t"].to_numpy(float), "gnss")
         out.append(GnssPosition(model, kg, gnss[["x", "y", "z"]].to_numpy(float)))
         if "gnss_vel" in kinds and {"vx", "vy", "vz"} <= set(gnss.columns):
             out.append(GnssVelocity(model, kg, gnss[["vx", "vy", "vz"]].to_numpy(float)))
@@ -203,7 +203,7 @@ def ekf_measurements(model, t, gnss=None, attitude=None, reference=None) -> list
             raise NavlibInputError(f"attitude: the {model.name} model uses attitude-sensor "
                                    "updates; give attitude data")
         ta, Ca = _rotations(attitude, "attitude")
-        out.append(AttitudeSensor(model, _epoch_index(t, ta, "attitude"), Ca))
+        out.append(AttitudeSensor(model, epoch_index(t, ta, "attitude"), Ca))
     if "rt" in kinds:
         if reference is None:
             raise NavlibInputError(f"reference: the {model.name} model needs reference-"
@@ -212,11 +212,11 @@ def ekf_measurements(model, t, gnss=None, attitude=None, reference=None) -> list
             out.append(ReferenceAttitude(model, np.arange(t.size), reference))
         else:
             tr, Cr = _rotations(reference, "reference")
-            out.append(ReferenceAttitude(model, _epoch_index(t, tr, "reference"), Cr))
+            out.append(ReferenceAttitude(model, epoch_index(t, tr, "reference"), Cr))
     return out
 
 
-def _imu_arrays(imu):
+def imu_arrays(imu):
     if isinstance(imu, pd.DataFrame):
         cols = ["t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z"]
         missing = [c for c in cols if c not in imu.columns]
@@ -238,7 +238,7 @@ def _imu_arrays(imu):
     return t, finite_array(f, "imu.f_b", (t.size, 3)), finite_array(w, "imu.w_ib_b", (t.size, 3))
 
 
-def _epoch_index(t_imu, t_meas, name: str) -> np.ndarray:
+def epoch_index(t_imu, t_meas, name: str) -> np.ndarray:
     """Nearest IMU sample of each measurement time (within half a sample)."""
     t_meas = finite_array(t_meas, f"{name}.t", ndim=1)
     k = np.clip(np.searchsorted(t_imu, t_meas), 1, t_imu.size - 1)

@@ -13,7 +13,7 @@ import numpy as np
 
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.filters.linear import _MEMORY_BUDGET, prepare_linear, simulate_linear
+from navlib.filters.linear import MEMORY_BUDGET, prepare_linear, simulate_linear
 from navlib.parallel import map_tasks
 
 __all__ = ["monte_carlo_linear"]
@@ -86,7 +86,7 @@ def monte_carlo_linear(model, *, runs: int, seed=None, runs_per_task: int = 25,
                    "monte_carlo_linear")
     if record_every is None:
         n_epochs, n = np.asarray(model.t).size, len(model.state_names)
-        record_every = max(1, int(np.ceil(n_epochs * 2 * 8 * runs * n / _MEMORY_BUDGET)))
+        record_every = max(1, int(np.ceil(n_epochs * 2 * 8 * runs * n / MEMORY_BUDGET)))
     sizes = [min(per_task, runs - i) for i in range(0, runs, per_task)]
     seeds = np.random.SeedSequence(seed).spawn(len(sizes))
     prepare = {k: v for k, v in options.items() if k in _PREPARE_KEYS}

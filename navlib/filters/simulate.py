@@ -18,8 +18,8 @@ from navlib import sensors as sensor_lib
 from navlib import strapdown
 from navlib.errors import NavlibInputError
 from navlib.filters.ekf import EKFResult, EKFSnapshot, ekf, error_model
-from navlib.filters.measurements import _epoch_index
-from navlib.kalman import _psd_sqrt
+from navlib.filters.measurements import epoch_index
+from navlib.kalman import psd_sqrt
 from navlib.models.base import Nominal
 from navlib.models.launcher import rt_dynamics_matrix
 from navlib.outliers import as_outliers, inject
@@ -153,7 +153,7 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     truth0 = strapdown.StrapdownState.from_trajectory(trajectory, 0)
     nav = np.concatenate([es.groups[g] for g in ("position", "velocity", "attitude")])
     P_nav = es.P0[np.ix_(nav, nav)]
-    dx0 = (g_init.standard_normal(9) @ _psd_sqrt(P_nav).T) if initial_error else np.zeros(9)
+    dx0 = (g_init.standard_normal(9) @ psd_sqrt(P_nav).T) if initial_error else np.zeros(9)
     dx = np.zeros((1, len(es.state_names)))
     dx[0, nav] = -dx0
     hat0 = es.correct(Nominal(t[:1], truth0.position[None], truth0.velocity[None],
@@ -164,7 +164,7 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     result = ekf(imu_df, gnss, initial=initial, model=es, attitude=attitude,
                  reference=reference, window_s=window_s, keep_covariance=keep_covariance,
                  snapshot_before=snapshot_before, resume=snapshot)
-    k = _epoch_index(t, result.t, "result")
+    k = epoch_index(t, result.t, "result")
     truth_par = {g: bias[k] for g, bias in (("bg", imu.gyro.bias), ("ba", imu.accel.bias))
                  if g in es.parameters}
     if "bp" in es.parameters:

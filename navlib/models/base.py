@@ -79,10 +79,11 @@ class DiscreteModel:
 
     def index(self, names: Sequence[str]) -> np.ndarray:
         """Positions of ``names`` in ``state_names``."""
-        return _indices(self.state_names, names)
+        return state_indices(self.state_names, names)
 
 
-def _indices(state_names: Sequence[str], names: Sequence[str]) -> np.ndarray:
+def state_indices(state_names: Sequence[str], names: Sequence[str]) -> np.ndarray:
+    """Positions of ``names`` in ``state_names``; NavlibInputError naming the unknown ones."""
     lookup = {name: i for i, name in enumerate(state_names)}
     missing = [name for name in names if name not in lookup]
     if missing:
@@ -140,7 +141,7 @@ class LinearModel:
 
     def index(self, names: Sequence[str]) -> np.ndarray:
         """Positions of ``names`` in ``state_names``."""
-        return _indices(self.state_names, names)
+        return state_indices(self.state_names, names)
 
     def subset(self, names: Sequence[str]) -> LinearModel:
         """Keep only the states ``names`` (in that order), deleting rows and columns."""

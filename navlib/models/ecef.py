@@ -29,7 +29,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
 from itertools import pairwise
 
 import numpy as np
@@ -395,7 +394,7 @@ STREAM_SAMPLES = 20_000
 """Trajectory samples per block of the streamed model build of :func:`ecef21_at_epochs`."""
 
 
-@lru_cache(maxsize=32)
+@cache.memoized(maxsize=32)
 def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
     """:func:`_chain` kept per trajectory object in memory (and on disk by its content)."""
     discrete = _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s)

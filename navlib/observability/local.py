@@ -14,14 +14,14 @@ import contextlib
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 import pandas as pd
 
 from navlib._validation import finite_scalar
+from navlib.cache import memoized
 from navlib.errors import NavlibInputError
-from navlib.observability.matrix import _condition
+from navlib.observability.matrix import condition_number
 from navlib.observability.sliding import sliding_singular_values
 from navlib.resolution import relative_resolution
 
@@ -207,7 +207,7 @@ def _singular_values_chunk(transitions, H, steps, window, variant, stride):
     return np.linalg.svd(O, compute_uv=False)
 
 
-@cache
+@memoized(maxsize=1)
 def _blas_controller():
     """threadpoolctl's view of the loaded BLAS libraries (scanned once: ~10 ms a scan), or
     ``None`` when ``threadpoolctl`` is not installed."""
@@ -318,7 +318,7 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
     if s.shape[1] < n:  # fewer rows than states: pad with exact zeros
         s = np.concatenate([s, np.zeros((s.shape[0], n - s.shape[1]))], axis=1)
     rank = np.sum(s > tol * s[:, :1], axis=1)
-    return LocalObservability(t=t[steps], step=steps, rank=rank, cond=_condition(s, n),
+    return LocalObservability(t=t[steps], step=steps, rank=rank, cond=condition_number(s, n),
                               singular_values=s, state_names=state_names, window=window,
                               variant=variant, rtol=tol)
 

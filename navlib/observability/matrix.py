@@ -91,7 +91,7 @@ def observability_matrix(F, H, n_rows: int | None = None) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # analysis of one matrix
 # --------------------------------------------------------------------------------------------
-def _condition(s: np.ndarray, n: int) -> np.ndarray:
+def condition_number(s: np.ndarray, n: int) -> np.ndarray:
     """2-norm condition number sigma_max / sigma_min over the last axis (inf when singular).
 
     ``s`` holds the singular values (descending). A matrix with fewer than ``n`` singular
@@ -301,7 +301,7 @@ def analyze(O, rtol: float | None = None, state_names: Sequence[str] | None = No
         threshold = float(np.clip(10.0 * bound, 1e-6, 0.1))
     groups, share = _coupling_groups(null_space, scale, threshold)
     return ObservabilityResult(
-        rank=rank, n=n, cond=float(_condition(s, n)), singular_values=s,
+        rank=rank, n=n, cond=float(condition_number(s, n)), singular_values=s,
         null_space=null_space, unobservable_groups=[[names[i] for i in g] for g in groups],
         unobservable_share=share, weakest_direction=Vt[n - 1].copy(), state_names=names,
         rtol=tol, coupling_threshold=threshold,

@@ -12,7 +12,7 @@ from matplotlib.ticker import MaxNLocator
 
 from navlib.models.launcher import SOLUTION_LABELS
 from navlib.plots.figure import subplots
-from navlib.plots.trajectory import LAUNCHER_MARKERS, _mark_events
+from navlib.plots.trajectory import LAUNCHER_MARKERS, mark_events
 from navlib.studies.launcher import SINGULAR_LOG10
 
 UNACCEPTABLE_LOG10 = 10.0
@@ -75,7 +75,7 @@ def mission_figure(res, events: dict | None = None, title: str = ""):
     for ax in (ax_r, ax_c):
         ax.grid(True, alpha=0.3)
         if events:
-            _mark_events(ax, events, LAUNCHER_MARKERS, label=ax is ax_r)
+            mark_events(ax, events, LAUNCHER_MARKERS, label=ax is ax_r)
     fig.suptitle(title or f"Local observability over the mission ({res.variant}, "
                  f"window {res.window} steps, rtol {res.rtol:.1e})")
     return fig

@@ -23,7 +23,7 @@ LAUNCHER_MARKERS = ("pitchover", "gravity_turn", "stage1_burnout", "stage2_ignit
 _TWO_PI = 2.0 * np.pi
 
 
-def _mark_events(ax, events: dict, which: Iterable[str] | None, label: bool) -> None:
+def mark_events(ax, events: dict, which: Iterable[str] | None, label: bool) -> None:
     """Dotted vertical lines at the chosen events, names written down from the top axis.
 
     Labels closer than 4 % of the time span to the previous one drop lower so they do not
@@ -67,8 +67,8 @@ def axial_imu_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
     ax_w.set_xlabel("time [s]")
     hz = ax_w.secondary_yaxis("right", functions=(lambda w: w / _TWO_PI, lambda h: h * _TWO_PI))
     hz.set_ylabel("[rev/s]")
-    _mark_events(ax_f, traj.events, markers, label=True)
-    _mark_events(ax_w, traj.events, markers, label=False)
+    mark_events(ax_f, traj.events, markers, label=True)
+    mark_events(ax_w, traj.events, markers, label=False)
     fig.suptitle(f"{_title(traj)}: axial IMU signals (Fig. 1 analogue)")
     return fig
 
@@ -83,8 +83,8 @@ def altitude_speed_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
     ax_v.plot(traj.t, speed, color="C3")
     ax_v.set_ylabel("speed (ECEF) [m/s]")
     ax_v.set_xlabel("time [s]")
-    _mark_events(ax_h, traj.events, markers, label=True)
-    _mark_events(ax_v, traj.events, markers, label=False)
+    mark_events(ax_h, traj.events, markers, label=True)
+    mark_events(ax_v, traj.events, markers, label=False)
     fig.suptitle(f"{_title(traj)}: height and speed")
     return fig
 
@@ -117,7 +117,7 @@ def launcher_figure(traj, markers: Iterable[str] | None = LAUNCHER_MARKERS):
     axes[2].set_ylabel("height [km]")
     axes[2].set_xlabel("time [s]")
     for k, ax in enumerate(axes):
-        _mark_events(ax, traj.events, markers, label=k == 0)
+        mark_events(ax, traj.events, markers, label=k == 0)
     fig.suptitle(f"{_title(traj)}: specific force, pitch and height")
     return fig
 
@@ -174,6 +174,6 @@ def closure_error_figure(closure, position_tol_m: float | None = 1.0,
     axes[2].set_xlabel("time [s]")
     if events:
         for k, ax in enumerate(axes):
-            _mark_events(ax, events, ROCKET_MARKERS, label=k == 0)
+            mark_events(ax, events, ROCKET_MARKERS, label=k == 0)
     fig.suptitle("strapdown re-integration of the exact IMU: error against the truth")
     return fig

@@ -29,7 +29,6 @@ whose client marks a timed-out, stalled or dead-kernel cell as *failed* with an 
 from __future__ import annotations
 
 import datetime as _dt
-import functools
 import subprocess
 import threading
 import time
@@ -40,6 +39,8 @@ from queue import Empty
 from typing import NamedTuple
 
 import psutil
+
+from navlib.cache import memoized
 
 POLL_SLICE_S = 0.25
 """Longest wait on a kernel socket before it is polled again, s."""
@@ -230,7 +231,7 @@ class _Classes(NamedTuple):
     kernel_manager: type
 
 
-@functools.cache
+@memoized(maxsize=1)
 def _classes() -> _Classes:
     """The watched channel, client and kernel-manager classes (imported lazily)."""
     # the Jupyter stack is heavy: loaded when the first kernel starts, not on import
@@ -324,7 +325,7 @@ def kernel_manager_class(watch: KernelWatch, env: Mapping[str, str] | None = Non
                 {"watch": watch, "extra_env": dict(env or {})})
 
 
-@functools.cache
+@memoized(maxsize=1)
 def _register_engine() -> None:
     """Register the ``navlib-bounded`` papermill engine (once per process)."""
     # papermill and nbclient are heavy: loaded when the first notebook runs, not on import

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from navlib.filters import linear_recursion, prepare_linear
-from navlib.kalman import _psd_sqrt
+from navlib.kalman import psd_sqrt
 from navlib.models import launcher
 from navlib.trajectory import launcher_ascent
 
@@ -64,7 +64,7 @@ def test_filter_kernel_equals_numpy(prepared):
     linear_recursion.truth_block(prepared.steps, block, work, draws, None)
     ref.truth_block(prepared.steps, block, want, draws, None)
     z_add = np.zeros((401, prepared.steps.H.shape[-2]))
-    R_sqrt = _psd_sqrt(prepared.steps.R[:1])
+    R_sqrt = psd_sqrt(prepared.steps.R[:1])
     meas = linear_recursion.measure_block(prepared, block, work, draws, z_add, R_sqrt)
     linear_recursion.measure_block(prepared, block, want, draws, z_add, R_sqrt)
     assert meas.size == 47

@@ -10,7 +10,7 @@ import pytest
 from paths import assert_same_numbers
 
 from navlib.filters import linear, linear_preparation, prepare_linear, simulate_linear
-from navlib.kalman import _psd_sqrt
+from navlib.kalman import psd_sqrt
 from navlib.models import launcher
 from navlib.outliers import Outlier
 from navlib.trajectory import launcher_ascent
@@ -29,7 +29,7 @@ def plain_loop(prepared, x, z_add, x_input, rng, record):
     epochs, NaN without update) and NIS (updates)."""
     steps, mask, gains = prepared.steps, prepared.measured, prepared.gains
     N, runs, m = steps.t.size, x.shape[0], steps.H.shape[-2]
-    R_sqrt = _psd_sqrt(steps.R)
+    R_sqrt = psd_sqrt(steps.R)
     x_hat = np.zeros_like(x)
     truth, est, innov_rec, nis = [], [], [], []
     for c0 in range(0, N, BLOCK):
@@ -81,7 +81,7 @@ def test_noisy_runs_equal_the_plain_loop(flight, update_every, record_every):
     sim = simulate_linear(prepared, runs=5, rng=mine, outliers=outs, record_every=record_every,
                           nees=False)
     rng = np.random.default_rng(3)
-    x = rng.standard_normal((5, prepared.steps.n)) @ _psd_sqrt(prepared.steps.P0).T
+    x = rng.standard_normal((5, prepared.steps.n)) @ psd_sqrt(prepared.steps.P0).T
     z_add, x_input, _ = linear._outlier_inputs(prepared.steps, outs)
     expected = plain_loop(prepared, x, z_add, x_input, rng, sim.index)
     assert_same_as_loop(sim, expected)
