@@ -197,19 +197,22 @@ def _translation(h, r0, v0, a, a_mid, steps=None):
     m = h.shape[0] + 1
     both = _rotate_z(np.concatenate([a, a_mid]), steps.turn)
     at, at_mid = both[:m], both[m:]
-    du = steps.h6 * (at[:-1] + 4.0 * at_mid + at[1:])
-    u = np.empty_like(a)
-    u[0] = 0.0
-    np.cumsum(du, axis=0, out=u[1:])
-    u_mid = u[:-1] + steps.h24 * (5.0 * at[:-1] + 8.0 * at_mid - at[1:])
+    u, u_mid = _simpson_integral(at, at_mid, steps)
     both = _rotate_z(np.concatenate([u, u_mid]) + v0, steps.back)
     v, v_mid = both[:m], both[m:]
-    dr = steps.h6 * (v[:-1] + 4.0 * v_mid + v[1:])
-    r = np.empty_like(a)
-    r[0] = 0.0
-    np.cumsum(dr, axis=0, out=r[1:])
-    r_mid = r[:-1] + steps.h24 * (5.0 * v[:-1] + 8.0 * v_mid - v[1:])
+    r, r_mid = _simpson_integral(v, v_mid, steps)
     return r + r0, v, r_mid + r0
+
+
+def _simpson_integral(x, x_mid, steps):
+    """The integral of ``x`` from the first sample to each sample (M+1, 3) and to each
+    mid-step (M, 3), by Simpson's rule on ``x`` at the samples and mid-steps (exact for
+    quadratic ``x``)."""
+    dx = steps.h6 * (x[:-1] + 4.0 * x_mid + x[1:])
+    integral = np.empty_like(x)
+    integral[0] = 0.0
+    np.cumsum(dx, axis=0, out=integral[1:])
+    return integral, integral[:-1] + steps.h24 * (5.0 * x[:-1] + 8.0 * x_mid - x[1:])
 
 
 
