@@ -68,7 +68,7 @@ def _as_steps(matrix, n_steps: int, name: str) -> np.ndarray:
     )
 
 
-def discretize_steps(A, G, Qc, dt, method: str = "expm", *, W=None):
+def discretize_steps(A, G, Qc, dt_s, method: str = "expm", *, W=None):
     """Per-step transition and process-noise matrices.
 
     Parameters
@@ -79,7 +79,7 @@ def discretize_steps(A, G, Qc, dt, method: str = "expm", *, W=None):
         Noise input matrix.
     Qc : ndarray (q, q)
         Power spectral density of the white noise ``w``.
-    dt : float or ndarray (K,)
+    dt_s : float or ndarray (K,)
         Step lengths, s.
     method : {"expm", "series", "euler"}
         See the module docstring.
@@ -95,12 +95,12 @@ def discretize_steps(A, G, Qc, dt, method: str = "expm", *, W=None):
     if method not in METHODS:
         raise NavlibInputError(f"method: expected one of {METHODS}, got {method!r}")
     A = np.asarray(A, dtype=float)
-    dt = np.atleast_1d(np.asarray(dt, dtype=float))
-    n_steps = A.shape[0] if A.ndim == 3 else dt.size
-    if dt.size == 1:
-        dt = np.full(n_steps, dt[0])
-    if dt.size != n_steps or np.any(~np.isfinite(dt)) or np.any(dt <= 0):
-        raise NavlibInputError(f"dt: expected {n_steps} positive finite step(s)")
+    dt_s = np.atleast_1d(np.asarray(dt_s, dtype=float))
+    n_steps = A.shape[0] if A.ndim == 3 else dt_s.size
+    if dt_s.size == 1:
+        dt_s = np.full(n_steps, dt_s[0])
+    if dt_s.size != n_steps or np.any(~np.isfinite(dt_s)) or np.any(dt_s <= 0):
+        raise NavlibInputError(f"dt_s: expected {n_steps} positive finite step(s)")
     A = _as_steps(A, n_steps, "A")
     if W is None:
         G = _as_steps(G, n_steps, "G")
@@ -108,7 +108,7 @@ def discretize_steps(A, G, Qc, dt, method: str = "expm", *, W=None):
     else:
         W = _as_steps(W, n_steps, "W")
     n = A.shape[-1]
-    step = dt[:, None, None]
+    step = dt_s[:, None, None]
     if method == "euler":
         return np.eye(n) + A * step, W * step
     if method == "series":

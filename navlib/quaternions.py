@@ -47,9 +47,10 @@ def quat_rotate(q, v):
     return v + 2.0 * (w * uv + cross(u, uv))
 
 
-def earth_quat(tau):
-    """Quaternion of ``exp(-S(Omega) tau)``: rotation by ``-Omega tau`` about ECEF z."""
-    half = -0.5 * earth.OMEGA_E * np.asarray(tau, dtype=float)
+def earth_quat(tau_s):
+    """Quaternion of ``exp(-S(Omega) tau)``, ``tau = tau_s`` (s): rotation by ``-Omega tau``
+    about ECEF z."""
+    half = -0.5 * earth.OMEGA_E * np.asarray(tau_s, dtype=float)
     zero = np.zeros_like(half)
     return np.stack([zero, zero, np.sin(half), np.cos(half)], axis=-1)
 

@@ -247,7 +247,7 @@ class StrapdownState:
         )
 
 
-def step(state: StrapdownState, f_b, w_ib_b, dt: float, *, f_mid=None, w_mid=None
+def step(state: StrapdownState, f_b, w_ib_b, dt_s: float, *, f_mid=None, w_mid=None
          ) -> StrapdownState:
     """Propagate one IMU interval (the per-sample form of :func:`integrate`).
 
@@ -258,21 +258,21 @@ def step(state: StrapdownState, f_b, w_ib_b, dt: float, *, f_mid=None, w_mid=Non
     f_b, w_ib_b : array_like (2, 3)
         Point samples of specific force (m/s^2) and inertial body rate (rad/s) at the start
         and at the end of the interval.
-    dt : float
+    dt_s : float
         Interval length, s (> 0).
     f_mid, w_mid : array_like (3,), optional
         Samples at mid-interval. By default the mean of the two samples is used (linear
-        reconstruction, second order in ``dt``); pass a cubic interpolation through the
+        reconstruction, second order in ``dt_s``); pass a cubic interpolation through the
         neighbouring samples, as :func:`integrate` does, for fourth order.
 
     Returns
     -------
     StrapdownState
-        The state at ``state.t + dt``.
+        The state at ``state.t + dt_s``.
 
     Notes
     -----
-    Input checking is limited to shapes and ``dt``; see the module docstring for the
+    Input checking is limited to shapes and ``dt_s``; see the module docstring for the
     mechanisation (spec excitability.md A2). Gravity is evaluated at the points
     ``P + tau V + tau^2/2 f_e`` predicted from the start state. Each call costs a few hundred
     microseconds of NumPy overhead; to propagate a block of samples (e.g. between GNSS
@@ -284,25 +284,25 @@ def step(state: StrapdownState, f_b, w_ib_b, dt: float, *, f_mid=None, w_mid=Non
         raise NavlibInputError(f"f_b: expected shape (2, 3), got {f_b.shape}")
     if w_ib_b.shape != (2, 3):
         raise NavlibInputError(f"w_ib_b: expected shape (2, 3), got {w_ib_b.shape}")
-    if not dt > 0.0:
-        raise NavlibInputError(f"dt: must be > 0, got {dt}")
+    if not dt_s > 0.0:
+        raise NavlibInputError(f"dt_s: must be > 0, got {dt_s}")
     f_mid = 0.5 * (f_b[0] + f_b[1]) if f_mid is None else np.asarray(f_mid, dtype=float)
     w_mid = 0.5 * (w_ib_b[0] + w_ib_b[1]) if w_mid is None else np.asarray(w_mid, dtype=float)
 
-    phi, phi_half = _attitude_increments(w_ib_b[0], w_mid, w_ib_b[1], dt)
+    phi, phi_half = _attitude_increments(w_ib_b[0], w_mid, w_ib_b[1], dt_s)
     q0 = state.q_b_e
-    q_mid = quat_mul(earth_quat(0.5 * dt), quat_mul(q0, quat_from_rotvec(phi_half)))
-    q1 = quat_mul(earth_quat(dt), quat_mul(q0, quat_from_rotvec(phi)))
+    q_mid = quat_mul(earth_quat(0.5 * dt_s), quat_mul(q0, quat_from_rotvec(phi_half)))
+    q1 = quat_mul(earth_quat(dt_s), quat_mul(q0, quat_from_rotvec(phi)))
     q1 = q1 / np.linalg.norm(q1)
     f_e = np.stack([quat_rotate(q0, f_b[0]), quat_rotate(q1, f_b[1])])
     f_e_mid = quat_rotate(q_mid, f_mid)
     # Gravity at the points predicted from the start state (no Picard iteration here).
-    tau = np.array([0.0, 0.5 * dt, dt])[:, None]
+    tau = np.array([0.0, 0.5 * dt_s, dt_s])[:, None]
     g = earth.normal_gravity_ecef(state.position + tau * state.velocity + 0.5 * tau**2 * f_e[0])
-    r, v, _ = _translation(np.array([dt]), state.position, state.velocity,
+    r, v, _ = _translation(np.array([dt_s]), state.position, state.velocity,
                            f_e + g[[0, 2]], (f_e_mid + g[1])[None])
     r1, v1 = r[1], v[1]
-    return StrapdownState(t=state.t + dt, position=r1, velocity=v1, q_b_e=q1)
+    return StrapdownState(t=state.t + dt_s, position=r1, velocity=v1, q_b_e=q1)
 
 
 @dataclass(frozen=True, eq=False)

@@ -90,14 +90,14 @@ class NormalizedEigenResult:
             "component": vectors.ravel(),
         })
 
-    def table(self, time: float | None = None, modes: Sequence[int] | None = None,
+    def table(self, time_s: float | None = None, modes: Sequence[int] | None = None,
               tracked: bool = False) -> pd.DataFrame:
         """Eigenvalues and eigenvector components at one epoch (Silva et al. Tables 1–2).
 
         Rows are states plus a first row ``eigenvalue``; columns ``lambda_1 ...``.
-        ``time`` defaults to the last epoch.
+        ``time_s`` (s) defaults to the last epoch.
         """
-        k = self._epoch(time)
+        k = self._epoch(time_s)
         modes = np.arange(1, self.n + 1) if modes is None else np.asarray(modes, dtype=int)
         values = (self.tracked_values if tracked else self.eigenvalues)[k, modes - 1]
         vectors = (self.tracked_vectors if tracked else self.eigenvectors)[k][:, modes - 1]
@@ -107,20 +107,20 @@ class NormalizedEigenResult:
         frame.attrs["t"] = float(self.t[k])
         return frame
 
-    def subspace_share(self, modes: Sequence[int], time: float | None = None) -> np.ndarray:
+    def subspace_share(self, modes: Sequence[int], time_s: float | None = None) -> np.ndarray:
         """Norm of each state's row in the subspace spanned by ``modes`` (1-based, sorted).
 
         ``share[j] = ||V_S[j, :]||`` is invariant to rotations inside the subspace, so it is
         the meaningful quantity for a near-degenerate group (ssac.md §3.6 step 6: compare
         summed or projected subspaces). 1 means state j lies wholly inside the subspace.
-        Returns (N, n) over time, or (n,) when ``time`` is given.
+        Returns (N, n) over time, or (n,) when ``time_s`` (s) is given.
         """
         modes = np.asarray(modes, dtype=int)
         if modes.size == 0 or modes.min() < 1 or modes.max() > self.n:
             raise NavlibInputError(f"modes: expected 1-based mode numbers in 1..{self.n}")
         V = self.eigenvectors[:, :, modes - 1]
         share = np.sqrt(np.sum(V**2, axis=2))
-        return share if time is None else share[self._epoch(time)]
+        return share if time_s is None else share[self._epoch(time_s)]
 
 
 def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "diag",

@@ -106,7 +106,7 @@ def linear_steps(model, *, method: str = "euler", P0=None, noise_input=None,
     if isinstance(model, LinearModel):
         if model.t is None:
             raise NavlibInputError(
-                "model: a constant LinearModel has no time axis; call model.discretize(dt=..., "
+                "model: a constant LinearModel has no time axis; call model.discretize(dt_s=..., "
                 "n_epochs=...) and pass the DiscreteModel"
             )
         t = np.asarray(model.t, dtype=float)

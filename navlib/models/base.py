@@ -152,13 +152,13 @@ class LinearModel:
             G=self.G[..., keep, :], H=self.H[..., :, keep], P0=P0,
         )
 
-    def discretize(self, dt: float | None = None, n_epochs: int | None = None,
+    def discretize(self, dt_s: float | None = None, n_epochs: int | None = None,
                    method: str = "expm", epochs=None, hold: str = "left") -> DiscreteModel:
         """Discrete ``F_k, Q_k`` (and ``H_k, R_k``) at steps or measurement epochs.
 
         Parameters
         ----------
-        dt : float, optional
+        dt_s : float, optional
             Step for a constant model (required then); ignored for trajectory models,
             whose steps come from ``t``.
         n_epochs : int, optional
@@ -178,13 +178,13 @@ class LinearModel:
             flight at 100 Hz the 1 s transition error drops from 8e-2 to 8e-4).
         """
         if self.t is None:
-            if dt is None:
-                raise NavlibInputError("dt: a constant model needs a step length")
+            if dt_s is None:
+                raise NavlibInputError("dt_s: a constant model needs a step length")
             n_epochs = self.n + 1 if n_epochs is None else int(n_epochs)
             if n_epochs < 2:
                 raise NavlibInputError(f"n_epochs: need at least 2, got {n_epochs}")
-            F1, Q1 = discretize_steps(self.A[None], self.G, self.Qc, dt, method)
-            t = np.arange(n_epochs) * float(dt)
+            F1, Q1 = discretize_steps(self.A[None], self.G, self.Qc, dt_s, method)
+            t = np.arange(n_epochs) * float(dt_s)
             F = np.broadcast_to(F1, (n_epochs - 1, self.n, self.n))
             Q = np.broadcast_to(Q1, (n_epochs - 1, self.n, self.n))
             return DiscreteModel(t, F, Q, _stack(self.H, n_epochs), _stack(self.R, n_epochs),

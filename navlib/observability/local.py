@@ -127,7 +127,7 @@ def _model_arrays(model, method: str):
         if not model.time_varying:
             raise NavlibInputError(
                 "model: a constant LinearModel has no steps; discretize it first "
-                "(model.discretize(dt=...)) or use observability_matrix for a PWCS pair"
+                "(model.discretize(dt_s=...)) or use observability_matrix for a PWCS pair"
             )
         if method not in METHODS:
             raise NavlibInputError(f"method: expected one of {METHODS}, got {method!r}")

@@ -91,11 +91,11 @@ def eigenvalues_figure(eig, modes: Sequence[int] | None = None, time_unit: str =
 
 def eigenvectors_figure(eig, modes: Sequence[int] = (1, 2, 3, 4, 5, 6), min_component: float
                         = 0.1, time_unit: str = "min", tracked: bool = False, ncols: int = 3,
-                        t_from: float = 0.0, title: str | None = None):
+                        t_from_s: float = 0.0, title: str | None = None):
     """Eigenvector components over time, one panel per mode (Figs. 8–13 analogues).
 
     Only states whose component exceeds ``min_component`` in magnitude at some epoch after
-    ``t_from`` (s) are drawn. With ``tracked=False`` (sorted order) crossings of nearly equal
+    ``t_from_s`` (s) are drawn. With ``tracked=False`` (sorted order) crossings of nearly equal
     eigenvalues show as the paper's X-shape; ``tracked=True`` follows the branches.
     """
     vectors = eig.tracked_vectors if tracked else eig.eigenvectors
@@ -104,7 +104,7 @@ def eigenvectors_figure(eig, modes: Sequence[int] = (1, 2, 3, 4, 5, 6), min_comp
     fig, axes = subplots(nrows, ncols, figsize=(4.2 * ncols, 2.8 * nrows), squeeze=False,
                          sharex=True, constrained_layout=True)
     t = _time(eig.t, time_unit)
-    start = int(np.searchsorted(eig.t, t_from))
+    start = int(np.searchsorted(eig.t, t_from_s))
     colors = plt.get_cmap("tab20").colors  # one colour per state, stable across panels
     for ax, m in zip(axes.flat, modes, strict=False):
         comp = vectors[start:, :, m - 1]

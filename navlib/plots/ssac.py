@@ -60,7 +60,7 @@ def ssac_eigenvectors_figure(study: SSACStudy, tracked: bool = False):
     Sorted order (default) shows the X-shape exchanges; ``tracked=True`` follows each
     branch backwards from its 60 min direction.
     """
-    return eigenvectors_figure(study.eigen, modes=range(1, 7), tracked=tracked, t_from=60.0,
+    return eigenvectors_figure(study.eigen, modes=range(1, 7), tracked=tracked, t_from_s=60.0,
                                title="eigenvectors of the six largest normalised eigenvalues"
                                + (" (tracked)" if tracked else " (sorted)"))
 

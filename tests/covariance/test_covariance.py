@@ -204,7 +204,7 @@ def test_tracking_follows_branches_through_a_crossing():
     # while the projector onto the pair (subspace share) stays put
     np.testing.assert_allclose(res.subspace_share([1, 2])[:, 2], 0.0, atol=1e-12)
     np.testing.assert_allclose(res.subspace_share([1, 2])[:, :2], 1.0, atol=1e-12)
-    table = res.table(time=2.0)
+    table = res.table(time_s=2.0)
     assert list(table.index) == ["eigenvalue", "x0", "x1", "x2"]
 
 

@@ -264,7 +264,7 @@ def pv_model() -> DiscreteModel:
     A = np.array([[0.0, 1.0], [0.0, 0.0]])
     model = LinearModel(("p", "v"), A, np.array([[0.0], [1.0]]), np.array([[0.01]]),
                         np.array([[1.0, 0.0]]), np.array([[4.0]]), P0=np.diag([100.0, 1.0]))
-    return model.discretize(dt=1.0, n_epochs=21)
+    return model.discretize(dt_s=1.0, n_epochs=21)
 
 
 def test_excitability_segment_equals_the_array_call(pv_model):

@@ -136,7 +136,7 @@ def test_position_flat_and_ins_only_growth(full_study):
     for s in ("dL", "dlambda", "dh"):
         assert 1.0 <= conv.loc[s, "ratio"] < 1.01
     # without updates the attitude sigma grows (the filter's reduction is information)
-    dm = full_study.model.discretize(dt=1.0, n_epochs=601)
+    dm = full_study.model.discretize(dt_s=1.0, n_epochs=601)
     free = ins_only_covariance(dm)
     assert free.sigma[-1, 0] > free.sigma[0, 0]
     assert np.all(full_study.covariance.sigma[-1, [0, 1, 2, 9, 10, 11, 12, 13, 14]]

@@ -38,7 +38,7 @@ def measure_comparison(analysis: RocketAnalysis) -> pd.DataFrame:
     trace = np.sum(se.sigma[-1] ** 2 / np.diag(analysis.model.P0))
     hb_values = hb.eigenvalues[-1] * trace / hb.order
     modes = np.flatnonzero(hb_values < RATIO_ESTIMATED**-2) + 1
-    share = hb.subspace_share(modes, time=float(se.t[-1])) if modes.size else \
+    share = hb.subspace_share(modes, time_s=float(se.t[-1])) if modes.size else \
         np.zeros(se.n)
     t = analysis.model.t
     later = np.flatnonzero(t > t[0] + TRANSIENT_S)

@@ -194,7 +194,7 @@ def p0_runs(initial, duration_s: float = 3600.0, dt_s: float = 1.0,
     models = [ssac(n_states, lat_deg, alt_m, P0=P0, attitude_scale=scale, C_b_n=C_b_n,
                    imu=imu, **options) for P0, scale in _pairs(initial)]
     n_epochs = round(duration_s / dt_s) + 1
-    discrete = models[0].discretize(dt=dt_s, n_epochs=n_epochs)
+    discrete = models[0].discretize(dt_s=dt_s, n_epochs=n_epochs)
     covs = kalman_covariances(discrete, P0=np.stack([m.P0 for m in models]),
                               update_first=True)
     return [SSACStudy(model, cov, normalized_eigen(cov, model.P0, track=track))
@@ -412,7 +412,7 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     if x0.shape != (model.n,):
         raise NavlibInputError(f"x0: expected {model.n} values, got shape {x0.shape}")
     t = study.t
-    F = model.discretize(dt=float(t[1] - t[0]), n_epochs=t.size).F
+    F = model.discretize(dt_s=float(t[1] - t[0]), n_epochs=t.size).F
     return noise_free_error(F, np.asarray(model.H), np.asarray(model.R),
                             study.covariance.P_prior, x0)
 
