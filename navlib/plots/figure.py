@@ -50,7 +50,7 @@ def show(fig: Figure) -> None:
     closed, so the inline backend does not draw it a second time at the end of the cell and
     a long notebook does not keep every figure alive.
     """
-    from IPython.display import display
+    from IPython.display import display  # IPython loads only when a figure is shown
 
     display(fig)
     plt.close(fig)

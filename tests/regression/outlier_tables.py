@@ -19,6 +19,7 @@ import re
 import sys
 from pathlib import Path
 
+import IPython.display
 import numpy as np
 import pandas as pd
 from golden import text_differences
@@ -58,15 +59,22 @@ def notebook_values(quick: bool) -> pd.DataFrame:
     nb = json.loads(NOTEBOOK.read_text())
     shown: list = []
     scope = {"__name__": "__main__"}
-    for cell in nb["cells"]:
-        if cell["cell_type"] != "code":
-            continue
-        source = "".join(cell["source"]).replace(
-            "from IPython.display import Markdown, display", "from IPython.display import Markdown")
-        if "parameters" in cell.get("metadata", {}).get("tags", []):
-            source += f"\nquick = {quick}\n"
-        scope["display"] = lambda *objs, **_kw: shown.extend(objs)
-        exec(compile(source, "notebook-05", "exec"), scope)
+    capture = lambda *objs, **_kw: shown.extend(objs)  # noqa: E731 - one-line sink
+    # navlib.plots.figure.show displays through IPython.display.display: capture it there too
+    original, IPython.display.display = IPython.display.display, capture
+    try:
+        for cell in nb["cells"]:
+            if cell["cell_type"] != "code":
+                continue
+            source = "".join(cell["source"]).replace(
+                "from IPython.display import Markdown, display",
+                "from IPython.display import Markdown")
+            if "parameters" in cell.get("metadata", {}).get("tags", []):
+                source += f"\nquick = {quick}\n"
+            scope["display"] = capture
+            exec(compile(source, "notebook-05", "exec"), scope)
+    finally:
+        IPython.display.display = original
     rows = []
     for i, obj in enumerate(shown):
         rows += _rows(f"shown {i}", obj)

@@ -25,6 +25,7 @@ from navlib.studies.assess import (
     fit_residuals,
 )
 from navlib.trajectory import stationary
+from navlib.vehicles import VEHICLE_PHASES
 from navlib.widgets.assess import AssessPanel, boundaries_text, parse_boundaries
 
 ROOT = REPO
@@ -321,8 +322,9 @@ def test_px4_simulated_flight_assessment(px4_log_path):
         result = assess_flight(imu, gnss)
     assert result.options["gnss_rate_hz"] == pytest.approx(19.2, abs=0.5)
     assert result.options["gnss_sigma_m"] < 1.0          # the log's own eph/epv
-    assert set(result.segment_table["phase"]) <= {"rest", "powered", "cruise", "turn",
-                                                  "coast", "free_fall"}
+    # read_ulog attaches the log's MAV_TYPE (2, quadrotor): the phases are a multicopter's
+    assert imu.attrs["mav_type"] == 2 and result.vehicle == "multicopter"
+    assert set(result.segment_table["phase"]) <= set(VEHICLE_PHASES["multicopter"])
     assert "rest" in set(result.segment_table["phase"])  # a quasi-static drone flight
     # the log says what it is and carries the autopilot's attitude: both are used, said so
     assert result.options["preset"] == "pixhawk_mems"
