@@ -37,6 +37,7 @@ from navlib.studies.ssac.claims import (
     MEDIUM,
     actual_claim,
     claims_table,
+    dropped_coupling,
     ssac_claims,
     static_tables,
 )
@@ -86,6 +87,7 @@ __all__ = [
     "ROBUSTNESS_GRID", "SEARCH", "SEARCH_GRID", "SITE_ALT_M", "SITE_LAT_DEG", "STATE_GROUPS",
     "X0_BASELINE", "X0_DRAWS", "X0_SEED", "SSACStudy", "actual_claim", "actual_error",
     "analytic_null_vectors", "claims_table", "closed_form_limits", "covariance_run",
+    "dropped_coupling",
     "equivalence_scale", "grid_claims", "grouping_table", "modified_run", "null_space_table",
     "observability_summary", "observability_table", "orientation_table", "p0_runs",
     "p0_sensitivity", "pair_structure", "reading_markdown", "search_points", "ssac_claims",

@@ -118,8 +118,9 @@ def _claims_run(prepared, P0, attitude_scale, arw_reading, noise_scale, converge
     results = dict(prepared["claims"])
     labels = ROBUSTNESS_GRID["x0"]
     again = [*rank_claims(obs, rank_rtol), individual_claim(study, rank_rtol),
-             groups_claim(groups), fast5_claim(conv, convergence),
-             ten_minute_claim(conv, convergence), bgd_claim(study, conv, convergence)]
+             groups_claim(groups, SITE_LAT_DEG, SITE_ALT_M, rank_rtol),
+             fast5_claim(conv, convergence), ten_minute_claim(conv, convergence),
+             bgd_claim(study, conv, convergence)]
     if x0 != labels[0]:
         again.append(actual_claim(study, prepared["x0"][labels.index(x0) - 1]))
     results.update((r.claim_id, r) for r in again)
