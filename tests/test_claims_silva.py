@@ -166,3 +166,14 @@ def test_search_point_judges_as_ssac_claims():
     assert {cid: row[cid] for cid in search.CLAIM_IDS} == \
         {cid: ref[cid].verdict == "reproduced" for cid in search.CLAIM_IDS}
     assert len(S.search_points()) == 2 * 3 * 2 * 3 * 4 * 4 * (1 + search.SEARCH_X0)
+
+
+def test_eq44_explanation_predicts_where_the_verdict_flips():
+    """The explanation's threshold (initial psiD sigma >= 2.06 classic limits) is where the
+    verdict flips: attitude sigmas x2.0 fail, x2.1 reproduce."""
+    below, above = (S.ssac_claims(S.covariance_run(DURATION_S, attitude_scale=scale,
+                                                   track=False), reduced=None, reduced10=None)
+                    for scale in (2.0, 2.1))
+    below, above = ({c.claim_id: c for c in r}["SSAC-eq44"] for r in (below, above))
+    assert "at least 2.06 times" in below.explanation
+    assert below.verdict == "not reproduced" and above.verdict == "reproduced"
