@@ -15,6 +15,8 @@ evaluates each claim in code (judged by :mod:`navlib.studies.claims`):
 * :mod:`.claims`, :mod:`.eigen_claims` — one function per claim, :func:`ssac_claims` all;
 * :mod:`.assumptions` — the declared assumption set; :mod:`.robustness` — the claims over
   it and the registration with the claims engine;
+* :mod:`.search` — the declared space searched jointly (the ``"ssac_claims"`` sweep
+  evaluation, :data:`SEARCH`);
 * :mod:`.reading` — the notebook's generated reading.
 
 All numbers come from the reconstructed model (ssac.md §2.3) with the assumed P0, Q and R of
@@ -35,6 +37,7 @@ from navlib.studies.ssac.claims import (
     MEDIUM,
     actual_claim,
     claims_table,
+    dropped_coupling,
     ssac_claims,
     static_tables,
 )
@@ -75,16 +78,18 @@ from navlib.studies.ssac.observability import (
 )
 from navlib.studies.ssac.reading import reading_markdown
 from navlib.studies.ssac.robustness import grid_claims
+from navlib.studies.ssac.search import SEARCH, SEARCH_GRID, search_points
 
 __all__ = [
-    "ADEQUATE", "ARW_READINGS", "BASELINE_POINT", "CONVERGENCE", "CONVERGENCE_DEFAULT",
-    "FAST", "GROUP_THRESHOLD", "MEDIUM", "ORIENTATION_DEG", "P0_MODIFIED_ATTITUDE_SCALE",
-    "PAIRS", "PAPER_GROUPS", "PAPER_RANKS", "POSITION", "QUICK_DURATION_S", "RANK_RTOL",
-    "ROBUSTNESS_GRID", "SITE_ALT_M", "SITE_LAT_DEG", "STATE_GROUPS", "X0_BASELINE",
-    "X0_DRAWS", "X0_SEED", "SSACStudy", "actual_claim", "actual_error",
+    "ADEQUATE", "ARW_READINGS", "BASELINE_POINT", "CONVERGENCE", "CONVERGENCE_DEFAULT", "FAST",
+    "GROUP_THRESHOLD", "MEDIUM", "ORIENTATION_DEG", "P0_MODIFIED_ATTITUDE_SCALE", "PAIRS",
+    "PAPER_GROUPS", "PAPER_RANKS", "POSITION", "QUICK_DURATION_S", "RANK_RTOL",
+    "ROBUSTNESS_GRID", "SEARCH", "SEARCH_GRID", "SITE_ALT_M", "SITE_LAT_DEG", "STATE_GROUPS",
+    "X0_BASELINE", "X0_DRAWS", "X0_SEED", "SSACStudy", "actual_claim", "actual_error",
     "analytic_null_vectors", "claims_table", "closed_form_limits", "covariance_run",
+    "dropped_coupling",
     "equivalence_scale", "grid_claims", "grouping_table", "modified_run", "null_space_table",
     "observability_summary", "observability_table", "orientation_table", "p0_runs",
-    "p0_sensitivity", "pair_structure", "reading_markdown", "ssac_claims", "static_tables",
-    "subspace_drift", "x0_draws", "x_shape_events",
+    "p0_sensitivity", "pair_structure", "reading_markdown", "search_points", "ssac_claims",
+    "static_tables", "subspace_drift", "x0_draws", "x_shape_events",
 ]

@@ -5,22 +5,33 @@ from __future__ import annotations
 
 import numpy as np
 
+from navlib.models.ssac import SIGMA_NU
 from navlib.studies.ssac.experiment import CONVERGENCE, CONVERGENCE_DEFAULT, X0_DRAWS
 from navlib.studies.ssac.observability import RANK_RTOL
 
-RUN_DEPS = ("P0", "attitude_scale", "arw_reading")
+RUN_DEPS = ("P0", "attitude_scale", "arw_reading", "noise_scale")
 """Assumptions every claim read from the covariance run depends on."""
 TIME_DEPS = (*RUN_DEPS, "convergence")
 """Assumptions of the convergence-time claims."""
 ARW_READINGS = {"deg/sqrt(h)": None, "deg/sqrt(s)": np.radians(0.0002)}
 """Readings of the lost unit of the paper's gyro random walk 0.0002 (ssac.md §4.1): the
 preset's deg/sqrt(h) (None: the preset value) or deg/sqrt(s), in rad/sqrt(s)."""
+NOISE_SCALES = (0.5, 1.0, 2.0)
+"""Factors on the zero-velocity measurement noise (the lost R; ssac.md §4.4 assumes
+``sigma_nu`` = :data:`~navlib.models.ssac.SIGMA_NU`, A-SSAC-set)."""
+
+
+def sigma_nu(noise_scale: float) -> float | None:
+    """The ZVU noise sigma (m/s) of ``noise_scale`` (None: the model's default)."""
+    return None if noise_scale == 1.0 else SIGMA_NU * noise_scale
+
+
 X0_BASELINE = "biases at 1 sigma"
 """The baseline truth x0 of SSAC-actual (A-SSAC-actual)."""
 ROBUSTNESS_GRID = {
     "P0": ("matched", "generic"), "attitude_scale": (0.5, 1.0, 2.0),
     "convergence": tuple(CONVERGENCE), "rank_rtol": (1e-12, 1e-10, 1e-8, 1e-6),
-    "arw_reading": tuple(ARW_READINGS),
+    "arw_reading": tuple(ARW_READINGS), "noise_scale": NOISE_SCALES,
     "x0": (X0_BASELINE, *(f"N(0, P0) draw {i + 1}" for i in range(X0_DRAWS))),
 }
 """The declared assumption set (docs/assumptions.md, A-SSAC-set): the paper's P0 is lost,
@@ -28,11 +39,13 @@ so the matched P0 of ssac.md §4.4 and the generic 1° one, each with its attitu
 halved, kept and doubled (full factorial, 6 runs); one at a time from the baseline: the
 reading of "converged" (:data:`~navlib.studies.ssac.CONVERGENCE`), the relative rank
 tolerance of O (1e-12 to 1e-6: the ninth singular value is 7e-5 of the largest, the
-round-off floor ~1e-14), the unit of the gyro random walk (:data:`ARW_READINGS`) and the
-truth x0 of SSAC-actual (:func:`~navlib.studies.ssac.x0_draws`). Each claim is judged on the
-points varying its ``depends_on``."""
+round-off floor ~1e-14), the unit of the gyro random walk (:data:`ARW_READINGS`), the ZVU
+measurement noise (:data:`NOISE_SCALES`) and the truth x0 of SSAC-actual
+(:func:`~navlib.studies.ssac.x0_draws`). Each claim is judged on the points varying its
+``depends_on``."""
 BASELINE_POINT = {"P0": "matched", "attitude_scale": 1.0, "convergence": CONVERGENCE_DEFAULT,
-                  "rank_rtol": RANK_RTOL, "arw_reading": "deg/sqrt(h)", "x0": X0_BASELINE}
+                  "rank_rtol": RANK_RTOL, "arw_reading": "deg/sqrt(h)", "noise_scale": 1.0,
+                  "x0": X0_BASELINE}
 """The baseline point of :data:`ROBUSTNESS_GRID`."""
 QUICK_DURATION_S = 600.0
 """Run length of quick mode (the 30-60 min claims are then not evaluated)."""

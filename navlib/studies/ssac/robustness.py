@@ -18,6 +18,7 @@ from navlib.studies.ssac.assumptions import (
     BASELINE_POINT,
     QUICK_DURATION_S,
     ROBUSTNESS_GRID,
+    sigma_nu,
 )
 from navlib.studies.ssac.claims import actual_claim, ssac_claims, static_tables
 from navlib.studies.ssac.experiment import (
@@ -35,13 +36,26 @@ def _depending(results: list[ClaimResult], name: str) -> list[ClaimResult]:
     return [r for r in results if name in r.depends_on]
 
 
+def _rerun(duration_s: float, tables, imu=None, sigma_nu=None) -> list[ClaimResult]:
+    """The claims on the matched-P0 runs (15, 12, 10 states and the P0-sensitivity rerun)
+    with the gyro noise ``imu`` or the ZVU noise ``sigma_nu`` of a one-at-a-time point."""
+    runs = {"track": False, "imu": imu, "sigma_nu": sigma_nu}
+    study, modified = p0_runs([("matched", 1.0), ("matched", P0_MODIFIED_ATTITUDE_SCALE)],
+                              duration_s, **runs)
+    return ssac_claims(study, tables=tables,
+                       reduced=covariance_run(duration_s, n_states=12, **runs),
+                       reduced10=covariance_run(duration_s, n_states=10, **runs),
+                       p0_table=p0_sensitivity(study, modified=modified))
+
+
 @cache.memoized(maxsize=1)
 def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
     """``(point, claims)`` over :data:`~navlib.studies.ssac.ROBUSTNESS_GRID` (quick mode:
-    the P0 runs and the gyro-noise reading at the baseline only). The P0 points differ in P0
-    alone, so the 15-, 12- and 10-state runs (with the P0-sensitivity rerun, the same for
-    every point: :func:`~navlib.studies.ssac.modified_run`) are three stacked recursions
-    (:func:`~navlib.studies.ssac.p0_runs`); the convergence, rank-tolerance and x0 points
+    the P0 runs, the gyro-noise reading and the ZVU noise at the baseline only). The P0
+    points differ in P0 alone, so the 15-, 12- and 10-state runs (with the P0-sensitivity
+    rerun, the same for every point: :func:`~navlib.studies.ssac.modified_run`) are three
+    stacked recursions (:func:`~navlib.studies.ssac.p0_runs`); the convergence,
+    rank-tolerance and x0 points
     re-judge the baseline run. Kept in the process for the last mode asked."""
     duration = QUICK_DURATION_S if quick else 3600.0
     tables = static_tables(SITE_LAT_DEG, SITE_ALT_M, duration)
@@ -75,17 +89,13 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
         out.append(({"x0": label}, [actual_claim(study, x0)]))
     if not quick:
         for reading, arw in ARW_READINGS.items():
-            if arw is None:
-                continue
-            imu = {"gyro_arw": arw}
-            *one, mod = p0_runs([("matched", 1.0), ("matched", P0_MODIFIED_ATTITUDE_SCALE)],
-                                duration, track=False, imu=imu)
-            study_arw = one[0]
-            out.append(({"arw_reading": reading}, _depending(ssac_claims(
-                study_arw, tables=tables,
-                reduced=covariance_run(duration, n_states=12, track=False, imu=imu),
-                reduced10=covariance_run(duration, n_states=10, track=False, imu=imu),
-                p0_table=p0_sensitivity(study_arw, modified=mod)), "arw_reading")))
+            if arw is not None:
+                out.append(({"arw_reading": reading}, _depending(
+                    _rerun(duration, tables, imu={"gyro_arw": arw}), "arw_reading")))
+        for scale in ROBUSTNESS_GRID["noise_scale"]:
+            if scale != BASELINE_POINT["noise_scale"]:
+                out.append(({"noise_scale": scale}, _depending(
+                    _rerun(duration, tables, sigma_nu=sigma_nu(scale)), "noise_scale")))
     return out
 
 
@@ -103,5 +113,6 @@ def robustness_claims(quick: bool = False) -> list:
 engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", baseline_claims,
                              ROBUSTNESS_GRID, robustness_claims,
                              "P0 x attitude scale factorial (stacked recursions per state "
-                             "count); convergence reading, rank tolerance, gyro-noise unit and "
-                             "x0 one at a time from the baseline", baseline_point=BASELINE_POINT))
+                             "count); convergence reading, rank tolerance, gyro-noise unit, ZVU "
+                             "noise and x0 one at a time from the baseline",
+                             baseline_point=BASELINE_POINT))
