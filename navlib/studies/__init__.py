@@ -15,7 +15,7 @@ evaluates its claims in code (claim, our number, checks) and returns tidy tables
   mission.
 
 Importing this package imports the studies that register named evaluations of
-:func:`navlib.sweep.sweep` (``rocket``, ``outliers``), so a name resolves after
+:func:`navlib.sweep.sweep` (``rocket``, ``outliers``, ``launcher``), so a name resolves after
 ``import navlib.studies``.
 """
 
@@ -23,6 +23,7 @@ Importing this package imports the studies that register named evaluations of
 # isort: off
 from navlib.studies import rocket  # noqa: F401 - registers its named sweep evaluations
 from navlib.studies import outliers  # noqa: F401 - registers its named sweep evaluations
+from navlib.studies import launcher  # noqa: F401 - registers its named sweep evaluation
 # isort: on
 from navlib.studies.claims import all_claims
 

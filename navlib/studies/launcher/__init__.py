@@ -21,6 +21,7 @@ the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md``
   causes of the partly / not reproduced ones;
 * :mod:`.assumptions` — the paper's words as numbers and the declared assumption sets;
   :mod:`.robustness` — the claims over them and the registration with the claims engine;
+* :mod:`.search` — the covariance claims' joint search (``"launcher_claims"``);
 * :mod:`.reading` — the notebook's generated reading.
 """
 
@@ -56,10 +57,12 @@ from navlib.studies.launcher.evolution import (
     EVOLUTION_CASES,
     covariance_evolution,
     evolution_grid,
+    evolution_tables,
 )
 from navlib.studies.launcher.fig1 import fig1_data
 from navlib.studies.launcher.reading import reading_markdown
 from navlib.studies.launcher.robustness import evolution_variants, table2_result
+from navlib.studies.launcher.search import SEARCH, SEARCH_GRID, search_points
 from navlib.studies.launcher.table2 import (
     DATA_DIR,
     TABLE2_CSV,
@@ -85,6 +88,8 @@ __all__ = [
     "IDENTICAL",
     "LOW_LOG10",
     "RESOLVED_LOG10",
+    "SEARCH",
+    "SEARCH_GRID",
     "SINGULAR_LOG10",
     "STRONG",
     "TABLE2_BASELINE",
@@ -104,6 +109,7 @@ __all__ = [
     "evolution_causes",
     "evolution_claims",
     "evolution_grid",
+    "evolution_tables",
     "evolution_variants",
     "fig1_claims",
     "fig1_data",
@@ -113,6 +119,7 @@ __all__ = [
     "mission_observability",
     "paper_table2",
     "reading_markdown",
+    "search_points",
     "table2",
     "table2_claim_results",
     "table2_result",

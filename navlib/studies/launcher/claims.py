@@ -306,9 +306,11 @@ def c1_bp_claim(frame: pd.DataFrame) -> ClaimResult:
         "b_p in the null space of every random-walk b_p row: " + ", ".join(
             f"{s} {'yes' if v else 'no'}" for s, v in per_solution.items()),
         [check("solutions whose random-walk b_p rows all leave b_p unobservable",
-               int(per_solution.sum()), ">=", len(SOLUTIONS), True)],
-        assumption="Table 2 random-walk b_p rows (the Markov rows are full rank: there the "
-                   "claim rests on the covariance, F3-bp)", depends_on=("rank_rtol",))
+               int(per_solution.sum()), ">=", len(SOLUTIONS), True)], basis="by construction",
+        assumption="Table 2 random-walk b_p rows; by construction: b_p enters only the GPS "
+                   "position, as a sum with dr, and a random walk has no dynamics to separate "
+                   "them, so b_p is in the null space at any rank tolerance; conclusion 1 is "
+                   "measured by C1-bp-outlier", depends_on=("rank_rtol",))
 
 
 def c3_rt_claim(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> ClaimResult:
@@ -375,7 +377,10 @@ def f1_proportional_claim(data: pd.DataFrame, s_t: float = 0.005) -> ClaimResult
         f"log-log slope {slope:.4f} for c_p >= {100 * s_t:g} s; cond s_t/c_p = "
         f"{ratio.min():.4f}-{ratio.max():.4f}",
         [check("|log-log slope - 1|", abs(slope - 1), "<=", 0.01, True)],
-        assumption="2-norm condition number of the 6-block-row O of eq. (7), s_t = 5 ms",
+        basis="by construction",
+        assumption="2-norm condition number of the 6-block-row O of eq. (7), s_t = 5 ms; by "
+                   "construction: cond = 1.171 c_p / s_t for c_p >> s_t is a property of "
+                   "eq. (7) (launcher.md §10a) that no assumption of ours moves",
         depends_on=("s_t",))
 
 
