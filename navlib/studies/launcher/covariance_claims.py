@@ -109,11 +109,12 @@ def r38_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:
                    f"(GPS keeps more than {BARELY:g} of the INS-only roll sigma), roll being "
                    "the least improved axis is secondary",
         depends_on=(*EVOLUTION_DEPENDS, "kick_deg"),
-        explanation="" if r["roll"] >= BARELY else "; ".join(filter(None, (
-            f"GPS cuts the roll sigma to {r['roll']:.3g} of INS-only; roll is only relatively "
-            f"weak (pitch/yaw at {max(r['pitch'], r['yaw']):.3g}), "
-            "so the 'weakly observable' of §3.8 holds as an ordering, not as an amount",
-            _no_pitch_text(causes, "gps/none", r["roll"])))))
+        explanation="" if r["roll"] >= BARELY else (
+            _no_pitch_text(causes, "gps/none", r["roll"])
+            or f"GPS cuts the roll sigma to {r['roll']:.3g} of INS-only")
+        + ("" if r["roll"] >= BARELY else
+           f"; roll is only relatively weak (pitch/yaw at {max(r['pitch'], r['yaw']):.3g}), "
+           "so the 'weakly observable' of §3.8 holds as an ordering, not as an amount"))
 
 
 def _gps_bias(ev: EvolutionTable) -> tuple[float, float]:
