@@ -35,13 +35,15 @@ def test_f1_full_rank_moves_with_the_rank_tolerance():
     assert strict.checks[0].value < base.checks[0].value
 
 
-def test_f1_proportional_and_c1_bp_are_by_construction():
-    """cond ~ 1.171 c_p / s_t is a property of eq. (7) and b_p lies in the null space of a
-    random-walk row at any rank tolerance: no input of ours can move either."""
+def test_claims_no_input_moves_are_by_construction():
+    """cond ~ 1.171 c_p / s_t is a property of eq. (7), b_p lies in the null space of a
+    random-walk row at any rank tolerance, and attitude sensors lower the condition number
+    at every input tried: no input of ours moves them."""
     assert launcher.fig1_claims()[1].basis == "by construction"
-    frame = launcher.table2_result(True).frame
-    c1 = _by_id(launcher.conclusion_claims(frame))["C1-bp"]
-    assert c1.basis == "by construction" and not c1.reproduced
+    result = launcher.table2_result(True)
+    claims = _by_id(result.claims() + launcher.conclusion_claims(result.frame))
+    for cid in ("C1-bp", "T2-att-noRT"):
+        assert claims[cid].basis == "by construction" and not claims[cid].reproduced
 
 
 def test_cp_mission_moves_with_c_p():
@@ -82,6 +84,22 @@ def test_gyro_bias_claims_move_with_the_bias_stability():
     assert (base["F5-barely"].verdict, strong["F5-barely"].verdict) == \
         ("reproduced", "not reproduced")
     assert base["C2-att"].verdict == "partly" and strong["C2-att"].verdict != "partly"
+
+
+def test_bias_model_claims_flip_with_the_gyro_time_constant():
+    """F5-model and F6-x1000 depend on c_g, which the paper does not state (100 s inferred;
+    its references allow up to an hour): at 1000 s the RW/Markov gyro gap is no longer
+    'strong', at 30 s the x1000 aiding is no longer 'obvious'."""
+    cases = ("att/GAP/markov", "att/GAP/random_walk", "ins-only/GAP/markov",
+             "att/GAP/markov x1000", "att/GAP/random_walk x1000", "ins-only/GAP/markov x1000")
+    base, slow, fast = _evolution(cases), _evolution(cases, c_g=1000.0), \
+        _evolution(cases, c_g=30.0)
+    assert slow["F5-model"].checks[0].value < base["F5-model"].checks[0].value
+    assert (base["F5-model"].verdict, slow["F5-model"].verdict) == \
+        ("partly", "not reproduced")
+    assert fast["F6-x1000"].checks[0].value > base["F6-x1000"].checks[0].value
+    assert (base["F6-x1000"].verdict, fast["F6-x1000"].verdict) == \
+        ("reproduced", "not reproduced")
 
 
 def test_model_claims_move_with_the_initial_attitude_sigma():

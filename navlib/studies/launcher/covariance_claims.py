@@ -164,7 +164,7 @@ def f5_model_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimRe
          check("|accel-bias sigma RW / Markov - 1|", abs(acc - 1), "<=", IDENTICAL),
          check("|GPS-bias sigma RW / Markov - 1|", abs(bp_rw / bp_m - 1), "<=", IDENTICAL)],
         assumption=f"'strongly' = a factor {STRONG:g}; 'negligible' = within {IDENTICAL:.0%}",
-        depends_on=(*EVOLUTION_DEPENDS, "sigma0_pos_m"),
+        depends_on=(*EVOLUTION_DEPENDS, "sigma0_pos_m", "c_g"),
         explanation="" if abs(bp_rw / bp_m - 1) <= IDENTICAL else _pad_text(causes))
 
 
@@ -220,7 +220,7 @@ def f6_x1000_claim(ev: EvolutionTable) -> ClaimResult:
          check("|log RW/Markov| at x1000 minus at x1",
                abs(np.log(model_1000)) - abs(np.log(model_ratio)), "<", 0.0)],
         assumption="gyro_bias (Markov sigma and random-walk density) times 1000: 50 deg/h",
-        depends_on=EVOLUTION_DEPENDS)
+        depends_on=(*EVOLUTION_DEPENDS, "c_g"))
 
 
 def c4_models_claim(ev: EvolutionTable) -> ClaimResult:
