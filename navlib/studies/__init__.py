@@ -15,8 +15,8 @@ evaluates its claims in code (claim, our number, checks) and returns tidy tables
   mission.
 
 Importing this package imports the studies that register named evaluations of
-:func:`navlib.sweep.sweep` (``rocket``, ``outliers``, ``ssac``), so a name resolves after
-``import navlib.studies``.
+:func:`navlib.sweep.sweep` and joint claim searches (``rocket``, ``outliers``, ``ssac``,
+``launcher``), so a name resolves after ``import navlib.studies``.
 """
 
 # the registration order is the order of ``python -m navlib sweep --list``
@@ -24,6 +24,7 @@ Importing this package imports the studies that register named evaluations of
 from navlib.studies import rocket  # noqa: F401 - registers its named sweep evaluations
 from navlib.studies import outliers  # noqa: F401 - registers its named sweep evaluations
 from navlib.studies import ssac  # noqa: F401 - registers its sweep evaluation and search space
+from navlib.studies import launcher  # noqa: F401 - registers its sweep evaluation and search space
 # isort: on
 from navlib.studies.claims import all_claims
 

@@ -114,7 +114,7 @@ def test_registry_and_table_contract():
     assert table.claim_id.is_unique
     assert set(table.verdict) <= set(engine.STATUSES) and set(table.basis) <= set(engine.BASES)
     assert (table[table.study == "rocket_profile"].basis == "by construction").all()
-    assert table.robustness.isna().all()                     # no assumption set declared
+    assert table[table.study == "rocket_profile"].robustness.isna().all()  # no set declared
     summary = engine.paper_summary(table)
     assert {"reproduced", "explained", "unexplained"} <= set(summary.columns)
     text = engine.summary_markdown(table)

@@ -15,10 +15,13 @@ the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md``
   over the mission;
 * :mod:`.fig1` — the Fig. 1 analogue (simplified model, spec §3.7, §10a);
 * :mod:`.evolution` — the covariance runs of Figs. 2, 3, 5, 6 (spec §7.3);
-* :mod:`.claims` — the robust claims of spec §10c, conclusions 1-4, Fig. 1 and the
-  covariance evolution, one function per claim;
+* :mod:`.claims` — the robust claims of spec §10c, conclusions 1 and 3 and Fig. 1 with
+  the end of §4.1; :mod:`.covariance_claims` — the covariance evolution (conclusions 2
+  and 4), one function per claim; :mod:`.causes` — the small experiments that measure the
+  causes of the partly / not reproduced ones;
 * :mod:`.assumptions` — the paper's words as numbers and the declared assumption sets;
   :mod:`.robustness` — the claims over them and the registration with the claims engine;
+* :mod:`.search` — the covariance claims' joint search (``"launcher_claims"``);
 * :mod:`.reading` — the notebook's generated reading.
 """
 
@@ -42,21 +45,24 @@ from navlib.studies.launcher.assumptions import (
     TOLERANCES,
     log10_cond_text,
 )
+from navlib.studies.launcher.causes import cp_mission_sigmas, evolution_causes
 from navlib.studies.launcher.claims import (
     conclusion_claims,
-    evolution_claims,
     fig1_claims,
     match_counts,
     table2_claim_results,
 )
+from navlib.studies.launcher.covariance_claims import EvolutionTable, evolution_claims
 from navlib.studies.launcher.evolution import (
     EVOLUTION_CASES,
     covariance_evolution,
     evolution_grid,
+    evolution_tables,
 )
 from navlib.studies.launcher.fig1 import fig1_data
 from navlib.studies.launcher.reading import reading_markdown
 from navlib.studies.launcher.robustness import evolution_variants, table2_result
+from navlib.studies.launcher.search import SEARCH, SEARCH_GRID, search_points
 from navlib.studies.launcher.table2 import (
     DATA_DIR,
     TABLE2_CSV,
@@ -71,13 +77,51 @@ from navlib.studies.launcher.table2 import (
 )
 
 __all__ = [
-    "BARELY", "COND_TOL", "DATA_DIR", "EVOLUTION_BASELINE", "EVOLUTION_CASES",
-    "EVOLUTION_DEPENDS", "EVOLUTION_GRID", "HIGH_LOG10", "IDENTICAL", "LOW_LOG10",
-    "RESOLVED_LOG10", "SINGULAR_LOG10", "STRONG", "TABLE2_BASELINE", "TABLE2_CSV",
-    "TABLE2_GRID", "TABLE2_RANK_RTOLS", "TABLE2_ROBUSTNESS_STRIDE", "TABLE2_STRIDE",
-    "TOLERANCES", "Table2Result", "conclusion_claims", "configurations",
-    "covariance_evolution", "describe_direction", "evolution_claims", "evolution_grid",
-    "evolution_variants", "fig1_claims", "fig1_data", "inspect_step", "log10_cond_text",
-    "match_counts", "mission_observability", "paper_table2", "reading_markdown", "table2",
-    "table2_claim_results", "table2_result", "variant_comparison",
+    "BARELY",
+    "COND_TOL",
+    "DATA_DIR",
+    "EVOLUTION_BASELINE",
+    "EVOLUTION_CASES",
+    "EVOLUTION_DEPENDS",
+    "EVOLUTION_GRID",
+    "HIGH_LOG10",
+    "IDENTICAL",
+    "LOW_LOG10",
+    "RESOLVED_LOG10",
+    "SEARCH",
+    "SEARCH_GRID",
+    "SINGULAR_LOG10",
+    "STRONG",
+    "TABLE2_BASELINE",
+    "TABLE2_CSV",
+    "TABLE2_GRID",
+    "TABLE2_RANK_RTOLS",
+    "TABLE2_ROBUSTNESS_STRIDE",
+    "TABLE2_STRIDE",
+    "TOLERANCES",
+    "EvolutionTable",
+    "Table2Result",
+    "conclusion_claims",
+    "configurations",
+    "covariance_evolution",
+    "cp_mission_sigmas",
+    "describe_direction",
+    "evolution_causes",
+    "evolution_claims",
+    "evolution_grid",
+    "evolution_tables",
+    "evolution_variants",
+    "fig1_claims",
+    "fig1_data",
+    "inspect_step",
+    "log10_cond_text",
+    "match_counts",
+    "mission_observability",
+    "paper_table2",
+    "reading_markdown",
+    "search_points",
+    "table2",
+    "table2_claim_results",
+    "table2_result",
+    "variant_comparison",
 ]

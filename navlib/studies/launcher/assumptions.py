@@ -79,3 +79,17 @@ which the paper does not give (:data:`navlib.models.launcher.ASSUMED`: 0.1 deg) 
 which every "GPS improves / barely improves" ratio is read. Quick mode: the baseline only."""
 EVOLUTION_BASELINE = {"sigma0_att_deg": 0.1}
 """The baseline point of :data:`EVOLUTION_GRID` (``navlib.models.launcher.ASSUMED``)."""
+NO_PITCH_KICK_DEG = 0.01
+"""Pitch kick (deg) of the cause experiment's ascent without a pitch programme
+(:func:`navlib.trajectory.launcher_ascent` needs a kick > 0; 0.01 deg keeps the body axes
+within a few hundredths of a degree of vertical): the paper's launcher makes "no manoeuvres",
+our surrogate pitches over by 2.5 deg (docs/assumptions.md, A-F2-pitch)."""
+SURVEYED_PAD_M = 0.1
+"""Initial position sigma (m) of a launcher on a surveyed pad, the cause experiment of the
+GPS-bias claims (docs/assumptions.md, A-F3-pad); the model's assumed value is 3 m
+(``navlib.models.launcher.ASSUMED``)."""
+CP_MISSION_SET = (100.0, 300.0, 1000.0)
+"""GPS-bias time constants c_p (s) of the end-of-§4.1 claim's set: the paper's 100 s and the
+longer constants its references allow (up to about an hour, [2]); A-F1-cp-mission."""
+CP_MISSION_BASELINE = {"c_p": 100.0}
+"""The baseline point of :data:`CP_MISSION_SET`."""

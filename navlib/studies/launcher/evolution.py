@@ -86,6 +86,13 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
     return [table for _, table in tables.values()]
 
 
+def evolution_tables(trajectory, model_kws, cases=None) -> list[pd.DataFrame]:
+    """:func:`covariance_evolution` on ``trajectory`` for each keyword set of ``model_kws``
+    (the sets may differ only in the initial sigmas ``sigma0_*``: one stacked recursion per
+    case serves them all)."""
+    return _evolution_tables(trajectory, cases, False, list(model_kws))
+
+
 def _evolution_build(trajectory, cases, model_kws) -> list[pd.DataFrame]:
     """The tables of :func:`_evolution_tables`, computed."""
     shared = {k: v for k, v in model_kws[0].items() if not k.startswith("sigma0_")}

@@ -4,7 +4,7 @@ covariance-evolution claims."""
 from __future__ import annotations
 
 from navlib.studies import claims as engine
-from navlib.studies.launcher.claims import evolution_claims
+from navlib.studies.launcher.covariance_claims import evolution_claims
 from navlib.studies.launcher.table2 import Table2Result
 
 

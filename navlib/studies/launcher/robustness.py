@@ -14,6 +14,8 @@ from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
 from navlib.studies.launcher.assumptions import (
     COND_TOL,
+    CP_MISSION_BASELINE,
+    CP_MISSION_SET,
     EVOLUTION_BASELINE,
     EVOLUTION_GRID,
     TABLE2_BASELINE,
@@ -23,15 +25,25 @@ from navlib.studies.launcher.assumptions import (
     TABLE2_STRIDE,
     TOLERANCES,
 )
-from navlib.studies.launcher.claims import conclusion_claims, evolution_claims, fig1_claims
+from navlib.studies.launcher.causes import cp_mission_sigmas, evolution_causes
+from navlib.studies.launcher.claims import conclusion_claims, f1_cp_mission_claim, fig1_claims
+from navlib.studies.launcher.covariance_claims import evolution_claims
 from navlib.studies.launcher.evolution import evolution_grid
 from navlib.studies.launcher.table2 import Table2Result, table2
 from navlib.trajectory import launcher_ascent
 
 
 def baseline_fig1_claims(quick: bool = False) -> list[ClaimResult]:
-    """The Fig. 1 claims (the same in both modes)."""
-    return fig1_claims()
+    """The Fig. 1 claims and the end of §4.1 (the same in both modes)."""
+    return [*fig1_claims(), f1_cp_mission_claim(cp_mission_sigmas(CP_MISSION_BASELINE["c_p"]),
+                                                 CP_MISSION_BASELINE["c_p"])]
+
+
+def fig1_robustness(quick: bool = False) -> list:
+    """``(point, claims)`` over the GPS-bias time constants of :data:`CP_MISSION_SET` (only
+    the end-of-§4.1 claim depends on c_p; the Fig. 1 claims sweep it themselves)."""
+    return [({"c_p": c}, [f1_cp_mission_claim(cp_mission_sigmas(c), c)])
+            for c in CP_MISSION_SET]
 
 
 @cache.memoized(maxsize=3)
@@ -66,8 +78,10 @@ def table2_robustness(quick: bool = False) -> list:
 @cache.memoized(maxsize=1)
 def evolution_variants(quick: bool) -> dict:
     """The evolution claims per initial attitude sigma (deg) of
-    :func:`~navlib.studies.launcher.evolution_grid`, kept for the last mode asked."""
-    return {v: evolution_claims(table) for v, table in evolution_grid(quick).items()}
+    :func:`~navlib.studies.launcher.evolution_grid`, explained by the cause experiments
+    (:func:`~navlib.studies.launcher.evolution_causes`), kept for the last mode asked."""
+    causes = evolution_causes(quick)
+    return {v: evolution_claims(table, causes) for v, table in evolution_grid(quick).items()}
 
 
 def baseline_evolution_claims(quick: bool = False) -> list[ClaimResult]:
@@ -83,7 +97,10 @@ def evolution_robustness(quick: bool = False) -> list:
             for k, v in evolution_variants(quick).items()]
 
 
-engine.register(engine.Study("fig1", "Beaudoin et al. (2018)", baseline_fig1_claims, order=0))
+engine.register(engine.Study("fig1", "Beaudoin et al. (2018)", baseline_fig1_claims,
+                             {"c_p": CP_MISSION_SET}, fig1_robustness,
+                             "the end-of-§4.1 claim at each GPS-bias time constant", order=0,
+                             baseline_point=CP_MISSION_BASELINE))
 engine.register(engine.Study(
     "table2", "Beaudoin et al. (2018)", baseline_table2_claims, TABLE2_GRID, table2_robustness,
     "one at a time: the tolerance re-judges the same table, each rank tolerance recomputes it",

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from navlib.cache import memoized
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
-from navlib.studies.outliers.claims import covariance_claims
+from navlib.studies.outliers.claims import covariance_claims, explained, explained_f7
 from navlib.studies.outliers.experiment import (
     correlation_fig10,
     paper_tests,
@@ -33,11 +33,14 @@ sign re-prepares only the two RT filters. Spike outliers only (notebook 05 adds 
 
 def study_claims(cache: FilterCache, window: float = DEFAULTS["window"],
                  outlier_time_s: float | None = None, shapes: Sequence[str] = ("spike", "step"),
-                 reuse: OutlierStudy | None = None, **settings) -> tuple[OutlierStudy, list]:
+                 reuse: OutlierStudy | None = None, conclusions: bool = False,
+                 **settings) -> tuple[OutlierStudy, list]:
     """T1-T4 and Figs. 7, 10, 11 on the filters of ``cache`` (``settings``: ``biases``,
-    ``bias_model``): (the outlier study with its claims, the covariance claims)."""
+    ``bias_model``; ``conclusions``: also the claims of §4.2.4, conclusions 1 and 3 and T4's
+    time range, :func:`~navlib.studies.outliers.claims.conclusion_claims`): (the outlier
+    study with its claims, the covariance claims)."""
     st = paper_tests(cache=cache, window=window, outlier_time_s=outlier_time_s, shapes=shapes,
-                     reuse=reuse, **settings, **cache.model_options)
+                     reuse=reuse, conclusions=conclusions, **settings, **cache.model_options)
     corr = correlation_fig10(cache=cache, **settings)
     sig = roll_sigma(cache=cache, **settings)
     ratios = sigma_ratios("ins_gps", "ins_gps_rt", cache=cache, **settings)
@@ -55,11 +58,13 @@ def _variants(quick: bool) -> dict:
         if previous is not None:
             adopt_filters(cache, previous)
         previous = None
-        st, cov = study_claims(cache, window=max(windows), shapes=("spike",), reuse=first)
+        st, cov = study_claims(cache, window=max(windows), shapes=("spike",), reuse=first,
+                               conclusions=True)
         first = first or st
         for window in windows:
             rescored = st if window == max(windows) else rescore(st, window)
-            out[(window, sign)] = rescored.claims + cov
+            out[(window, sign)] = [explained(c, rescored) for c in rescored.claims] + [
+                explained_f7(c) for c in cov]
         previous = cache
         del cache
     return out

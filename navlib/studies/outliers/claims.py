@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
@@ -110,6 +112,145 @@ def outlier_claims(study: OutlierStudy, shape: str = "spike") -> list[ClaimResul
     return [c for c in claims if c is not None]
 
 
+SAME_RANGE = 2.0
+"""Two recoveries are "within the same time range" (T4) when their time constants differ by
+at most this factor (docs/assumptions.md, A-T4-time-range)."""
+
+
+def _decay_text(r: OutlierResponse) -> str:
+    """How the induced error of ``r`` decays, measured: retained share and time constant."""
+    s = r.score
+    return (f"{SOLUTION_LABELS[r.solution]} retains {s.retained:.3g} of the induced error "
+            f"after {s.window:g} s (time constant {s.time_constant:.3g} s)")
+
+
+def _outcome_explanation(r: OutlierResponse, want: str, magnitude: float) -> str:
+    """The measured cause of one failed outcome check (:func:`_outcome_check`)."""
+    s = r.score
+    if want == "affected":
+        ratio = s.peak / s.sigma_end if s.sigma_end > 0 else float("nan")
+        return (f"{SOLUTION_LABELS[r.solution]}: the outlier moves the estimate by "
+                f"{ratio:.3g} of the filter sigma; the response is linear in the outlier, so "
+                f"reaching {AFFECTED:g} sigma needs {magnitude * AFFECTED / ratio:.3g} instead "
+                f"of the paper's {magnitude:g} (x{AFFECTED / ratio:.3g})")
+    if want == "recovers":
+        return (_decay_text(r) + f": a 1/e recovery needs a window of about "
+                f"{s.time_constant:.3g} s")
+    return _decay_text(r) + ": the filter corrects it within the window"
+
+
+def explained(result: ClaimResult, study: OutlierStudy) -> ClaimResult:
+    """``result`` (one of T1-T4 or a conclusion claim) with the measured cause of each failed
+    outcome check as its explanation (the engine's table; notebook 05 shows the claims
+    without it)."""
+    if result.verdict in ("reproduced", "not evaluated") or result.explanation:
+        return result
+    texts = []
+    for c in result.checks:
+        if c.passed:
+            continue
+        for r in (*study.responses.values(), *study.conclusions.values()):
+            label = SOLUTION_LABELS[r.solution]
+            if r.outlier.shape == "spike" and c.name.startswith(label + ":") and \
+                    r.watch != "ref_roll" and (result.claim_id, r.outlier.channel) in _RUNS:
+                want = ("affected" if "peak" in c.name else
+                        "recovers" if "(recovers)" in c.name else "static error")
+                texts.append(_outcome_explanation(r, want, r.outlier.magnitude))
+                break
+    return replace(result, explanation="; ".join(dict.fromkeys(texts))) if texts else result
+
+
+_RUNS = {("T1", "gnss_vel"), ("T2", "gyro_x"), ("T3", "rt_x"), ("T4", "gyro_x"),
+         ("C1-bp-outlier", "gnss_vel"), ("C3-RT-outlier", "rt_x"), ("R-4.2.4", "gyro_x"),
+         ("T4-time", "gyro_x")}
+"""The outlier channel each claim's responses carry (T2 and T4 share the gyro spike but not
+their solutions)."""
+
+
+def _spike(study: OutlierStudy, key: tuple) -> OutlierResponse | None:
+    return study.responses.get((*key, "spike")) if key[0].startswith("T") else \
+        study.conclusions.get(key)
+
+
+def claim_c1_outlier(study: OutlierStudy) -> ClaimResult | None:
+    """C1-bp-outlier: conclusion 1 over all four solutions: T1's GPS-velocity outlier leaves
+    a static error in the (Markov) GPS bias of every solution, not only the one T1 shows."""
+    keys = [("T1", "ins_gps_att"), ("C1", "ins_gps"), ("C1", "ins_gps_rt"),
+            ("C1", "ins_gps_att_rt")]
+    rs = [_spike(study, k) for k in keys]
+    if any(r is None for r in rs):
+        return None
+    return claim(
+        "C1-bp-outlier", "No solution makes the GPS position bias observable: the velocity "
+        "outlier leaves a static b_p error in all four solutions (conclusion 1)",
+        "static error in b_p (shown for INS/GPS/att, concluded for all)",
+        "; ".join(_fmt(r) for r in rs),
+        [_outcome_check(r, "static error") for r in rs],
+        assumption=_base_assumption(study, "spike") + "; T1's outlier on every solution",
+        depends_on=("window", "a1_sign"))
+
+
+def claim_c3_outlier(study: OutlierStudy) -> ClaimResult | None:
+    """C3-RT-outlier: conclusion 3's reason: an RT outlier leaves a static roll error in
+    INS/GPS + RT, which the attitude sensors correct (INS/GPS/att + RT)."""
+    rs = [_spike(study, ("T3", "ins_gps_rt")), _spike(study, ("C3", "ins_gps_att_rt"))]
+    if any(r is None for r in rs):
+        return None
+    return claim(
+        "C3-RT-outlier", "The RT is recommended only with attitude sensors: without them an RT "
+        "outlier leaves a static roll error, with them it is corrected (conclusion 3)",
+        "INS/GPS + RT sensitive to RT outliers; with attitude sensors not",
+        "; ".join(_fmt(r) for r in rs),
+        [_outcome_check(rs[0], "static error"), _outcome_check(rs[1], "recovers")],
+        assumption=_base_assumption(study, "spike") + "; T3's RT outlier",
+        depends_on=("window", "a1_sign"))
+
+
+def claim_r424(study: OutlierStudy) -> ClaimResult | None:
+    """R-4.2.4: attitude sensors overcome the RT solution's structural unobservability: the
+    gyro outlier's roll error stays with INS/GPS + RT (T2) and is corrected with
+    INS/GPS/att + RT (T4)."""
+    rs = [_spike(study, ("T2", "ins_gps_rt")), _spike(study, ("T4", "ins_gps_att_rt"))]
+    if any(r is None for r in rs):
+        return None
+    return claim(
+        "R-4.2.4", "Attitude sensors overcome the structural unobservability of the RT "
+        "solution: the roll error it cannot correct alone is corrected with them (§4.2.4)",
+        "static roll error without attitude sensors, corrected with them",
+        "; ".join(_fmt(r) for r in rs),
+        [_outcome_check(rs[0], "static error"), _outcome_check(rs[1], "recovers")],
+        assumption=_base_assumption(study, "spike") + "; T2's and T4's gyro outlier",
+        depends_on=("window", "a1_sign"))
+
+
+def claim_t4_time(study: OutlierStudy) -> ClaimResult | None:
+    """T4-time: with and without RT the roll error is corrected "within the same time range"
+    (time constants within a factor :data:`SAME_RANGE`, A-T4-time-range)."""
+    rs = [_spike(study, ("T4", "ins_gps_att")), _spike(study, ("T4", "ins_gps_att_rt"))]
+    if any(r is None for r in rs):
+        return None
+    tau = [r.score.time_constant for r in rs]
+    ratio = tau[1] / tau[0] if tau[0] > 0 else float("nan")
+    return claim(
+        "T4-time", "With and without RT the roll error is corrected within the same time "
+        "range (T4, Fig. 12)", "both correct within the same time range",
+        f"time constants: INS/GPS/att {tau[0]:.3g} s, + RT {tau[1]:.3g} s (ratio {ratio:.3g})",
+        [check("recovery time constant RT / no RT", ratio, "in",
+               (1.0 / SAME_RANGE, SAME_RANGE), True)],
+        assumption=_base_assumption(study, "spike") + f"; 'same time range' = time constants "
+                   f"within a factor {SAME_RANGE:g}", depends_on=("window", "a1_sign"),
+        explanation="" if 1.0 / SAME_RANGE <= ratio <= SAME_RANGE else
+        "; ".join(_decay_text(r) for r in rs))
+
+
+def conclusion_claims(study: OutlierStudy) -> list[ClaimResult]:
+    """§4.2.4, conclusions 1 and 3 and T4's time range from a study run with
+    ``conclusions=True`` (:func:`~navlib.studies.outliers.paper_tests`)."""
+    claims = [claim_c1_outlier(study), claim_c3_outlier(study), claim_r424(study),
+              claim_t4_time(study)]
+    return [c for c in claims if c is not None]
+
+
 def claim_f10(correlation: pd.DataFrame, rho_threshold: float = -0.9) -> ClaimResult:
     """Fig. 10: attitude error (body axes) and launcher divergence almost perfectly
     negatively correlated over the first 5 s (median rho at most ``rho_threshold`` on every
@@ -172,6 +313,20 @@ def claim_roll_sigma(cid: str, sigma: pd.DataFrame, ratios: pd.Series | None = N
         cid, f"The RT greatly lowers the roll sigma of {text}", paper, ours, checks,
         assumption=f"'greatly' = ratio <= {ratio_threshold}; 'not improved' = ratio >= "
                    f"{improved}", depends_on=("a1_sign",))
+
+
+def explained_f7(result: ClaimResult) -> ClaimResult:
+    """F7 with the measured cause of its failed "not improved" checks (engine's table)."""
+    if result.claim_id != "F7" or result.verdict == "reproduced" or result.explanation:
+        return result
+    values = {c.name: c.value for c in result.checks}
+    return replace(result, explanation=(
+        f"the RT lowers pitch/yaw as much as roll (smallest pitch, yaw ratio "
+        f"{values.get('smallest of pitch, yaw sigma RT / no RT', np.nan):.3g}, roll "
+        f"{values.get('roll sigma RT / no RT', np.nan):.3g}): its pseudo-measurement (eq. 8) "
+        "observes attitude error plus divergence on all three axes without noise, so it "
+        "improves every axis; the paper's 'all other estimates are not improved' fits an RT "
+        "on roll only, the simplification its future work proposes"))
 
 
 def covariance_claims(correlation: pd.DataFrame, sigma: pd.DataFrame,

@@ -14,7 +14,7 @@ from navlib._validation import finite_scalar
 from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.outliers import PAPER_TESTS, score_recovery
-from navlib.studies.outliers.claims import outlier_claims
+from navlib.studies.outliers.claims import conclusion_claims, outlier_claims
 from navlib.studies.outliers.response import (
     DEFAULTS,
     RT_ONLY_OPTIONS,
@@ -25,6 +25,20 @@ from navlib.studies.outliers.response import (
     outlier_response,
     record_stride,
 )
+
+CONCLUSION_RUNS = {("C1", "ins_gps"): ("T1", "bp"), ("C1", "ins_gps_rt"): ("T1", "bp"),
+                   ("C1", "ins_gps_att_rt"): ("T1", "bp"), ("C3", "ins_gps_att_rt"): ("T3", "roll")}
+"""Spike runs beyond T1-T4: ``(run, solution) -> (test whose outlier is injected, watched
+quantity)``. "C1": T1's GPS-velocity outlier on the solutions T1 does not run (conclusion 1,
+"no solution" observes b_p); "C3": T3's RT outlier with attitude sensors (conclusion 3: the RT
+only together with them). Each joins its filter's recursion of the T1-T4 responses."""
+
+
+def _conclusion_requests(sol: str, outlier_time_s, biases: str) -> list[tuple]:
+    """The (outlier, watch) requests of :data:`CONCLUSION_RUNS` on solution ``sol``."""
+    return [(PAPER_TESTS[tid].outlier("spike", time=outlier_time_s), watch)
+            for (run, s), (tid, watch) in CONCLUSION_RUNS.items()
+            if s == sol and (watch != "bp" or "P" in biases.upper())]
 
 
 def _capture(responses, window_first: float = 0.05, window_later: float = 5.0) -> dict:
@@ -49,7 +63,7 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 window: float = DEFAULTS["window"], record_every: int | None = None,
                 cache: FilterCache | None = None, divergence: bool = True,
                 outlier_time_s: float | None = None, reuse: OutlierStudy | None = None,
-                **model_options) -> OutlierStudy:
+                conclusions: bool = False, **model_options) -> OutlierStudy:
     """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
 
     Parameters
@@ -77,6 +91,9 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
         A study on the same trajectory and configuration whose model options differ at
         most in the RT-only ones (:data:`RT_ONLY_OPTIONS`): its non-RT responses are the
         same and are taken over instead of rerun.
+    conclusions : bool
+        Also run the spikes of :data:`CONCLUSION_RUNS` (in the same recursions) and judge
+        the claims they carry (:func:`~navlib.studies.outliers.claims.conclusion_claims`).
     """
     traj = trajectory if trajectory is not None else (
         cache.trajectory if cache is not None else default_trajectory())
@@ -115,6 +132,8 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                     for tid in tids for shape in shapes if (tid, sol, shape) not in same]
         if "T4" in tids and sol == "ins_gps_att_rt":
             requests.append((PAPER_TESTS["T4"].outlier("spike", time=outlier_time_s), "ref_roll"))
+        if conclusions and (reuse is None or sol.endswith("_rt")):
+            requests += _conclusion_requests(sol, outlier_time_s, biases)
         if requests:              # one recursion for all of this filter's responses
             cache.unit_responses(sol, requests, biases=biases,
                                  bias_model=effective_bias_model(biases, bias_model),
@@ -139,6 +158,17 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                     sol, test.outlier("spike", time=outlier_time_s), "ref_roll", biases=biases,
                     bias_model=bias_model, window=window, record_every=record_every,
                     cache=cache)
+    extra = {}
+    for (run, sol), (tid, watch) in CONCLUSION_RUNS.items() if conclusions else ():
+        if watch == "bp" and "P" not in biases.upper():
+            continue
+        old = reuse.conclusions.get((run, sol)) if reuse is not None else None
+        if old is not None and not sol.endswith("_rt"):
+            extra[(run, sol)] = _rescored(old, window)
+            continue
+        extra[(run, sol)] = outlier_response(
+            sol, PAPER_TESTS[tid].outlier("spike", time=outlier_time_s), watch, biases=biases,
+            bias_model=bias_model, window=window, record_every=record_every, cache=cache)
     capture = _capture(responses)
     div = responses.get(("T4", "ins_gps_att_rt", "divergence"))
     if div is not None:
@@ -149,23 +179,32 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
     settings = {"biases": biases, "bias_model": effective_bias_model(biases, bias_model),
                 "window": window, "shapes": tuple(shapes), "rate_hz": traj.rate_hz,
                 "duration_s": float(traj.t[-1] - traj.t[0]), **model_options}
-    study = OutlierStudy(responses, capture, [], settings)
-    return OutlierStudy(responses, capture, outlier_claims(study), settings)
+    study = OutlierStudy(responses, capture, [], settings, extra)
+    return OutlierStudy(responses, capture, _claims(study), settings, extra)
+
+
+def _claims(study: OutlierStudy) -> list:
+    """T1-T4 and the T4 detail, and the conclusion claims where their runs were made."""
+    return outlier_claims(study) + (conclusion_claims(study) if study.conclusions else [])
+
+
+def _rescored(r, window: float):
+    """``r`` scored with another recovery window."""
+    induced = r.induced if r.induced.shape[1] > 1 else r.induced[:, 0]
+    sigma = r.sigma if r.sigma.shape[1] > 1 else r.sigma[:, 0]
+    return replace(r, score=score_recovery(r.t, induced, t_outlier=r.outlier.time,
+                                           window=window, sigma=sigma,
+                                           averaging=DEFAULTS["averaging"]))
 
 
 def rescore(study: OutlierStudy, window: float) -> OutlierStudy:
     """The same responses scored with another recovery window (no new filter run)."""
     window = finite_scalar(window, "window", 0.0, low_open=True)
-    responses = {}
-    for key, r in study.responses.items():
-        induced = r.induced if r.induced.shape[1] > 1 else r.induced[:, 0]
-        sigma = r.sigma if r.sigma.shape[1] > 1 else r.sigma[:, 0]
-        responses[key] = replace(r, score=score_recovery(
-            r.t, induced, t_outlier=r.outlier.time, window=window, sigma=sigma,
-            averaging=DEFAULTS["averaging"]))
+    responses = {key: _rescored(r, window) for key, r in study.responses.items()}
+    extra = {key: _rescored(r, window) for key, r in study.conclusions.items()}
     settings = {**study.settings, "window": window}
-    new = OutlierStudy(responses, study.capture, [], settings)
-    return OutlierStudy(responses, study.capture, outlier_claims(new), settings)
+    new = OutlierStudy(responses, study.capture, [], settings, extra)
+    return OutlierStudy(responses, study.capture, _claims(new), settings, extra)
 
 
 def correlation_fig10(trajectory=None, *, duration: float = 5.0,

@@ -388,12 +388,17 @@ class OutlierStudy:
         :func:`outlier_claims`.
     claims : list of ClaimResult
     settings : dict
+    conclusions : dict
+        ``(run, solution) -> OutlierResponse`` of the spike runs beyond T1-T4 that the
+        paper's §4.2.4 and conclusions 1 and 3 need (:data:`~navlib.studies.outliers.
+        experiment.CONCLUSION_RUNS`; empty unless asked for).
     """
 
     responses: dict
     capture: dict
     claims: list
     settings: dict = field(default_factory=dict)
+    conclusions: dict = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
         """One row per (test, solution, shape): the score, the paper's outcome and ours."""
