@@ -21,6 +21,7 @@ def test_every_subpackage_is_listed_for_the_wheel():
 
 
 @pytest.mark.notebook
+@pytest.mark.slow
 def test_wheel_installs_and_reports_outside_the_checkout(tmp_path):
     wheels = tmp_path / "wheels"
     build = subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
