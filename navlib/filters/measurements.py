@@ -19,8 +19,9 @@ from typing import ClassVar
 
 import numpy as np
 import pandas as pd
+from scipy.spatial.transform import Rotation
 
-from navlib._validation import finite_array
+from navlib._validation import finite_array, increasing_times
 from navlib.errors import NavlibInputError
 from navlib.rotations import log_so3
 
@@ -232,8 +233,6 @@ def imu_arrays(imu):
             raise NavlibInputError(
                 "imu: expected a navlib.sensors.ImuSimulation or a DataFrame with t, f_x.. w_z"
             ) from exc
-    from navlib._validation import increasing_times
-
     t = increasing_times(t, "imu.t")
     return t, finite_array(f, "imu.f_b", (t.size, 3)), finite_array(w, "imu.w_ib_b", (t.size, 3))
 
@@ -255,8 +254,6 @@ def epoch_index(t_imu, t_meas, name: str) -> np.ndarray:
 
 def _rotations(data, name: str):
     """(t, (K, 3, 3)) from ``(t, Rotation)`` or a DataFrame ``t, qx, qy, qz, qw``."""
-    from scipy.spatial.transform import Rotation
-
     if isinstance(data, pd.DataFrame):
         cols = ["qx", "qy", "qz", "qw"]
         missing = [c for c in ["t", *cols] if c not in data.columns]

@@ -20,7 +20,9 @@ import pandas as pd
 
 from navlib._validation import finite_scalar
 from navlib.cache import memoized
+from navlib.discretize import METHODS, discretize_steps
 from navlib.errors import NavlibInputError
+from navlib.models.base import DiscreteModel, LinearModel
 from navlib.observability.matrix import condition_number
 from navlib.observability.sliding import sliding_singular_values
 from navlib.resolution import relative_resolution
@@ -117,9 +119,6 @@ def _model_arrays(model, method: str):
     :class:`~navlib.models.base.LinearModel` is discretised lazily, chunk by chunk, with
     :func:`navlib.discretize.discretize_steps` (``method``), without forming ``Q``.
     """
-    from navlib.discretize import METHODS, discretize_steps
-    from navlib.models.base import DiscreteModel, LinearModel
-
     if isinstance(model, DiscreteModel):
         F = np.asarray(model.F)
         return np.asarray(model.t), (lambda idx: F[idx]), np.asarray(model.H)
@@ -212,7 +211,7 @@ def _blas_controller():
     """threadpoolctl's view of the loaded BLAS libraries (scanned once: ~10 ms a scan), or
     ``None`` when ``threadpoolctl`` is not installed."""
     try:
-        from threadpoolctl import ThreadpoolController
+        from threadpoolctl import ThreadpoolController  # optional: present with scipy's stack
     except ImportError:
         return None
     return ThreadpoolController()
