@@ -193,33 +193,37 @@ def claim_c1_outlier(study: OutlierStudy) -> ClaimResult | None:
 def claim_c3_outlier(study: OutlierStudy) -> ClaimResult | None:
     """C3-RT-outlier: conclusion 3's reason: an RT outlier leaves a static roll error in
     INS/GPS + RT, which the attitude sensors correct (INS/GPS/att + RT)."""
-    rs = [_spike(study, ("T3", "ins_gps_rt")), _spike(study, ("C3", "ins_gps_att_rt"))]
-    if any(r is None for r in rs):
-        return None
-    return claim(
-        "C3-RT-outlier", "The RT is recommended only with attitude sensors: without them an RT "
-        "outlier leaves a static roll error, with them it is corrected (conclusion 3)",
-        "INS/GPS + RT sensitive to RT outliers; with attitude sensors not",
-        "; ".join(_fmt(r) for r in rs),
-        [_outcome_check(rs[0], "static error"), _outcome_check(rs[1], "recovers")],
-        assumption=_base_assumption(study, "spike") + "; T3's RT outlier",
-        depends_on=("window", "a1_sign"))
+    return _static_then_corrected(
+        study, "C3-RT-outlier", (("T3", "ins_gps_rt"), ("C3", "ins_gps_att_rt")),
+        "The RT is recommended only with attitude sensors: without them an RT outlier leaves a "
+        "static roll error, with them it is corrected (conclusion 3)",
+        "INS/GPS + RT sensitive to RT outliers; with attitude sensors not", "T3's RT outlier")
 
 
 def claim_r424(study: OutlierStudy) -> ClaimResult | None:
     """R-4.2.4: attitude sensors overcome the RT solution's structural unobservability: the
     gyro outlier's roll error stays with INS/GPS + RT (T2) and is corrected with
     INS/GPS/att + RT (T4)."""
-    rs = [_spike(study, ("T2", "ins_gps_rt")), _spike(study, ("T4", "ins_gps_att_rt"))]
+    return _static_then_corrected(
+        study, "R-4.2.4", (("T2", "ins_gps_rt"), ("T4", "ins_gps_att_rt")),
+        "Attitude sensors overcome the structural unobservability of the RT solution: the roll "
+        "error it cannot correct alone is corrected with them (§4.2.4)",
+        "static roll error without attitude sensors, corrected with them",
+        "T2's and T4's gyro outlier")
+
+
+def _static_then_corrected(study: OutlierStudy, claim_id: str, cases, statement: str,
+                           paper: str, outlier_note: str) -> ClaimResult | None:
+    """A claim that the first case's outlier leaves a static error and the second case's is
+    corrected (the spike runs of ``cases``: (test, solution) pairs); None when a run is
+    missing."""
+    rs = [_spike(study, case) for case in cases]
     if any(r is None for r in rs):
         return None
     return claim(
-        "R-4.2.4", "Attitude sensors overcome the structural unobservability of the RT "
-        "solution: the roll error it cannot correct alone is corrected with them (§4.2.4)",
-        "static roll error without attitude sensors, corrected with them",
-        "; ".join(_fmt(r) for r in rs),
+        claim_id, statement, paper, "; ".join(_fmt(r) for r in rs),
         [_outcome_check(rs[0], "static error"), _outcome_check(rs[1], "recovers")],
-        assumption=_base_assumption(study, "spike") + "; T2's and T4's gyro outlier",
+        assumption=_base_assumption(study, "spike") + "; " + outlier_note,
         depends_on=("window", "a1_sign"))
 
 
