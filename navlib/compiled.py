@@ -16,7 +16,19 @@ from navlib.observability import sliding
 
 def compile_kernels() -> None:
     """Compile (first run on a machine) or load (afterwards) every kernel of navlib."""
+    compile_kalman_kernels()
+    compile_other_kernels()
+
+
+def compile_kalman_kernels() -> None:
+    """The Kalman kernels (:func:`navlib.kalman.compile_kernels`): about half of a first
+    compile, so a report compiles them in a second process beside :func:`compile_other_kernels`."""
     kalman.compile_kernels()
+
+
+def compile_other_kernels() -> None:
+    """The linear simulation's, the strapdown mechanisation's and the every-step
+    observability window's kernels."""
     linear_recursion.compile_recursion_kernels()
     strapdown_kernel.compile_kernel()
     sliding.compile_kernel()
