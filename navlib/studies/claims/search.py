@@ -13,11 +13,13 @@ version; notebook 00 reads it with :func:`stored_search` and judges it with
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import itertools
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import pandas as pd
 
+from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir
 from navlib.sweep import sweep
@@ -71,6 +73,22 @@ def search_space(name: str) -> SearchSpace:
     if name not in SEARCH_SPACES:
         raise NavlibInputError(f"search {name!r}: unknown; known: {list(SEARCH_SPACES)}")
     return SEARCH_SPACES[name]
+
+
+def factorial_points(grid: Mapping | None, declared: Mapping,
+                     baseline: Mapping) -> pd.DataFrame:
+    """The full-factorial points of a declared assumption space, one column per assumption.
+
+    ``declared`` maps each assumption to its values; ``grid`` (None: all of ``declared``)
+    narrows it to some names and values, a name it leaves out keeping its ``baseline``
+    value, so ``factorial_points({}, ...)`` is the baseline point alone. Columns come in
+    ``declared`` order, the last varying fastest.
+    """
+    grid = dict(declared) if grid is None else dict(grid)
+    reject_unknown(grid, declared, "grid")
+    grid = {**{name: (baseline[name],) for name in declared}, **grid}
+    return pd.DataFrame(list(itertools.product(*(grid[name] for name in declared))),
+                        columns=list(declared))
 
 
 def run_search(name: str, grid: dict | None = None, scheduler=None,

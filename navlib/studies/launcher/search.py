@@ -11,9 +11,8 @@ import itertools
 import numpy as np
 import pandas as pd
 
-from navlib._validation import reject_unknown
 from navlib.cache import memoized
-from navlib.studies.claims.search import SearchSpace, register_search
+from navlib.studies.claims.search import SearchSpace, factorial_points, register_search
 from navlib.studies.launcher.assumptions import NO_PITCH_KICK_DEG, SURVEYED_PAD_M
 from navlib.studies.launcher.causes import cp_mission_sigmas
 from navlib.studies.launcher.claims import f1_cp_mission_claim
@@ -46,12 +45,7 @@ SEARCH_CLAIMS = ("F1-cp-mission", "F2-roll", "F2-ideal", "R-3.8", "F3-bp", "F5-m
 def search_points(grid: dict | None = None) -> pd.DataFrame:
     """The points of :data:`SEARCH_GRID` (or of ``grid``; a key left out keeps its
     :data:`SEARCH_BASELINE` value) as sweep points of ``"launcher_claims"``."""
-    grid = SEARCH_GRID if grid is None else dict(grid)
-    reject_unknown(grid, SEARCH_GRID, "grid")
-    grid = {**{k: (v,) for k, v in SEARCH_BASELINE.items()}, **grid}
-    rows = [dict(zip(SEARCH_PARAMETERS, values, strict=True))
-            for values in itertools.product(*(grid[k] for k in SEARCH_PARAMETERS))]
-    return pd.DataFrame(rows, columns=list(SEARCH_PARAMETERS))
+    return factorial_points(grid, SEARCH_GRID, SEARCH_BASELINE)
 
 
 @memoized(maxsize=1)

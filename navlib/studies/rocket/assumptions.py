@@ -12,7 +12,7 @@ from navlib.errors import NavlibInputError
 from navlib.models.ecef import P0_DEFAULTS
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
-from navlib.studies.claims.search import SearchSpace, register_search
+from navlib.studies.claims.search import SearchSpace, factorial_points, register_search
 from navlib.studies.rocket.claims import (
     CLAIM_IDS,
     claim_xrank,
@@ -75,18 +75,14 @@ SEARCH_PARAMETERS = ("eta", "nu", "sigma_p0_m", "sigma_v0_m_s", "sigma_sg_ppm", 
 def search_points(grid: dict | None = None) -> pd.DataFrame:
     """The points of :data:`ROBUSTNESS_GRID` (the declared assumption space, full factorial)
     as :func:`navlib.sweep.sweep` points of its ``"claims"`` evaluation."""
-    grid = ROBUSTNESS_GRID if grid is None else dict(grid)
-    reject_unknown(grid, ROBUSTNESS_GRID, "grid")
-    grid = {**{k: (v,) for k, v in ROBUSTNESS_BASELINE.items()}, **grid}
-    rows = []
-    for eta, nu, p0, sg, spin in itertools.product(grid["eta"], grid["nu"], grid["p0"],
-                                                   grid["sigma_sg_ppm"], grid["spin_hz"]):
-        if p0 not in P0_SETS:
-            raise NavlibInputError(f"grid['p0']: unknown set {p0!r}; use {list(P0_SETS)}")
-        p = {**P0_DEFAULTS, **P0_SETS[p0]}
-        rows.append({"eta": eta, "nu": nu, "sigma_p0_m": p["sigma_p0_m"],
-                     "sigma_v0_m_s": p["sigma_v0_m_s"], "sigma_sg_ppm": sg, "spin_hz": spin})
-    return pd.DataFrame(rows, columns=list(SEARCH_PARAMETERS))
+    points = factorial_points(grid, ROBUSTNESS_GRID, ROBUSTNESS_BASELINE)
+    unknown = [p0 for p0 in points["p0"] if p0 not in P0_SETS]
+    if unknown:
+        raise NavlibInputError(f"grid['p0']: unknown set {unknown[0]!r}; use {list(P0_SETS)}")
+    sets = [{**P0_DEFAULTS, **P0_SETS[p0]} for p0 in points.pop("p0")]
+    for column in ("sigma_p0_m", "sigma_v0_m_s"):
+        points[column] = [p[column] for p in sets]
+    return points[list(SEARCH_PARAMETERS)]
 
 
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:

@@ -12,15 +12,12 @@ the truth x0 re-judge those runs.
 
 from __future__ import annotations
 
-import itertools
-
 import pandas as pd
 
-from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG
 from navlib.studies.claims import NOT_EVALUATED
-from navlib.studies.claims.search import SearchSpace, register_search
+from navlib.studies.claims.search import SearchSpace, factorial_points, register_search
 from navlib.studies.ssac.assumptions import (
     ARW_READINGS,
     BASELINE_POINT,
@@ -74,16 +71,13 @@ def search_points(grid: dict | None = None) -> pd.DataFrame:
     """The points of :data:`SEARCH_GRID` (or of ``grid``: a key left out keeps its
     :data:`~navlib.studies.ssac.BASELINE_POINT` value) as :func:`navlib.sweep.sweep` points
     of the ``"ssac_claims"`` evaluation."""
-    grid = SEARCH_GRID if grid is None else dict(grid)
-    reject_unknown(grid, SEARCH_GRID, "grid")
-    grid = {**{k: (BASELINE_POINT[k],) for k in SEARCH_PARAMETERS}, **grid}
-    for key, values in grid.items():
-        unknown = [v for v in values if v not in ROBUSTNESS_GRID[key]]
+    points = factorial_points(grid, SEARCH_GRID, BASELINE_POINT)
+    for key in SEARCH_PARAMETERS:
+        unknown = [v for v in points[key].unique().tolist() if v not in ROBUSTNESS_GRID[key]]
         if unknown:
             raise NavlibInputError(f"grid[{key!r}]: {unknown} not in the declared set "
                                    f"{list(ROBUSTNESS_GRID[key])}")
-    return pd.DataFrame(list(itertools.product(*(grid[k] for k in SEARCH_PARAMETERS))),
-                        columns=list(SEARCH_PARAMETERS))
+    return points
 
 
 def _prepare(P0, attitude_scale, arw_reading, noise_scale):
