@@ -153,11 +153,12 @@ _COMPILE_KALMAN = "from navlib.compiled import compile_kalman_kernels; compile_k
 
 
 def _compile_kernels() -> None:
-    """Compile navlib's numba kernels (or load them from numba's disk cache) before kernels
-    that run at once start: otherwise each of them compiles the same kernels on a machine's
-    first run (README "Compiled kernels"). The Kalman kernels compile in a second process
-    while this one compiles the others (a first compile: 29 s in one process, about 15 s so
-    on two cores); should that process fail, they compile here."""
+    """Compile navlib's shared numba kernels (or load them from numba's disk cache) before
+    kernels that run at once start: otherwise each of them compiles the same kernels on a
+    machine's first run (README "Compiled kernels"). The Kalman kernels compile in a second
+    process while this one compiles the others; should that process fail, they compile here.
+    The observability window, which one notebook uses, compiles in that notebook
+    (:mod:`navlib.compiled`)."""
     # imported here: the runner itself needs neither numba nor NumPy otherwise
     from navlib import compiled
 
