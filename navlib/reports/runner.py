@@ -175,12 +175,15 @@ def _compile_kernels() -> None:
 
 
 def queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[NotebookInfo]:
-    """Longest first, by the ``seconds`` of the previous manifest in ``output`` or, when it
-    has none (a new folder), in :func:`default_output_dir` (the last ``make report``);
-    notebooks it does not time come first, in name order (they may be long). A notebook
-    that starts :attr:`~NotebookInfo.after` others keeps its place: the workers take the
-    first notebook of the queue that is ready, so it starts as soon as those have finished
-    (beside the rest) instead of after every other notebook."""
+    """Longest path first: a notebook's ``seconds`` in the previous manifest (of ``output``
+    or, when it has none, a new folder, of :func:`default_output_dir`: the last ``make
+    report``) plus the longest of the notebooks that start :attr:`~NotebookInfo.after` it,
+    so a summary that waits for others does not start late because they did. Notebooks the
+    manifest does not time count as infinitely long (they may be long); among equals (a
+    first report has no manifest), those others wait for come first, then name order. A
+    notebook that waits keeps its place: the workers take the first notebook of the queue
+    that is ready, so it starts as soon as those have finished (beside the rest) instead of
+    after every other notebook."""
     entries: dict = {}
     for folder in (output, default_output_dir()):
         entries = load_manifest(folder).get("notebooks", {})
@@ -194,7 +197,15 @@ def queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[Notebook
         except (TypeError, KeyError, ValueError):
             return math.inf
 
-    return sorted(selected, key=lambda info: -seconds(info))  # stable: ties by name
+    waiting = {info.name: [seconds(other) for other in selected
+                           if info.name in dependencies(other, selected)]
+               for info in selected}
+
+    def priority(info: NotebookInfo) -> tuple[float, bool]:
+        path = seconds(info) + max(waiting[info.name], default=0.0)
+        return -path, not waiting[info.name]
+
+    return sorted(selected, key=priority)  # stable: ties by name
 
 
 class _Pending:

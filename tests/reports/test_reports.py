@@ -4,6 +4,7 @@ Kernel starts cost about a second each, so one good report is built per module a
 into each test's own folder before a test modifies it.
 """
 
+import dataclasses
 import json
 import os
 import shutil
@@ -395,6 +396,21 @@ def test_queue_is_longest_first_by_the_previous_manifest(good, tmp_path, monkeyp
     assert order() == ["03_bad", "02_other", "01_good"]  # untimed first: it may be long
 
 
+def test_queue_puts_what_a_waiting_notebook_needs_first(good, tmp_path, monkeypatch):
+    """The longest path first: a notebook plus the longest of those that wait for it."""
+    infos = reports.list_notebooks(good[0])
+    waits = dataclasses.replace(infos[0], after=("03",))  # 01_good starts after 03_bad
+    infos = [waits, *infos[1:]]
+    out = tmp_path / "out"
+    out.mkdir()
+    monkeypatch.setattr(runner, "default_output_dir", lambda: tmp_path / "none")
+    order = lambda: [i.name for i in runner.queue_order(infos, out)]  # noqa: E731
+    assert order() == ["03_bad", "01_good", "02_other"]  # no manifest: 03 is waited for
+    (out / "manifest.json").write_text(json.dumps({"notebooks": {
+        "01_good": {"seconds": 9.0}, "02_other": {"seconds": 12.0}, "03_bad": {"seconds": 5.0}}}))
+    assert order() == ["03_bad", "02_other", "01_good"]  # 5 + 9 s before 12 s before 9 s
+
+
 def test_kernel_environment_shares_the_cores(monkeypatch):
     for name in (*reports.BLAS_THREAD_VARIABLES, *reports.MALLOC_VARIABLES):
         monkeypatch.delenv(name, raising=False)
@@ -465,8 +481,10 @@ def test_a_notebook_after_others_starts_when_they_have_finished(tmp_path):
     nbformat.write(nb, nbdir / "00_summary.ipynb")
     infos = reports.list_notebooks(nbdir)
     assert [i.after for i in infos] == [("01",), (), ()]
-    # 00 keeps its place in the queue; the workers skip it until 01 has finished
-    assert runner.queue_order(infos, tmp_path / "out")[0].name == "00_summary"
+    # no manifest: 01, which 00 waits for, first; 00 keeps its place before 02, and the
+    # workers skip it until 01 has finished
+    assert [i.name for i in runner.queue_order(infos, tmp_path / "out")] == [
+        "01_slow", "00_summary", "02_fast"]
     runs = reports.run_reports(nbdir, tmp_path / "out", jobs=2)
     assert all(r.ok for r in runs)
     stamps = {n: float((tmp_path / n).read_text()) for n in ("00", "01", "02")}
