@@ -45,3 +45,41 @@ def test_joint_search_reads_best_point_and_conflicts():
     assert js.held == {"X": 2, "Y": 1, "Z": 2}
     with pytest.raises(NavlibInputError, match="missing"):
         engine.joint_search(frame, ["b"], ["X"])
+
+
+def _study(name, points, baseline):
+    """A registered study whose claim A holds where x > 0 and B where y > 0."""
+    def claims_at(point):
+        full = {**baseline, **point}
+        return [engine.claim(cid, "statement", "paper", f"{key} = {full[key]}",
+                             [engine.check("value", 1.0 if full[key] > 0 else 0.0, ">=", 1.0)],
+                             depends_on=(key,))
+                for cid, key in (("A", "x"), ("B", "y"))]
+
+    return engine.Study(name, "a paper", lambda quick: claims_at({}),
+                        {"x": (-1.0, 1.0), "y": (-1.0, 1.0)},
+                        lambda quick: [(p, claims_at(p)) for p in points],
+                        baseline_point=baseline)
+
+
+def test_a_factorial_declared_set_is_its_own_joint_search(monkeypatch):
+    from navlib.studies.claims import registry
+
+    baseline = {"x": 1.0, "y": -1.0}
+    factorial = [{"x": x, "y": y} for x in (-1.0, 1.0) for y in (-1.0, 1.0)]
+    monkeypatch.setattr(registry, "_REGISTRY", {})  # the papers' studies are not run here
+    monkeypatch.setitem(registry._REGISTRY, "fact", _study("fact", factorial, baseline))
+    frame = engine.factorial_search("fact")
+    assert list(frame.columns) == ["x", "y", "A", "B"] and len(frame) == 4
+    assert frame.A.tolist() == [False, False, True, True]
+    found = engine.joint_search(frame, ["x", "y"], ["A", "B"])
+    assert found.best == {"x": 1.0, "y": 1.0} and found.n_reproduced == 2
+    searches = {s.name: s for s in engine.joint_searches()}
+    assert set(searches) == {*engine.SEARCH_SPACES, "fact"}  # the stored ones, then in process
+    assert searches["fact"].claim_ids == ("A", "B")
+    assert searches["fact"].baseline.to_dict() == baseline
+    # one at a time from the baseline: A and B are never varied together, so no joint search
+    one_at_a_time = [{"x": -1.0}, {"y": 1.0}]
+    monkeypatch.setitem(registry._REGISTRY, "fact", _study("fact", one_at_a_time, baseline))
+    assert engine.factorial_search("fact") is None
+    assert "fact" not in {s.name for s in engine.joint_searches()}

@@ -58,6 +58,7 @@ from navlib.studies.claims.registry import (
     STUDY_MODULES,
     Study,
     all_claims,
+    factorial_search,
     register,
     studies,
     study_frame,
@@ -73,6 +74,8 @@ from navlib.studies.claims.robustness import (
 from navlib.studies.claims.search import (
     SEARCH_SPACES,
     SearchSpace,
+    SearchTable,
+    joint_searches,
     register_search,
     run_search,
     search_space,
@@ -82,9 +85,10 @@ from navlib.studies.claims.summary import counts, paper_summary, reading_markdow
 
 __all__ = [
     "BASES", "COLUMNS", "NOT_EVALUATED", "OPS", "SEARCH_SPACES", "STATUSES", "STUDY_MODULES",
-    "VERDICTS", "Check", "ClaimResult", "JointSearch", "Robustness", "SearchSpace", "Study",
-    "all_claims", "check",
-    "claim", "claims_frame", "counts", "explain", "joint_search", "not_evaluated",
+    "VERDICTS", "Check", "ClaimResult", "JointSearch", "Robustness", "SearchSpace",
+    "SearchTable", "Study", "all_claims", "check",
+    "claim", "claims_frame", "counts", "explain", "factorial_search", "joint_search",
+    "joint_searches", "not_evaluated",
     "paper_summary", "reading_markdown", "register", "register_search", "robustness_over",
     "run_search", "search_space", "stored_search", "studies",
     "study_frame", "study_robustness", "summary_markdown", "verdict_of",

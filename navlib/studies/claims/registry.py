@@ -163,3 +163,33 @@ def all_claims(quick: bool = False, only: Sequence[str] | None = None,
         raise NavlibInputError(f"claims: duplicate claim ids {dup}")
     return frame
 
+
+
+def factorial_search(name: str, quick: bool = False) -> pd.DataFrame | None:
+    """Study ``name``'s claims at every point of its declared set, as a joint-search frame.
+
+    When the study evaluates its set as a full factorial (every combination of the values
+    its points take), its robustness points are a joint search of that space already, in
+    process: one row per point (the :attr:`Study.grid` columns, a name a point leaves out at
+    its baseline value) and one boolean column per measured claim judged at every point
+    (True = reproduced), for :func:`~navlib.studies.claims.joint_search`. None when the set
+    is evaluated one assumption at a time (such points cannot show which claims hold
+    together) or the study declares none.
+    """
+    study = studies()[name]
+    if study.robustness is None or not study.grid:
+        return None
+    baseline = study.baseline_at(quick)
+    measured = [r.claim_id for r in study.baseline(quick) if r.basis == "measured"]
+    rows = []
+    for point, results in study.robustness(quick):
+        verdicts = {r.claim_id: r.verdict == "reproduced" for r in results}
+        rows.append({**{k: baseline[k] for k in study.grid}, **point, **verdicts})
+    frame = pd.DataFrame(rows)
+    keys = list(study.grid)
+    levels = [frame[k].map(repr).nunique() for k in keys]
+    distinct = len(frame[keys].map(repr).drop_duplicates())
+    if distinct != len(frame) or distinct != int(pd.Series(levels).prod()) or distinct < 2:
+        return None
+    claims = [c for c in measured if c in frame.columns and frame[c].notna().all()]
+    return frame[keys + claims].astype({c: bool for c in claims})

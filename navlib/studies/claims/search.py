@@ -22,6 +22,7 @@ import pandas as pd
 from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir
+from navlib.studies.claims.registry import factorial_search, studies
 from navlib.sweep import sweep
 
 
@@ -112,3 +113,59 @@ def stored_search(name: str) -> tuple[pd.DataFrame, dict]:
             key, _, value = line[1:].partition(":")
             header[key.strip()] = value.strip()
     return pd.read_csv(path, comment="#"), header
+
+
+@dataclass(frozen=True)
+class SearchTable:
+    """One joint search as notebook 00 shows it (:func:`joint_searches`).
+
+    Attributes
+    ----------
+    name, paper : str
+        The search (a :data:`SEARCH_SPACES` name, or the study searched in process) and the
+        paper.
+    source : str
+        Where the table comes from (the stored file's command line and navlib version, or
+        the study's factorial set evaluated in this process).
+    frame : DataFrame
+        One row per point: the ``parameters`` columns and a boolean column per claim.
+    parameters, claim_ids : tuple of str
+    baseline : Series
+        The baseline point (the ``parameters``).
+    """
+
+    name: str
+    paper: str
+    source: str
+    frame: pd.DataFrame
+    parameters: tuple
+    claim_ids: tuple
+    baseline: pd.Series
+
+
+def joint_searches(quick: bool = False) -> list[SearchTable]:
+    """Every joint search of the papers' assumption spaces: the stored searches of
+    :data:`SEARCH_SPACES`, then, for each study whose measured claims no stored search
+    judges, its declared set when the study evaluates it as a full factorial
+    (:func:`~navlib.studies.claims.registry.factorial_search`, in process: the Beaudoin
+    outlier claims over the recovery window and the sign of A1)."""
+    out = []
+    for name, space in SEARCH_SPACES.items():
+        frame, header = stored_search(name)
+        out.append(SearchTable(name, space.paper,
+                               f"{header['command']} (navlib {header['navlib']})", frame,
+                               space.parameters, space.claim_ids, space.points({}).iloc[0]))
+    searched = {c for space in SEARCH_SPACES.values() for c in space.claim_ids}
+    for name, study in studies().items():
+        frame = factorial_search(name, quick)
+        if frame is None:
+            continue
+        parameters = tuple(study.grid)
+        claims = tuple(c for c in frame.columns[len(parameters):] if c not in searched)
+        if claims:
+            baseline = study.baseline_at(quick)
+            out.append(SearchTable(
+                name, study.paper, f"the study's declared set, full factorial, in process "
+                f"({study.grid_note})", frame[[*parameters, *claims]], parameters, claims,
+                pd.Series({k: baseline[k] for k in parameters})))
+    return out
