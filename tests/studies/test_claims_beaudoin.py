@@ -112,6 +112,19 @@ def test_model_claims_move_with_the_initial_attitude_sigma():
         assert low[cid].checks[0].value != high[cid].checks[0].value
 
 
+def test_bias_model_claim_fails_for_a_tactical_gyro_with_a_short_time_constant():
+    """C4-models ("Markov or random walk make little difference") measures the bias models'
+    attitude sigmas: with the paper's gyro no defensible gyro time constant flips it (RW /
+    Markov within 1 % from c_g = 10 s to 1000 s), but a 5 deg/h gyro (100 times the
+    paper's) with c_g = 30 s separates the models by a third."""
+    cases = ("att/GAP/markov", "att/GAP/random_walk", "ins-only/GAP/markov")
+    gyro = sensor_values()["gyro_bias"]
+    base = _evolution(cases)["C4-models"]
+    tactical = _evolution(cases, c_g=30.0, gyro_bias=100.0 * gyro)["C4-models"]
+    assert tactical.checks[0].value > 10 * base.checks[0].value
+    assert (base.verdict, tactical.verdict) == ("reproduced", "not reproduced")
+
+
 # ---------------------------------------------------------------- Table 2
 @pytest.fixture(scope="module")
 def table2_claims():
