@@ -80,10 +80,10 @@ def run_notebook(number: str, peaks: dict) -> float:
 
 def run_report(jobs: int, cache_dir: Path) -> float:
     """Wall time of a whole full-mode report with ``jobs`` kernels, the navlib cache in
-    ``cache_dir`` and numba's in ``cache_dir/numba`` (an empty folder: every first compile
-    included), s."""
+    ``cache_dir/navlib`` and numba's in ``cache_dir/numba`` (empty folders: every first
+    compile included), s."""
     env = {k: v for k, v in os.environ.items() if k != "NAVLIB_NO_CACHE"}
-    env["NAVLIB_CACHE_DIR"] = str(cache_dir)
+    env["NAVLIB_CACHE_DIR"] = str(cache_dir / "navlib")
     env["NUMBA_CACHE_DIR"] = str(cache_dir / "numba")
     with tempfile.TemporaryDirectory(prefix="navlib-bench-") as out:
         start = time.perf_counter()
