@@ -10,6 +10,7 @@ import navlib.studies  # noqa: F401 - registers the SSAC search space
 from navlib.studies import claims as engine
 from navlib.studies import ssac as S
 from navlib.studies.ssac import search
+from navlib.studies.ssac.eigen_claims import orientation_claim
 
 DURATION_S = 3600.0
 
@@ -125,6 +126,18 @@ def test_orientation_shares_move_with_the_imu_orientation():
     base = S.orientation_table(duration_s=600.0)
     other = S.orientation_table((75.0, -40.0, 25.0), duration_s=600.0)
     assert not np.allclose(base.body_share, other.body_share, atol=1e-3)
+
+
+def test_orientation_claim_fails_for_a_level_imu_turned_in_heading():
+    """SSAC-orientation ("every axis of a rotated IMU has a non-estimable portion") holds for
+    the tilted orientations of the declared set and fails for the level one turned only in
+    heading (in the set too): its vertical axis keeps no portion."""
+    assert S.ORIENTATIONS[0] == S.ORIENTATION_DEG
+    verdicts = {ypr: orientation_claim(S.orientation_table(ypr, duration_s=600.0))
+                for ypr in S.ORIENTATIONS}
+    assert [v.verdict for v in verdicts.values()] == ["reproduced"] * 3 + ["not reproduced"]
+    level = verdicts[(45.0, 0.0, 0.0)].checks[0].value
+    assert level < 1e-3 < verdicts[S.ORIENTATION_DEG].checks[0].value
 
 
 def test_reduced_filters_explained_by_the_dropped_coupling(runs):

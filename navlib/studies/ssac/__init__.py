@@ -27,6 +27,7 @@ from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG
 from navlib.studies.ssac.assumptions import (
     ARW_READINGS,
     BASELINE_POINT,
+    ORIENTATIONS,
     QUICK_DURATION_S,
     ROBUSTNESS_GRID,
     X0_BASELINE,
@@ -82,8 +83,8 @@ from navlib.studies.ssac.search import SEARCH, SEARCH_GRID, search_points
 
 __all__ = [
     "ADEQUATE", "ARW_READINGS", "BASELINE_POINT", "CONVERGENCE", "CONVERGENCE_DEFAULT", "FAST",
-    "GROUP_THRESHOLD", "MEDIUM", "ORIENTATION_DEG", "P0_MODIFIED_ATTITUDE_SCALE", "PAIRS",
-    "PAPER_GROUPS", "PAPER_RANKS", "POSITION", "QUICK_DURATION_S", "RANK_RTOL",
+    "GROUP_THRESHOLD", "MEDIUM", "ORIENTATIONS", "ORIENTATION_DEG", "P0_MODIFIED_ATTITUDE_SCALE",
+    "PAIRS", "PAPER_GROUPS", "PAPER_RANKS", "POSITION", "QUICK_DURATION_S", "RANK_RTOL",
     "ROBUSTNESS_GRID", "SEARCH", "SEARCH_GRID", "SITE_ALT_M", "SITE_LAT_DEG", "STATE_GROUPS",
     "X0_BASELINE", "X0_DRAWS", "X0_SEED", "SSACStudy", "actual_claim", "actual_error",
     "analytic_null_vectors", "claims_table", "closed_form_limits", "covariance_run",

@@ -6,7 +6,12 @@ from __future__ import annotations
 import numpy as np
 
 from navlib.models.ssac import SIGMA_NU
-from navlib.studies.ssac.experiment import CONVERGENCE, CONVERGENCE_DEFAULT, X0_DRAWS
+from navlib.studies.ssac.experiment import (
+    CONVERGENCE,
+    CONVERGENCE_DEFAULT,
+    ORIENTATION_DEG,
+    X0_DRAWS,
+)
 from navlib.studies.ssac.observability import RANK_RTOL
 
 RUN_DEPS = ("P0", "attitude_scale", "arw_reading", "noise_scale")
@@ -26,6 +31,10 @@ def sigma_nu(noise_scale: float) -> float | None:
     return None if noise_scale == 1.0 else SIGMA_NU * noise_scale
 
 
+ORIENTATIONS = (ORIENTATION_DEG, (120.0, -35.0, 60.0), (-75.0, 50.0, -140.0), (45.0, 0.0, 0.0))
+"""IMU orientations (yaw, pitch, roll, deg, ZYX) of the "rotated IMU" of SSAC-orientation: the
+experiment's, two other arbitrary ones, and a level IMU turned in heading only (a rotated
+IMU too, though not a tilted one; A-SSAC-set)."""
 X0_BASELINE = "biases at 1 sigma"
 """The baseline truth x0 of SSAC-actual (A-SSAC-actual)."""
 ROBUSTNESS_GRID = {
@@ -33,6 +42,7 @@ ROBUSTNESS_GRID = {
     "convergence": tuple(CONVERGENCE), "rank_rtol": (1e-12, 1e-10, 1e-8, 1e-6),
     "arw_reading": tuple(ARW_READINGS), "noise_scale": NOISE_SCALES,
     "x0": (X0_BASELINE, *(f"N(0, P0) draw {i + 1}" for i in range(X0_DRAWS))),
+    "imu_orientation": ORIENTATIONS,
 }
 """The declared assumption set (docs/assumptions.md, A-SSAC-set): the paper's P0 is lost,
 so the matched P0 of ssac.md §4.4 and the generic 1° one, each with its attitude sigmas
@@ -40,12 +50,13 @@ halved, kept and doubled (full factorial, 6 runs); one at a time from the baseli
 reading of "converged" (:data:`~navlib.studies.ssac.CONVERGENCE`), the relative rank
 tolerance of O (1e-12 to 1e-6: the ninth singular value is 7e-5 of the largest, the
 round-off floor ~1e-14), the unit of the gyro random walk (:data:`ARW_READINGS`), the ZVU
-measurement noise (:data:`NOISE_SCALES`) and the truth x0 of SSAC-actual
-(:func:`~navlib.studies.ssac.x0_draws`). Each claim is judged on the points varying its
+measurement noise (:data:`NOISE_SCALES`), the truth x0 of SSAC-actual
+(:func:`~navlib.studies.ssac.x0_draws`) and the IMU orientation of SSAC-orientation
+(:data:`ORIENTATIONS`). Each claim is judged on the points varying its
 ``depends_on``."""
 BASELINE_POINT = {"P0": "matched", "attitude_scale": 1.0, "convergence": CONVERGENCE_DEFAULT,
                   "rank_rtol": RANK_RTOL, "arw_reading": "deg/sqrt(h)", "noise_scale": 1.0,
-                  "x0": X0_BASELINE}
+                  "x0": X0_BASELINE, "imu_orientation": ORIENTATION_DEG}
 """The baseline point of :data:`ROBUSTNESS_GRID`."""
 QUICK_DURATION_S = 600.0
 """Run length of quick mode (the 30-60 min claims are then not evaluated)."""

@@ -21,10 +21,12 @@ from navlib.studies.ssac.assumptions import (
     sigma_nu,
 )
 from navlib.studies.ssac.claims import actual_claim, ssac_claims, static_tables
+from navlib.studies.ssac.eigen_claims import orientation_claim
 from navlib.studies.ssac.experiment import (
     CONVERGENCE_DEFAULT,
     P0_MODIFIED_ATTITUDE_SCALE,
     covariance_run,
+    orientation_table,
     p0_runs,
     p0_sensitivity,
     x0_draws,
@@ -55,8 +57,8 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
     points differ in P0 alone, so the 15-, 12- and 10-state runs (with the P0-sensitivity
     rerun, the same for every point: :func:`~navlib.studies.ssac.modified_run`) are three
     stacked recursions (:func:`~navlib.studies.ssac.p0_runs`); the convergence,
-    rank-tolerance and x0 points
-    re-judge the baseline run. Kept in the process for the last mode asked."""
+    rank-tolerance and x0 points re-judge the baseline run, an IMU orientation point
+    reruns the orientation table. Kept in the process for the last mode asked."""
     duration = QUICK_DURATION_S if quick else 3600.0
     tables = static_tables(SITE_LAT_DEG, SITE_ALT_M, duration)
     points = [(p0, scale) for p0 in ROBUSTNESS_GRID["P0"]
@@ -87,6 +89,9 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
                             rank_rtol=rtol, **kw), "rank_rtol")))
     for label, x0 in zip(ROBUSTNESS_GRID["x0"][1:], x0_draws(study), strict=True):
         out.append(({"x0": label}, [actual_claim(study, x0)]))
+    for ypr in ROBUSTNESS_GRID["imu_orientation"][1:]:
+        out.append(({"imu_orientation": ypr},
+                    [orientation_claim(orientation_table(ypr, duration))]))
     if not quick:
         for reading, arw in ARW_READINGS.items():
             if arw is not None:
@@ -114,5 +119,5 @@ engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", base
                              ROBUSTNESS_GRID, robustness_claims,
                              "P0 x attitude scale factorial (stacked recursions per state "
                              "count); convergence reading, rank tolerance, gyro-noise unit, ZVU "
-                             "noise and x0 one at a time from the baseline",
+                             "noise, x0 and IMU orientation one at a time from the baseline",
                              baseline_point=BASELINE_POINT))

@@ -126,7 +126,8 @@ def _claims_run(prepared, P0, attitude_scale, arw_reading, noise_scale, converge
 
 register(Evaluation("ssac_claims", "SSAC ZVU alignment: verdicts of Silva et al.'s claims "
                     "(True = reproduced) at a point of the declared assumption set",
-                    dict(BASELINE_POINT), SHARED, _claims_run, _prepare))
+                    {k: BASELINE_POINT[k] for k in SEARCH_PARAMETERS}, SHARED, _claims_run,
+                    _prepare))
 
 SEARCH = register_search(SearchSpace(
     "ssac", "Silva, Hemerly & Leite Filho (2017)", SEARCH_PARAMETERS, CLAIM_IDS,
