@@ -74,7 +74,7 @@ class FilterCache:
                 self._items.pop(next(iter(self._items)))
             model = launcher(solution, biases, bias_model, self.trajectory,
                              **self.model_options)
-            value = prepare_linear(model, compact=True)
+            value = prepare_linear(model, compact=True, own_model=True)   # model not kept
             if key not in self._summaries:
                 self._summaries[key] = CovarianceSummary.of(value)
                 self._disk.put(("summary", key), self._summaries[key])
