@@ -368,6 +368,18 @@ class FactoredNoise:
         return L @ L.swapaxes(-1, -2)
 
 
+def _definite_steps(R, count: int) -> np.ndarray:
+    """:func:`definite_noise` of each epoch's ``R`` (count, m, m); one test when the stack
+    repeats one matrix (a broadcast constant ``R``, stride 0: the same matrix, so the same
+    answer)."""
+    R = np.asarray(R)
+    if not count:
+        return np.zeros(0, dtype=bool)
+    if R.ndim == 3 and R.strides[0] == 0:
+        return np.broadcast_to(definite_noise(R[0]), (count,))
+    return definite_noise(R)
+
+
 def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
                          gains: bool = False, block: int = 2048, keep=None):
     """The Joseph-form covariance recursion (spec launcher.md §6.2) for a stack of initial
@@ -396,7 +408,7 @@ def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: 
     if H is None:
         r_definite = np.zeros(count, dtype=bool)
     else:
-        r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
+        r_definite = _definite_steps(R, count)
     update, r_definite = kernel_array(measured, np.bool_), kernel_array(r_definite, np.bool_)
     P_prior = np.empty((batch, count, n, n)) if priors else np.empty((batch, 0, n, n))
     kept = range(count) if keep is None else np.unique(np.asarray(keep, dtype=int) % max(count, 1))
