@@ -169,7 +169,7 @@ def _copy(src, dst):
     """``dst[:, :] = src`` entry by entry (matrices of one shape). The kernels copy with it
     (and :func:`_copy_vector`) rather than by assigning an array to a slice, whose compiled
     shape check (numba 0.61+ formats both shapes into its error message) took about 4 s of
-    the first compile (README "Compiled kernels")."""
+    the first compile of these kernels."""
     for i in range(src.shape[0]):
         for j in range(src.shape[1]):
             dst[i, j] = src[i, j]
