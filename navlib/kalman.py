@@ -133,8 +133,8 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
     S = np.empty((m, m))
     _sym_sum(np.dot(H, PHt), R, S)
     if m == 0:
-        K[:, :] = PHt
-        S_pinv[:, :] = S
+        _copy(PHt, K)
+        _copy(S, S_pinv)
         return 0
     if definite and _inverse(S, S_pinv):
         dof = m
@@ -149,8 +149,8 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
                 for i in range(m):
                     scaled[i, j] = V[i, j] * inv_w
                 dof += 1
-        S_pinv[:, :] = np.dot(scaled, V.T)
-    K[:, :] = np.dot(PHt, S_pinv)
+        _copy(np.dot(scaled, V.T), S_pinv)
+    _copy(np.dot(PHt, S_pinv), K)
     return dof
 
 
@@ -164,6 +164,24 @@ def _sym_sum(A, B, out):
 
 
 @numba.njit(cache=True)
+def _copy(src, dst):
+    """``dst[:, :] = src`` entry by entry (matrices of one shape). The kernels copy with it
+    (and :func:`_copy_vector`) rather than by assigning an array to a slice, whose compiled
+    shape check (numba 0.61+ formats both shapes into its error message) took about 4 s of
+    the first compile of these kernels."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@numba.njit(cache=True)
+def _copy_vector(src, dst):
+    """``dst[:] = src`` entry by entry (vectors of one length; see :func:`_copy`)."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@numba.njit(cache=True)
 def _inverse(S, out):
     """``out = S^-1`` by LU decomposition with partial pivoting and two triangular solves
     against the identity: the algorithm of LAPACK ``gesv`` that :func:`numpy.linalg.inv`
@@ -173,9 +191,14 @@ def _inverse(S, out):
     that ``R`` is lost in rounding), and the caller takes the pseudo-inverse."""
     m = S.shape[0]
     LU = S.copy()
-    perm = np.arange(m)
+    perm = np.empty(m, dtype=np.int64)
     for k in range(m):
-        p = k + np.argmax(np.abs(LU[k:, k]))
+        perm[k] = k
+    for k in range(m):
+        p = k                                  # first row of largest |LU[i, k]|, i >= k
+        for i in range(k + 1, m):
+            if abs(LU[i, k]) > abs(LU[p, k]):
+                p = i
         if LU[p, k] == 0.0:
             return False
         if p != k:
@@ -291,14 +314,16 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
             predict_kernel(cur, F[s], Q[s], nxt)
             cur, nxt = nxt, cur
         if P_prior.shape[0]:
-            P_prior[i] = cur
+            _copy(cur, P_prior[i])
         if update[i]:
             d = _joseph_kernel(cur, H[i], R[i], definite[i], pinv_rtol, nxt, K_k, S_k)
             cur, nxt = nxt, cur
             if K.shape[0]:
-                K[i], S_pinv[i], dof[i] = K_k, S_k, d
+                _copy(K_k, K[i])
+                _copy(S_k, S_pinv[i])
+                dof[i] = d
         if slot[i] >= 0:
-            P_post[slot[i]] = cur
+            _copy(cur, P_post[slot[i]])
     return cur
 
 
@@ -342,6 +367,18 @@ class FactoredNoise:
         return L @ L.swapaxes(-1, -2)
 
 
+def _definite_steps(R, count: int) -> np.ndarray:
+    """:func:`definite_noise` of each epoch's ``R`` (count, m, m); one test when the stack
+    repeats one matrix (a broadcast constant ``R``, stride 0: the same matrix, so the same
+    answer)."""
+    R = np.asarray(R)
+    if not count:
+        return np.zeros(0, dtype=bool)
+    if R.ndim == 3 and R.strides[0] == 0:
+        return np.broadcast_to(definite_noise(R[0]), (count,))
+    return definite_noise(R)
+
+
 def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
                          gains: bool = False, block: int = 2048, keep=None):
     """The Joseph-form covariance recursion (spec launcher.md §6.2) for a stack of initial
@@ -370,7 +407,7 @@ def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: 
     if H is None:
         r_definite = np.zeros(count, dtype=bool)
     else:
-        r_definite = definite_noise(R) if count else np.zeros(0, dtype=bool)
+        r_definite = _definite_steps(R, count)
     update, r_definite = kernel_array(measured, np.bool_), kernel_array(r_definite, np.bool_)
     P_prior = np.empty((batch, count, n, n)) if priors else np.empty((batch, 0, n, n))
     kept = range(count) if keep is None else np.unique(np.asarray(keep, dtype=int) % max(count, 1))
@@ -415,7 +452,9 @@ def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_
         j0 = samples[u]
         x, innovation, nis_u, dof = update_kernel(x, P, z[u], H, R, definite, pinv_rtol,
                                                   Ps[u], K, S_pinv)
-        xs[u], innovations[u], nis[u], dofs[u] = x, innovation, nis_u, dof
+        _copy_vector(x, xs[u])
+        _copy_vector(innovation, innovations[u])
+        nis[u], dofs[u] = nis_u, dof
         P = Ps[u]
     return x, P
 

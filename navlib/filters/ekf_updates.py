@@ -47,7 +47,7 @@ class Epochs:
         self.rows, self.m_all = rows, m_all
         designs, self.at = {}, {}
         for k, epoch in events.items():
-            key = tuple(meas for meas, _ in epoch)
+            key = tuple([meas for meas, _ in epoch])
             if key not in designs:
                 fixed = (all(isinstance(meas, FixedDesign) for meas in key)
                          and len(set(key)) == len(key))

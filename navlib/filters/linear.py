@@ -136,9 +136,13 @@ class LinearSimulation:
             raise NavlibInputError(
                 f"rows: expected (p, {self.n}) or ({self.t.size}, p, {self.n}), got {rows.shape}"
             )
-        truth = np.einsum("kpn,krn->krp", rows, self.truth)
-        est = np.einsum("kpn,krn->krp", rows, self.estimate)
-        var = np.einsum("kpn,knm,kpm->kp", rows, self.P, rows)
+        # only the states some row weighs: a watched quantity is a few of them (e.g. the
+        # three attitude errors), and the other terms of each sum are exact zeros
+        cols = np.flatnonzero(np.any(rows != 0, axis=(0, 1)))
+        rows = rows[..., cols]
+        truth = np.einsum("kpn,krn->krp", rows, self.truth[..., cols])
+        est = np.einsum("kpn,krn->krp", rows, self.estimate[..., cols])
+        var = np.einsum("kpn,knm,kpm->kp", rows, self.P[:, cols[:, None], cols], rows)
         return truth, est, np.sqrt(np.clip(var, 0.0, None))
 
     def consistency(self, alpha: float = 0.05) -> dict:

@@ -190,15 +190,21 @@ def truth_kernel(x, F, noise, inputs, j0):
     of ``F`` (s, n, n); ``x`` (., R, n), ``noise`` (s, R, n) or no rows, ``inputs``
     (s, R, n) or (s, 1, n) (the same input for every run) or no rows. The NumPy code it
     replaced is ``tests/linear_reference.py``."""
-    runs = x.shape[1]
+    runs, n = x.shape[1], x.shape[2]
     for i in range(F.shape[0]):
         j = j0 + i
         _rows_times(x[j], F[i], x[j + 1])
+        # sums entry by entry: ``x[j + 1] += noise[i]`` assigns an array to a slice, whose
+        # compiled shape check took about 4 s of the first compile (navlib.kalman._copy)
         if noise.shape[0]:
-            x[j + 1] += noise[i]
+            for r in range(runs):
+                for c in range(n):
+                    x[j + 1, r, c] += noise[i, r, c]
         if inputs.shape[0]:
             for r in range(runs):
-                x[j + 1, r] += inputs[i, 0 if inputs.shape[1] == 1 else r]
+                u = 0 if inputs.shape[1] == 1 else r
+                for c in range(n):
+                    x[j + 1, r, c] += inputs[i, u, c]
 
 
 def measure_block(prepared: LinearFilter, block: Block, work: Work, draws, z_add,

@@ -433,3 +433,22 @@ def test_a_diverged_ekf_state_is_a_clear_error():
     state = (np.array([np.nan, 0.0, 0.0]), np.zeros(3), np.eye(3))
     with pytest.raises(NavlibInputError, match=r"diverged.*t = 0\.000 s"):
         _window_nominal(None, t, np.zeros((3, 3)), np.zeros((3, 3)), state, {}, None)
+
+
+def test_own_model_steps_are_the_same_numbers(short_launcher):
+    """``own_model=True`` writes ``F`` and ``Gamma`` into the model's own ``A`` and ``G``:
+    the same products (to the bit) and the same prepared filter, without new arrays."""
+    def model():
+        return launcher("ins_gps_att_rt", "GAP", "markov", short_launcher)
+
+    ref = filters.prepare_linear(model(), compact=True)
+    owned = model()
+    got = filters.prepare_linear(owned, compact=True, own_model=True)
+    for name in ("F", "Gamma", "L"):
+        np.testing.assert_array_equal(getattr(got.steps, name), getattr(ref.steps, name))
+    assert np.shares_memory(got.steps.F, owned.A) and np.shares_memory(got.steps.Gamma, owned.G)
+    np.testing.assert_array_equal(got.covariance.P_post, ref.covariance.P_post)
+    np.testing.assert_array_equal(got.gains.K, ref.gains.K)
+    constant = launcher("ins_gps", "GAP", "markov", short_launcher)     # A per sample, H fixed
+    steps = filters.linear_steps(constant, own_model=False)
+    assert not np.shares_memory(steps.F, constant.A)

@@ -160,3 +160,28 @@ def test_no_snapshot_with_the_closed_loop_reference():
     with pytest.raises(NavlibInputError, match="posterior"):
         simulate_ekf(traj, solution="ins_gps_rt", biases="GA", noise=False,
                      initial_error=False, gnss_rate_hz=20.0, snapshot_before=5.0)
+
+
+def test_conclusion_runs_kept_without_conclusions(flight, monkeypatch):
+    """paper_tests without ``conclusions`` (notebook 05) still runs the conclusion spikes in
+    its recursions and keeps them: the same study with ``conclusions`` (the claims engine)
+    then prepares no filter, and its conclusions are those of a study run alone."""
+    kw = dict(shapes=("spike",), outlier_time_s=20.0, window=15.0)
+    first = study.FilterCache(flight, size=1)
+    study.paper_tests(cache=first, **kw)
+    first.release()
+    shared = study.FilterCache(flight, size=1)
+    study.adopt_filters(shared, first)
+
+    def no_preparation(*_args, **_kwargs):
+        raise AssertionError("a filter was prepared")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(study.response, "prepare_linear", no_preparation)
+        got = study.paper_tests(cache=shared, conclusions=True, **kw)
+    alone = study.paper_tests(cache=study.FilterCache(flight, size=1), conclusions=True, **kw)
+    assert got.conclusions.keys() == alone.conclusions.keys() and got.conclusions
+    for key, r in alone.conclusions.items():
+        np.testing.assert_allclose(got.conclusions[key].induced, r.induced, rtol=0,
+                                   atol=1e-12 * max(np.abs(r.induced).max(), 1e-300))
+    assert [c.verdict for c in got.claims] == [c.verdict for c in alone.claims]

@@ -220,7 +220,7 @@ def ekf_vs_covariance(trajectory, *, solution: str = "ins_gps_att",
     pos = [names.index(f"dr_{a}") for a in "xyz"]
     sig_ekf = np.hstack([sigma_in_frame(res.P, psi, C_e_b), res.sigma[:, pos]])
     prepared = prepare_linear(launcher(solution, biases, bias_model, trajectory,
-                                       **model_options))
+                                       **model_options), compact=True, own_model=True)
     P = prepared.covariance.P_post[k]
     sig_cov = np.hstack([sigma_in_frame(P, psi, C_e_b),
                          np.sqrt(np.diagonal(P, axis1=1, axis2=2)[:, pos])])

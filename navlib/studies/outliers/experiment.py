@@ -94,6 +94,9 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
     conclusions : bool
         Also run the spikes of :data:`CONCLUSION_RUNS` (in the same recursions) and judge
         the claims they carry (:func:`~navlib.studies.outliers.claims.conclusion_claims`).
+        Without it they are run all the same, in the recursions that run anyway, and kept
+        in ``cache`` (and the disk cache) only: the claims engine's study of the same
+        models (:mod:`~navlib.studies.outliers.assumptions`) then prepares no filter.
     """
     traj = trajectory if trajectory is not None else (
         cache.trajectory if cache is not None else default_trajectory())
@@ -132,12 +135,16 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                     for tid in tids for shape in shapes if (tid, sol, shape) not in same]
         if "T4" in tids and sol == "ins_gps_att_rt":
             requests.append((PAPER_TESTS["T4"].outlier("spike", time=outlier_time_s), "ref_roll"))
-        if conclusions and (reuse is None or sol.endswith("_rt")):
-            requests += _conclusion_requests(sol, outlier_time_s, biases)
+        runs = (_conclusion_requests(sol, outlier_time_s, biases)
+                if reuse is None or sol.endswith("_rt") else [])
+        if conclusions:
+            requests, runs = requests + runs, []
         if requests:              # one recursion for all of this filter's responses
+            # (without ``conclusions`` their runs join it too, kept but not judged: the
+            # claims engine judges them on the same filters after notebook 05)
             cache.unit_responses(sol, requests, biases=biases,
                                  bias_model=effective_bias_model(biases, bias_model),
-                                 record_every=record_every)
+                                 record_every=record_every, also=runs)
         for tid in tids:
             test = PAPER_TESTS[tid]
             for shape in shapes:

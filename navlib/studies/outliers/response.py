@@ -74,7 +74,7 @@ class FilterCache:
                 self._items.pop(next(iter(self._items)))
             model = launcher(solution, biases, bias_model, self.trajectory,
                              **self.model_options)
-            value = prepare_linear(model, compact=True)
+            value = prepare_linear(model, compact=True, own_model=True)   # model not kept
             if key not in self._summaries:
                 self._summaries[key] = CovarianceSummary.of(value)
                 self._disk.put(("summary", key), self._summaries[key])
@@ -98,9 +98,18 @@ class FilterCache:
                 self.get(*key)
         return self._summaries[key]
 
+    def _known(self, keys: list) -> list:
+        """``keys`` of unit responses not on disk either (those found there are kept)."""
+        for w in keys:
+            found, response = self._disk.get(("response", *w))
+            if found:
+                self._responses[w] = response
+        return [w for w in keys if w not in self._responses]
+
     def unit_responses(self, solution: str, requests: Sequence[tuple[Outlier, str]], *,
                        biases: str = "GAP", bias_model: str = "markov",
-                       record_every: int = 1) -> list[UnitResponse]:
+                       record_every: int = 1, also: Sequence[tuple[Outlier, str]] = ()
+                       ) -> list[UnitResponse]:
         """The :class:`UnitResponse` of each ``(outlier, watch)`` request on one solution,
         at every ``record_every``-th epoch (and the last).
 
@@ -108,17 +117,18 @@ class FilterCache:
         recursion for all of them (:func:`navlib.filters.linear.unit_responses`), and
         kept; a record stride takes their epochs of
         :func:`navlib.filters.linear.recorded_epochs`, the same numbers a run recording
-        only those epochs gives.
+        only those epochs gives. The requests ``also`` join that recursion when it runs
+        (their responses are kept, on disk too, not returned): they never prepare a filter
+        by themselves, and a later reader of them (the claims engine reading what
+        notebook 05 computed) then prepares none either.
         """
         config = (solution, biases, bias_model)
         wanted = [(config, _unit(o), watch) for o, watch in requests]
-        missing = [w for w in dict.fromkeys(wanted) if w not in self._responses]
-        for w in missing:
-            found, response = self._disk.get(("response", *w))
-            if found:
-                self._responses[w] = response
-        missing = [w for w in missing if w not in self._responses]
+        missing = self._known([w for w in dict.fromkeys(wanted) if w not in self._responses])
         if missing:
+            extra = [(config, _unit(o), watch) for o, watch in also]
+            missing += self._known([w for w in dict.fromkeys(extra)
+                                    if w not in self._responses and w not in missing])
             units = list(dict.fromkeys(w[1] for w in missing))
             sim = unit_responses(self.get(*config), units)
             C = self.trajectory.attitude.as_matrix()
