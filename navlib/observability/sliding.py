@@ -57,39 +57,6 @@ def block_data(transitions, H, k0: int, n_blocks: int, window: int):
     return Hs.reshape(*shape, m, n), Fs.reshape(*shape, n, n)
 
 
-def sparse_transitions(F):
-    """The transitions ``F`` (..., n, n) as the entries of their common pattern: ``rows``,
-    ``cols`` (nnz,) of every entry that is non-zero at some step, and the values
-    (..., nnz). An Euler step ``I + A dt`` of a navigation error model has few: 156 of 784
-    for the 28-state launcher model."""
-    n = F.shape[-1]
-    flat = F.reshape(-1, n * n)
-    pattern = np.flatnonzero((flat != 0.0).any(axis=0))
-    rows, cols = np.divmod(pattern, n)
-    return rows, cols, np.ascontiguousarray(flat[:, pattern]).reshape(*F.shape[:-2],
-                                                                      pattern.size)
-
-
-@numba.njit(cache=True, nogil=True)
-def _sparse_product(dst, src, values, X, out):
-    """``out[dst[e]] += values[e] X[src[e]]`` over the entries ``e`` of a sparse ``F`` given
-    by :func:`sparse_transitions`, from ``out = 0``: ``F X`` with ``(dst, src) = (rows,
-    cols)``, ``F' X`` with ``(cols, rows)`` (rows of ``X`` along contiguous memory)."""
-    out[:] = 0.0
-    for e in range(values.size):
-        target, source, value = out[dst[e]], X[src[e]], values[e]
-        for c in range(target.size):
-            target[c] += value * source[c]
-
-
-@numba.njit(cache=True, nogil=True)
-def _dense(rows, cols, values, out):
-    """``out`` (n, n) becomes the sparse ``F`` of :func:`sparse_transitions`."""
-    out[:] = 0.0
-    for e in range(values.size):
-        out[rows[e], cols[e]] = values[e]
-
-
 @numba.njit(cache=True, nogil=True)
 def householder(alpha, x):
     """Reflector ``I - tau [1; v] [1; v]'`` mapping ``[alpha; x]`` to ``[beta; 0]``
@@ -211,43 +178,42 @@ def singular_values(A, s):
 
 
 @numba.njit(cache=True, nogil=True)
-def sliding_kernel(Hb, rows, cols, Fv, K, out):
+def sliding_kernel(Hb, Fb, K, out):
     """Singular values (``out``, K x n) of ``O(k)`` at the first ``K`` steps of the blocks
-    ``Hb`` (nb + 1, w, m, n) of :func:`block_data` and the transitions' entries ``Fv``
-    (nb + 1, w, nnz) at ``rows``, ``cols`` (:func:`sparse_transitions`) (module docstring).
-    Returns the number of steps whose ``dlasq1`` did not converge."""
+    ``Hb`` (nb + 1, w, m, n), ``Fb`` (nb + 1, w, n, n) of :func:`block_data` (module
+    docstring). Returns the number of steps whose ``dlasq1`` did not converge."""
     w, m, n = Hb.shape[1], Hb.shape[2], Hb.shape[3]
-    Yt, Phit = np.empty((w, n, n)), np.empty((w, n, n))   # Yt[r] = Y_r', Phit[r] = Phi_r'
+    Yt, Phi = np.empty((w, n, n)), np.empty((w, n, n))    # Yt[r] = Y_r', Phi[r] = Phi_r
     Pt = np.empty((max(w - 1, 1), n, n))                    # Pt[j] = P_j'
-    stack, Ht = np.empty((n, m + n)), np.empty((n, m))      # [H_r; Y F_r]', (H_j Psi_j)'
+    stack, rows = np.empty((n, m + n)), np.empty((n, m))    # [H_r; Y F_r]', (H_j Psi_j)'
     Ct, Xt, psi, product = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), \
         np.empty((n, n))
     failed = 0
     for b in range(Hb.shape[0] - 1):
-        Ht[:] = Hb[b, w - 1].T
-        triangularize(Ht, Yt[w - 1])
-        _dense(cols, rows, Fv[b, w - 1], Phit[w - 1])
+        rows[:] = Hb[b, w - 1].T
+        triangularize(rows, Yt[w - 1])
+        Phi[w - 1] = Fb[b, w - 1]
         for r in range(w - 2, -1, -1):
             stack[:, :m] = Hb[b, r].T
-            _sparse_product(cols, rows, Fv[b, r], Yt[r + 1], product)     # (Y F_r)'
+            np.dot(Fb[b, r].T, Yt[r + 1], product)
             stack[:, m:] = product
             triangularize(stack, Yt[r])
-            _sparse_product(cols, rows, Fv[b, r], Phit[r + 1], Phit[r])   # (Phi F_r)'
+            np.dot(Phi[r + 1], Fb[b, r], Phi[r])
         if w > 1:
-            Ht[:] = Hb[b + 1, 0].T
-            triangularize(Ht, Pt[0])
-            _dense(rows, cols, Fv[b + 1, 0], psi)
+            rows[:] = Hb[b + 1, 0].T
+            triangularize(rows, Pt[0])
+            psi[:] = Fb[b + 1, 0]
         for j in range(1, w - 1):
             Pt[j] = Pt[j - 1]
-            np.dot(psi.T, Hb[b + 1, j].T, Ht)
-            fold(Pt[j], Ht)
+            np.dot(psi.T, Hb[b + 1, j].T, rows)
+            fold(Pt[j], rows)
             if j < w - 2:
-                _sparse_product(rows, cols, Fv[b + 1, j], psi, product)   # F_j Psi_j
+                np.dot(Fb[b + 1, j], psi, product)
                 psi[:] = product
         for r in range(min(w, K - b * w)):
             Ct[:] = Yt[r]
             if r > 0:
-                np.dot(Phit[r], Pt[r - 1], Xt)
+                np.dot(Phi[r].T, Pt[r - 1], Xt)
                 fold(Ct, Xt)
             failed += singular_values(Ct, out[b * w + r]) != 0
     return failed
@@ -266,8 +232,7 @@ def sliding_singular_values(transitions, H, k0: int, K: int, window: int) -> np.
     n_blocks = -(-K // window)
     Hb, Fb = block_data(transitions, H, k0, n_blocks, window)
     s = np.empty((K, n))
-    failed = sliding_kernel(Hb, *sparse_transitions(Fb), K, s)
-    if failed:  # pragma: no cover - dqds of finite input converges
+    if sliding_kernel(Hb, Fb, K, s):  # pragma: no cover - dqds of finite input converges
         raise NavlibInputError("O(k): the singular values (LAPACK dlasq1) did not converge")
     return s
 
