@@ -370,7 +370,7 @@ def mission_observability(solution: str = "ins_gps_att_rt", biases: str = "GAP",
     matrix still uses consecutive 5 ms steps). Returns
     :class:`navlib.observability.LocalObservability` (``to_frame()`` for plotting).
     """
-    model = launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
+    model = _config_model((solution, biases, bias_model), trajectory, model_kw, method)
     return local_observability(model, window=window, variant=variant, stride=stride,
                                rtol=rtol, method=method)
 
