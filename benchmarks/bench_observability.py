@@ -32,10 +32,10 @@ import numpy as np
 from _harness import Case
 from _harness import launcher_flight as trajectory
 
-from navlib.models.launcher import launcher, state_names
+from navlib.models.launcher import launcher, launcher_steps, state_names
 from navlib.observability import local_observability
 from navlib.observability.local import _model_arrays
-from navlib.observability.sliding import sliding_singular_values
+from navlib.observability.sliding import block_data, sliding_singular_values
 from navlib.studies.launcher import configurations, table2
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -123,13 +123,33 @@ def _rate_columns(name: str, flops: float):
     return extra
 
 
+def _cpu_columns(name: str):
+    def extra(best: float) -> dict:
+        return {"cpu_s": _CPU_S.get(name, float("nan")), "load_1min": os.getloadavg()[0]}
+    return extra
+
+
 def run_table2():
     return table2(trajectory(), variant="time_varying", stride=1)
 
 
 def run_curve():
-    model = launcher("ins_gps_att_rt", "GAP", "markov", trajectory=trajectory())
+    model = launcher_steps("ins_gps_att_rt", "GAP", "markov", trajectory=trajectory())
     return local_observability(model, stride=200)
+
+
+def _inputs(build):
+    """The sliding window's inputs of the 60 configurations, chunk by chunk (model,
+    transitions, :func:`block_data`), without the kernel: ``launcher`` (an ``A`` stack per
+    model, discretised per chunk) against ``launcher_steps`` (the steps computed per chunk)."""
+    def run():
+        for config in configurations():
+            t, transitions, H = _model_arrays(build(*config, trajectory=trajectory()), "euler")
+            n = H.shape[2]
+            chunk = 1024 // n * n
+            for k0 in range(0, t.size - n + 1, chunk):
+                block_data(transitions, H, k0, -(-chunk // n), n)
+    return run
 
 
 @cache
@@ -164,6 +184,14 @@ def cases():
              goal_s=5.0, repeat=2,
              extra=_rate_columns("sliding_numpy", local_flops(28, 12, 30001)),
              notes="one thread; transitions included"),
+        Case("observability: Table 2 inputs, A stack per model (launcher)",
+             "60 configs x 30001 steps", _cpu_timed("inputs_A", _inputs(launcher)),
+             goal_s=10.0, repeat=2, extra=_cpu_columns("inputs_A"),
+             notes="one thread; no kernel"),
+        Case("observability: Table 2 inputs, steps per chunk (launcher_steps)",
+             "60 configs x 30001 steps", _cpu_timed("inputs_steps", _inputs(launcher_steps)),
+             goal_s=10.0, repeat=2, extra=_cpu_columns("inputs_steps"),
+             notes="one thread; no kernel"),
         Case("observability: 1 Hz rank/cond curve, ins_gps_att_rt GAP markov (28 states)",
              "150 points", _cpu_timed("curve", run_curve), goal_s=1.0, repeat=3,
              extra=_rate_columns("curve", curve_flops()), notes="model build included"),

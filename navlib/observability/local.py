@@ -115,13 +115,23 @@ def _model_arrays(model, method: str):
 
     Returns ``(t, transitions, H)`` where ``transitions(idx)`` gives ``F[idx]`` for an
     integer index array. A
-    :class:`~navlib.models.base.DiscreteModel` supplies its ``F``; a trajectory
+    :class:`~navlib.models.base.DiscreteModel` supplies its ``F``; a step source (``t``,
+    ``H``, ``state_names``, ``method`` and a ``transitions(idx)`` method, e.g.
+    :class:`~navlib.models.launcher.LauncherSteps`) computes the steps asked for; a trajectory
     :class:`~navlib.models.base.LinearModel` is discretised lazily, chunk by chunk, with
     :func:`navlib.discretize.discretize_steps` (``method``), without forming ``Q``.
     """
     if isinstance(model, DiscreteModel):
         F = np.asarray(model.F)
         return np.asarray(model.t), (lambda idx: F[idx]), np.asarray(model.H)
+    if callable(getattr(model, "transitions", None)):  # a step source (LauncherSteps)
+        if method != model.method:
+            raise NavlibInputError(f"method: the model's transitions are {model.method!r} "
+                                   f"steps, got method={method!r}")
+        t, H = np.asarray(model.t), np.asarray(model.H)
+        if H.ndim == 2:
+            H = np.broadcast_to(H, (t.size, *H.shape))
+        return t, model.transitions, H
     if isinstance(model, LinearModel):
         if not model.time_varying:
             raise NavlibInputError(
@@ -250,10 +260,11 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
 
     Parameters
     ----------
-    model : DiscreteModel or LinearModel
-        A discrete model (``t, F, H``), or a trajectory LinearModel that is discretised here
+    model : DiscreteModel, LinearModel or step source
+        A discrete model (``t, F, H``), a trajectory LinearModel that is discretised here
         chunk by chunk with ``method`` (no ``Q`` is formed, so a long 200 Hz mission fits in
-        memory).
+        memory), or a step source whose ``transitions(idx)`` computes the ``method`` steps
+        asked for (:func:`navlib.models.launcher.launcher_steps`: no ``A`` stack at all).
     window : int, optional
         Block rows per local matrix (default ``n``).
     variant : {"time_varying", "frozen"}

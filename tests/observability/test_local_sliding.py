@@ -12,8 +12,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from navlib import NavlibInputError
 from navlib.models import DiscreteModel
-from navlib.models.launcher import launcher
+from navlib.models.launcher import launcher, launcher_steps
 from navlib.observability import local_matrix, local_observability
 from navlib.trajectory import launcher_ascent
 
@@ -87,6 +88,25 @@ def test_every_step_equals_the_strided_path(ascent):
         np.testing.assert_array_equal(every.step[::7], strided.step)
         np.testing.assert_array_equal(every.rank[::7], strided.rank)
         assert_close_to_sigma_max(every.singular_values[::7], strided.singular_values)
+
+
+@pytest.mark.parametrize("config", [("ins_gps_att_rt", "GAP", "random_walk"),
+                                    ("ins_gps", "GP", "markov"), ("ins_gps_rt", "A", "markov")])
+def test_launcher_steps_are_the_models_euler_steps(ascent, config):
+    """:func:`launcher_steps` computes the steps asked for, bitwise the Euler transitions
+    of :func:`launcher`'s ``A`` stack, so the every-step test gives the same numbers; it
+    refuses another discretisation."""
+    model, steps = launcher(*config, trajectory=ascent), launcher_steps(*config,
+                                                                        trajectory=ascent)
+    assert steps.state_names == model.state_names and steps.n == model.n
+    idx = np.array([[0, 1, 2], [150, 7, ascent.t.size - 2]])
+    F = model.discretize(method="euler").F
+    np.testing.assert_array_equal(steps.transitions(idx), F[idx])
+    a, b = local_observability(model), local_observability(steps)
+    np.testing.assert_array_equal(a.singular_values, b.singular_values)
+    np.testing.assert_array_equal(local_matrix(model, 40), local_matrix(steps, 40))
+    with pytest.raises(NavlibInputError, match="euler"):
+        local_observability(steps, stride=50, method="expm")
 
 
 @settings(max_examples=30, deadline=None)

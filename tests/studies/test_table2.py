@@ -115,6 +115,23 @@ def test_claim_verdicts_react_to_a_broken_row(result):
     assert claim(claims, "T2-Markov").verdict == "not reproduced"
 
 
+def test_further_rank_tolerances_rerank_the_same_table(result, short_ascent):
+    """``at_rtol`` gives what a table computed at that tolerance gives (the same steps, the
+    same singular values re-ranked): the rank columns and matches move, nothing else; a
+    tolerance the table was not ranked at is refused."""
+    assert set(result.rank_rtols) == {1e-12, 1e-10}
+    for tol in (1e-12, 1e-10):
+        want = table2(short_ascent, stride=250, rtol=tol, rank_rtols=())
+        got = result.at_rtol(tol)
+        pd.testing.assert_frame_equal(got.frame, want.frame)
+        assert got.rank_rtols == {} and got.stride == want.stride
+    loose = result.at_rtol(1e-10).frame
+    assert (loose.n_unobservable >= result.frame.n_unobservable).all()
+    pd.testing.assert_series_equal(loose.log10_cond, result.frame.log10_cond)
+    with pytest.raises(NavlibInputError, match="ranked at"):
+        result.at_rtol(1e-8)
+
+
 def test_variant_comparison_and_one_solution_subset(short_ascent):
     comp = variant_comparison(short_ascent, "ins_gps_att", stride=500)
     assert len(comp) == 15

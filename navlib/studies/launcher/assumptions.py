@@ -61,18 +61,19 @@ between the 5 Hz points) and other rounding-noise digits for the numerically sin
 (16.4-18.7 instead of 16.9-21.5), which the claims read as singular (:data:`SINGULAR_LOG10`)."""
 TABLE2_RANK_RTOLS = ("numpy default", 1e-12, 1e-10)
 """Relative rank tolerances of O(k) a reader could defend (A-T2-rank-rtol): numpy's
-``max(M, n) eps`` (~1e-13 here) and two above it; at 1e-10 the INS/GPS GA row loses rank."""
+``max(M, n) eps`` (~1e-13 here) and two above it; at 1e-10 the INS/GPS GA row loses rank.
+:func:`~navlib.studies.launcher.table2.table2` ranks its singular values at the numbers of this
+set in the same pass."""
 TABLE2_GRID = {"cond_tol": TOLERANCES, "rank_rtol": TABLE2_RANK_RTOLS}
 """Declared assumption set of the Table 2 claims: the rounding allowed on a printed order
 (decades) and the rank tolerance (one at a time from the baseline)."""
 TABLE2_BASELINE = {"cond_tol": COND_TOL, "rank_rtol": "numpy default"}
 """The baseline point of :data:`TABLE2_GRID`."""
 TABLE2_ROBUSTNESS_STRIDE = 40
-"""Stride of the rank-tolerance points of the Table 2 assumption set: the 5 Hz grid, whose
-unobservable counts, match counts and verdicts at the baseline tolerance are those of every
-step (tested: tests/studies/test_table2.py,
-``test_every_step_table_keeps_the_counts_and_verdicts_of_the_5hz_grid``), at a fortieth of the
-cost of three more every-step tables; at the other tolerances that equality is assumed."""
+"""The former stride (5 Hz grid) of the rank-tolerance points of the Table 2 set, no longer
+used: those points now re-rank the every-step table's singular values
+(:meth:`~navlib.studies.launcher.table2.Table2Result.at_rtol`), the paper's every-step test at
+every tolerance from one computation (docs/assumptions.md, A-T2-rank-rtol)."""
 EVOLUTION_GRID = {"sigma0_att_deg": (0.03, 0.1, 0.3)}
 """Declared assumption set of the covariance-evolution claims: the initial attitude sigma,
 which the paper does not give (:data:`navlib.models.launcher.ASSUMED`: 0.1 deg) and against

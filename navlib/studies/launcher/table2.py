@@ -5,8 +5,7 @@ one configuration over the mission."""
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -16,12 +15,18 @@ import pandas as pd
 from navlib import cache
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
-from navlib.models.launcher import BIAS_SETS, SOLUTION_LABELS, SOLUTIONS, launcher
+from navlib.models.launcher import (
+    BIAS_SETS,
+    SOLUTION_LABELS,
+    SOLUTIONS,
+    launcher,
+    launcher_steps,
+)
 from navlib.observability import analyze, local_matrix, local_observability
 from navlib.parallel import map_tasks
 from navlib.resources import data_dir
 from navlib.studies.claims import ClaimResult
-from navlib.studies.launcher.assumptions import COND_TOL, TOLERANCES
+from navlib.studies.launcher.assumptions import COND_TOL, TABLE2_RANK_RTOLS, TOLERANCES
 from navlib.studies.launcher.claims import cond_match, match_counts, table2_claim_results
 from navlib.trajectory import launcher_ascent
 
@@ -89,15 +94,28 @@ def describe_direction(vector, state_names, C_b_e, top: int = 3) -> str:
     return ", ".join(f"{labels[i]} {values[i]:+.2f}" for i in order)
 
 
-def _mid_step_analysis(model, res, trajectory, window, variant, method, rtol) -> dict:
-    """Unobservable groups and weakest direction of O(k) at the mission's middle step."""
+def _mid_step_analysis(model, res, trajectory, window, variant, method, rtol,
+                       rank_rtols=()) -> dict:
+    """Unobservable groups and weakest direction of O(k) at the mission's middle step, and
+    the groups at each of ``rank_rtols`` (``groups@<rtol>``) from the same matrix."""
     k = int(res.step[res.step.size // 2])
     O = local_matrix(model, k, window=window, variant=variant, method=method)
-    a = analyze(O, rtol=res.rtol if rtol is None else rtol, state_names=model.state_names,
-                coupling_threshold="auto")
-    return {"groups": "; ".join("{" + ", ".join(g) + "}" for g in a.unobservable_groups),
+
+    def analysis(tol):
+        return analyze(O, rtol=tol, state_names=model.state_names, coupling_threshold="auto")
+
+    def groups(a):
+        return "; ".join("{" + ", ".join(g) + "}" for g in a.unobservable_groups)
+
+    a = analysis(res.rtol if rtol is None else rtol)
+    return {"groups": groups(a),
             "weakest": describe_direction(a.weakest_direction, model.state_names,
-                                          trajectory.attitude[k].as_matrix())}
+                                          trajectory.attitude[k].as_matrix()),
+            **{f"groups@{tol:g}": groups(analysis(tol)) for tol in rank_rtols}}
+
+
+RANK_COLUMNS = ("n_unobservable", "rank_constant", "groups")
+"""The columns of a Table 2 row that depend on the rank tolerance."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,6 +140,9 @@ class Table2Result:
         Tolerance on log10 cond for a match (both >= 16 also match).
     n_steps : int
         Trajectory samples; ``duration_s`` the mission length.
+    rank_rtols : dict
+        Per further rank tolerance of the same computation (``table2(rank_rtols=...)``):
+        its :data:`RANK_COLUMNS` frame (same row order), read by :meth:`at_rtol`.
     """
 
     frame: pd.DataFrame
@@ -132,6 +153,22 @@ class Table2Result:
     cond_tol: float
     n_steps: int
     duration_s: float
+    rank_rtols: dict = field(default_factory=dict)
+
+    def at_rtol(self, rtol: float) -> Table2Result:
+        """The same table ranked at another relative tolerance of ``rank_rtols`` (the same
+        singular values at the same steps: no new computation): :data:`RANK_COLUMNS` and the
+        matches change, the condition numbers and weakest directions do not."""
+        key = finite_scalar(rtol, "rtol", low=0.0, high=1.0)
+        if key not in self.rank_rtols:
+            raise NavlibInputError(f"rtol: this table was ranked at {sorted(self.rank_rtols)} "
+                                   f"besides its own tolerance, got {rtol!r}")
+        frame = self.frame.copy()
+        for column in RANK_COLUMNS:
+            frame[column] = self.rank_rtols[key][column].to_numpy()
+        frame["match_unobservable"] = frame.n_unobservable == frame.paper_unobservable
+        frame["match"] = frame.match_unobservable & frame.match_cond
+        return replace(self, frame=frame, rank_rtols={})
 
     def wide(self) -> pd.DataFrame:
         """Paper layout: 32 rows (solution x bias set), ours / paper per bias model."""
@@ -166,44 +203,49 @@ class Table2Result:
         return match_counts(self.frame, TOLERANCES if tolerances is None else tolerances)
 
 
-def _config_model(config, trajectory, model_kw):
-    """The launcher model of one ``(solution, biases, bias_model)`` configuration."""
+def _config_model(config, trajectory, model_kw, method):
+    """The launcher model of one ``(solution, biases, bias_model)`` configuration as the
+    observability test reads it: its Euler steps computed chunk by chunk
+    (:func:`~navlib.models.launcher.launcher_steps`), or the continuous model that
+    ``method`` discretises."""
     solution, biases, bias_model = config
-    return launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
+    build = launcher_steps if method == "euler" else launcher
+    return build(solution, biases, bias_model, trajectory=trajectory, **model_kw)
 
 
 def _model_row(config, model, trajectory, *, window, variant, stride, rtol, method,
-               n_jobs) -> dict:
-    """Our Table 2 row of one configuration from its model."""
+               n_jobs, rank_rtols=()) -> dict:
+    """Our Table 2 row of one configuration from its model; for each of ``rank_rtols`` also
+    the unobservable count, rank constancy and groups at that tolerance
+    (``n_unobservable@<rtol>``...: the same singular values re-ranked)."""
     solution, biases, bias_model = config
     res = local_observability(model, window=window, variant=variant, stride=stride,
                               rtol=rtol, method=method, n_jobs=n_jobs)
-    return {"solution": solution, "biases": biases, "bias_model": bias_model,
-            "n_states": model.n, "n_unobservable": res.n_unobservable,
-            "log10_cond": res.log10_max_cond, "rank_constant": res.rank_constant,
-            **_mid_step_analysis(model, res, trajectory, window, variant, method, rtol)}
+    row = {"solution": solution, "biases": biases, "bias_model": bias_model,
+           "n_states": model.n, "n_unobservable": res.n_unobservable,
+           "log10_cond": res.log10_max_cond, "rank_constant": res.rank_constant,
+           **_mid_step_analysis(model, res, trajectory, window, variant, method, rtol,
+                                rank_rtols)}
+    for tol in rank_rtols:
+        other = res.with_rtol(tol)
+        row[f"n_unobservable@{tol:g}"] = other.n_unobservable
+        row[f"rank_constant@{tol:g}"] = other.rank_constant
+    return row
 
 
 def _config_row(config, trajectory, *, model_kw, **options) -> dict:
     """Our Table 2 row of one configuration (one task of the ``scheduler`` run)."""
-    return _model_row(config, _config_model(config, trajectory, model_kw), trajectory,
-                      **options)
+    return _model_row(config, _config_model(config, trajectory, model_kw, options["method"]),
+                      trajectory, **options)
 
 
 def _local_rows(configs, trajectory, progress, model_kw, options) -> list[dict]:
-    """The rows one configuration after the other, each model built in a background thread
-    while the previous one is analysed (a build is serial numpy work that would otherwise
-    leave the analysis threads' cores idle)."""
+    """The rows one configuration after the other (each analysed by ``n_jobs`` threads)."""
     rows = []
-    with ThreadPoolExecutor(1) as builder:
-        upcoming = builder.submit(_config_model, configs[0], trajectory, model_kw)
-        for i, config in enumerate(configs):
-            if progress is not None:
-                progress(i, len(configs), config)
-            model = upcoming.result()
-            if i + 1 < len(configs):
-                upcoming = builder.submit(_config_model, configs[i + 1], trajectory, model_kw)
-            rows.append(_model_row(config, model, trajectory, **options))
+    for i, config in enumerate(configs):
+        if progress is not None:
+            progress(i, len(configs), config)
+        rows.append(_config_row(config, trajectory, model_kw=model_kw, **options))
     return rows
 
 
@@ -218,7 +260,7 @@ def _table2_rows(trajectory, configs, model_kw: dict, options: dict) -> list[dic
 def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
            window: int | None = None, rtol: float | None = None, method: str = "euler",
            solutions=SOLUTIONS, cond_tol: float = COND_TOL, n_jobs: int | None = None,
-           progress=None, scheduler=None, **model_kw) -> Table2Result:
+           progress=None, scheduler=None, rank_rtols=None, **model_kw) -> Table2Result:
     """Regenerate Table 2 (spec launcher.md §6.1, §7.2).
 
     Parameters
@@ -243,6 +285,11 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
         Run the configurations as Dask tasks (:func:`navlib.parallel.map_tasks`: a Client, an
         address ``tcp://host:port``, ``"processes"``...), the trajectory scattered once to
         the workers; default None: here, ``n_jobs`` threads per configuration.
+    rank_rtols : sequence of float, optional
+        Further relative rank tolerances at which the same singular values are also ranked
+        (:meth:`Table2Result.at_rtol`); default the numbers of
+        :data:`~navlib.studies.launcher.assumptions.TABLE2_RANK_RTOLS`, so that the claims'
+        rank-tolerance robustness comes from this one computation.
     **model_kw
         Passed to :func:`navlib.models.launcher` (e.g. ``a1_sign``, ``c_p``).
 
@@ -254,8 +301,12 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     if trajectory is None:
             trajectory = launcher_ascent()
     configs = configurations(solutions)
+    if rank_rtols is None:
+        rank_rtols = [tol for tol in TABLE2_RANK_RTOLS if not isinstance(tol, str)]
+    rank_rtols = tuple(finite_scalar(tol, "rank_rtols", low=0.0, high=1.0)
+                       for tol in rank_rtols)
     options = {"window": window, "variant": variant, "stride": stride, "rtol": rtol,
-               "method": method}
+               "method": method, "rank_rtols": rank_rtols}
     if scheduler is not None:  # one task per configuration (navlib.parallel.map_tasks)
         rows = map_tasks(partial(_config_row, n_jobs=1, model_kw=model_kw, **options),
                          configs, scheduler, shared={"trajectory": trajectory}, desc="Table 2")
@@ -265,6 +316,8 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     else:
         rows = _table2_rows(trajectory, configs, model_kw, {**options, "n_jobs": n_jobs})
     ours = pd.DataFrame(rows)
+    further = {tol: pd.DataFrame({c: ours.pop(f"{c}@{tol:g}") for c in RANK_COLUMNS})
+               for tol in rank_rtols}
     paper = paper_table2().rename(columns={"n_unobservable": "paper_unobservable",
                                            "log10_cond": "paper_log10_cond",
                                            "n_states": "paper_n_states"})
@@ -280,7 +333,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
     t = np.asarray(trajectory.t)
     return Table2Result(frame=frame, variant=variant, method=method, stride=int(stride),
                         window=window, cond_tol=cond_tol, n_steps=t.size,
-                        duration_s=float(t[-1] - t[0]))
+                        duration_s=float(t[-1] - t[0]), rank_rtols=further)
 
 
 
@@ -317,7 +370,7 @@ def mission_observability(solution: str = "ins_gps_att_rt", biases: str = "GAP",
     matrix still uses consecutive 5 ms steps). Returns
     :class:`navlib.observability.LocalObservability` (``to_frame()`` for plotting).
     """
-    model = launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
+    model = _config_model((solution, biases, bias_model), trajectory, model_kw, method)
     return local_observability(model, window=window, variant=variant, stride=stride,
                                rtol=rtol, method=method)
 
