@@ -73,7 +73,7 @@ def quat_from_matrix(C) -> np.ndarray:
     (:func:`_matrix_quat_kernel`, scipy's formulas in scipy's order, the same quaternion to
     the bit) when ``C`` is a rotation to 1e-13 (far inside scipy's own tolerance, so scipy
     would not project it either), else scipy with its projection."""
-    C = np.ascontiguousarray(C, dtype=float)
+    C = np.require(C, float, "CW")  # one kernel type: a read-only view would compile again
     quat = np.empty(4)
     if _matrix_quat_kernel(C, quat):
         return quat

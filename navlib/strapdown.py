@@ -429,11 +429,14 @@ def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
     n = t.size
     (idx, weights), earth_q, earth_mid = _clock(t) if clock is None else clock
     position, velocity, q = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4))
-    inputs = (np.ascontiguousarray(a, dtype=float)
+    # C-contiguous and writeable: the one type the kernel is compiled for
+    # (:func:`navlib.strapdown_kernel.compile_kernel`); a read-only view (a broadcast
+    # trajectory row, a cached array) would be a second specialisation, compiled on first use
+    inputs = (np.require(a, float, "CW")
               for a in (t, f_b, w_ib_b, r, v, q0, weights, earth_q, earth_mid))
     t_c, f_c, w_c, r_c, v_c, q_c, weights_c, earth_c, earth_mid_c = inputs
-    failed = integrate_kernel(t_c, f_c, w_c, r_c, v_c, q_c, idx, weights_c, earth_c,
-                              earth_mid_c, position, velocity, q)
+    failed = integrate_kernel(t_c, f_c, w_c, r_c, v_c, q_c, np.require(idx, np.int64, "CW"),
+                              weights_c, earth_c, earth_mid_c, position, velocity, q)
     if failed >= 0:
         h = np.diff(t[failed:])
         raise NavlibInputError(

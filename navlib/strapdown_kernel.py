@@ -11,6 +11,11 @@ rule and gravity at the solution's own points by fixed-point iteration over
 replaced (``tests/strapdown_reference.py``), so results agree to rounding; each interval
 costs a few hundred floating-point operations instead of a few hundred NumPy calls per
 block, which made the EKF's 0.1 s windows Python-bound.
+
+The kernels use element loops, :func:`numpy.empty` and views only: no array expressions,
+reductions, slice assignments or :func:`numpy.searchsorted`, whose numba implementations
+each compile on first use: they made about half of the first compile (13.6 CPU-s with
+them, about 7 without, for the same numbers to the bit; issue 26).
 """
 
 from __future__ import annotations
@@ -141,7 +146,8 @@ def _prefix_products(q):
     while shift < q.shape[0]:
         for k in range(q.shape[0] - 1, shift - 1, -1):
             _quat_mul(q[k - shift], q[k], tmp)
-            q[k] = tmp
+            for i in range(4):
+                q[k, i] = tmp[i]
         shift *= 2
     for k in range(q.shape[0]):
         norm = math.sqrt(q[k, 0] * q[k, 0] + q[k, 1] * q[k, 1] + q[k, 2] * q[k, 2]
@@ -165,11 +171,41 @@ def _gravity(r, out):
 
 
 @numba.njit(cache=True)
-def _rotate_z(x, c, s, out):
-    """Rotate a vector about ECEF z by the angle of cosine ``c``, sine ``s``."""
-    out[0] = c * x[0] - s * x[1]
-    out[1] = s * x[0] + c * x[1]
-    out[2] = x[2]
+def _rotate_rows(x, cos_turn, sin_turn, first, sign, out):
+    """Rotate each row ``k`` of ``x`` (K, 3) about ECEF z by the angle of cosine
+    ``cos_turn[first + k]`` and sine ``sign * sin_turn[first + k]`` into ``out``."""
+    for k in range(x.shape[0]):
+        c, s = cos_turn[first + k], sign * sin_turn[first + k]
+        out[k, 0] = c * x[k, 0] - s * x[k, 1]
+        out[k, 1] = s * x[k, 0] + c * x[k, 1]
+        out[k, 2] = x[k, 2]
+
+
+@numba.njit(cache=True)
+def _add_row(x, row):
+    """``x += row`` for ``x`` (K, 3) and ``row`` (3,)."""
+    for k in range(x.shape[0]):
+        for i in range(3):
+            x[k, i] += row[i]
+
+
+@numba.njit(cache=True)
+def _simpson_integral(h, x, x_mid, integral, integral_mid):
+    """:func:`navlib.strapdown._simpson_integral`: the integral of ``x`` (M+1, 3) from the
+    first sample to each sample into ``integral`` (M+1, 3) and to each mid-step into
+    ``integral_mid`` (M, 3), by Simpson's rule on ``x`` and ``x_mid`` (M, 3) over the
+    steps ``h`` (M,)."""
+    for i in range(3):
+        integral[0, i] = 0.0
+    for k in range(h.shape[0]):
+        for i in range(3):
+            integral[k + 1, i] = integral[k, i] + h[k] / 6.0 * (x[k, i] + 4.0 * x_mid[k, i]
+                                                                + x[k + 1, i])
+    for k in range(h.shape[0]):
+        for i in range(3):
+            integral_mid[k, i] = integral[k, i] + h[k] / 24.0 * (5.0 * x[k, i]
+                                                                 + 8.0 * x_mid[k, i]
+                                                                 - x[k + 1, i])
 
 
 @numba.njit(cache=True)
@@ -179,39 +215,18 @@ def _translation(h, r0, v0, a, a_mid, cos_turn, sin_turn, r, v, r_mid):
     and then the mid-steps) into ``r``, ``v`` (M+1, 3) and ``r_mid`` (M, 3)."""
     m = h.shape[0] + 1
     at, at_mid = np.empty((m, 3)), np.empty((m - 1, 3))
-    for k in range(m):
-        _rotate_z(a[k], cos_turn[k], sin_turn[k], at[k])
-    for k in range(m - 1):
-        _rotate_z(a_mid[k], cos_turn[m + k], sin_turn[m + k], at_mid[k])
-    u, u_mid = np.zeros((m, 3)), np.empty((m - 1, 3))
-    for k in range(m - 1):
-        for i in range(3):
-            u[k + 1, i] = u[k, i] + h[k] / 6.0 * (at[k, i] + 4.0 * at_mid[k, i] + at[k + 1, i])
-    for k in range(m - 1):
-        for i in range(3):
-            u_mid[k, i] = u[k, i] + h[k] / 24.0 * (5.0 * at[k, i] + 8.0 * at_mid[k, i]
-                                                   - at[k + 1, i])
-    shifted = np.empty(3)
-    for k in range(m):
-        for i in range(3):
-            shifted[i] = u[k, i] + v0[i]
-        _rotate_z(shifted, cos_turn[k], -sin_turn[k], v[k])
+    _rotate_rows(a, cos_turn, sin_turn, 0, 1.0, at)
+    _rotate_rows(a_mid, cos_turn, sin_turn, m, 1.0, at_mid)
+    u, u_mid = np.empty((m, 3)), np.empty((m - 1, 3))
+    _simpson_integral(h, at, at_mid, u, u_mid)
+    _add_row(u, v0)
+    _add_row(u_mid, v0)
     v_mid = np.empty((m - 1, 3))
-    for k in range(m - 1):
-        for i in range(3):
-            shifted[i] = u_mid[k, i] + v0[i]
-        _rotate_z(shifted, cos_turn[m + k], -sin_turn[m + k], v_mid[k])
-    rel = np.zeros((m, 3))
-    for k in range(m - 1):
-        for i in range(3):
-            rel[k + 1, i] = rel[k, i] + h[k] / 6.0 * (v[k, i] + 4.0 * v_mid[k, i] + v[k + 1, i])
-    for k in range(m - 1):
-        for i in range(3):
-            r_mid[k, i] = (rel[k, i] + h[k] / 24.0 * (5.0 * v[k, i] + 8.0 * v_mid[k, i]
-                                                      - v[k + 1, i])) + r0[i]
-    for k in range(m):
-        for i in range(3):
-            r[k, i] = rel[k, i] + r0[i]
+    _rotate_rows(u, cos_turn, sin_turn, 0, -1.0, v)
+    _rotate_rows(u_mid, cos_turn, sin_turn, m, -1.0, v_mid)
+    _simpson_integral(h, v, v_mid, r, r_mid)
+    _add_row(r, r0)
+    _add_row(r_mid, r0)
 
 
 @numba.njit(cache=True)
@@ -242,9 +257,15 @@ def _translation_window(h, r0, v0, f_e, f_e_mid, r, v):
     previous, r_mid, g = np.empty((m, 3)), np.empty((m - 1, 3)), np.empty(3)
     for iteration in range(PICARD_MAX_ITER):
         _translation(h, r0, v0, a, a_mid, cos_turn, sin_turn, r, v, r_mid)
-        if iteration and np.max(np.abs(r - previous)) < PICARD_TOL_M:
+        converged = iteration > 0
+        for k in range(m):
+            for i in range(3):
+                # written so that a NaN does not converge (like np.max(...) < tol)
+                if not abs(r[k, i] - previous[k, i]) < PICARD_TOL_M:
+                    converged = False
+                previous[k, i] = r[k, i]
+        if converged:
             return True
-        previous[:] = r
         for k in range(m):
             _gravity(r[k], g)
             for i in range(3):
@@ -267,15 +288,17 @@ def integrate_kernel(t, f_b, w_b, r0, v0, q0, idx, weights, earth_q, earth_mid, 
     attitude quaternions ``q`` (N, 4). Returns the first sample of a gravity window that
     did not converge, or -1."""
     n = t.shape[0]
-    f_mid, w_mid = np.zeros((n - 1, 3)), np.zeros((n - 1, 3))
+    f_mid, w_mid = np.empty((n - 1, 3)), np.empty((n - 1, 3))
     for k in range(n - 1):
-        for j in range(idx.shape[1]):
-            for i in range(3):
-                w_mid[k, i] += weights[k, j] * w_b[idx[k, j], i]
-                f_mid[k, i] += weights[k, j] * f_b[idx[k, j], i]
+        for i in range(3):
+            w_sum, f_sum = 0.0, 0.0
+            for j in range(idx.shape[1]):
+                w_sum += weights[k, j] * w_b[idx[k, j], i]
+                f_sum += weights[k, j] * f_b[idx[k, j], i]
+            w_mid[k, i], f_mid[k, i] = w_sum, f_sum
     body = np.empty((n, 4))
-    body[0, :3] = 0.0
-    body[0, 3] = 1.0
+    for i in range(4):
+        body[0, i] = 1.0 if i == 3 else 0.0
     dq_half = np.empty((n - 1, 4))
     phi, phi_half = np.empty(3), np.empty(3)
     for k in range(n - 1):
@@ -294,15 +317,21 @@ def integrate_kernel(t, f_b, w_b, r0, v0, q0, idx, weights, earth_q, earth_mid, 
         _quat_mul(q0, tmp, tmp2)
         _quat_mul(earth_mid[k], tmp2, tmp)
         _quat_rotate(tmp, f_mid[k], f_e_mid[k])
-    position[0], velocity[0] = r0, v0
+    r_start, v_start = np.empty(3), np.empty(3)
+    for i in range(3):
+        position[0, i], velocity[0, i] = r0[i], v0[i]
     i0 = 0
     while i0 < n - 1:
-        i1 = max(np.searchsorted(t, t[i0] + WINDOW_S, side="right") - 1, i0 + 1)
+        # the last sample within WINDOW_S of t[i0], at least the next one
+        i1 = i0 + 1
+        while i1 + 1 < n and t[i1 + 1] <= t[i0] + WINDOW_S:
+            i1 += 1
         h = np.empty(i1 - i0)
         for k in range(i1 - i0):
             h[k] = t[i0 + k + 1] - t[i0 + k]
-        if not _translation_window(h, position[i0].copy(), velocity[i0].copy(),
-                                   f_e[i0:i1 + 1], f_e_mid[i0:i1],
+        for i in range(3):
+            r_start[i], v_start[i] = position[i0, i], velocity[i0, i]
+        if not _translation_window(h, r_start, v_start, f_e[i0:i1 + 1], f_e_mid[i0:i1],
                                    position[i0:i1 + 1], velocity[i0:i1 + 1]):
             return i0
         i0 = i1

@@ -66,3 +66,22 @@ def test_quaternion_of_a_matrix_is_scipys():
     np.testing.assert_array_equal(got, Rotation.from_matrix(C).as_quat())
     np.testing.assert_array_equal(quat_from_matrix(1.001 * C[0]),
                                   Rotation.from_matrix(1.001 * C[0]).as_quat())
+
+
+def test_read_only_inputs_use_the_one_compiled_specialisation():
+    """Read-only inputs (the stationary trajectory's broadcast positions, a broadcast
+    attitude matrix) are passed to the kernels as the writeable C arrays they are compiled
+    for (``compile_kernel``), so a notebook never compiles a second specialisation."""
+    from navlib.quaternions import _matrix_quat_kernel
+    from navlib.strapdown_kernel import integrate_kernel
+    from navlib.trajectory import stationary
+
+    still = stationary(duration_s=2.0)
+    assert not still.position[0].flags.writeable
+    strapdown.closure_error(still)
+    strapdown.closure_error(sounding_rocket(), duration_s=1.0)
+    C = np.broadcast_to(still.C_b_e()[0], (2, 3, 3))[0]
+    np.testing.assert_array_equal(quat_from_matrix(C), Rotation.from_matrix(C).as_quat())
+    quat_from_matrix(np.eye(3))
+    assert len(integrate_kernel.signatures) == 1
+    assert len(_matrix_quat_kernel.signatures) == 1

@@ -29,7 +29,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import lru_cache
 from itertools import pairwise
+from pathlib import Path
 
 import numpy as np
 
@@ -104,7 +106,8 @@ def _imu_spec(sensors):
     if sensors is None:
         sensors = DEFAULT_SENSORS
     if isinstance(sensors, str):
-        sensors = load_preset(sensors)
+        shipped = Path(sensors).suffix != ".toml" and Path(sensors).parent == Path(".")
+        sensors = _shipped_preset(sensors) if shipped else load_preset(sensors)
     if isinstance(sensors, Mapping):
         return sensors
     imu = getattr(sensors, "imu", sensors)
@@ -114,6 +117,14 @@ def _imu_spec(sensors):
             f"or a mapping with {list(NOISE_KEYS)}; got {type(sensors).__name__}"
         )
     return imu
+
+
+@lru_cache(maxsize=16)
+def _shipped_preset(name: str):
+    """:func:`navlib.sensors.load_preset` of a shipped preset name, read once per process
+    (the packaged files do not change while it runs; a design sweep asks for the preset's
+    sigmas at every point). A file path is read at every call."""
+    return load_preset(name)
 
 
 def imu_noise_densities(sensors=None) -> dict:

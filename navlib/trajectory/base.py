@@ -142,8 +142,12 @@ def build_trajectory(t, position, velocity, acceleration, C_b_e, w_eb_b, *, even
     C_b_e = finite_array(C_b_e, "C_b_e", (n, 3, 3))
     w_eb_b = finite_array(w_eb_b, "w_eb_b", (n, 3))
     f_b, w_ib_b = exact_imu(position, velocity, acceleration, C_b_e, w_eb_b)
+    if C_b_e.strides[0] == 0:  # one matrix broadcast (a vehicle at rest): converted once
+        attitude = Rotation.from_matrix(C_b_e[:1])[np.zeros(n, dtype=np.intp)]
+    else:
+        attitude = Rotation.from_matrix(C_b_e)
     return Trajectory(
-        t=t, position=position, velocity=velocity, attitude=Rotation.from_matrix(C_b_e),
+        t=t, position=position, velocity=velocity, attitude=attitude,
         specific_force=f_b, angular_rate=w_ib_b, events=dict(events or {}), name=name,
         parameters=dict(parameters or {}),
     )

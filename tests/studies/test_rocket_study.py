@@ -286,3 +286,14 @@ def test_panels_recompute_only_what_changes(baseline):
     np.testing.assert_allclose(sens.analysis.sensability.s, baseline.with_nu(0.99).sensability.s)
     sens.controls["states"].value = ("bg_x",)
     assert "S7" in sens.table.value
+
+
+def test_sensability_evaluation_carries_the_covariance_columns():
+    """The "sensability" sweep evaluation returns the columns of "covariance" from the same
+    recursion, equal to the bit (notebook 08 runs one sweep for both)."""
+    from navlib.sweep import EVALUATIONS
+
+    point = {"spin_hz": 1.0, "sigma_sg_ppm": 300.0, "gnss_sigma_m": 2.0}
+    both = EVALUATIONS["sensability"](**point)
+    alone = EVALUATIONS["covariance"](**point)
+    assert alone and {k: both[k] for k in alone} == alone

@@ -120,12 +120,18 @@ def _sensability_run(prepared, **full) -> dict:
     for j, s in enumerate(model.state_names):
         out[f"s_end_{s}"] = float(se.s[-1, j])
         out[f"s_frac_{s}"] = float(np.mean(se.s[later, j] >= S_THRESHOLD))
-    return out
+    # the same recursion's covariance columns, so that a grid needing both runs it once
+    return {**out, **_covariance_columns(model, se)}
 
 
 def _covariance_run(prepared, **full) -> dict:
     model = _rocket_model(prepared, full)
-    se = _sensability(model, full)
+    return _covariance_columns(model, _sensability(model, full))
+
+
+def _covariance_columns(model, se) -> dict:
+    """``sigma_end_<state>`` (physical 1-sigma at the last epoch) and ``ratio_<state>``
+    (``sigma_0 / sigma_end``) of a sensability result ``se`` of ``model``."""
     sigma0 = np.sqrt(np.diag(model.P0))
     out = {}
     for j, s in enumerate(model.state_names):
@@ -201,7 +207,8 @@ register(Evaluation("excitability", "rocket flight: e of the 21 states per segme
                     _rocket_prepare))
 register(Evaluation("sensability", "rocket flight: sensability at the end and share of the "
                     "epochs after the transient with s >= 1/sqrt2, per state and for the roll "
-                    "axis", _PARAMETERS, _SHARED, _sensability_run, _rocket_prepare))
+                    "axis; and the columns of 'covariance' from the same recursion",
+                    _PARAMETERS, _SHARED, _sensability_run, _rocket_prepare))
 register(Evaluation("covariance", "rocket flight: physical 1-sigma at the end and "
                     "sigma_0/sigma_end per state", _PARAMETERS, _SHARED, _covariance_run,
                     _rocket_prepare))
