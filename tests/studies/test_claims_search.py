@@ -83,3 +83,18 @@ def test_a_factorial_declared_set_is_its_own_joint_search(monkeypatch):
     monkeypatch.setitem(registry._REGISTRY, "fact", _study("fact", one_at_a_time, baseline))
     assert engine.factorial_search("fact") is None
     assert "fact" not in {s.name for s in engine.joint_searches()}
+
+
+def test_paper_summary_adds_searches_that_share_no_assumption():
+    def table(name, paper, parameter, passed):
+        frame = pd.DataFrame({parameter: [1, 2], "C" + name: passed})
+        return engine.SearchTable(name, paper, "test", frame, (parameter,), ("C" + name,),
+                                  pd.Series({parameter: 1}))
+
+    searches = [table("a", "P", "x", [True, False]), table("b", "P", "y", [False, True]),
+                table("c", "Q", "x", [False, False])]
+    summary = engine.paper_joint_summary(searches).set_index("paper")
+    assert summary.loc["P", ["claims", "reproduced", "points"]].tolist() == [2, 2, "2 x 2"]
+    assert summary.loc["P", "joint"] and summary.loc["Q", "reproduced"] == 0
+    shared = engine.paper_joint_summary([searches[0], table("b", "P", "x", [False, True])])
+    assert not shared.joint.iloc[0]          # both vary x: the sum is only an upper bound

@@ -76,6 +76,7 @@ from navlib.studies.claims.search import (
     SearchSpace,
     SearchTable,
     joint_searches,
+    paper_joint_summary,
     register_search,
     run_search,
     search_space,
@@ -85,12 +86,10 @@ from navlib.studies.claims.summary import counts, paper_summary, reading_markdow
 
 __all__ = [
     "BASES", "COLUMNS", "NOT_EVALUATED", "OPS", "SEARCH_SPACES", "STATUSES", "STUDY_MODULES",
-    "VERDICTS", "Check", "ClaimResult", "JointSearch", "Robustness", "SearchSpace",
-    "SearchTable", "Study", "all_claims", "check",
-    "claim", "claims_frame", "counts", "explain", "factorial_search", "joint_search",
-    "joint_searches", "not_evaluated",
+    "VERDICTS", "Check", "ClaimResult", "JointSearch", "Robustness", "SearchSpace", "SearchTable",
+    "Study", "all_claims", "check", "claim", "claims_frame", "counts", "explain",
+    "factorial_search", "joint_search", "joint_searches", "not_evaluated", "paper_joint_summary",
     "paper_summary", "reading_markdown", "register", "register_search", "robustness_over",
-    "run_search", "search_space", "stored_search", "studies",
-    "study_frame", "study_robustness", "summary_markdown", "verdict_of",
-    "with_failed_headline",
+    "run_search", "search_space", "stored_search", "studies", "study_frame", "study_robustness",
+    "summary_markdown", "verdict_of", "with_failed_headline",
 ]

@@ -23,6 +23,7 @@ from navlib._validation import reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir
 from navlib.studies.claims.registry import factorial_search, studies
+from navlib.studies.claims.robustness import joint_search
 from navlib.sweep import sweep
 
 
@@ -169,3 +170,37 @@ def joint_searches(quick: bool = False) -> list[SearchTable]:
                 f"({study.grid_note})", frame[[*parameters, *claims]], parameters, claims,
                 pd.Series({k: baseline[k] for k in parameters})))
     return out
+
+
+def paper_joint_summary(searches: list[SearchTable]) -> pd.DataFrame:
+    """Per paper, its joint searches together: the claims searched, the number reproduced at
+    each search's best point, and their sum. When a paper's searches share no assumption,
+    the union of their best points is one assumption set and the sum is what it reproduces
+    (``joint`` True: the paper's best joint set); when they share one, the sum is only an
+    upper bound (``joint`` False).
+
+    Returns
+    -------
+    DataFrame
+        ``paper, searches, points, claims, reproduced, conflicts, joint``, one row per paper.
+    """
+    rows: dict[str, dict] = {}
+    for search in searches:
+        found = joint_search(search.frame, search.parameters, search.claim_ids)
+        row = rows.setdefault(search.paper, {"paper": search.paper, "searches": [],
+                                             "points": [], "claims": 0, "reproduced": 0,
+                                             "conflicts": 0, "parameters": []})
+        row["searches"].append(search.name)
+        row["points"].append(found.n_points)
+        row["claims"] += len(found.claims)
+        row["reproduced"] += found.n_reproduced
+        row["conflicts"] += len(found.conflicts)
+        row["parameters"].extend(search.parameters)
+    out = []
+    for row in rows.values():
+        parameters = row.pop("parameters")
+        out.append({**row, "searches": ", ".join(row["searches"]),
+                    "points": " x ".join(str(n) for n in row["points"]),
+                    "joint": len(parameters) == len(set(parameters))})
+    return pd.DataFrame(out, columns=["paper", "searches", "points", "claims", "reproduced",
+                                      "conflicts", "joint"])
