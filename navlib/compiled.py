@@ -9,7 +9,7 @@ strapdown mechanisation (:mod:`navlib.strapdown_kernel`) and the every-step obse
 test (:mod:`navlib.observability.sliding`).
 
 A report warms the kernels several notebooks share before the notebooks start, in two
-processes of about equal cost (:func:`compile_kalman_kernels`, :func:`compile_other_kernels`).
+processes (:func:`compile_kalman_kernels` beside :func:`compile_other_kernels`).
 The every-step observability window has one user in a report, Table 2 at every step
 (notebook 02; the claims summary starts after it and reads the cache it wrote), so it
 compiles there, on its first use, while the other core runs another notebook.
@@ -28,8 +28,8 @@ def compile_kernels() -> None:
 
 
 def compile_kalman_kernels() -> None:
-    """The Kalman kernels (:func:`navlib.kalman.compile_kernels`): about half of the shared
-    kernels' first compile, so a report compiles them in a second process beside
+    """The Kalman kernels (:func:`navlib.kalman.compile_kernels`): more than half of the
+    shared kernels' first compile, so a report compiles them in a second process beside
     :func:`compile_other_kernels`."""
     kalman.compile_kernels()
 
