@@ -164,7 +164,6 @@ def all_claims(quick: bool = False, only: Sequence[str] | None = None,
     return frame
 
 
-
 def factorial_search(name: str, quick: bool = False) -> pd.DataFrame | None:
     """Study ``name``'s claims at every point of its declared set, as a joint-search frame.
 

@@ -149,6 +149,7 @@ def joint_searches(quick: bool = False) -> list[SearchTable]:
     :data:`SEARCH_SPACES`, then, for each study whose measured claims no stored search
     judges, its declared set when the study evaluates it as a full factorial
     (:func:`~navlib.studies.claims.registry.factorial_search`, in process: the Beaudoin
+    Table 2 claims over the rounding of a printed order and the rank tolerance, and the
     outlier claims over the recovery window and the sign of A1)."""
     out = []
     for name, space in SEARCH_SPACES.items():
