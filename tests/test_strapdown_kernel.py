@@ -8,9 +8,9 @@ import pytest
 import strapdown_reference as ref
 from scipy.spatial.transform import Rotation
 
-from navlib import strapdown
+from navlib import filters, strapdown
 from navlib.quaternions import quat_from_matrix
-from navlib.trajectory import sounding_rocket
+from navlib.trajectory import launcher_ascent, sounding_rocket
 
 STEP_RTOL = 1e-12
 
@@ -70,8 +70,9 @@ def test_quaternion_of_a_matrix_is_scipys():
 
 def test_read_only_inputs_use_the_one_compiled_specialisation():
     """Read-only inputs (the stationary trajectory's broadcast positions, a broadcast
-    attitude matrix) are passed to the kernels as the writeable C arrays they are compiled
-    for (``compile_kernel``), so a notebook never compiles a second specialisation."""
+    attitude matrix, the times of the EKF's windows) are passed to the kernels as the
+    writeable C arrays they are compiled for (``compile_kernel``), so a notebook never
+    compiles a second specialisation."""
     from navlib.quaternions import _matrix_quat_kernel
     from navlib.strapdown_kernel import integrate_kernel
     from navlib.trajectory import stationary
@@ -83,5 +84,8 @@ def test_read_only_inputs_use_the_one_compiled_specialisation():
     C = np.broadcast_to(still.C_b_e()[0], (2, 3, 3))[0]
     np.testing.assert_array_equal(quat_from_matrix(C), Rotation.from_matrix(C).as_quat())
     quat_from_matrix(np.eye(3))
+    short = launcher_ascent(duration_s=2.0)
+    filters.simulate_ekf(short, solution="ins_gps_att", biases="GAP", bias_model="markov",
+                         seed=0, gnss_rate_hz=short.rate_hz, window_s=0.1)
     assert len(integrate_kernel.signatures) == 1
     assert len(_matrix_quat_kernel.signatures) == 1

@@ -29,7 +29,6 @@ from navlib.errors import NavlibInputError
 from navlib.filters.ekf_updates import Epochs, WindowUpdates, update_records
 from navlib.filters.linear_preparation import METHODS
 from navlib.filters.measurements import Measurement, ekf_measurements, epoch_index, imu_arrays
-from navlib.kalman import kernel_array
 from navlib.models.base import ErrorStateModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
 from navlib.models.launcher import LauncherErrorState
@@ -460,7 +459,5 @@ def _window_nominal(es, t, f_meas, w_meas, state, params, clock) -> Nominal:
     dt = (t - t[0])[:, None]
     par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
     f_c, w_c = es.compensate(par, f_meas, w_meas)
-    # a writable copy of the (read-only) trajectory times: a read-only array would compile,
-    # and cache, a second specialisation of the strapdown kernel (3.6 s in a cold notebook 05)
-    nav = strapdown._integrate(kernel_array(t), f_c, w_c, r, v, quat_from_matrix(C), clock)
+    nav = strapdown._integrate(t, f_c, w_c, r, v, quat_from_matrix(C), clock)
     return Nominal(t, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c, par)
