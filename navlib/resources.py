@@ -48,6 +48,13 @@ def toml_names(folder: Path) -> list[str]:
     return sorted(p.stem for p in folder.glob("*.toml"))
 
 
+def is_shipped_name(name_or_path) -> bool:
+    """Whether ``name_or_path`` names a shipped TOML file rather than a path: no ``.toml``
+    suffix and no folder part (the rule of :func:`toml_path`)."""
+    path = Path(str(name_or_path))
+    return path.suffix != ".toml" and path.parent == Path(".")
+
+
 def toml_path(folder: Path, name_or_path, argument: str, file_kind: str, kind: str) -> Path:
     """The TOML file ``name_or_path`` names: a path (a ``.toml`` suffix or a folder part)
     as given, else the shipped ``folder/<name>.toml``. A NavlibInputError starting with
@@ -55,7 +62,7 @@ def toml_path(folder: Path, name_or_path, argument: str, file_kind: str, kind: s
     shipped names (:func:`toml_names`)."""
     text = str(name_or_path)
     path = Path(text)
-    if path.suffix == ".toml" or path.parent != Path("."):
+    if not is_shipped_name(text):
         if not path.is_file():
             raise NavlibInputError(f"{argument}: {file_kind} {text!r} not found")
         return path

@@ -29,9 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
 from itertools import pairwise
-from pathlib import Path
 
 import numpy as np
 
@@ -46,6 +44,7 @@ from navlib.models.base import (
     LinearModel,
     MeasurementRows,
 )
+from navlib.resources import is_shipped_name
 from navlib.rotations import skew
 from navlib.sensors import DEFAULT_IMU_PRESET, load_preset
 
@@ -106,8 +105,7 @@ def _imu_spec(sensors):
     if sensors is None:
         sensors = DEFAULT_SENSORS
     if isinstance(sensors, str):
-        shipped = Path(sensors).suffix != ".toml" and Path(sensors).parent == Path(".")
-        sensors = _shipped_preset(sensors) if shipped else load_preset(sensors)
+        sensors = _shipped_preset(sensors) if is_shipped_name(sensors) else load_preset(sensors)
     if isinstance(sensors, Mapping):
         return sensors
     imu = getattr(sensors, "imu", sensors)
@@ -119,7 +117,7 @@ def _imu_spec(sensors):
     return imu
 
 
-@lru_cache(maxsize=16)
+@cache.memoized(maxsize=16)
 def _shipped_preset(name: str):
     """:func:`navlib.sensors.load_preset` of a shipped preset name, read once per process
     (the packaged files do not change while it runs; a design sweep asks for the preset's
