@@ -98,7 +98,7 @@ class FilterCache:
                 self.get(*key)
         return self._summaries[key]
 
-    def _known(self, keys: list) -> list:
+    def _not_on_disk(self, keys: list) -> list:
         """``keys`` of unit responses not on disk either (those found there are kept)."""
         for w in keys:
             found, response = self._disk.get(("response", *w))
@@ -124,10 +124,10 @@ class FilterCache:
         """
         config = (solution, biases, bias_model)
         wanted = [(config, _unit(o), watch) for o, watch in requests]
-        missing = self._known([w for w in dict.fromkeys(wanted) if w not in self._responses])
+        missing = self._not_on_disk([w for w in dict.fromkeys(wanted) if w not in self._responses])
         if missing:
             extra = [(config, _unit(o), watch) for o, watch in also]
-            missing += self._known([w for w in dict.fromkeys(extra)
+            missing += self._not_on_disk([w for w in dict.fromkeys(extra)
                                     if w not in self._responses and w not in missing])
             units = list(dict.fromkeys(w[1] for w in missing))
             sim = unit_responses(self.get(*config), units)
