@@ -24,6 +24,7 @@ import numpy as np
 
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
+from navlib.kernel_copy import copy_matrix, copy_vector
 
 PINV_RTOL = 1e-12
 """Relative cut-off of the innovation-covariance pseudo-inverse; the value
@@ -133,8 +134,8 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
     S = np.empty((m, m))
     _sym_sum(np.dot(H, PHt), R, S)
     if m == 0:
-        _copy(PHt, K)
-        _copy(S, S_pinv)
+        copy_matrix(PHt, K)
+        copy_matrix(S, S_pinv)
         return 0
     if definite and _inverse(S, S_pinv):
         dof = m
@@ -149,8 +150,8 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
                 for i in range(m):
                     scaled[i, j] = V[i, j] * inv_w
                 dof += 1
-        _copy(np.dot(scaled, V.T), S_pinv)
-    _copy(np.dot(PHt, S_pinv), K)
+        copy_matrix(np.dot(scaled, V.T), S_pinv)
+    copy_matrix(np.dot(PHt, S_pinv), K)
     return dof
 
 
@@ -161,24 +162,6 @@ def _sym_sum(A, B, out):
     for i in range(out.shape[0]):
         for j in range(out.shape[1]):
             out[i, j] = 0.5 * ((A[i, j] + B[i, j]) + (A[j, i] + B[j, i]))
-
-
-@numba.njit(cache=True)
-def _copy(src, dst):
-    """``dst[:, :] = src`` entry by entry (matrices of one shape). The kernels copy with it
-    (and :func:`_copy_vector`) rather than by assigning an array to a slice, whose compiled
-    shape check (numba 0.61+ formats both shapes into its error message) took about 4 s of
-    the first compile of these kernels."""
-    for i in range(src.shape[0]):
-        for j in range(src.shape[1]):
-            dst[i, j] = src[i, j]
-
-
-@numba.njit(cache=True)
-def _copy_vector(src, dst):
-    """``dst[:] = src`` entry by entry (vectors of one length; see :func:`_copy`)."""
-    for i in range(src.shape[0]):
-        dst[i] = src[i]
 
 
 @numba.njit(cache=True)
@@ -314,16 +297,16 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
             predict_kernel(cur, F[s], Q[s], nxt)
             cur, nxt = nxt, cur
         if P_prior.shape[0]:
-            _copy(cur, P_prior[i])
+            copy_matrix(cur, P_prior[i])
         if update[i]:
             d = _joseph_kernel(cur, H[i], R[i], definite[i], pinv_rtol, nxt, K_k, S_k)
             cur, nxt = nxt, cur
             if K.shape[0]:
-                _copy(K_k, K[i])
-                _copy(S_k, S_pinv[i])
+                copy_matrix(K_k, K[i])
+                copy_matrix(S_k, S_pinv[i])
                 dof[i] = d
         if slot[i] >= 0:
-            _copy(cur, P_post[slot[i]])
+            copy_matrix(cur, P_post[slot[i]])
     return cur
 
 
@@ -452,8 +435,8 @@ def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_
         j0 = samples[u]
         x, innovation, nis_u, dof = update_kernel(x, P, z[u], H, R, definite, pinv_rtol,
                                                   Ps[u], K, S_pinv)
-        _copy_vector(x, xs[u])
-        _copy_vector(innovation, innovations[u])
+        copy_vector(x, xs[u])
+        copy_vector(innovation, innovations[u])
         nis[u], dofs[u] = nis_u, dof
         P = Ps[u]
     return x, P

@@ -195,7 +195,7 @@ def truth_kernel(x, F, noise, inputs, j0):
         j = j0 + i
         _rows_times(x[j], F[i], x[j + 1])
         # sums entry by entry: ``x[j + 1] += noise[i]`` assigns an array to a slice, whose
-        # compiled shape check took about 4 s of the first compile (navlib.kalman._copy)
+        # compiled shape check took about 4 s of the first compile (navlib.kernel_copy)
         if noise.shape[0]:
             for r in range(runs):
                 for c in range(n):
