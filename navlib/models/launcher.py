@@ -296,14 +296,21 @@ def _starts(solution: str, letters: str) -> dict:
     return start
 
 
+def _slicer(start: dict):
+    """``sl(group, size=3)``: the slice of a group's states, from :func:`_starts`."""
+
+    def sl(group, size=3):
+        return slice(start[group], start[group] + size)
+
+    return sl
+
+
 def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict):
     """``A`` (N, n, n) along attitudes ``C_b_e`` (N, 3, 3) and specific forces ``f_b``
     (N, 3): the paper's ``F(k)`` (eq. 1-5) and the RT block of spec §3.4."""
     start = _starts(solution, letters)
     n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
-
-    def sl(group, size=3):
-        return slice(start[group], start[group] + size)
+    sl = _slicer(start)
 
     I3 = np.eye(3)
     W_ie = skew(EARTH_RATE_ECEF)
@@ -322,8 +329,7 @@ def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p:
         if bias_model == "markov":
             A[:, sl(b), sl(b)] = -I3 / tau[b]
     if solution.endswith("_rt"):
-        xa = slice(start["xa"], start["xa"] + 10)
-        A[:, xa, xa] = rt_dynamics_matrix()
+        A[:, sl("xa", 10), sl("xa", 10)] = rt_dynamics_matrix()
         A[:, sl("xa"), sl("psi")] = p["a1_sign"] * np.swapaxes(C_b_e, 1, 2)
     return A
 
@@ -333,9 +339,7 @@ def _dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict)
     (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of spec §3.4)."""
     start = _starts(solution, letters)
     n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
-
-    def sl(group, size=3):
-        return slice(start[group], start[group] + size)
+    sl = _slicer(start)
 
     I3 = np.eye(3)
     A = _state_dynamics(C_b_e, f_b, solution, letters, bias_model, p)
@@ -380,9 +384,7 @@ def _measurement_matrix(solution: str, letters: str, meas: dict, C_b_e) -> np.nd
     (m, n), or (N, m, n) along the attitudes for the RT solutions."""
     start = _starts(solution, letters)
     n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
-
-    def sl(group, size=3):
-        return slice(start[group], start[group] + size)
+    sl = _slicer(start)
 
     I3 = np.eye(3)
     rt = solution.endswith("_rt")
@@ -405,9 +407,7 @@ def _model(solution, letters, bias_model, t, C_b_e, f_b, sensors, kw, s_t) -> Li
     names = state_names(solution, letters, bias_model)
     start = _starts(solution, letters)
     n = len(names)
-
-    def sl(group, size=3):
-        return slice(start[group], start[group] + size)
+    sl = _slicer(start)
 
     I3 = np.eye(3)
     A, G, psd = _dynamics(C_b_e, f_b, solution, letters, bias_model, p)
