@@ -12,6 +12,7 @@ from __future__ import annotations
 import ast
 import json
 import re
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -84,10 +85,25 @@ def _title(nb, fallback: str) -> str:
     return fallback
 
 
-def read_notebook(path: Path):
-    """The notebook at ``path`` (nbformat version 4); NavlibInputError when unreadable."""
+def notebook_format():
+    """nbformat, imported without the IRI grammars of ``rfc3987-syntax``.
+
+    jsonschema (nbformat's validator) compiles 39 lark grammars on import when that package
+    is installed (JupyterLab's event schemas pull it in), to check the ``iri`` formats that no
+    notebook schema uses: about 2 CPU-s of every process that runs or exports notebooks
+    (importing papermill and nbconvert: 2.9-3.2 CPU-s with them, 0.8-1.1 without, on the
+    2-core machine of the README's timings). Marking the package absent first makes
+    jsonschema skip those two format checkers (it imports them under ``suppress(ImportError)``); a
+    process that imported it already keeps it."""
+    sys.modules.setdefault("rfc3987_syntax", None)
     import nbformat  # only when a notebook is read: the assess, plan and sweep commands never do
 
+    return nbformat
+
+
+def read_notebook(path: Path):
+    """The notebook at ``path`` (nbformat version 4); NavlibInputError when unreadable."""
+    nbformat = notebook_format()
     try:
         return nbformat.read(path, as_version=4)
     except Exception as exc:  # nbformat raises several unrelated types for bad files

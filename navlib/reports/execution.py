@@ -20,7 +20,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from navlib.reports.discovery import NotebookInfo, read_notebook
+from navlib.reports.discovery import NotebookInfo, notebook_format, read_notebook
 from navlib.reports.kernel_watch import KernelWatch, NotebookAborted, execute_notebook
 from navlib.reports.results import CellFailure, NotebookRun
 
@@ -41,7 +41,7 @@ def _failure_from(exc: BaseException, executed_path: Path, source_nb) -> CellFai
     """
     # the notebook stack (nbformat, papermill) loads only when a notebook runs, not on
     # ``import navlib.reports`` (the assess, plan and sweep commands import it too)
-    import nbformat
+    nbformat = notebook_format()
     from papermill.exceptions import PapermillExecutionError
 
     if not isinstance(exc, PapermillExecutionError | NotebookAborted):
@@ -74,7 +74,7 @@ def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
     script and no network to show them."""
     # nbconvert and the widget stack (ipywidgets, matplotlib) are heavy: loaded only when
     # a page is exported
-    import nbformat
+    nbformat = notebook_format()
     from nbconvert import HTMLExporter
 
     from navlib.widgets.static import freeze_widgets

@@ -41,6 +41,7 @@ from typing import NamedTuple
 import psutil
 
 from navlib.cache import memoized
+from navlib.reports.discovery import notebook_format
 
 POLL_SLICE_S = 0.25
 """Longest wait on a kernel socket before it is polled again, s."""
@@ -329,7 +330,7 @@ def kernel_manager_class(watch: KernelWatch, env: Mapping[str, str] | None = Non
 def _register_engine() -> None:
     """Register the ``navlib-bounded`` papermill engine (once per process)."""
     # papermill and nbclient are heavy: loaded when the first notebook runs, not on import
-    import nbformat
+    nbformat = notebook_format()
     from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
     from papermill.clientwrap import PapermillNotebookClient
     from papermill.engines import NBClientEngine, papermill_engines

@@ -504,3 +504,20 @@ def test_bad_after_metadata_is_named(tmp_path):
     nbformat.write(nb, nbdir / "01_a.ipynb")
     with pytest.raises(NavlibInputError, match=r"navlib\.after"):
         reports.list_notebooks(nbdir)
+
+
+def test_notebook_stack_loads_without_the_iri_grammars(tmp_path):
+    # a fresh process: reading and validating a notebook imports neither rfc3987-syntax nor
+    # lark (their grammars cost ~2 CPU-s per report process), and validation still works
+    path = tmp_path / "01_a.ipynb"
+    _write(path, [("code", "x = 1")])
+    script = (
+        "import sys\n"
+        "from navlib.reports.discovery import notebook_format, read_notebook\n"
+        f"nb = read_notebook({str(path)!r})\n"
+        "notebook_format().validate(nb)\n"
+        "import papermill, nbconvert\n"
+        "print(sorted(m for m in ('lark', 'rfc3987_syntax') if sys.modules.get(m)))\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "[]"
