@@ -8,11 +8,11 @@ costs). The kernels live beside the NumPy code they replace: the Kalman algebra
 strapdown mechanisation (:mod:`navlib.strapdown_kernel`) and the every-step observability
 test (:mod:`navlib.observability.sliding`).
 
-A report warms the kernels several notebooks share before the notebooks start, in two
-processes (:func:`compile_kalman_kernels` beside :func:`compile_other_kernels`).
-The every-step observability window has one user in a report, Table 2 at every step
-(notebook 02; the claims summary starts after it and reads the cache it wrote), so it
-compiles there, on its first use, while the other core runs another notebook.
+A report warms the kernels several notebooks share (:func:`compile_shared_kernels`) in a
+process of its own while its longest notebook starts: Table 2 at every step (notebook 02;
+the claims summary starts after it and reads the cache it wrote) uses none of them before
+its every-step observability window, the one kernel only it uses, which it compiles on
+first use.
 """
 
 from navlib import kalman, strapdown_kernel
@@ -22,19 +22,14 @@ from navlib.observability import sliding
 
 def compile_kernels() -> None:
     """Compile (first run on a machine) or load (afterwards) every kernel of navlib."""
-    compile_kalman_kernels()
-    compile_other_kernels()
+    compile_shared_kernels()
     sliding.compile_kernel()
 
 
-def compile_kalman_kernels() -> None:
-    """The Kalman kernels (:func:`navlib.kalman.compile_kernels`): more than half of the
-    shared kernels' first compile, so a report compiles them in a second process beside
-    :func:`compile_other_kernels`."""
+def compile_shared_kernels() -> None:
+    """The kernels several notebooks of a report use: the Kalman algebra
+    (:func:`navlib.kalman.compile_kernels`), the linear simulation and the strapdown
+    mechanisation."""
     kalman.compile_kernels()
-
-
-def compile_other_kernels() -> None:
-    """The linear simulation's and the strapdown mechanisation's kernels."""
     linear_recursion.compile_recursion_kernels()
     strapdown_kernel.compile_kernel()

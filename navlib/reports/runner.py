@@ -136,9 +136,8 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
     staging = staging_folder(output)
     try:
         with signals_interrupt():
-            if jobs > 1:
-                _compile_kernels()
-            runs = _run_all(selected, queue, staging, settings, progress)
+            runs = _run_all(selected, queue, staging, settings, progress,
+                            warm_up=_compile_shared_kernels if jobs > 1 else None)
             publish(staging, output, runs, partial=only is not None)
         return runs
     except (ReportInterrupted, KeyboardInterrupt):
@@ -149,29 +148,27 @@ def run_reports(notebooks_dir, output_dir, *, quick: bool = False,
             shutil.rmtree(staging, ignore_errors=True)
 
 
-_COMPILE_KALMAN = "from navlib.compiled import compile_kalman_kernels; compile_kalman_kernels()"
+_COMPILE_SHARED = "from navlib.compiled import compile_shared_kernels; compile_shared_kernels()"
 
 
-def _compile_kernels() -> None:
-    """Compile navlib's shared numba kernels (or load them from numba's disk cache) before
-    kernels that run at once start: otherwise each of them compiles the same kernels on a
-    machine's first run (README "Compiled kernels"). The Kalman kernels compile in a second
-    process while this one compiles the others; should that process fail, they compile here.
-    The observability window, which one notebook uses, compiles in that notebook
-    (:mod:`navlib.compiled`)."""
-    # imported here: the runner itself needs neither numba nor NumPy otherwise
-    from navlib import compiled
-
-    helper = subprocess.Popen([sys.executable, "-c", _COMPILE_KALMAN])
+def _compile_shared_kernels(stopped: Callable[[], bool]) -> None:
+    """Compile navlib's shared numba kernels (or load them from numba's disk cache) in a
+    process of their own, so that the notebook kernels started after it load them instead
+    of each compiling the same code on a machine's first run (README "Compiled kernels").
+    Killed when ``stopped()``; should it fail, each notebook compiles what it uses on first
+    use (a broken kernel then fails the cell that calls it, with its traceback)."""
+    process = subprocess.Popen([sys.executable, "-c", _COMPILE_SHARED])
     try:
-        compiled.compile_other_kernels()
-    except BaseException:  # interrupted: the second process goes too
-        helper.kill()
-        raise
+        while not stopped():
+            try:
+                process.wait(timeout=_EVENT_WAIT_S)
+                return
+            except subprocess.TimeoutExpired:
+                continue
     finally:
-        failed = helper.wait() != 0
-    if failed:
-        compiled.compile_kalman_kernels()
+        if process.poll() is None:
+            process.kill()
+            process.wait()
 
 
 def queue_order(selected: Sequence[NotebookInfo], output: Path) -> list[NotebookInfo]:
@@ -243,10 +240,16 @@ class _Pending:
 
 
 def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], staging: Path,
-             settings: Settings, progress: Progress | None) -> list[NotebookRun]:
+             settings: Settings, progress: Progress | None,
+             warm_up: Callable[[Callable[[], bool]], None] | None = None) -> list[NotebookRun]:
     """Execute the notebooks of ``queue`` (in that order) on ``settings.jobs`` worker
     threads into ``staging``; their runs in the order of ``selected``, or ReportError
     with them unless all are ok.
+
+    ``warm_up(stopped)`` (the shared kernels' compile) runs once on the second worker while
+    the first starts the head of the queue, the longest path (notebook 02, whose every-step
+    observability window is the one kernel only it uses, compiled there); the other workers
+    take notebooks once it has returned.
 
     Only the calling thread reports progress (workers post their events to it), so
     progress lines never interleave mid-line and Ctrl-C / SIGTERM reach it while it
@@ -258,7 +261,14 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
     pending = _Pending(queue)
     total = len(queue)
 
-    def work():
+    warmed = threading.Lock()
+    warm_ups = [warm_up] if warm_up is not None else []
+
+    def work(index: int):
+        if index > 0:
+            with warmed:  # the first of the other workers warms up, the rest wait for it
+                while warm_ups and not kernels.stopped:
+                    warm_ups.pop()(lambda: kernels.stopped)
         while not kernels.stopped:
             position, info = pending.take(lambda: kernels.stopped)
             if info is None:
@@ -280,7 +290,7 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
             events.put((position, info.name, run))
             pending.finished(info)
 
-    workers = [threading.Thread(target=work, name=f"report-worker-{k}", daemon=True)
+    workers = [threading.Thread(target=work, args=(k,), name=f"report-worker-{k}", daemon=True)
                for k in range(settings.jobs)]
     runs: list[NotebookRun] = []
     try:

@@ -294,6 +294,7 @@ def _gone(pid: int) -> bool:
 def test_parallel_runs_overlap_and_publish_both(tmp_path, monkeypatch):
     for name in reports.BLAS_THREAD_VARIABLES:
         monkeypatch.delenv(name, raising=False)
+    _no_warm_up(monkeypatch)
     nbdir = tmp_path / "notebooks"
     nbdir.mkdir()
     _timed(nbdir, "01_first", 4.0)
@@ -311,6 +312,13 @@ def test_parallel_runs_overlap_and_publish_both(tmp_path, monkeypatch):
     manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())["notebooks"]
     assert sorted(manifest) == ["01_first", "02_second"]
     assert all((tmp_path / "out" / f"{r.name}.html").exists() for r in runs)
+
+
+def _no_warm_up(monkeypatch) -> None:
+    """Two workers without the shared kernels' compile (a process of a few seconds, or of
+    half a minute on a machine's first run) before the second starts: for the tests that
+    time notebooks against each other."""
+    monkeypatch.setattr(runner, "_compile_shared_kernels", lambda stopped: None)
 
 
 def _bad_and_slow(good, tmp_path: Path, sleep: float) -> tuple[Path, Path]:
@@ -464,9 +472,10 @@ def test_jobs_option(good, tmp_path, capsys):
     assert "--jobs N" in proc.stdout and "--no-cache" in proc.stdout
 
 
-def test_a_notebook_after_others_starts_when_they_have_finished(tmp_path):
+def test_a_notebook_after_others_starts_when_they_have_finished(tmp_path, monkeypatch):
     """00 (metadata navlib.after: 01) reads what 01 wrote: with two workers it would
     otherwise start beside 01; 02, which it does not wait for, runs beside 01."""
+    _no_warm_up(monkeypatch)
     nbdir = tmp_path / "notebooks"
     nbdir.mkdir()
     stamp = f"import pathlib, time\nstamps = pathlib.Path({str(tmp_path)!r})\n"
@@ -521,3 +530,26 @@ def test_notebook_stack_loads_without_the_iri_grammars(tmp_path):
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_the_shared_kernels_compile_beside_the_first_notebook(tmp_path, monkeypatch):
+    """With two workers the head of the queue starts at once while the other worker warms
+    the shared kernels up; the next notebook starts after the warm-up."""
+    nbdir = tmp_path / "notebooks"
+    nbdir.mkdir()
+    stamp = f"import pathlib, time\nstamps = pathlib.Path({str(tmp_path)!r})\n"
+    for name in ("01_head", "02_next"):
+        _write(nbdir / f"{name}.ipynb", [("code", stamp + f"(stamps / {name[:2]!r})"
+                                          ".write_text(str(time.time()))")])
+
+    def warm_up(stopped):  # returns once the head notebook has run its cell
+        deadline = time.time() + 120
+        while not (tmp_path / "01").exists() and time.time() < deadline and not stopped():
+            time.sleep(0.05)
+        (tmp_path / "warm").write_text(str(time.time()))
+
+    monkeypatch.setattr(runner, "_compile_shared_kernels", warm_up)
+    runs = reports.run_reports(nbdir, tmp_path / "out", jobs=2)
+    assert all(r.ok for r in runs)
+    stamps = {n: float((tmp_path / n).read_text()) for n in ("01", "warm", "02")}
+    assert stamps["01"] <= stamps["warm"] <= stamps["02"]
