@@ -19,7 +19,9 @@ Golub-Kahan bidiagonalisation of the n x n factor and LAPACK's ``dlasq1`` (dqds,
 keeps the factors transposed (``Y_r'``, ``P_j'``, lower triangular), so that each reflector
 works along contiguous memory: a dot product per column, which numba may vectorise
 (``fastmath={"reassoc"}`` in :func:`_reflect` only: the sums of one dot product in another
-order, a rounding-level change). The NumPy code it replaced is kept in
+order, a rounding-level change). The kernels use numba's ``error_model="numpy"`` (IEEE
+division, no division-by-zero check to compile: none of their divisors is zero) and allocate
+their scratch once per chunk. The NumPy code it replaced is kept in
 tests/sliding_reference.py to compare against.
 """
 
@@ -44,21 +46,28 @@ LAPACK, bound by a named symbol so that the kernels stay in numba's disk cache).
 def block_data(transitions, H, k0: int, n_blocks: int, window: int):
     """``H`` (n_blocks + 1, w, m, n) and ``F`` (n_blocks + 1, w, n, n) of the steps from
     ``k0`` in blocks of ``w``; past the mission ``H = 0`` and ``F = I``, which only steps
-    without a complete window read."""
+    without a complete window read. Inside the mission both are the caller's steps as they
+    are (``H`` a view when it is contiguous, ``F`` the array ``transitions`` returns)."""
     m, n = H.shape[1:]
-    idx = np.arange(k0, k0 + (n_blocks + 1) * window)
-    Hs = np.zeros((idx.size, m, n))
-    inside = idx[idx < H.shape[0]]
-    Hs[:inside.size] = H[inside]
-    Fs = np.empty((idx.size, n, n))
-    inside = idx[idx < H.shape[0] - 1]
-    Fs[:inside.size] = transitions(inside)
-    Fs[inside.size:] = np.eye(n)
+    size = (n_blocks + 1) * window
     shape = (n_blocks + 1, window)
+    if k0 + size <= H.shape[0]:
+        Hs = np.ascontiguousarray(H[k0:k0 + size], dtype=float)
+    else:
+        Hs = np.zeros((size, m, n))
+        Hs[:H.shape[0] - k0] = H[k0:]
+    inside = min(size, H.shape[0] - 1 - k0)
+    F = np.ascontiguousarray(transitions(np.arange(k0, k0 + inside)), dtype=float)
+    if inside == size:
+        Fs = F
+    else:
+        Fs = np.empty((size, n, n))
+        Fs[:inside] = F
+        Fs[inside:] = np.eye(n)
     return Hs.reshape(*shape, m, n), Fs.reshape(*shape, n, n)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def householder(alpha, x):
     """Reflector ``I - tau [1; v] [1; v]'`` mapping ``[alpha; x]`` to ``[beta; 0]``
     (LAPACK ``dlarfg``): returns ``(beta, tau)`` and overwrites ``x`` with ``v``; ``tau = 0``
@@ -78,7 +87,7 @@ def householder(alpha, x):
     return beta, (beta - alpha) / beta
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc"}, error_model="numpy")
 def _reflect(head, tails, v, tau):
     """Apply the reflector ``(tau, [1; v])`` to columns given transposed: column ``c`` is
     ``head[c]`` followed by the last ``v.size`` entries of ``tails[c]`` (a dot product and
@@ -95,7 +104,7 @@ def _reflect(head, tails, v, tau):
             row[i] -= w * v[i]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _reflect_rows(top, rows, column, v, tau, work):
     """Apply the reflector ``(tau, [1; v])`` to ``[top; rows[:p, column + 1:]]`` in place
     (``p = v.size``, ``top`` the length-L row right of the pivot), row by row."""
@@ -118,7 +127,7 @@ def _reflect_rows(top, rows, column, v, tau, work):
             row[c] -= vi * w[c]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def fold(Rt, Xt):
     """``R`` becomes the triangular factor of ``[R; X]``, both given transposed: ``Rt``
     (n, n, lower triangular) is updated, ``Xt`` (n, p) overwritten. One reflector per
@@ -131,7 +140,7 @@ def fold(Rt, Xt):
             _reflect(Rt[j + 1:, j], Xt[j + 1:], v, tau)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def triangularize(At, Rt):
     """``Rt`` (n, n) becomes the transposed upper triangular factor of ``A`` (p, n), given
     transposed as ``At`` (n, p), zero beyond column ``min(p, n)`` (Householder QR); ``At`` is
@@ -149,22 +158,24 @@ def triangularize(At, Rt):
             Rt[c, i] = At[c, i]
 
 
-@numba.njit(cache=True, nogil=True)
-def singular_values(A, s):
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def singular_values(A, s, work, lapack_ints):
     """Singular values of the square ``A`` (n, n; overwritten) into ``s``, descending.
 
     Golub-Kahan bidiagonalisation by reflectors from the left (columns) and the right (rows),
-    then LAPACK ``dlasq1`` on the bidiagonal. Returns ``dlasq1``'s ``info`` (0: converged).
+    then LAPACK ``dlasq1`` on the bidiagonal. ``work`` (at least ``6 n`` floats) and
+    ``lapack_ints`` (two int32: ``dlasq1``'s ``n`` and ``info``) are scratch, allocated once
+    per kernel run. Returns ``dlasq1``'s ``info`` (0: converged).
     """
     n = A.shape[0]
-    e, v, work = np.zeros(max(n - 1, 1)), np.empty(n), np.empty(4 * n)
+    e, v, lasq = work[:n], work[n:2 * n], work[2 * n:6 * n]  # e[:n - 1] all set below
     for j in range(n):
         below = v[:n - j - 1]
         for i in range(below.size):
             below[i] = A[j + 1 + i, j]
         s[j], tau = householder(A[j, j], below)
         if tau != 0.0:
-            _reflect_rows(A[j, j + 1:], A[j + 1:], j, below, tau, work)
+            _reflect_rows(A[j, j + 1:], A[j + 1:], j, below, tau, lasq)
         if j < n - 2:
             right = v[:n - j - 2]
             for i in range(right.size):
@@ -174,22 +185,22 @@ def singular_values(A, s):
                 _reflect(A[j + 1:, j + 1], A[j + 1:], right, tau)
         elif j == n - 2:
             e[j] = A[j, j + 1]
-    size, info = np.full(1, n, np.int32), np.zeros(1, np.int32)
-    _dlasq1(size.ctypes, s.ctypes, e.ctypes, work.ctypes, info.ctypes)
-    return info[0]
+    lapack_ints[0] = n
+    _dlasq1(lapack_ints.ctypes, s.ctypes, e.ctypes, lasq.ctypes, lapack_ints[1:].ctypes)
+    return lapack_ints[1]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def sliding_kernel(Hb, Fb, K, out):
     """Singular values (``out``, K x n) of ``O(k)`` at the first ``K`` steps of the blocks
     ``Hb`` (nb + 1, w, m, n), ``Fb`` (nb + 1, w, n, n) of :func:`block_data` (module
     docstring). Returns the number of steps whose ``dlasq1`` did not converge."""
     w, m, n = Hb.shape[1], Hb.shape[2], Hb.shape[3]
-    Yt, Phi = np.empty((w, n, n)), np.empty((w, n, n))    # Yt[r] = Y_r', Phi[r] = Phi_r
+    Yt, Phi = np.empty((w, n, n)), np.empty((w, n, n))    # Yt[r] = Y_r', Phi[r] = Phi_r (r > 0)
     Pt = np.empty((max(w - 1, 1), n, n))                    # Pt[j] = P_j'
     stack, rows = np.empty((n, m + n)), np.empty((n, m))    # [H_r; Y F_r]', (H_j Psi_j)'
-    Ct, Xt, psi, product = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), \
-        np.empty((n, n))
+    Xt, psi, product = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    work, lapack_ints = np.empty(6 * n), np.empty(2, np.int32)
     failed = 0
     for b in range(Hb.shape[0] - 1):
         copy_matrix(Hb[b, w - 1].T, rows)
@@ -200,7 +211,8 @@ def sliding_kernel(Hb, Fb, K, out):
             np.dot(Fb[b, r].T, Yt[r + 1], product)
             copy_matrix(product, stack[:, m:])
             triangularize(stack, Yt[r])
-            np.dot(Phi[r + 1], Fb[b, r], Phi[r])
+            if r > 0:
+                np.dot(Phi[r + 1], Fb[b, r], Phi[r])
         if w > 1:
             copy_matrix(Hb[b + 1, 0].T, rows)
             triangularize(rows, Pt[0])
@@ -211,13 +223,12 @@ def sliding_kernel(Hb, Fb, K, out):
             fold(Pt[j], rows)
             if j < w - 2:
                 np.dot(Fb[b + 1, j], psi, product)
-                copy_matrix(product, psi)
+                psi, product = product, psi
         for r in range(min(w, K - b * w)):
-            copy_matrix(Yt[r], Ct)
             if r > 0:
                 np.dot(Phi[r].T, Pt[r - 1], Xt)
-                fold(Ct, Xt)
-            failed += singular_values(Ct, out[b * w + r]) != 0
+                fold(Yt[r], Xt)
+            failed += singular_values(Yt[r], out[b * w + r], work, lapack_ints) != 0
     return failed
 
 

@@ -53,7 +53,7 @@ def test_singular_values_equal_numpy_svd(n):
     rng = np.random.default_rng(n)
     A = np.triu(rng.normal(size=(n, n))) * np.logspace(0, -8, n)  # graded, as O(k)'s factors
     s = np.empty(n)
-    assert singular_values(A.copy(), s) == 0
+    assert singular_values(A.copy(), s, np.empty(6 * n), np.empty(2, np.int32)) == 0
     assert_close(s, np.linalg.svd(A, compute_uv=False))
 
 
