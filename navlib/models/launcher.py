@@ -475,9 +475,9 @@ class LauncherSteps:
         flat = np.ravel(idx)
         A = _state_dynamics(self._C_b_e[flat], self._f_b[flat], *self._configuration,
                             self._values)
-        step = (self.t[flat + 1] - self.t[flat])[:, None, None]
-        F = np.eye(self.n) + A * step
-        return F.reshape(*np.shape(idx), self.n, self.n)
+        A *= (self.t[flat + 1] - self.t[flat])[:, None, None]
+        A += np.eye(self.n)  # in place, bitwise I + s_t A: no two chunk-sized temporaries
+        return A.reshape(*np.shape(idx), self.n, self.n)
 
 
 def launcher_steps(solution: str = "ins_gps", biases: str = "GAP",
