@@ -110,7 +110,9 @@ def discretize_steps(A, G, Qc, dt_s, method: str = "expm", *, W=None):
     n = A.shape[-1]
     step = dt_s[:, None, None]
     if method == "euler":
-        return np.eye(n) + A * step, W * step
+        F = A * step
+        F += np.eye(n)  # bitwise I + A dt, one (N, n, n) temporary fewer
+        return F, W * step
     if method == "series":
         F = expm_taylor(A * step)
         L, Q, factor = W, W * step, step
