@@ -101,23 +101,29 @@ def _evolution_build(trajectory, cases, model_kws) -> list[pd.DataFrame]:
         raise NavlibInputError("model_kws: variants may differ only in sigma0_*")
     gyro_bias = sensor_values()["gyro_bias"]
     C_e_b = np.swapaxes(trajectory.attitude.as_matrix(), 1, 2)
-    rows, steps_cache = [[] for _ in model_kws], {}
-    for name, (solution, biases, bias_model, aiding, factor) in cases.items():
+    # the cases that share a model (solution, biases, bias model, gyro factor) are run one
+    # after the other on its steps, built once (the model is built only to be prepared:
+    # linear_steps may form F and Gamma in its arrays); the rows keep the order of ``cases``
+    by_model: dict[tuple, list] = {}
+    for order, (name, (solution, biases, bias_model, aiding, factor)) in \
+            enumerate(cases.items()):
         if aiding not in ("kf", "ins_only", "ideal"):
             raise NavlibInputError(f"cases[{name!r}]: aiding must be 'kf', 'ins_only' or "
                                    f"'ideal', got {aiding!r}")
-        key = (solution, biases, bias_model, factor)
+        by_model.setdefault((solution, biases, bias_model, factor), []).append(
+            (order, (name, solution, biases, bias_model, aiding, factor)))
+    rows = [[None] * len(cases) for _ in model_kws]
+    for (solution, biases, bias_model, factor), model_cases in by_model.items():
         extra = {"gyro_bias": gyro_bias * factor} if factor != 1.0 else {}
-        if key not in steps_cache:
-            steps_cache.clear()
-            config = (solution, biases, bias_model)
-            steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra),
-                                 with_q=False)
-            steps_cache[key] = (steps, [steps.P0, *(
-                _variant_P0(config, trajectory, {**kw, **extra}) for kw in model_kws[1:])])
-        case = (name, solution, biases, bias_model, aiding, factor)
-        for variant, row in enumerate(_evolution_rows(case, *steps_cache[key], C_e_b)):
-            rows[variant].append(row)
+        config = (solution, biases, bias_model)
+        steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra),
+                             with_q=False, own_model=True)
+        P0s = [steps.P0, *(_variant_P0(config, trajectory, {**kw, **extra})
+                           for kw in model_kws[1:])]
+        for order, case in model_cases:
+            for variant, row in enumerate(_evolution_rows(case, steps, P0s, C_e_b)):
+                rows[variant][order] = row
+        del steps
     return [pd.DataFrame(r) for r in rows]
 
 
