@@ -10,6 +10,7 @@ ssac.md §4.4; the paper's own values were lost from the seed text.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
@@ -80,13 +81,19 @@ class SSACStudy:
     model : LinearModel
     covariance : CovarianceResult
         1 Hz Joseph-form recursion, update at every epoch including t = 0.
-    eigen : NormalizedEigenResult
-        Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n).
+    track : bool
+        Whether :attr:`eigen` tracks eigenvectors through crossings.
     """
 
     model: LinearModel
     covariance: CovarianceResult
-    eigen: NormalizedEigenResult
+    track: bool = True
+
+    @cached_property
+    def eigen(self) -> NormalizedEigenResult:
+        """Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n), computed when first
+        read (the claims read only the sigmas of the 12- and 10-state runs)."""
+        return normalized_eigen(self.covariance, self.model.P0, track=self.track)
 
     @property
     def t(self) -> np.ndarray:
@@ -197,8 +204,7 @@ def p0_runs(initial, duration_s: float = 3600.0, dt_s: float = 1.0,
     discrete = models[0].discretize(dt_s=dt_s, n_epochs=n_epochs)
     covs = kalman_covariances(discrete, P0=np.stack([m.P0 for m in models]),
                               update_first=True)
-    return [SSACStudy(model, cov, normalized_eigen(cov, model.P0, track=track))
-            for model, cov in zip(models, covs, strict=True)]
+    return [SSACStudy(model, cov, track) for model, cov in zip(models, covs, strict=True)]
 
 
 def _pairs(initial) -> list[tuple]:
