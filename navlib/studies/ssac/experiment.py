@@ -27,12 +27,13 @@ from navlib.covariance import (
 )
 from navlib.errors import NavlibInputError
 from navlib.estimability import (
+    closed_loop_error,
     dominant_changes,
-    noise_free_error,
     projector_drift,
     settling_time,
     split_modes,
     subspace_shares,
+    update_factors,
 )
 from navlib.models.base import LinearModel
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, ssac
@@ -94,6 +95,17 @@ class SSACStudy:
         """Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n), computed when first
         read (the claims read only the sigmas of the 12- and 10-state runs)."""
         return normalized_eigen(self.covariance, self.model.P0, track=self.track)
+
+    @cached_property
+    def closed_loop(self) -> tuple[np.ndarray, np.ndarray]:
+        """``F`` (N-1, n, n) and ``I - K_k H`` (N, n, n) of the run's filter
+        (:func:`navlib.estimability.update_factors`), computed when first read and shared
+        by every noise-free run of it (:func:`actual_error`: the baseline truth and the
+        draws of the claims engine's set)."""
+        model, t = self.model, self.t
+        F = model.discretize(dt_s=float(t[1] - t[0]), n_epochs=t.size).F
+        return F, update_factors(np.asarray(model.H), np.asarray(model.R),
+                                 self.covariance.P_prior)
 
     @property
     def t(self) -> np.ndarray:
@@ -401,8 +413,9 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     The truth is ``x0`` (default: every bias at its nominal 1-sigma value, all other errors
     zero), the estimate starts at zero and is corrected with the study's Kalman gains at
     every epoch: ``e_0 = (I - K_0 H) x0``, ``e_{k+1} = (I - K_{k+1} H) F e_k``
-    (:func:`navlib.estimability.noise_free_error`). Returns the error (truth - estimate) at
-    every epoch, (N, n), SI units.
+    (:func:`navlib.estimability.noise_free_error`, with the gains of
+    :attr:`SSACStudy.closed_loop`). Returns the error (truth - estimate) at every epoch,
+    (N, n), SI units.
     """
     model = study.model
     p = model.parameters
@@ -417,10 +430,7 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     x0 = np.asarray(x0, dtype=float)
     if x0.shape != (model.n,):
         raise NavlibInputError(f"x0: expected {model.n} values, got shape {x0.shape}")
-    t = study.t
-    F = model.discretize(dt_s=float(t[1] - t[0]), n_epochs=t.size).F
-    return noise_free_error(F, np.asarray(model.H), np.asarray(model.R),
-                            study.covariance.P_prior, x0)
+    return closed_loop_error(*study.closed_loop, x0)
 
 
 
