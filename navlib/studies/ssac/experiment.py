@@ -388,7 +388,11 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
 def _orientation_table(ypr_deg: tuple, duration_s: float) -> pd.DataFrame:
     C = Rotation.from_euler("ZYX", ypr_deg, degrees=True).as_matrix()
     study = covariance_run(duration_s, track=False, C_b_n=C)
-    eig = study.eigen
+    # the table reads the modes of the last epoch only, through products V V' and squared
+    # components that no eigenvector sign changes: that epoch's eigen-analysis alone
+    # (eigh per epoch gives the same vectors, up to the signs chained over the run)
+    eig = normalized_eigen(study.covariance.P_post[-1:], study.model.P0, track=False,
+                           t=study.t[-1:], state_names=study.state_names)
     pair_cols, _ = pair_subspace(eig, eig.t.size - 1)
     V = eig.eigenvectors[-1][:, pair_cols]
     rows = []
