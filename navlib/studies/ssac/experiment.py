@@ -97,6 +97,15 @@ class SSACStudy:
         return normalized_eigen(self.covariance, self.model.P0, track=self.track)
 
     @cached_property
+    def final_eigen(self) -> NormalizedEigenResult:
+        """:attr:`eigen` of the last epoch alone: the same modes up to their signs (which
+        :attr:`eigen` chains over the run), for readers of the end's pair projector and
+        shares only (:func:`pair_structure`, which no sign changes: the P0 sensitivity and
+        the orientation table)."""
+        return normalized_eigen(self.covariance.P_post[-1:], self.model.P0, track=False,
+                                t=self.t[-1:], state_names=self.state_names)
+
+    @cached_property
     def closed_loop(self) -> tuple[np.ndarray, np.ndarray]:
         """``F`` (N-1, n, n) and ``I - K_k H`` (N, n, n) of the run's filter
         (:func:`navlib.estimability.update_factors`), computed when first read and shared
@@ -348,7 +357,7 @@ def p0_sensitivity(study: SSACStudy | None = None,
         modified = modified_run(base, attitude_scale)
     rows = []
     for label, st in (("matched", base), (f"attitude x{attitude_scale:g}", modified)):
-        ps = pair_structure(st.eigen)
+        ps = pair_structure(st.final_eigen)
         sig = st.sigma_display().iloc[-1]
         for (x, _b), (_, row) in zip(PAIRS, ps.iterrows(), strict=True):
             rows.append({"P0": label, "pair": row["pair"], "bias_share": row["share_b"],
@@ -388,11 +397,7 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
 def _orientation_table(ypr_deg: tuple, duration_s: float) -> pd.DataFrame:
     C = Rotation.from_euler("ZYX", ypr_deg, degrees=True).as_matrix()
     study = covariance_run(duration_s, track=False, C_b_n=C)
-    # the table reads the modes of the last epoch only, through products V V' and squared
-    # components that no eigenvector sign changes: that epoch's eigen-analysis alone
-    # (eigh per epoch gives the same vectors, up to the signs chained over the run)
-    eig = normalized_eigen(study.covariance.P_post[-1:], study.model.P0, track=False,
-                           t=study.t[-1:], state_names=study.state_names)
+    eig = study.final_eigen  # the modes at the end, read through V V' and squares only
     pair_cols, _ = pair_subspace(eig, eig.t.size - 1)
     V = eig.eigenvectors[-1][:, pair_cols]
     rows = []
