@@ -11,7 +11,9 @@ ssac.md §3.6; covariance analysis and estimability, ssac.md §3.4); the SSAC st
 * :func:`projector_drift` — how far a subspace of modes moves after a time;
 * :func:`dominant_changes` — epochs at which the dominant group of sorted modes changes;
 * :func:`settling_time` — time of reaching a factor of the final sigma;
-* :func:`noise_free_error` — the actual error of a noise-free run with the filter's gains;
+* :func:`noise_free_error` — the actual error of a noise-free run with the filter's gains
+  (:func:`update_factors` and :func:`closed_loop_error`, its two steps, for several truths
+  run through the same filter);
 * :func:`sparse_basis` — a reduced row-echelon basis of a subspace (readable null vectors).
 """
 
@@ -21,8 +23,8 @@ import numpy as np
 
 from navlib.kalman import kalman_gain
 
-__all__ = ["dominant_changes", "noise_free_error", "projector_drift", "settling_time",
-           "sparse_basis", "split_modes", "subspace_shares"]
+__all__ = ["closed_loop_error", "dominant_changes", "noise_free_error", "projector_drift",
+           "settling_time", "sparse_basis", "split_modes", "subspace_shares", "update_factors"]
 
 
 def subspace_shares(V: np.ndarray) -> np.ndarray:
@@ -125,10 +127,22 @@ def noise_free_error(F: np.ndarray, H: np.ndarray, R: np.ndarray, P_prior: np.nd
     ndarray (N, n)
         Error (truth - estimate) at every epoch.
     """
-    N, n = P_prior.shape[0], P_prior.shape[-1]
+    return closed_loop_error(F, update_factors(H, R, P_prior), x0)
+
+
+def update_factors(H: np.ndarray, R: np.ndarray, P_prior: np.ndarray) -> np.ndarray:
+    """``I - K_k H`` (N, n, n) of a Kalman filter updated at every epoch, with the gains
+    :func:`navlib.kalman.kalman_gain` of ``P_prior`` (N, n, n): what :func:`noise_free_error`
+    applies at each update."""
+    n = P_prior.shape[-1]
+    return np.eye(n) - kalman_gain(P_prior, H, R).K @ H
+
+
+def closed_loop_error(F: np.ndarray, I_KH: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """:func:`noise_free_error` from the filter's :func:`update_factors` ``I_KH`` (N, n, n):
+    ``e_0 = I_KH[0] x0``, ``e_{k+1} = I_KH[k+1] F_k e_k``; (N, n)."""
+    N, n = I_KH.shape[0], I_KH.shape[-1]
     F = np.broadcast_to(F, (N - 1, n, n))
-    K = kalman_gain(P_prior, H, R).K  # (N, n, m)
-    I_KH = np.eye(n) - K @ H
     e = np.empty((N, n))
     e[0] = I_KH[0] @ x0
     for k in range(N - 1):

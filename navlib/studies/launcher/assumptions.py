@@ -85,6 +85,9 @@ SURVEYED_PAD_M = 0.1
 """Initial position sigma (m) of a launcher on a surveyed pad, the cause experiment of the
 GPS-bias claims (docs/assumptions.md, A-F3-pad); the model's assumed value is 3 m
 (``navlib.models.launcher.ASSUMED``)."""
+PAD_CASES = ("att/GAP/markov", "att/GAP/random_walk")
+"""The Fig. 3 cases rerun with the launch position known to :data:`SURVEYED_PAD_M`."""
+
 CP_MISSION_SET = (100.0, 300.0, 1000.0)
 """GPS-bias time constants c_p (s) of the end-of-§4.1 claim's set: the paper's 100 s and the
 longer constants its references allow (up to about an hour, [2]); A-F1-cp-mission."""

@@ -8,15 +8,13 @@ import numpy as np
 
 from navlib import cache
 from navlib.models.launcher import ASSUMED, sensor_values
-from navlib.studies.launcher.assumptions import NO_PITCH_KICK_DEG, SURVEYED_PAD_M
+from navlib.studies.launcher.assumptions import NO_PITCH_KICK_DEG, PAD_CASES, SURVEYED_PAD_M
 from navlib.studies.launcher.covariance_claims import EvolutionTable
 from navlib.studies.launcher.evolution import EVOLUTION_CASES, covariance_evolution
 from navlib.trajectory import launcher_ascent
 
 NO_PITCH_CASES = ("gps/none", "ins-only/none", "ideal-gps/none")
 """The Fig. 2 cases rerun on the ascent without a pitch programme."""
-PAD_CASES = ("att/GAP/markov", "att/GAP/random_walk")
-"""The Fig. 3 cases rerun with the launch position known to :data:`SURVEYED_PAD_M`."""
 
 
 def _ascent(quick: bool, **overrides):
@@ -39,6 +37,8 @@ def evolution_causes(quick: bool = False) -> dict[str, EvolutionTable]:
     """
     level = covariance_evolution(_ascent(quick, kick_deg=NO_PITCH_KICK_DEG),
                                  {k: EVOLUTION_CASES[k] for k in NO_PITCH_CASES})
+    # on the claims' ascent these are rows of evolution_grid's stacked runs (a P0 variant),
+    # kept on disk when it is built: notebook 02 computes them, the claims engine reads them
     pad = covariance_evolution(_ascent(quick), {k: EVOLUTION_CASES[k] for k in PAD_CASES},
                                sigma0_pos=SURVEYED_PAD_M)
     return {"no_pitch": EvolutionTable(level), "surveyed_pad": EvolutionTable(pad)}

@@ -15,7 +15,7 @@ from navlib.errors import NavlibInputError
 from navlib.filters import linear_steps
 from navlib.kalman import PINV_RTOL
 from navlib.models.launcher import ASSUMED, launcher, sensor_values
-from navlib.studies.launcher.assumptions import EVOLUTION_GRID
+from navlib.studies.launcher.assumptions import EVOLUTION_GRID, PAD_CASES, SURVEYED_PAD_M
 from navlib.trajectory import launcher_ascent
 
 EVOLUTION_CASES = {
@@ -63,12 +63,18 @@ def covariance_evolution(trajectory=None, cases=None, *, quick: bool = False,
     return _evolution_tables(trajectory, cases, quick, [model_kw])[0]
 
 
-def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.DataFrame]:
+def _evolution_tables(trajectory, cases, quick: bool, model_kws,
+                      also: tuple | None = None) -> list[pd.DataFrame]:
     """:func:`covariance_evolution` for several ``model_kw`` that differ only in the initial
     sigmas (``sigma0_*``, which enter P0 alone): the per-step F, L, H, R of each case are
     built once and every variant's recursion runs in one stacked recursion over the
     variants' P0 (the recursion of :func:`navlib.covariance.kalman_covariances`, the same
-    numbers as one recursion per variant; :func:`_evolution_rows`)."""
+    numbers as one recursion per variant; :func:`_evolution_rows`).
+
+    ``also``: ``(names, model_kw)``, some of the cases at one more such variant, run in the
+    same stacked recursions when the tables are built and kept on disk as
+    :func:`covariance_evolution` of those cases (not returned).
+    """
     if trajectory is None:
         trajectory = launcher_ascent(duration_s=80.0, rate_hz=20.0) if quick \
             else launcher_ascent()
@@ -79,10 +85,14 @@ def _evolution_tables(trajectory, cases, quick: bool, model_kws) -> list[pd.Data
     tables = dict(enumerate(kept.get(kw) for kw in model_kws))
     todo = [i for i, (found, _) in tables.items() if not found]
     if todo:
-        built = _evolution_build(trajectory, cases, [model_kws[i] for i in todo])
+        built, extra = _evolution_build(trajectory, cases, [model_kws[i] for i in todo], also)
         for i, table in zip(todo, built, strict=True):
             kept.put(model_kws[i], table)
             tables[i] = (True, table)
+        if also is not None:
+            names, kw = also
+            cache.Scope(__name__, "covariance_evolution", trajectory,
+                        {name: cases[name] for name in names}).put(kw, extra)
     return [table for _, table in tables.values()]
 
 
@@ -93,32 +103,47 @@ def evolution_tables(trajectory, model_kws, cases=None) -> list[pd.DataFrame]:
     return _evolution_tables(trajectory, cases, False, list(model_kws))
 
 
-def _evolution_build(trajectory, cases, model_kws) -> list[pd.DataFrame]:
-    """The tables of :func:`_evolution_tables`, computed."""
+def _evolution_build(trajectory, cases, model_kws, also=None
+                     ) -> tuple[list[pd.DataFrame], pd.DataFrame | None]:
+    """The tables of :func:`_evolution_tables`, computed, and the table of its ``also``
+    variant (None without one)."""
+    names, also_kw = ((), None) if also is None else (tuple(also[0]), also[1])
     shared = {k: v for k, v in model_kws[0].items() if not k.startswith("sigma0_")}
     if any({k: v for k, v in kw.items() if not k.startswith("sigma0_")} != shared
-           for kw in model_kws):  # pragma: no cover - internal use only
+           for kw in [*model_kws, *([also_kw] if names else [])]):  # pragma: no cover
         raise NavlibInputError("model_kws: variants may differ only in sigma0_*")
     gyro_bias = sensor_values()["gyro_bias"]
     C_e_b = np.swapaxes(trajectory.attitude.as_matrix(), 1, 2)
-    rows, steps_cache = [[] for _ in model_kws], {}
-    for name, (solution, biases, bias_model, aiding, factor) in cases.items():
+    # the cases that share a model (solution, biases, bias model, gyro factor) are run one
+    # after the other on its steps, built once (the model is built only to be prepared:
+    # linear_steps may form F and Gamma in its arrays); the rows keep the order of ``cases``
+    by_model: dict[tuple, list] = {}
+    for order, (name, (solution, biases, bias_model, aiding, factor)) in \
+            enumerate(cases.items()):
         if aiding not in ("kf", "ins_only", "ideal"):
             raise NavlibInputError(f"cases[{name!r}]: aiding must be 'kf', 'ins_only' or "
                                    f"'ideal', got {aiding!r}")
-        key = (solution, biases, bias_model, factor)
+        by_model.setdefault((solution, biases, bias_model, factor), []).append(
+            (order, (name, solution, biases, bias_model, aiding, factor)))
+    rows = [[None] * len(cases) for _ in model_kws]
+    also_rows = [None] * len(names)
+    for (solution, biases, bias_model, factor), model_cases in by_model.items():
         extra = {"gyro_bias": gyro_bias * factor} if factor != 1.0 else {}
-        if key not in steps_cache:
-            steps_cache.clear()
-            config = (solution, biases, bias_model)
-            steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra),
-                                 with_q=False)
-            steps_cache[key] = (steps, [steps.P0, *(
-                _variant_P0(config, trajectory, {**kw, **extra}) for kw in model_kws[1:])])
-        case = (name, solution, biases, bias_model, aiding, factor)
-        for variant, row in enumerate(_evolution_rows(case, *steps_cache[key], C_e_b)):
-            rows[variant].append(row)
-    return [pd.DataFrame(r) for r in rows]
+        config = (solution, biases, bias_model)
+        steps = linear_steps(launcher(*config, trajectory, **model_kws[0], **extra),
+                             with_q=False, own_model=True)
+        P0s = [steps.P0, *(_variant_P0(config, trajectory, {**kw, **extra})
+                           for kw in model_kws[1:])]
+        for order, case in model_cases:
+            also_P0 = [_variant_P0(config, trajectory, {**also_kw, **extra})] \
+                if case[0] in names else []
+            case_rows = _evolution_rows(case, steps, [*P0s, *also_P0], C_e_b)
+            for variant, row in enumerate(case_rows[:len(model_kws)]):
+                rows[variant][order] = row
+            if also_P0:
+                also_rows[names.index(case[0])] = case_rows[-1]
+        del steps
+    return [pd.DataFrame(r) for r in rows], pd.DataFrame(also_rows) if names else None
 
 
 def _variant_P0(config: tuple, trajectory, model_kw: dict) -> np.ndarray:
@@ -180,4 +205,7 @@ def evolution_grid(quick: bool = False) -> dict[float, pd.DataFrame]:
     base = float(np.degrees(ASSUMED["sigma0_att"]))
     values = (base,) if quick else EVOLUTION_GRID["sigma0_att_deg"]
     kws = [{} if np.isclose(v, base) else {"sigma0_att": np.radians(v)} for v in values]
-    return dict(zip(values, _evolution_tables(None, None, quick, kws), strict=True))
+    # the surveyed-pad cause experiment (A-F3-pad) is two of these cases at another initial
+    # position sigma: stacked with them, and kept for the claims engine's cause experiments
+    pad = (PAD_CASES, {"sigma0_pos": SURVEYED_PAD_M})
+    return dict(zip(values, _evolution_tables(None, None, quick, kws, also=pad), strict=True))

@@ -2,7 +2,9 @@
 (:mod:`navlib.studies.launcher.assumptions`) and the three studies' registration with the
 claims engine (Fig. 1, Table 2, covariance evolution). The Table 2 results and the evolution
 claims are kept in the process (:func:`navlib.cache.memoized`), shared by the baseline
-claims and the robustness."""
+claims and the robustness; so are the Table 2 claims at the baseline and over the set,
+which the claims engine reads twice in a report (:func:`~navlib.studies.all_claims`, then
+the joint searches)."""
 
 from __future__ import annotations
 
@@ -65,11 +67,13 @@ def _all_table2_claims(result: Table2Result, cond_tol: float = COND_TOL) -> list
     return result.claims(cond_tol) + conclusion_claims(result.frame, cond_tol)
 
 
+@cache.memoized(maxsize=2)
 def baseline_table2_claims(quick: bool = False) -> list[ClaimResult]:
     """The Table 2 and conclusion claims at the baseline tolerances."""
     return _all_table2_claims(table2_result(quick))
 
 
+@cache.memoized(maxsize=2)
 def table2_robustness(quick: bool = False) -> list:
     """``(point, claims)`` over the Table 2 set, full factorial: each rank tolerance re-ranks
     the every-step table, each tolerance re-judges it (so the set is also the claims' joint

@@ -8,6 +8,7 @@ import itertools
 import pandas as pd
 
 from navlib._validation import reject_unknown
+from navlib.cache import memoized
 from navlib.errors import NavlibInputError
 from navlib.models.ecef import P0_DEFAULTS
 from navlib.studies import claims as engine
@@ -85,11 +86,15 @@ def search_points(grid: dict | None = None) -> pd.DataFrame:
     return points[list(SEARCH_PARAMETERS)]
 
 
+# the claims engine asks for both twice in a report (all_claims, then the joint searches'
+# factorial_search): kept in the process per mode
+@memoized(maxsize=2)
 def _baseline_claims(quick: bool = False) -> list[ClaimResult]:
     a = excitability_study()
     return [*excitability_claims(a), claim_xrank(a), *sensability_claims(a)]
 
 
+@memoized(maxsize=2)
 def _robustness(quick: bool = False) -> list:
     return robustness_variants(QUICK_ROBUSTNESS_GRID if quick else ROBUSTNESS_GRID)
 

@@ -10,6 +10,7 @@ ssac.md §4.4; the paper's own values were lost from the seed text.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
@@ -26,12 +27,13 @@ from navlib.covariance import (
 )
 from navlib.errors import NavlibInputError
 from navlib.estimability import (
+    closed_loop_error,
     dominant_changes,
-    noise_free_error,
     projector_drift,
     settling_time,
     split_modes,
     subspace_shares,
+    update_factors,
 )
 from navlib.models.base import LinearModel
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, ssac
@@ -80,13 +82,39 @@ class SSACStudy:
     model : LinearModel
     covariance : CovarianceResult
         1 Hz Joseph-form recursion, update at every epoch including t = 0.
-    eigen : NormalizedEigenResult
-        Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n).
+    track : bool
+        Whether :attr:`eigen` tracks eigenvectors through crossings.
     """
 
     model: LinearModel
     covariance: CovarianceResult
-    eigen: NormalizedEigenResult
+    track: bool = True
+
+    @cached_property
+    def eigen(self) -> NormalizedEigenResult:
+        """Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n), computed when first
+        read (the claims read only the sigmas of the 12- and 10-state runs)."""
+        return normalized_eigen(self.covariance, self.model.P0, track=self.track)
+
+    @cached_property
+    def final_eigen(self) -> NormalizedEigenResult:
+        """:attr:`eigen` of the last epoch alone: the same modes up to their signs (which
+        :attr:`eigen` chains over the run), for readers of the end's pair projector and
+        shares only (:func:`pair_structure`, which no sign changes: the P0 sensitivity and
+        the orientation table)."""
+        return normalized_eigen(self.covariance.P_post[-1:], self.model.P0, track=False,
+                                t=self.t[-1:], state_names=self.state_names)
+
+    @cached_property
+    def closed_loop(self) -> tuple[np.ndarray, np.ndarray]:
+        """``F`` (N-1, n, n) and ``I - K_k H`` (N, n, n) of the run's filter
+        (:func:`navlib.estimability.update_factors`), computed when first read and shared
+        by every noise-free run of it (:func:`actual_error`: the baseline truth and the
+        draws of the claims engine's set)."""
+        model, t = self.model, self.t
+        F = model.discretize(dt_s=float(t[1] - t[0]), n_epochs=t.size).F
+        return F, update_factors(np.asarray(model.H), np.asarray(model.R),
+                                 self.covariance.P_prior)
 
     @property
     def t(self) -> np.ndarray:
@@ -197,8 +225,7 @@ def p0_runs(initial, duration_s: float = 3600.0, dt_s: float = 1.0,
     discrete = models[0].discretize(dt_s=dt_s, n_epochs=n_epochs)
     covs = kalman_covariances(discrete, P0=np.stack([m.P0 for m in models]),
                               update_first=True)
-    return [SSACStudy(model, cov, normalized_eigen(cov, model.P0, track=track))
-            for model, cov in zip(models, covs, strict=True)]
+    return [SSACStudy(model, cov, track) for model, cov in zip(models, covs, strict=True)]
 
 
 def _pairs(initial) -> list[tuple]:
@@ -330,7 +357,7 @@ def p0_sensitivity(study: SSACStudy | None = None,
         modified = modified_run(base, attitude_scale)
     rows = []
     for label, st in (("matched", base), (f"attitude x{attitude_scale:g}", modified)):
-        ps = pair_structure(st.eigen)
+        ps = pair_structure(st.final_eigen)
         sig = st.sigma_display().iloc[-1]
         for (x, _b), (_, row) in zip(PAIRS, ps.iterrows(), strict=True):
             rows.append({"P0": label, "pair": row["pair"], "bias_share": row["share_b"],
@@ -370,7 +397,7 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
 def _orientation_table(ypr_deg: tuple, duration_s: float) -> pd.DataFrame:
     C = Rotation.from_euler("ZYX", ypr_deg, degrees=True).as_matrix()
     study = covariance_run(duration_s, track=False, C_b_n=C)
-    eig = study.eigen
+    eig = study.final_eigen  # the modes at the end, read through V V' and squares only
     pair_cols, _ = pair_subspace(eig, eig.t.size - 1)
     V = eig.eigenvectors[-1][:, pair_cols]
     rows = []
@@ -395,8 +422,9 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     The truth is ``x0`` (default: every bias at its nominal 1-sigma value, all other errors
     zero), the estimate starts at zero and is corrected with the study's Kalman gains at
     every epoch: ``e_0 = (I - K_0 H) x0``, ``e_{k+1} = (I - K_{k+1} H) F e_k``
-    (:func:`navlib.estimability.noise_free_error`). Returns the error (truth - estimate) at
-    every epoch, (N, n), SI units.
+    (:func:`navlib.estimability.noise_free_error`, with the gains of
+    :attr:`SSACStudy.closed_loop`). Returns the error (truth - estimate) at every epoch,
+    (N, n), SI units.
     """
     model = study.model
     p = model.parameters
@@ -411,10 +439,7 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     x0 = np.asarray(x0, dtype=float)
     if x0.shape != (model.n,):
         raise NavlibInputError(f"x0: expected {model.n} values, got shape {x0.shape}")
-    t = study.t
-    F = model.discretize(dt_s=float(t[1] - t[0]), n_epochs=t.size).F
-    return noise_free_error(F, np.asarray(model.H), np.asarray(model.R),
-                            study.covariance.P_prior, x0)
+    return closed_loop_error(*study.closed_loop, x0)
 
 
 
