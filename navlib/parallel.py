@@ -70,6 +70,9 @@ def executor(scheduler=None, *, n_workers: int | None = None):
     """
     if scheduler is None:
         scheduler = os.environ.get(SCHEDULER_ENV) or "processes"
+    if isinstance(scheduler, str) and scheduler == "synchronous":  # no Dask needed
+        yield None
+        return
     from distributed import Client  # heavy (about 1 s): imported when a scheduler is resolved
     if isinstance(scheduler, Client):
         yield scheduler
@@ -78,9 +81,6 @@ def executor(scheduler=None, *, n_workers: int | None = None):
         raise NavlibInputError(f"scheduler: expected None, a dask.distributed.Client, an "
                                f"address 'tcp://host:port' or one of {LOCAL_SCHEDULERS}, "
                                f"got {type(scheduler).__name__}")
-    if scheduler == "synchronous":
-        yield None
-        return
     if scheduler in ("processes", "threads"):
         cluster = _local_cluster(scheduler == "processes", n_workers)
         try:
