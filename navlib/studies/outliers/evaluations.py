@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from navlib import observability
 from navlib.cache import memoized
-from navlib.models.launcher import launcher
+from navlib.models.launcher import launcher_steps
 from navlib.outliers import Outlier
 from navlib.studies.outliers.response import FilterCache, outlier_response
 from navlib.sweep import Evaluation, register
@@ -26,7 +26,8 @@ def _launcher_trajectory(duration_s: float, rate_hz: float):
 def _observability_run(_, *, solution, biases, bias_model, duration_s, rate_hz, stride,
                        variant) -> dict:
     traj = _launcher_trajectory(float(duration_s), float(rate_hz))
-    model = launcher(solution, biases, bias_model, trajectory=traj)
+    # the Euler steps computed at the strided windows only, not the model at every sample
+    model = launcher_steps(solution, biases, bias_model, trajectory=traj)
     res = observability.local_observability(model, variant=variant, stride=int(stride),
                                             n_jobs=1)
     k = int(res.step[res.step.size // 2])
