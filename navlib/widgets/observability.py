@@ -21,7 +21,13 @@ import ipywidgets as widgets
 import numpy as np
 
 from navlib.errors import NavlibInputError
-from navlib.models.launcher import BIAS_MODELS, BIAS_SETS, SOLUTION_LABELS, SOLUTIONS, launcher
+from navlib.models.launcher import (
+    BIAS_MODELS,
+    BIAS_SETS,
+    SOLUTION_LABELS,
+    SOLUTIONS,
+    launcher_steps,
+)
 from navlib.observability import analyze, local_matrix, local_observability
 from navlib.plots.observability import mission_figure, singular_values_figure
 from navlib.studies.launcher import describe_direction
@@ -110,8 +116,9 @@ class ObservabilityPanel(Panel):
         c = self.controls
         try:
             if rebuild_model or self.model is None:
-                self.model = launcher(c["solution"].value, c["biases"].value,
-                                      c["bias_model"].value, trajectory=self.trajectory)
+                # Euler steps computed for the evaluated windows only (as Table 2)
+                self.model = launcher_steps(c["solution"].value, c["biases"].value,
+                                            c["bias_model"].value, trajectory=self.trajectory)
             self._raw = local_observability(self.model, variant=c["variant"].value,
                                             stride=self.stride)
         except NavlibInputError:
