@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from scipy.special import gammaincinv
 
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
@@ -483,17 +484,20 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
     The average over ``runs`` independent runs of a chi-square statistic with ``dof``
     degrees of freedom is ``chi2(runs dof) / runs`` (Bar-Shalom, Li & Kirubarajan 2001,
     §5.4); returns ``(lower, upper)`` (arrays when ``dof`` is one).
+
+    The chi-square quantile is ``2 gammaincinv(k / 2, q)``, what ``scipy.stats.chi2.ppf``
+    evaluates (the same numbers), without importing ``scipy.stats`` (about 0.3-0.7 s in a
+    process that needs nothing else of it).
     """
     dof = np.asarray(dof, dtype=float)
     runs = int(runs)
     if runs < 1:
         raise NavlibInputError(f"runs: expected >= 1, got {runs}")
     alpha = finite_scalar(alpha, "alpha", 0.0, 1.0, low_open=True)
-    from scipy import stats  # imported here: scipy.stats costs 0.7 s in every process
-
     total = runs * dof
-    lo = np.where(total > 0, stats.chi2.ppf(alpha / 2, np.maximum(total, 1)) / runs, 0.0)
-    hi = np.where(total > 0, stats.chi2.ppf(1 - alpha / 2, np.maximum(total, 1)) / runs, 0.0)
+    k = np.maximum(total, 1)
+    lo = np.where(total > 0, 2 * gammaincinv(k / 2, alpha / 2) / runs, 0.0)
+    hi = np.where(total > 0, 2 * gammaincinv(k / 2, 1 - alpha / 2) / runs, 0.0)
     return lo, hi
 
 
