@@ -487,7 +487,8 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
 
     The chi-square quantile is ``2 gammaincinv(k / 2, q)``, what ``scipy.stats.chi2.ppf``
     evaluates (the same numbers), without importing ``scipy.stats`` (about 0.3-0.7 s in a
-    process that needs nothing else of it).
+    process that needs nothing else of it), and once per distinct ``dof`` (a NEES history
+    has one per epoch but a few distinct values; each quantile is an iterative inversion).
     """
     dof = np.asarray(dof, dtype=float)
     runs = int(runs)
@@ -495,9 +496,11 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
         raise NavlibInputError(f"runs: expected >= 1, got {runs}")
     alpha = finite_scalar(alpha, "alpha", 0.0, 1.0, low_open=True)
     total = runs * dof
-    k = np.maximum(total, 1)
-    lo = np.where(total > 0, 2 * gammaincinv(k / 2, alpha / 2) / runs, 0.0)
-    hi = np.where(total > 0, 2 * gammaincinv(k / 2, 1 - alpha / 2) / runs, 0.0)
+    k, where = np.unique(np.maximum(total, 1), return_inverse=True)
+    lo = np.where(total > 0, (2 * gammaincinv(k / 2, alpha / 2) / runs)[where.reshape(total.shape)],
+                  0.0)
+    hi = np.where(total > 0,
+                  (2 * gammaincinv(k / 2, 1 - alpha / 2) / runs)[where.reshape(total.shape)], 0.0)
     return lo, hi
 
 
