@@ -531,9 +531,12 @@ def nees_values(err, P, rtol: float = 1e-10, basis=None):
     Scaled to a correlation matrix first (states of very different units); directions with
     (relative) zero variance are left out, and the degrees of freedom are the kept rank.
     ``basis``: :func:`nees_basis` of ``P`` when already computed (``P`` and ``rtol`` are
-    then not used).
+    then not used). The (K, R, n) intermediates are formed in place where they can be
+    (a 100-run history is 60 MB each, and fresh memory costs its page faults).
     """
     safe, active, V, inv_w, dof = basis if basis is not None else nees_basis(P, rtol)
-    en = np.where(active[:, None, :], err / safe[:, None, :], 0.0)
+    en = np.divide(err, safe[:, None, :])
+    np.copyto(en, 0.0, where=~active[:, None, :])
     proj = en @ V
-    return (proj**2 @ inv_w[:, :, None])[..., 0], dof
+    np.square(proj, out=proj)
+    return (proj @ inv_w[:, :, None])[..., 0], dof
