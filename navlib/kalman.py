@@ -8,8 +8,9 @@ The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
 covariance recursion of :func:`covariance_recursion`), :func:`propagate_kernel`
-(the EKF between updates), :func:`update_kernel` (the EKF's updates) and
-:func:`fixed_updates_kernel` (the EKF's runs of updates with one fixed design).
+(the EKF between updates) and :func:`update_kernel` (the EKF's updates), both inlined into
+:func:`fixed_updates_kernel` (the EKF's runs of updates with one design, and its
+propagation to a window's end).
 :func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
 batch) around them; :func:`compile_kernels` compiles or loads
 them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
@@ -224,12 +225,13 @@ def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     return dof
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def update_kernel(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     """The EKF's measurement update (:mod:`navlib.filters.ekf`): innovation ``z - H x``,
     :func:`_joseph_kernel` into ``P_post``, ``K``, ``S_pinv``, the corrected mean
     ``x + K innovation`` and the NIS ``innovation' S^+ innovation``; returns
-    ``(x_post, innovation, nis, dof)``."""
+    ``(x_post, innovation, nis, dof)``. Inlined into :func:`fixed_updates_kernel`, the
+    EKF's one entry point (compiled there once, not a second time on its own)."""
     innov = z - np.dot(H, x)
     dof = _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv)
     return x + np.dot(K, innov), innov, np.dot(np.dot(innov, S_pinv), innov), dof
@@ -311,7 +313,7 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     return cur
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def propagate_kernel(x, P, F, Q, kept, j0, j1):
     """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
     from sample ``j0`` to ``j1`` of a window (``F[j]``,
@@ -322,7 +324,8 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
     The closed loop drives the ``kept`` (RT) states with the error of the corrected
     navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back
     estimate of the reset states, so their rows take the ``kept`` columns only.
-    Returns new arrays (the inputs are not written)."""
+    Returns new arrays (the inputs are not written). Inlined into
+    :func:`fixed_updates_kernel` like :func:`update_kernel`."""
     x, P = x.copy(), P.copy()
     spare = np.empty_like(P)
     for j in range(j0, j1):
@@ -421,14 +424,17 @@ def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: 
 
 @numba.njit(cache=True)
 def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
-                         innovations, nis, dofs):
-    """The EKF over a run of updates with one fixed design (:mod:`navlib.filters.ekf_updates`):
+                         innovations, nis, dofs, j_end):
+    """The EKF over a run of updates with one design (:mod:`navlib.filters.ekf_updates`):
     from sample ``j0`` of a window, for each update ``u``, :func:`propagate_kernel` to
     sample ``samples[u]`` and :func:`update_kernel` with ``z[u]``, ``H``, ``R``; the
     posterior mean, covariance, innovation, NIS and dof of update ``u`` into ``xs[u]``,
-    ``Ps[u]``, ``innovations[u]``, ``nis[u]``, ``dofs[u]``. The same compiled steps as one
-    call per update, without Python between them (docs/assumptions.md "Compiled kernels").
-    Returns the last posterior ``(x, P)``."""
+    ``Ps[u]``, ``innovations[u]``, ``nis[u]``, ``dofs[u]``; then :func:`propagate_kernel`
+    to sample ``j_end`` (no step when it is the last update's sample; with no updates,
+    the propagation alone). The same compiled steps as one call per update, without
+    Python between them (docs/assumptions.md "Compiled kernels"); the EKF's one compiled
+    entry point (its propagation and update are inlined: each compiled once, here).
+    Returns ``(x, P)`` at ``j_end``."""
     n, m = P.shape[0], H.shape[0]
     K, S_pinv = np.empty((n, m)), np.empty((m, m))
     for u in range(samples.size):
@@ -440,7 +446,7 @@ def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_
         copy_vector(innovation, innovations[u])
         nis[u], dofs[u] = nis_u, dof
         P = Ps[u]
-    return x, P
+    return propagate_kernel(x, P, F, Q, kept, j0, j_end)
 
 
 def compile_kernels() -> None:
@@ -457,13 +463,10 @@ def compile_kernels() -> None:
                    np.empty(1, dtype=np.int64))
     joseph_update(P, H[0], R[0])
     kalman_gain(P, H[0], R[0])
-    update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, PINV_RTOL, np.empty((n, n)),
-                  np.empty((n, m)), np.empty((m, m)))
-    propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
     fixed_updates_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, np.ones(1, dtype=np.int64),
                          np.zeros((1, m)), H[0], R[0], True, PINV_RTOL, np.empty((1, n)),
                          np.empty((1, n, n)), np.empty((1, m)), np.empty(1),
-                         np.empty(1, dtype=np.int64))
+                         np.empty(1, dtype=np.int64), 1)
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains:
