@@ -8,8 +8,9 @@ The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
 covariance recursion of :func:`covariance_recursion`), :func:`propagate_kernel`
-(the EKF between updates), :func:`update_kernel` (the EKF's updates) and
-:func:`fixed_updates_kernel` (the EKF's runs of updates with one fixed design).
+(the EKF between updates) and :func:`update_kernel` (the EKF's updates), both inlined into
+:func:`fixed_updates_kernel` (the EKF's runs of updates with one design, and its
+propagation to a window's end).
 :func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
 batch) around them; :func:`compile_kernels` compiles or loads
 them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from scipy.special import gammaincinv
 
 from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
@@ -223,12 +225,13 @@ def _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     return dof
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def update_kernel(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     """The EKF's measurement update (:mod:`navlib.filters.ekf`): innovation ``z - H x``,
     :func:`_joseph_kernel` into ``P_post``, ``K``, ``S_pinv``, the corrected mean
     ``x + K innovation`` and the NIS ``innovation' S^+ innovation``; returns
-    ``(x_post, innovation, nis, dof)``."""
+    ``(x_post, innovation, nis, dof)``. Inlined into :func:`fixed_updates_kernel`, the
+    EKF's one entry point (compiled there once, not a second time on its own)."""
     innov = z - np.dot(H, x)
     dof = _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv)
     return x + np.dot(K, innov), innov, np.dot(np.dot(innov, S_pinv), innov), dof
@@ -310,7 +313,7 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     return cur
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def propagate_kernel(x, P, F, Q, kept, j0, j1):
     """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
     from sample ``j0`` to ``j1`` of a window (``F[j]``,
@@ -321,7 +324,8 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
     The closed loop drives the ``kept`` (RT) states with the error of the corrected
     navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back
     estimate of the reset states, so their rows take the ``kept`` columns only.
-    Returns new arrays (the inputs are not written)."""
+    Returns new arrays (the inputs are not written). Inlined into
+    :func:`fixed_updates_kernel` like :func:`update_kernel`."""
     x, P = x.copy(), P.copy()
     spare = np.empty_like(P)
     for j in range(j0, j1):
@@ -420,14 +424,17 @@ def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: 
 
 @numba.njit(cache=True)
 def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
-                         innovations, nis, dofs):
-    """The EKF over a run of updates with one fixed design (:mod:`navlib.filters.ekf_updates`):
+                         innovations, nis, dofs, j_end):
+    """The EKF over a run of updates with one design (:mod:`navlib.filters.ekf_updates`):
     from sample ``j0`` of a window, for each update ``u``, :func:`propagate_kernel` to
     sample ``samples[u]`` and :func:`update_kernel` with ``z[u]``, ``H``, ``R``; the
     posterior mean, covariance, innovation, NIS and dof of update ``u`` into ``xs[u]``,
-    ``Ps[u]``, ``innovations[u]``, ``nis[u]``, ``dofs[u]``. The same compiled steps as one
-    call per update, without Python between them (docs/assumptions.md "Compiled kernels").
-    Returns the last posterior ``(x, P)``."""
+    ``Ps[u]``, ``innovations[u]``, ``nis[u]``, ``dofs[u]``; then :func:`propagate_kernel`
+    to sample ``j_end`` (no step when it is the last update's sample; with no updates,
+    the propagation alone). The same compiled steps as one call per update, without
+    Python between them (docs/assumptions.md "Compiled kernels"); the EKF's one compiled
+    entry point (its propagation and update are inlined: each compiled once, here).
+    Returns ``(x, P)`` at ``j_end``."""
     n, m = P.shape[0], H.shape[0]
     K, S_pinv = np.empty((n, m)), np.empty((m, m))
     for u in range(samples.size):
@@ -439,7 +446,7 @@ def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_
         copy_vector(innovation, innovations[u])
         nis[u], dofs[u] = nis_u, dof
         P = Ps[u]
-    return x, P
+    return propagate_kernel(x, P, F, Q, kept, j0, j_end)
 
 
 def compile_kernels() -> None:
@@ -456,13 +463,10 @@ def compile_kernels() -> None:
                    np.empty(1, dtype=np.int64))
     joseph_update(P, H[0], R[0])
     kalman_gain(P, H[0], R[0])
-    update_kernel(np.zeros(n), P, np.zeros(m), H[0], R[0], True, PINV_RTOL, np.empty((n, n)),
-                  np.empty((n, m)), np.empty((m, m)))
-    propagate_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, 1)
     fixed_updates_kernel(np.zeros(n), P, steps, steps, np.arange(1), 0, np.ones(1, dtype=np.int64),
                          np.zeros((1, m)), H[0], R[0], True, PINV_RTOL, np.empty((1, n)),
                          np.empty((1, n, n)), np.empty((1, m)), np.empty(1),
-                         np.empty(1, dtype=np.int64))
+                         np.empty(1, dtype=np.int64), 1)
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains:
@@ -483,17 +487,23 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
     The average over ``runs`` independent runs of a chi-square statistic with ``dof``
     degrees of freedom is ``chi2(runs dof) / runs`` (Bar-Shalom, Li & Kirubarajan 2001,
     §5.4); returns ``(lower, upper)`` (arrays when ``dof`` is one).
+
+    The chi-square quantile is ``2 gammaincinv(k / 2, q)``, what ``scipy.stats.chi2.ppf``
+    evaluates (the same numbers), without importing ``scipy.stats`` (about 0.3-0.7 s in a
+    process that needs nothing else of it), and once per distinct ``dof`` (a NEES history
+    has one per epoch but a few distinct values; each quantile is an iterative inversion).
     """
     dof = np.asarray(dof, dtype=float)
     runs = int(runs)
     if runs < 1:
         raise NavlibInputError(f"runs: expected >= 1, got {runs}")
     alpha = finite_scalar(alpha, "alpha", 0.0, 1.0, low_open=True)
-    from scipy import stats  # imported here: scipy.stats costs 0.7 s in every process
-
     total = runs * dof
-    lo = np.where(total > 0, stats.chi2.ppf(alpha / 2, np.maximum(total, 1)) / runs, 0.0)
-    hi = np.where(total > 0, stats.chi2.ppf(1 - alpha / 2, np.maximum(total, 1)) / runs, 0.0)
+    k, where = np.unique(np.maximum(total, 1), return_inverse=True)
+    lo = np.where(total > 0, (2 * gammaincinv(k / 2, alpha / 2) / runs)[where.reshape(total.shape)],
+                  0.0)
+    hi = np.where(total > 0,
+                  (2 * gammaincinv(k / 2, 1 - alpha / 2) / runs)[where.reshape(total.shape)], 0.0)
     return lo, hi
 
 
@@ -524,9 +534,12 @@ def nees_values(err, P, rtol: float = 1e-10, basis=None):
     Scaled to a correlation matrix first (states of very different units); directions with
     (relative) zero variance are left out, and the degrees of freedom are the kept rank.
     ``basis``: :func:`nees_basis` of ``P`` when already computed (``P`` and ``rtol`` are
-    then not used).
+    then not used). The (K, R, n) intermediates are formed in place where they can be
+    (a 100-run history is 60 MB each, and fresh memory costs its page faults).
     """
     safe, active, V, inv_w, dof = basis if basis is not None else nees_basis(P, rtol)
-    en = np.where(active[:, None, :], err / safe[:, None, :], 0.0)
+    en = np.divide(err, safe[:, None, :])
+    np.copyto(en, 0.0, where=~active[:, None, :])
     proj = en @ V
-    return (proj**2 @ inv_w[:, :, None])[..., 0], dof
+    np.square(proj, out=proj)
+    return (proj @ inv_w[:, :, None])[..., 0], dof

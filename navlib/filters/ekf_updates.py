@@ -5,7 +5,9 @@
 each epoch's measurements in the results, the stacked ``H``, ``R`` of fixed designs);
 :class:`WindowUpdates` runs one propagation window: the compiled propagation between
 updates (:func:`~navlib.kalman.propagate_kernel`) and the Joseph update at each epoch
-(:func:`~navlib.kalman.update_kernel`); :func:`update_records` gathers a window's results.
+(:func:`~navlib.kalman.update_kernel`), both through the one compiled entry point
+:func:`~navlib.kalman.fixed_updates_kernel`; :func:`update_records` gathers a window's
+results.
 """
 
 from __future__ import annotations
@@ -15,14 +17,7 @@ import itertools
 import numpy as np
 
 from navlib.filters.measurements import FixedDesign
-from navlib.kalman import (
-    PINV_RTOL,
-    definite_noise,
-    fixed_updates_kernel,
-    kernel_array,
-    propagate_kernel,
-    update_kernel,
-)
+from navlib.kalman import PINV_RTOL, definite_noise, fixed_updates_kernel, kernel_array
 
 
 class Epochs:
@@ -83,7 +78,7 @@ def _fixed_design(measurements):
 
 class WindowUpdates:
     """Updates sample by sample and the compiled propagation between them
-    (:func:`~navlib.kalman.propagate_kernel`)
+    (:func:`~navlib.kalman.fixed_updates_kernel`)
     over the windows of :func:`navlib.filters.ekf.ekf`."""
 
     def __init__(self, es, kept, observers, epochs):
@@ -98,7 +93,8 @@ class WindowUpdates:
 
         A run of fixed-design updates (when no measurement watches the posterior) is one
         call of :func:`~navlib.kalman.fixed_updates_kernel`; any other update is a run of
-        one, evaluated at its sample."""
+        one, evaluated at its sample; the propagation to the window's end is a run of
+        none."""
         x, P, F, Q = kernel_array(x), kernel_array(P), kernel_array(F), kernel_array(Q)
         z_fixed = self.epochs.innovations(w0, nominal)
         at = self.epochs.at
@@ -118,31 +114,37 @@ class WindowUpdates:
                 j0, i = updates[end - 1], end
                 continue
             j = updates[i]
-            x, P = propagate_kernel(x, P, F, Q, self.kept, j0, j)
             z, H, R, definite = (_evaluated(epoch, nominal, j) if fixed is None
                                  else (z_fixed[j, cols], *fixed))
-            x, P, innov, nis, dof = _update(x, P, z, H, R, definite)
-            rec.append((np.array([j]), x[None], P[None], innov[None], cols, np.array([nis]),
-                        np.array([dof])))
+            R = kernel_array(R)
+            x, P, run = _fixed_run(x, P, F, Q, self.kept, j0, np.array([j], dtype=np.int64),
+                                   np.reshape(z, (1, -1)),
+                                   (H, R, definite_noise(R) if definite is None else definite))
+            rec.append((np.array([j]), *run[:3], cols, *run[3:]))
             if self.observers:                 # posterior navigation attitude
                 C_post = self.es.correct(nominal.at(slice(j, j + 1)), x[None]).C_b_e[0]
                 for meas in self.observers:
                     meas.observe(C_post)
             j0, i = j, i + 1
-        x, P = propagate_kernel(x, P, F, Q, self.kept, j0, steps)
+        n = P.shape[0]
+        x, P, _ = _fixed_run(x, P, F, Q, self.kept, j0, np.empty(0, dtype=np.int64),
+                             np.empty((0, 0)), (np.empty((0, n)), np.empty((0, 0)), False),
+                             steps)
         return x, P, rec
 
 
-def _fixed_run(x, P, F, Q, kept, j0, samples, z, fixed):
+def _fixed_run(x, P, F, Q, kept, j0, samples, z, fixed, j_end=None):
     """:func:`~navlib.kalman.fixed_updates_kernel` over the updates at ``samples`` with
-    innovations ``z`` (u, m) and the design ``fixed`` ``(H, R, definite)``: the last
-    posterior and the run's ``(x, P, innovations, NIS, dof)`` by update."""
+    innovations ``z`` (u, m) and the design ``fixed`` ``(H, R, definite)``, then the
+    propagation to sample ``j_end`` (default: none after the last update): the state at
+    ``j_end`` and the run's ``(x, P, innovations, NIS, dof)`` by update."""
     H, R, definite = fixed
     u, n, m = samples.size, P.shape[0], z.shape[1]
     run = (np.empty((u, n)), np.empty((u, n, n)), np.empty((u, m)), np.empty(u),
            np.empty(u, dtype=np.int64))
     x, P = fixed_updates_kernel(x, P, F, Q, kept, j0, samples, kernel_array(z), kernel_array(H),
-                                kernel_array(R), bool(definite), PINV_RTOL, *run)
+                                kernel_array(R), bool(definite), PINV_RTOL, *run,
+                                samples[-1] if j_end is None else j_end)
     return x, P, run
 
 
@@ -180,14 +182,3 @@ def _stacked(parts):
     for (a, b), p in zip(itertools.pairwise(ends), parts, strict=True):
         R[a:b, a:b] = p[2]
     return z, H, R
-
-
-def _update(x, P, z, H, R, definite):
-    """Joseph update with the stacked measurements of one epoch (``definite``: of ``R``
-    when known); the posterior, the innovation, NIS and its dof."""
-    x, P, z, H, R = (kernel_array(a) for a in (x, P, z, H, R))
-    definite = bool(definite_noise(R) if definite is None else definite)
-    n, m = H.shape[1], H.shape[0]
-    P_post, K, S_pinv = np.empty((n, n)), np.empty((n, m)), np.empty((m, m))
-    x, innov, nis, dof = update_kernel(x, P, z, H, R, definite, PINV_RTOL, P_post, K, S_pinv)
-    return x, P_post, innov, float(nis), int(dof)
