@@ -15,9 +15,12 @@ its every-step observability window, the one kernel only it uses, which it compi
 first use.
 """
 
+import numpy as np
+
 from navlib import kalman, strapdown_kernel
 from navlib.filters import linear_recursion
 from navlib.observability import sliding
+from navlib.sensors import simulation
 
 
 def compile_kernels() -> None:
@@ -28,8 +31,9 @@ def compile_kernels() -> None:
 
 def compile_shared_kernels() -> None:
     """The kernels several notebooks of a report use: the Kalman algebra
-    (:func:`navlib.kalman.compile_kernels`), the linear simulation and the strapdown
-    mechanisation."""
+    (:func:`navlib.kalman.compile_kernels`), the linear simulation, the strapdown
+    mechanisation and the sensor errors' Gauss-Markov recursion."""
     kalman.compile_kernels()
     linear_recursion.compile_recursion_kernels()
     strapdown_kernel.compile_kernel()
+    simulation.first_order_recursion(np.ones(1), np.ones((2, 1)), np.empty((2, 1)))

@@ -325,3 +325,19 @@ def test_bias_signs_through_strapdown():
     d_att = (traj.attitude[-1].inv() * res.attitude[-1]).as_rotvec()
     # Plus the second-order coupling with the Earth rate, |Omega| |b_g| T^2 / 2 = 1.5e-5 rad.
     np.testing.assert_allclose(d_att, b_g * T, rtol=0, atol=2e-5)
+
+
+@pytest.mark.parametrize(("n", "a", "axes"), [(2, 0.5, 1), (3001, np.exp(-0.005 / 100.0), 3),
+                                             (20000, np.exp(-0.01 / 0.3), 7)])
+def test_gauss_markov_recursion_is_lfilter_bitwise(n, a, axes):
+    """The compiled recursion gives scipy.signal.lfilter's numbers bit for bit (the filter
+    it replaced, kept here as the reference)."""
+    from scipy.signal import lfilter
+
+    from navlib.sensors.simulation import first_order_recursion
+
+    drive = np.random.default_rng(n).standard_normal((n, axes))
+    out = np.empty_like(drive)
+    first_order_recursion(np.full(n - 1, a), drive, out)
+    expected = lfilter([1.0], [1.0, -a], drive, axis=0)
+    np.testing.assert_array_equal(out.view(np.int64), expected.view(np.int64))
