@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.collections import PolyCollection
 from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
@@ -12,6 +13,13 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Index runs ``(first, last)`` where ``mask`` holds."""
     edges = np.diff(np.r_[0, mask.astype(int), 0])
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
+
+
+def _bars(rows, half_height: float) -> list:
+    """Rectangles (vertices) of the ``(start, width)`` spans of each row ``j`` of ``rows``,
+    centred on ``y = j``: what ``broken_barh`` draws, for every row in one collection."""
+    return [[(x, j - half_height), (x, j + half_height), (x + w, j + half_height),
+             (x + w, j - half_height)] for j, spans in enumerate(rows) for x, w in spans]
 
 
 def timeline_figure(plan, transient_s: float | None = None):
@@ -35,11 +43,12 @@ def timeline_figure(plan, transient_s: float | None = None):
     excitable = table[table["excitable"]]
     spans = {name: list(zip(rows["t_start"], rows["t_end"] - rows["t_start"], strict=True))
              for name, rows in excitable.groupby("state", sort=False)}
-    for j, name in enumerate(names):
-        ax.broken_barh(spans.get(name, []), (j - 0.4, 0.8), color="tab:orange", alpha=0.35,
-                       linewidth=0)
-        ax.broken_barh([(t[a], t[b] - t[a] + step) for a, b in _runs(ok[:, j])],
-                       (j - 0.2, 0.4), color="tab:blue", linewidth=0)
+    # one collection per kind (two artists, not two per state: a threshold redraws them)
+    ax.add_collection(PolyCollection(_bars([spans.get(name, []) for name in names], 0.4),
+                                     color="tab:orange", alpha=0.35, linewidth=0))
+    ax.add_collection(PolyCollection(
+        _bars([[(t[a], t[b] - t[a] + step) for a, b in _runs(ok[:, j])]
+               for j in range(len(names))], 0.2), color="tab:blue", linewidth=0))
     for r in plan.segment_table.itertuples(index=False):
         ax.axvline(r.t_start, color="0.5", linewidth=0.5, linestyle="--")
     ax.set_yticks(np.arange(len(names)), names, fontsize=7)
