@@ -500,11 +500,12 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
     alpha = finite_scalar(alpha, "alpha", 0.0, 1.0, low_open=True)
     total = runs * dof
     k, where = np.unique(np.maximum(total, 1), return_inverse=True)
-    lo = np.where(total > 0, (2 * gammaincinv(k / 2, alpha / 2) / runs)[where.reshape(total.shape)],
-                  0.0)
-    hi = np.where(total > 0,
-                  (2 * gammaincinv(k / 2, 1 - alpha / 2) / runs)[where.reshape(total.shape)], 0.0)
-    return lo, hi
+    where = where.reshape(total.shape)
+
+    def bound(q: float) -> np.ndarray:
+        return np.where(total > 0, (2 * gammaincinv(k / 2, q) / runs)[where], 0.0)
+
+    return bound(alpha / 2), bound(1 - alpha / 2)
 
 
 def nees_basis(P, rtol: float = 1e-10):
