@@ -296,6 +296,17 @@ def _starts(solution: str, letters: str) -> dict:
     return start
 
 
+def _state_count(start: dict) -> int:
+    """Number of states of a configuration, from :func:`_starts`."""
+    return sum(len(_GROUPS[g]) for g in start)
+
+
+def _model_name(solution: str, letters: str, bias_model: str) -> str:
+    """``solution/letters/bias_model``, ``-`` for no bias: the name of a configuration's
+    model (:func:`launcher`) and of its steps (:func:`launcher_steps`)."""
+    return f"{solution}/{letters or '-'}/{bias_model}"
+
+
 def _slicer(start: dict):
     """``sl(group, size=3)``: the slice of a group's states, from :func:`_starts`."""
 
@@ -309,7 +320,7 @@ def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p:
     """``A`` (N, n, n) along attitudes ``C_b_e`` (N, 3, 3) and specific forces ``f_b``
     (N, 3): the paper's ``F(k)`` (eq. 1-5) and the RT block of spec §3.4."""
     start = _starts(solution, letters)
-    n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
+    n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
 
     I3 = np.eye(3)
@@ -338,7 +349,7 @@ def _dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict)
     """``A`` (N, n, n), ``G`` (N, n, q) and the PSDs (q,) along attitudes and specific forces
     (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of spec §3.4)."""
     start = _starts(solution, letters)
-    n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
+    n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
 
     I3 = np.eye(3)
@@ -383,7 +394,7 @@ def _measurement_matrix(solution: str, letters: str, meas: dict, C_b_e) -> np.nd
     """``H``: [attitude;] GPS velocity; GPS position (+ b_p) [; RT difference, eq. 8], as
     (m, n), or (N, m, n) along the attitudes for the RT solutions."""
     start = _starts(solution, letters)
-    n, N = sum(len(_GROUPS[g]) for g in start), len(C_b_e)
+    n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
 
     I3 = np.eye(3)
@@ -431,7 +442,7 @@ def _model(solution, letters, bias_model, t, C_b_e, f_b, sensors, kw, s_t) -> Li
     return LinearModel(
         state_names=names, A=A, G=G, Qc=Qc, H=H, R=R, t=t, P0=P0,
         measurement_names=meas_names, noise_names=noise_names,
-        name=f"{solution}/{letters or '-'}/{bias_model}", parameters=params,
+        name=_model_name(solution, letters, bias_model), parameters=params,
     )
 
 
@@ -492,7 +503,7 @@ def launcher_steps(solution: str = "ins_gps", biases: str = "GAP",
     p = _values(sensors, kw, float(np.median(np.diff(t))))
     H = _measurement_matrix(solution, letters, _measurements(solution, p), C_b_e)
     return LauncherSteps(state_names=state_names(solution, letters, bias_model), t=t, H=H,
-                         method="euler", name=f"{solution}/{letters or '-'}/{bias_model}",
+                         method="euler", name=_model_name(solution, letters, bias_model),
                          _C_b_e=C_b_e, _f_b=f_b, _configuration=(solution, letters, bias_model),
                          _values=p)
 
