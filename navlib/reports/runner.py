@@ -262,13 +262,13 @@ def _run_all(selected: Sequence[NotebookInfo], queue: Sequence[NotebookInfo], st
     total = len(queue)
 
     warmed = threading.Lock()
-    warm_ups = [warm_up] if warm_up is not None else []
+    not_warmed = [warm_up] if warm_up is not None else []  # emptied by the worker warming up
 
     def work(index: int):
         if index > 0:
             with warmed:  # the first of the other workers warms up, the rest wait for it
-                while warm_ups and not kernels.stopped:
-                    warm_ups.pop()(lambda: kernels.stopped)
+                if not_warmed and not kernels.stopped:
+                    not_warmed.pop()(lambda: kernels.stopped)
         while not kernels.stopped:
             position, info = pending.take(lambda: kernels.stopped)
             if info is None:
