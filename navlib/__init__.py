@@ -14,7 +14,7 @@ from navlib.errors import NavlibInputError
 __version__ = "0.1.0"
 
 _SUBMODULES = (
-    "covariance", "discretize", "earth", "filters", "fleet", "io", "metrics", "models",
+    "covariance", "discretize", "earth", "filters", "io", "metrics", "models",
     "observability", "outliers", "parallel", "plots", "reports", "rotations", "segmentation",
     "sensors", "strapdown",
     "studies", "sweep", "trajectory", "units", "widgets",
