@@ -14,12 +14,15 @@ from navlib.errors import NavlibInputError
 VEHICLES = ("rocket", "multicopter", "fixed-wing", "ground")
 """Vehicle classes whose phases :func:`navlib.segmentation.segment_flight` names."""
 VEHICLE_PHASES = {
-    "rocket": ("rest", "powered", "coast", "free_fall", "descent"),
+    "rocket": ("pad", "boost", "coast", "free_fall", "descent", "drogue", "main", "landed"),
     "multicopter": ("rest", "hover", "climb", "descent", "turn", "cruise"),
     "fixed-wing": ("rest", "climb", "descent", "turn", "cruise"),
     "ground": ("rest", "turn", "cruise"),
 }
-"""The phase words of each vehicle class, in priority order (the last is the fallback)."""
+"""The phase words of each vehicle class: for the others in priority order (the last is
+the fallback); a rocket's in flight order (``drogue`` and ``main`` come from a flight
+computer's logged states, :mod:`navlib.segmentation.logged`; detected descent is
+``descent``)."""
 MAV_TYPES = {1: "fixed-wing", 2: "multicopter", 3: "multicopter", 4: "multicopter",
              9: "rocket", 10: "ground", 11: "ground", 13: "multicopter", 14: "multicopter",
              15: "multicopter", 19: "multicopter", 20: "multicopter", 21: "multicopter",

@@ -6,14 +6,17 @@ phase lasts, merges runs shorter than ``min_duration_s`` and, for a vehicle clas
 the phases with that vehicle's words (``docs/assumptions.md`` V1-V2).
 """
 
+from __future__ import annotations
+
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.segmentation.features import flight_features, window_means
+from navlib.segmentation.logged import flight_events, logged_segments
 from navlib.units import DEG
 from navlib.vehicles import VEHICLE_PHASES, check_vehicle
 
@@ -61,12 +64,40 @@ class Segmentation:
         The thresholds used (:data:`SEGMENT_DEFAULTS` with the caller's changes).
     vehicle : str or None
         The vehicle class whose words name the phases (None: kinematic labels).
+    source : str
+        ``"detected"`` (the kinematics) or ``"logged"`` (a rocket's flight-computer states,
+        :func:`~navlib.segmentation.logged.logged_segments`).
+    detected : DataFrame or None
+        The detected segments when ``segments`` are the logged ones (else None).
+    events : DataFrame or None
+        A rocket's events, logged and detected side by side
+        (:func:`~navlib.segmentation.logged.flight_events`); None for other vehicles.
     """
 
     segments: pd.DataFrame
     features: pd.DataFrame
     thresholds: dict = field(default_factory=dict)
     vehicle: str | None = None
+    source: str = "detected"
+    detected: pd.DataFrame | None = None
+    events: pd.DataFrame | None = None
+
+    def shifted(self, t_zero: float) -> Segmentation:
+        """The same segmentation on a clock whose zero is ``t_zero`` of this one (every
+        time minus ``t_zero``)."""
+        def moved(frame, columns):
+            if frame is None:
+                return None
+            frame = frame.copy()
+            for c in columns:
+                if c in frame.columns:
+                    frame[c] = frame[c] - t_zero
+            return frame
+
+        times = ("t", "t_start", "t_end", "t_logged", "t_detected")
+        return replace(self, segments=moved(self.segments, times),
+                       features=moved(self.features, times),
+                       detected=moved(self.detected, times), events=moved(self.events, times))
 
     def to_frame(self) -> pd.DataFrame:
         """The editable segment table (a copy): ``phase, t_start, t_end, duration``."""
@@ -143,24 +174,25 @@ def _with_hysteresis(strict: np.ndarray, relaxed: dict[str, np.ndarray]) -> np.n
     return out
 
 
-def _rocket_sequence(labels: np.ndarray, height: np.ndarray, rise_m: float) -> np.ndarray:
-    """Rocket words from the kinematic labels and the flight's order (module docstring)."""
-    out = labels.copy()
+def _rocket_sequence(labels: np.ndarray, height: np.ndarray,
+                     rise_m: float) -> tuple[np.ndarray, int | None]:
+    """Rocket words from the kinematic labels and the flight's order (module docstring), and
+    the window of the apogee (None when the record never rises ``rise_m``)."""
+    out = np.full(labels.size, "pad", dtype=object)
     rise = np.flatnonzero(height - height[0] >= rise_m)
     if rise.size == 0:   # never rose: on the pad throughout, or recorded from mid-descent
-        falling = height[0] - height[-1] > rise_m
-        out[labels != "rest"] = "descent" if falling else "rest"
-        return out
+        if height[0] - height[-1] > rise_m:
+            out[:] = np.where(labels == "rest", "landed", "descent")
+        return out, None
     launch = int(rise[0])
     while launch > 0 and labels[launch - 1] == "powered":
         launch -= 1
-    out[:launch] = "rest"
     apogee = launch + int(np.argmax(height[launch:]))
-    ascent = out[launch:apogee + 1]
-    ascent[~np.isin(ascent, ("powered", "free_fall"))] = "coast"
-    after = out[apogee + 1:]
-    after[after != "rest"] = "descent"
-    return out
+    ascent = labels[launch:apogee + 1]
+    out[launch:apogee + 1] = np.where(ascent == "powered", "boost",
+                                      np.where(ascent == "free_fall", "free_fall", "coast"))
+    out[apogee + 1:] = np.where(labels[apogee + 1:] == "rest", "landed", "descent")
+    return out, apogee
 
 
 def _runs(labels: np.ndarray) -> list[list]:
@@ -201,7 +233,8 @@ def _merge_short(runs: list[list], t_start: np.ndarray, t_end: np.ndarray,
     return runs
 
 
-def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segmentation:
+def segment_flight(trajectory, vehicle: str | None = None, flight_states=None,
+                   **thresholds) -> Segmentation:
     """Cut a flight into phases (rest, powered, turn, free fall, coast, cruise) from its
     kinematics, named in a vehicle's words when ``vehicle`` is given.
 
@@ -213,6 +246,12 @@ def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segm
     vehicle : str, optional
         One of :data:`VEHICLES`: the phases take its words (:data:`VEHICLE_PHASES`, module
         docstring); None: the kinematic labels.
+    flight_states : DataFrame or sequence, optional
+        A rocket flight computer's own states (``t, state`` at each change, as
+        :func:`navlib.io.read_altos` keeps them in ``attrs["flight_states"]``, or
+        ``(state, t)`` pairs): with ``vehicle="rocket"`` the segments are the logged phases
+        (:func:`~navlib.segmentation.logged.logged_segments`) and the detected ones are kept
+        beside them (``detected``, ``events``). Ignored for other vehicles.
     **thresholds
         Any of :data:`SEGMENT_DEFAULTS`: ``rest_speed_m_s`` (1), ``rest_rate_deg_s`` (3),
         ``rest_accel_m_s2`` (0.5), ``powered_accel_m_s2`` (2), ``turn_rate_deg_s`` (5),
@@ -225,7 +264,7 @@ def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segm
     -------
     Segmentation
         ``segments`` (``phase, t_start, t_end, duration``, contiguous from the first to
-        the last sample) and the per-window ``features``.
+        the last sample), the per-window ``features`` and, for a rocket, its ``events``.
     """
     vehicle = None if vehicle is None else check_vehicle(vehicle)
     p = _options(thresholds)
@@ -237,8 +276,9 @@ def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segm
     relaxed = _conditions(w, p, p["hysteresis"], vehicle)
     relaxed["cruise"] = strict == "cruise"
     labels = _with_hysteresis(strict, relaxed)
+    apogee = None
     if vehicle == "rocket":
-        labels = _rocket_sequence(labels, w["height"].to_numpy(), p["hover_height_m"])
+        labels, apogee = _rocket_sequence(labels, w["height"].to_numpy(), p["hover_height_m"])
     t_start, t_end = w["t_start"].to_numpy(), w["t_end"].to_numpy()
     runs = _merge_short(_runs(labels), t_start, t_end, p["min_duration_s"])
     final = labels.copy()
@@ -252,4 +292,18 @@ def segment_flight(trajectory, vehicle: str | None = None, **thresholds) -> Segm
         "t_end": [float(t_end[r[2]]) for r in runs],
     })
     segments["duration"] = segments["t_end"] - segments["t_start"]
-    return Segmentation(segments=segments, features=w, thresholds=p, vehicle=vehicle)
+    if vehicle != "rocket":
+        return Segmentation(segments=segments, features=w, thresholds=p, vehicle=vehicle)
+    t_apogee = None if apogee is None else float(w["t"].iloc[apogee])
+    logged = None if flight_states is None else logged_segments(
+        flight_states, float(t_start[0]), float(t_end[-1]))
+    events = flight_events(segments, t_apogee, logged)
+    if logged is None:
+        return Segmentation(segments=segments, features=w, thresholds=p, vehicle=vehicle,
+                            events=events)
+    w["detected"] = final
+    edges = logged["t_start"].to_numpy()
+    k = np.clip(np.searchsorted(edges, w["t"].to_numpy(), side="right") - 1, 0, edges.size - 1)
+    w["phase"] = logged["phase"].to_numpy()[k]
+    return Segmentation(segments=logged, features=w, thresholds=p, vehicle=vehicle,
+                        source="logged", detected=segments, events=events)

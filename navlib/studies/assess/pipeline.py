@@ -28,6 +28,7 @@ from navlib.segmentation import (
     segment_flight,
     vehicle_from_log,
 )
+from navlib.studies.assess import clock
 from navlib.studies.assess.fit import fit_notes, fit_records, fit_report, fit_residuals
 from navlib.studies.assess.inputs import (
     GNSS_KEYS,
@@ -277,10 +278,19 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     if vehicle is None:
         vehicle, vehicle_reason = recognise_vehicle(trajectory)
     notes.append(f"vehicle {vehicle!r}: {vehicle_reason}")
-    automatic = segment_flight(trajectory, vehicle=vehicle, **seg_opts)
+    logged = imu.attrs.get("flight_states") if vehicle == "rocket" else None
+    automatic = segment_flight(trajectory, vehicle=vehicle, flight_states=logged, **seg_opts)
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
+    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle)
+    moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
+                           inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res)
+    trajectory, model, automatic = moved["trajectory"], moved["model"], moved["automatic"]
+    inputs, gnss_res, imu_res = moved["inputs"], moved["gnss_residuals"], moved["imu_residuals"]
+    notes.append(f"times are seconds since the {zero}, at {t_zero:.6g} s on the log's clock"
+                 + (" (phases from the flight computer's logged states; detected beside them "
+                    "in .automatic.events)" if automatic.source == "logged" else ""))
     table, joined = automatic_segment_table(
         automatic.segments if segments is None else segments, model, automatic, trajectory.t,
         automatic_segments=segments is None)
@@ -292,7 +302,8 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                "model_options": model_options, "model_step_s": model_step_s,
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
                "attitude_source": residuals.get("heading_source"), "vehicle": vehicle,
-               "vehicle_reason": vehicle_reason}
+               "vehicle_reason": vehicle_reason, "t_zero": t_zero, "time_zero": zero,
+               "phase_source": automatic.source}
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return FlightAssessment.build(

@@ -17,6 +17,7 @@ from navlib.segmentation import (
     Segmentation,
     segments_table,
 )
+from navlib.studies.assess import states
 
 _GROUP_OF = {name: group for group, names in STATE_GROUPS.items() for name in names}
 
@@ -88,6 +89,15 @@ class FlightAssessment(SegmentedAnalysis):
         return self.options.get("vehicle", "")
 
     @property
+    def t_ignition(self) -> float:
+        """A rocket's ignition on the log's own clock, s: the zero of every time of this
+        result (:mod:`navlib.studies.assess.clock`); NaN when the zero is the first sample
+        (other vehicles, a record without boost) or the times are the mission's own."""
+        if self.options.get("time_zero") == "ignition":
+            return float(self.options["t_zero"])
+        return float("nan")
+
+    @property
     def labels(self) -> tuple[str, ...]:
         return tuple(_label(r) for r in self.segment_table.itertuples(index=False))
 
@@ -103,6 +113,13 @@ class FlightAssessment(SegmentedAnalysis):
     def to_frame(self) -> pd.DataFrame:
         """The per-segment :meth:`~navlib.metrics.SegmentedAnalysis.summary`."""
         return self.summary()
+
+    def states_table(self, log: str = "") -> pd.DataFrame:
+        """How well each state is known, one row per segment x state in navigation axes and
+        units (position and velocity north/east/down, roll/pitch/yaw, IMU errors per body
+        axis; m, m/s, deg, deg/h, mg, ppm): :func:`navlib.studies.assess.states.states_table`,
+        the table ``python -m navlib assess`` writes to ``states.csv``."""
+        return states.states_table(self, log)
 
     def _segment_changes(self, segments) -> dict:
         """``segments`` as in :func:`assess_flight` (None keeps the current ones; ``"auto"``

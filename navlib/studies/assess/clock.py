@@ -1,0 +1,63 @@
+"""The clock of an assessment: seconds since ignition for rockets, since the first sample else.
+
+A log's own clock is whatever its logger counted (GPS seconds of the week, microseconds since
+boot, AltOS's seconds from boost detection). The assessment states every time on one clock
+whose zero is
+
+* for a rocket, its ignition: the start of the first ``boost`` segment of the automatic
+  segment table (the flight computer's logged boost state when the log has states,
+  :mod:`navlib.segmentation.logged`, else the detected powered run; after short segments are
+  joined, :func:`~navlib.studies.assess.automatic_segment_table`), so that boost starts at
+  0 s;
+* for a rocket without a boost in the record, and for every other vehicle, the first sample
+  of the fitted span.
+
+The zero on the log's own clock (``t_zero``; ``t_ignition`` when it is an ignition) is stated
+once, in the result's ``options`` and notes. Notes and warnings issued before the fit (data
+quality, bridged holes) keep the log's clock.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from navlib.studies.assess.result import automatic_segment_table
+
+
+def time_zero(automatic, model, t_flight, vehicle: str | None) -> tuple[float, str]:
+    """The zero of the assessment's clock on the log's clock (module docstring), and what
+    it is (``"ignition"`` or ``"first sample"``)."""
+    if vehicle == "rocket":
+        table, _ = automatic_segment_table(automatic.segments, model, automatic, t_flight,
+                                           automatic_segments=True)
+        boost = table.loc[table["phase"] == "boost", "t_start"]
+        if len(boost):
+            return float(boost.iloc[0]), "ignition"
+    return float(t_flight[0]), "first sample"
+
+
+def _frame(frame, t_zero: float, columns=("t", "t_first", "t_last")):
+    if frame is None:
+        return None
+    frame = frame.copy()
+    for column in columns:
+        if column in frame.columns:
+            frame[column] = frame[column] - t_zero
+    return frame
+
+
+def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residuals,
+             imu_residuals) -> dict:
+    """Every time of an assessment's pieces minus ``t_zero``: the trajectory (``t`` and its
+    ``events``), the model epochs, the segmentation, the input summary (``t_first``,
+    ``t_last``) and the residual frames. Returns them by name."""
+    events = {k: v - t_zero if isinstance(v, int | float) else v
+              for k, v in trajectory.events.items()}
+    return {"trajectory": replace(trajectory, t=np.asarray(trajectory.t) - t_zero,
+                                  events=events),
+            "model": replace(model, t=np.asarray(model.t) - t_zero),
+            "automatic": automatic.shifted(t_zero), "inputs": _frame(inputs, t_zero),
+            "gnss_residuals": _frame(gnss_residuals, t_zero),
+            "imu_residuals": _frame(imu_residuals, t_zero)}
