@@ -6,7 +6,9 @@ Each recorded flight (a ``LOG``: :func:`navlib.io.parse_log`) goes through
 with the ``-p`` keywords; each mission file through
 :func:`navlib.studies.plan.plan_mission`. :func:`assess_logs` and :func:`plan_missions` return
 one :data:`SUMMARY_COLUMNS` row per flight or mission and its HTML page
-(:mod:`navlib.reports.pages`); :func:`write_fleet` writes ``DIR/summary.csv`` and the pages.
+(:mod:`navlib.reports.pages`), with the stacked states tables (how well each state is known,
+:mod:`navlib.studies.assess.states`) in the table's ``attrs["states"]``; :func:`write_fleet`
+writes ``DIR/summary.csv``, ``DIR/states.csv`` and the pages.
 A flight or mission that fails (unreadable log, too short, a fit that does not converge...)
 gets ``status = failed`` and its error in the table; it never stops the others.
 """
@@ -27,13 +29,17 @@ from navlib.io import read_log
 from navlib.parallel import map_tasks
 from navlib.reports.pages import flight_page, plan_page
 from navlib.studies.assess import assess_flight
+from navlib.studies.assess.states import STATES_COLUMNS
 from navlib.studies.plan import plan_mission
 
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
-SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
-                   "excitable", "sensible", "warnings", "seconds", "page")
-"""Columns of ``summary.csv``, in order (a mission's file name in ``log``)."""
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "t_ignition", "duration_s",
+                   "n_segments", "phases", "excitable", "sensible", "warnings", "seconds",
+                   "page")
+"""Columns of ``summary.csv``, in order (a mission's file name in ``log``). ``t_ignition``:
+a rocket's ignition on the log's own clock, s, the zero of the ``phases`` times (which are
+since the first sample for other vehicles; NaN there)."""
 
 
 def _keywords(fn, *skip: str) -> tuple[str, ...]:
@@ -55,11 +61,14 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
     ``build(warning_texts)`` returns the :class:`~navlib.studies.assess.FlightAssessment`
     (or mission plan) and its HTML page; ``warning_texts()`` gives the warnings caught so far.
     The row gets the status, vehicle, duration, phases, excitable and sensible states per
-    segment, every warning caught and the seconds taken; a failure goes in ``error``.
+    segment, every warning caught and the seconds taken; a failure goes in ``error``. Besides
+    the columns, ``row["states"]`` holds the result's
+    :meth:`~navlib.studies.assess.FlightAssessment.states_table` (None when it failed).
     """
     start = time.perf_counter()
     row = dict.fromkeys(SUMMARY_COLUMNS, "")
-    row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0)
+    row.update(log=label, status="failed", duration_s=float("nan"), n_segments=0,
+               t_ignition=float("nan"), states=None)
     page = None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -73,7 +82,8 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
                        phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
                                         for r in seg.itertuples(index=False)),
                        excitable=_per_segment(summary, "excitable"),
-                       sensible=_per_segment(summary, "sensible"))
+                       sensible=_per_segment(summary, "sensible"),
+                       t_ignition=result.t_ignition, states=result.states_table(label))
         except Exception as exc:  # a bad input is reported, never stops the others
             row["error"] = f"{type(exc).__name__}: {exc}"
     row["warnings"] = " | ".join(sorted({_warning_text(w) for w in caught}))
@@ -123,8 +133,7 @@ def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=N
     reject_unknown(options, _keywords(assess_flight, "imu", "gnss"), "assess options (-p)")
     results = map_tasks(_task, logs, scheduler, shared={"options": options},
                         progress=progress, desc="flights")
-    table = pd.DataFrame([row for row, _ in results], columns=list(SUMMARY_COLUMNS))
-    return table, [page for _, page in results]
+    return _table([row for row, _ in results]), [page for _, page in results]
 
 
 def plan_missions(missions: Sequence[str], options: Mapping | None = None,
@@ -153,8 +162,16 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None,
         return summary_row(mission, build)
 
     rows = [row(m) for m in missions]
-    table = pd.DataFrame([r for r, _ in rows], columns=list(SUMMARY_COLUMNS))
-    return table, [p for _, p in rows]
+    return _table([r for r, _ in rows]), [p for _, p in rows]
+
+
+def _table(rows: list[dict]) -> pd.DataFrame:
+    """The summary table of ``rows``; their states tables, stacked, in ``attrs["states"]``."""
+    table = pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+    states = [row["states"] for row in rows if row.get("states") is not None]
+    table.attrs["states"] = (pd.concat(states, ignore_index=True) if states else
+                             pd.DataFrame(columns=list(STATES_COLUMNS)))
+    return table
 
 
 def _page_name(index: int, log: str) -> str:
@@ -164,8 +181,9 @@ def _page_name(index: int, log: str) -> str:
 
 
 def write_fleet(table: pd.DataFrame, pages: Sequence, output) -> Path:
-    """Write ``output/summary.csv`` and one HTML page per assessed flight or planned
-    mission; returns the CSV."""
+    """Write ``output/summary.csv``, ``output/states.csv`` (the stacked states tables of
+    ``table.attrs["states"]``, one row per log x segment x state, when present) and one HTML
+    page per assessed flight or planned mission; returns the summary CSV."""
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
     table = table.copy()
@@ -175,5 +193,9 @@ def write_fleet(table: pd.DataFrame, pages: Sequence, output) -> Path:
             (output / name).write_text(page, encoding="utf-8")
             table.loc[i, "page"] = name
     path = output / "summary.csv"
+    states = table.attrs.get("states")
+    table.attrs = {}
     table.to_csv(path, index=False)
+    if states is not None:
+        states.to_csv(output / "states.csv", index=False)
     return path

@@ -21,7 +21,7 @@ from navlib.segmentation import (
 from navlib.studies.assess import assess_flight
 from navlib.trajectory import sounding_rocket
 
-ROCKET_ONLY = {"powered", "coast", "free_fall"}
+ROCKET_ONLY = {"pad", "boost", "coast", "free_fall", "drogue", "main", "landed"}
 
 
 def _phases(segmentation):
@@ -52,7 +52,7 @@ def parachute():
 def test_every_vehicle_has_rest_and_only_rockets_have_rocket_words():
     assert set(VEHICLE_PHASES) == set(VEHICLES)
     for vehicle, words in VEHICLE_PHASES.items():
-        assert words[0] == "rest"
+        assert words[0] == ("pad" if vehicle == "rocket" else "rest")
         assert bool(ROCKET_ONLY & set(words)) == (vehicle == "rocket")
 
 
@@ -104,7 +104,7 @@ def test_fixed_wing_climbs_turns_and_descends(plane):
 
 def test_rocket_descent_after_apogee(parachute):
     phases = _phases(segment_flight(parachute, vehicle="rocket"))
-    assert [p for p, _, _ in phases] == ["rest", "powered", "coast", "descent"]
+    assert [p for p, _, _ in phases] == ["pad", "boost", "coast", "descent"]
     assert phases[3][1] == pytest.approx(15.5, abs=0.5)        # apogee at 15.5 s
     assert phases[0][2] == pytest.approx(5.0, abs=0.5)         # ignition at 5 s
 
@@ -123,8 +123,8 @@ def test_rocket_on_the_pad_is_at_rest(rocket):
                                   angular_rate=truth.angular_rate, attitude=truth.attitude)
     assert _phases(segment_flight(noisy))[0][0] != "rest"
     phases = _phases(segment_flight(noisy, vehicle="rocket"))
-    assert phases[0][0] == "rest" and phases[0][2] == pytest.approx(18.0, abs=0.5)
-    assert phases[1][0] == "powered"
+    assert phases[0][0] == "pad" and phases[0][2] == pytest.approx(18.0, abs=0.5)
+    assert phases[1][0] == "boost"
 
 
 @pytest.mark.parametrize("attrs, expected", [
