@@ -47,6 +47,13 @@ _FAMILY = {"free_fall": "unpowered", "coast": "unpowered"}
 TIME_TOL_S = 1e-6
 
 
+def clock_time(t, t_zero: float) -> np.ndarray:
+    """``t - t_zero`` rounded to the nanosecond: times on a clock moved to a new zero read as
+    typed (``59.3 - 18.1`` is ``41.2``, not ``41.199999999999996``), so boundaries written
+    out and typed back match the segments; no log resolves a nanosecond."""
+    return np.round(np.asarray(t, dtype=float) - float(t_zero), 9)
+
+
 @dataclass(frozen=True, eq=False)
 class Segmentation:
     """Phases of a flight found by :func:`segment_flight`.
@@ -84,14 +91,14 @@ class Segmentation:
 
     def shifted(self, t_zero: float) -> Segmentation:
         """The same segmentation on a clock whose zero is ``t_zero`` of this one (every
-        time minus ``t_zero``)."""
+        time minus ``t_zero``, :func:`clock_time`)."""
         def moved(frame, columns):
             if frame is None:
                 return None
             frame = frame.copy()
             for c in columns:
                 if c in frame.columns:
-                    frame[c] = frame[c] - t_zero
+                    frame[c] = clock_time(frame[c].to_numpy(dtype=float), t_zero)
             return frame
 
         times = ("t", "t_start", "t_end", "t_logged", "t_detected")

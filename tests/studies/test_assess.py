@@ -91,11 +91,17 @@ def test_sample_script_is_deterministic(tmp_path):
 
 def test_sample_segments_and_fit(sample):
     table = sample.segment_table
-    # the paper's segments: pad [0, 19], powered and spin [19, 60], free fall [60, 86] s
-    assert table["phase"].tolist() == ["rest", "powered", "coast", "free_fall"]
-    assert table["t_end"].iloc[0] == pytest.approx(18.0, abs=0.3)
-    assert table["t_end"].iloc[1] == pytest.approx(46.0, abs=0.5)
-    assert table["t_end"].iloc[2] == pytest.approx(60.0, abs=1.0)
+    # the paper's segments on the flight's own clock: pad [0, 19], powered and spin [19, 60],
+    # free fall [60, 86] s; the result's clock starts at the ignition (lift-off 18.1 s)
+    t0 = sample.t_ignition
+    assert t0 == pytest.approx(18.0, abs=0.3) and sample.options["time_zero"] == "ignition"
+    assert table["phase"].tolist() == ["pad", "boost", "coast", "free_fall"]
+    assert table["t_start"].iloc[0] == pytest.approx(-t0)
+    assert table["t_start"].iloc[1] == 0.0 and table["t_end"].iloc[0] == 0.0
+    assert table["t_end"].iloc[1] == pytest.approx(46.0 - t0, abs=0.5)
+    assert table["t_end"].iloc[2] == pytest.approx(60.0 - t0, abs=1.0)
+    assert sample.trajectory.t[0] == pytest.approx(-t0)
+    assert sample.model.t[0] == pytest.approx(-t0)
     # 1 Hz epochs inside each closed segment
     assert np.all(np.abs(table["n_epochs"] - table["duration"]) <= 1.0)
     fit = sample.fit.set_index(["quantity", "axis"])
@@ -143,7 +149,7 @@ def test_sample_tables_are_consistent(sample):
         assert row.n_excitable == part["excitable"].sum()
     sens = sample.sensability_frame()
     assert len(sens) == 21 * len(sample.sensability.t)
-    assert set(sens["phase"]) == {"rest", "powered", "coast", "free_fall"}
+    assert set(sens["phase"]) == {"pad", "boost", "coast", "free_fall"}
 
 
 def test_sample_physics(sample):
@@ -158,10 +164,11 @@ def test_sample_physics(sample):
 
 
 def test_with_settings_reuses_the_model(sample):
-    other = sample.with_settings([30.0], eta=1e-2, nu=0.99)
+    t0 = sample.t_ignition            # the segments are on the result's clock
+    other = sample.with_settings([30.0 - t0], eta=1e-2, nu=0.99)
     assert other.model is sample.model and other.trajectory is sample.trajectory
-    assert other.segments == ((0.0, 30.0), (30.0, 86.0))
-    assert other.segment_table["phase"].tolist() == ["rest", "free_fall"]  # majority labels
+    np.testing.assert_allclose(other.segments, [(-t0, 30.0 - t0), (30.0 - t0, 86.0 - t0)])
+    assert other.segment_table["phase"].tolist() == ["pad", "free_fall"]  # majority labels
     assert other.sensability.nu == 0.99
     # a larger eta keeps fewer directions in the excited subspace
     wider = sample.with_settings(eta=1e-2)
@@ -170,7 +177,7 @@ def test_with_settings_reuses_the_model(sample):
     back = other.with_settings("auto")
     assert back.segments == sample.segments
     with pytest.raises(NavlibInputError, match="GNSS epoch"):
-        sample.with_settings([(10.2, 10.8)])
+        sample.with_settings([(10.2 - t0, 10.8 - t0)])
     with pytest.raises(NavlibInputError, match="eta"):
         sample.with_settings(eta=0.0)
 
@@ -281,9 +288,10 @@ def test_figures_draw(sample):
                 sensability_figure(sample, ["bg_x", "bg_y", "bg_z"])):
         assert fig.axes
         plt.close(fig)
+    t0 = sample.t_ignition
     edited = sample.with_settings(pd.DataFrame({"phase": ["pad", "flight"],
-                                                "t_start": [0.0, 18.0],
-                                                "t_end": [18.0, 86.0]}))
+                                                "t_start": [-t0, 0.0],
+                                                "t_end": [0.0, 86.0 - t0]}))
     fig = plots.phases_figure(edited)
     assert "1 pad" in [t.get_text() for t in fig.axes[0].texts]
     plt.close(fig)
@@ -295,8 +303,9 @@ def test_panel_updates_and_reports_errors(sample):
     panel.controls["boundaries"].value = "18, 46, 200"
     assert "outside the flight span" in panel.status.value
     assert panel.assessment.segments == sample.segments          # last good result kept
-    panel.controls["boundaries"].value = "10; 18"
-    assert panel.assessment.segments[:2] == ((0.0, 10.0), (10.0, 18.0))
+    panel.controls["boundaries"].value = "-10; 0"
+    np.testing.assert_allclose(panel.assessment.segments[:2],
+                               [(-sample.t_ignition, -10.0), (-10.0, 0.0)])
     panel.controls["eta"].value = 1e-2
     assert panel.assessment.thresholds["eta"] == pytest.approx(1e-2)
     panel.controls["boundaries"].value = "auto"

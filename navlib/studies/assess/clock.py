@@ -21,8 +21,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
-
+from navlib.segmentation.phases import clock_time
 from navlib.studies.assess.result import automatic_segment_table
 
 
@@ -44,7 +43,7 @@ def _frame(frame, t_zero: float, columns=("t", "t_first", "t_last")):
     frame = frame.copy()
     for column in columns:
         if column in frame.columns:
-            frame[column] = frame[column] - t_zero
+            frame[column] = clock_time(frame[column].to_numpy(dtype=float), t_zero)
     return frame
 
 
@@ -52,12 +51,13 @@ def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residu
              imu_residuals) -> dict:
     """Every time of an assessment's pieces minus ``t_zero``: the trajectory (``t`` and its
     ``events``), the model epochs, the segmentation, the input summary (``t_first``,
-    ``t_last``) and the residual frames. Returns them by name."""
-    events = {k: v - t_zero if isinstance(v, int | float) else v
+    ``t_last``) and the residual frames (:func:`~navlib.segmentation.phases.clock_time`).
+    Returns them by name."""
+    events = {k: float(clock_time(v, t_zero)) if isinstance(v, int | float) else v
               for k, v in trajectory.events.items()}
-    return {"trajectory": replace(trajectory, t=np.asarray(trajectory.t) - t_zero,
+    return {"trajectory": replace(trajectory, t=clock_time(trajectory.t, t_zero),
                                   events=events),
-            "model": replace(model, t=np.asarray(model.t) - t_zero),
+            "model": replace(model, t=clock_time(model.t, t_zero)),
             "automatic": automatic.shifted(t_zero), "inputs": _frame(inputs, t_zero),
             "gnss_residuals": _frame(gnss_residuals, t_zero),
             "imu_residuals": _frame(imu_residuals, t_zero)}
