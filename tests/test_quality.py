@@ -291,5 +291,5 @@ def test_sounding_rocket_with_a_frozen_receiver_keeps_its_phases():
                               quality_thresholds={"gnss": {"frozen_min_duration_s": 1e6}})
     assert any("GNSS position frozen for 26 s at 50.0-76.0 s" in str(w.message)
                and "the gyros read" in str(w.message) for w in caught)
-    assert result.segment_table["phase"].tolist() == ["rest", "powered", "coast", "free_fall"]
-    assert blind.segment_table["phase"].tolist().count("powered") > 1
+    assert result.segment_table["phase"].tolist() == ["pad", "boost", "coast", "free_fall"]
+    assert blind.segment_table["phase"].tolist().count("boost") > 1

@@ -21,7 +21,9 @@ from navlib.units import DEG
 
 PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
                  "free_fall": "tab:cyan", "coast": "tab:blue", "cruise": "tab:green",
-                 "climb": "tab:orange", "hover": "tab:olive", "descent": "tab:brown"}
+                 "climb": "tab:orange", "hover": "tab:olive", "descent": "tab:brown",
+                 "pad": "0.55", "boost": "tab:red", "drogue": "peru", "main": "darkkhaki",
+                 "landed": "0.75"}
 """Colour of each automatic phase (the words of every vehicle class,
 :data:`navlib.segmentation.VEHICLE_PHASES`); user-named segments cycle through
 :data:`OTHER_COLOURS`."""

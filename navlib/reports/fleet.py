@@ -34,7 +34,7 @@ from navlib.studies.plan import plan_mission
 
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
-SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "t_ignition", "duration_s",
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "t_ignition",
                    "n_segments", "phases", "excitable", "sensible", "warnings", "seconds",
                    "page")
 """Columns of ``summary.csv``, in order (a mission's file name in ``log``). ``t_ignition``:

@@ -50,14 +50,19 @@ Vehicles (``docs/assumptions.md`` V1-V2). The table above is the *kinematic* lab
 (``vehicle=None``). Given a vehicle class of :data:`VEHICLES` (or one recognised by
 :func:`recognise_vehicle`), the phases take that vehicle's words, :data:`VEHICLE_PHASES`:
 
-* ``rocket``: the kinematic labels, then the flight's order. The launch is the start of the
-  powered run that lifts the vehicle ``hover_height_m`` above its first position (or the
-  moment it gets there, unpowered); every window before it is ``rest`` (a rocket on its pad
-  stands, whatever the fit's noise suggests); from the launch to the apogee (the highest
-  point) ``powered`` and ``free_fall`` stay and anything else is ``coast``; after the apogee
-  every window is ``descent`` except kinematic ``rest`` (landed). A record that never rises
-  that far is ``rest`` throughout, or ``descent`` outside kinematic rest when it ends
-  ``hover_height_m`` lower than it starts (recorded from mid-descent).
+* ``rocket``: the kinematic labels, then the flight's order, in rocketry words. The launch
+  is the start of the powered run that lifts the vehicle ``hover_height_m`` above its first
+  position (or the moment it gets there, unpowered); every window before it is ``pad`` (a
+  rocket on its pad stands, whatever the fit's noise suggests); from the launch to the
+  apogee (the highest point) ``powered`` is ``boost`` (one segment per burn), ``free_fall``
+  stays and anything else is ``coast``; after the apogee every window is ``descent`` except
+  kinematic ``rest`` (``landed``). A record that never rises that far is ``pad``
+  throughout, or ``descent`` (``landed`` at rest) when it ends ``hover_height_m`` lower than
+  it starts (recorded from mid-descent). When the log carries the flight computer's own
+  states (``flight_states``: AltOS's ``boost``, ``fast``, ``coast``, ``drogue``, ``main``,
+  ``landed``), they are the segments (:mod:`~navlib.segmentation.logged`), the detected
+  ones are kept beside them and :attr:`Segmentation.events` lists the ignition, burnout,
+  apogee, main deployment and landing, logged and detected side by side.
 * ``multicopter``, ``fixed-wing``, ``ground``: with ``v_up`` the vertical speed (up of the
   first position), ``v_h`` the horizontal speed and ``height`` the height above the
   flight's lowest point, in priority order ``rest`` (kinematic rest; a multicopter also
@@ -75,6 +80,7 @@ The result is an editable table (:meth:`Segmentation.to_frame`: ``phase, t_start
 
 Modules: :mod:`~navlib.segmentation.features` (per-sample kinematics and their window
 means), :mod:`~navlib.segmentation.phases` (the labelling),
+:mod:`~navlib.segmentation.logged` (a flight computer's logged states and the events),
 :mod:`~navlib.vehicles` and :mod:`~navlib.segmentation.recognition` (vehicle
 classes) and :mod:`~navlib.segmentation.edits` (a user's segments); the public names are
 re-exported here.

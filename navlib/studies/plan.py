@@ -57,6 +57,10 @@ DEFAULT_GNSS_RATE_HZ = 1.0
 DEFAULT_GNSS_SIGMA_M = 5.0
 """GNSS position sigma when neither the mission, the call nor the preset gives one, m."""
 
+_SI_UNITS = {"position": "m", "velocity": "m/s", "attitude": "rad", "gyro_bias": "rad/s",
+             "acc_bias": "m/s^2", "gyro_scale": "1", "acc_scale": "1"}
+
+
 def _fit_columns() -> pd.DataFrame:
     return pd.DataFrame(columns=["quantity", "axis", "rms", "unit", "white_noise"])
 
@@ -96,10 +100,12 @@ class MissionPlan(FlightAssessment):
         segments), ``sensible_from_s`` (first epoch after the start-up transient with
         ``s >= s_threshold``; NaN: never), ``sensible_share`` (share of the epochs after
         the transient with it), ``sensible_share_outage`` (the same inside the outage
-        windows; NaN without outages) and ``sigma_end`` (posterior 1-sigma at the last
-        epoch, SI). The first ``transient_s`` seconds are left out of the sensability
-        columns: at the first epochs the information is still the normalised prior, in
-        which every state looks sensible (assumption M6).
+        windows; NaN without outages), ``sigma_end`` (posterior 1-sigma at the last
+        epoch) and its SI ``unit`` (m, m/s, rad, rad/s, m/s^2, 1; the same in navigation
+        axes and data-sheet units, per segment: :meth:`states_table`). The first
+        ``transient_s`` seconds are left out of the sensability columns: at the first
+        epochs the information is still the normalised prior, in which every state looks
+        sensible (assumption M6).
         """
         transient_s = finite_scalar(transient_s, "transient_s", 0.0)
         table = self.state_table()
@@ -125,7 +131,7 @@ class MissionPlan(FlightAssessment):
                 "sensible_share": float(ok[after, j].mean()),
                 "sensible_share_outage": float(ok[inside, j].mean()) if inside.any()
                 else np.nan,
-                "sigma_end": float(se.sigma[-1, j])})
+                "sigma_end": float(se.sigma[-1, j]), "unit": _SI_UNITS[part["group"].iloc[0]]})
         return pd.DataFrame(rows)
 
 

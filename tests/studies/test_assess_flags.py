@@ -87,7 +87,9 @@ def test_cli_vehicle_and_split_json_reach_the_summary(tmp_path, capsys):
     assert list(table.columns[:5]) == ["log", "status", "error", "vehicle", "duration_s"]
     row = table.iloc[0]
     assert row.vehicle == "rocket"
-    assert row.phases.split(";")[0].startswith("rest 0.0-")
+    assert row.phases.split(";")[0].startswith("pad -18.")    # the pad before ignition
+    assert row.phases.split("; ")[1].startswith("boost 0.0-")
+    assert float(row.t_ignition) == pytest.approx(18.1, abs=0.3)
     assert "vehicle" in (out / row.page).read_text()
 
 

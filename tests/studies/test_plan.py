@@ -73,7 +73,7 @@ def test_defaults_and_given_presets():
     rocket = plan_mission("sounding_rocket")
     assert rocket.options["preset"] == "motionpak_tactical"     # the mission's own
     assert rocket.options["gnss_rate_hz"] == 1.0 and rocket.options["gnss_sigma_m"] == 5.0
-    assert list(rocket.segment_table["phase"])[:2] == ["rest", "powered"]
+    assert list(rocket.segment_table["phase"])[:2] == ["pad", "boost"]
     table = {"vehicle": "ground", "site": {"lat_deg": 10.0, "lon_deg": 20.0},
              "waypoint": [{"north_m": 0.0}, {"north_m": 150.0}]}
     ground = plan_mission(table)
@@ -153,7 +153,7 @@ def test_planned_beside_flown_per_phase(sample_flight):
     """The sample flight was simulated from the sounding-rocket profile the rocket mission
     describes: per phase the plan expects what the flight delivers."""
     table = plan_beside_flight(plan_mission("sounding_rocket"), sample_flight)
-    assert list(table["phase"]) == ["rest", "powered", "coast", "free_fall"]
+    assert list(table["phase"]) == ["pad", "boost", "coast", "free_fall"]
     assert (table["planned_excitable"] == table["flown_excitable"]).all()
     assert (table["planned_sensible"] == table["flown_sensible"]).all()
     assert (table["sensible_only_planned"] == "-").all()

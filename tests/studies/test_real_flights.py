@@ -166,7 +166,8 @@ def test_in_air_start_uses_the_logged_attitude(truth, recs):
     result = _assess(air, gnss[gnss["t"] >= t0].reset_index(drop=True))
     assert result.options["attitude_source"] == "log"
     assert any("autopilot's own attitude" in n for n in result.notes)
-    k = int(np.searchsorted(truth.t, result.trajectory.t[0]))
+    assert result.options["t_zero"] == pytest.approx(t0, abs=0.02)   # times since the start
+    k = int(np.searchsorted(truth.t, result.trajectory.t[0] + result.options["t_zero"]))
     err = (result.trajectory.attitude[0].inv() * truth.attitude[k]).magnitude()
     assert np.degrees(err) < 4.0       # the fit's correction moves the logged start (biases)
     assert result.segment_table["phase"].iloc[0] != "rest"

@@ -242,7 +242,7 @@ def test_hpr_rocket_plans_with_a_descent_segment():
     plan = plan_mission("hpr_rocket")
     summary = plan.summary()
     phases = list(summary["phase"])
-    assert phases[0] == "rest" and "powered" in phases and phases[-1] == "descent"
+    assert phases[0] == "pad" and "boost" in phases and phases[-1] == "descent"
     descent = summary[summary["phase"] == "descent"].iloc[0]
     apogee = plan.trajectory.events["apogee"]
     assert abs(descent["t_start"] - apogee) < 1.0

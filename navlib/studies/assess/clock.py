@@ -10,7 +10,8 @@ whose zero is
   joined, :func:`~navlib.studies.assess.automatic_segment_table`), so that boost starts at
   0 s;
 * for a rocket without a boost in the record, and for every other vehicle, the first sample
-  of the fitted span.
+  of the record (of the whole record when holes split it into spans assessed separately:
+  the spans share its clock; a rocket's spans each take the ignition they hold).
 
 The zero on the log's own clock (``t_zero``; ``t_ignition`` when it is an ignition) is stated
 once, in the result's ``options`` and notes. Notes and warnings issued before the fit (data
@@ -25,16 +26,18 @@ from navlib.segmentation.phases import clock_time
 from navlib.studies.assess.result import automatic_segment_table
 
 
-def time_zero(automatic, model, t_flight, vehicle: str | None) -> tuple[float, str]:
+def time_zero(automatic, model, t_flight, vehicle: str | None,
+              t_record: float | None = None) -> tuple[float, str]:
     """The zero of the assessment's clock on the log's clock (module docstring), and what
-    it is (``"ignition"`` or ``"first sample"``)."""
+    it is (``"ignition"`` or ``"first sample"``). ``t_record``: the first sample of the
+    whole record, when the span ``t_flight`` is one of several (None: ``t_flight[0]``)."""
     if vehicle == "rocket":
         table, _ = automatic_segment_table(automatic.segments, model, automatic, t_flight,
                                            automatic_segments=True)
         boost = table.loc[table["phase"] == "boost", "t_start"]
         if len(boost):
             return float(boost.iloc[0]), "ignition"
-    return float(t_flight[0]), "first sample"
+    return float(t_flight[0] if t_record is None else t_record), "first sample"
 
 
 def _frame(frame, t_zero: float, columns=("t", "t_first", "t_last")):

@@ -221,7 +221,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
               "fit_options": fit_options, "segment_options": segment_options,
               "model_options": model_options, "model_step_s": model_step_s,
               "vehicle": vehicle, "vehicle_reason": vehicle_reason,
-              "findings": checked.findings}
+              "findings": checked.findings, "t_record": float(imu["t"].iloc[0])}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -253,7 +253,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
                  segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings) -> FlightAssessment:
+                 findings, t_record) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -283,7 +283,7 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
-    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle)
+    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, t_record)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
                            inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res)
     trajectory, model, automatic = moved["trajectory"], moved["model"], moved["automatic"]
