@@ -102,6 +102,9 @@ def test_sample_segments_and_fit(sample):
     assert table["t_end"].iloc[2] == pytest.approx(60.0 - t0, abs=1.0)
     assert sample.trajectory.t[0] == pytest.approx(-t0)
     assert sample.model.t[0] == pytest.approx(-t0)
+    events = sample.events.set_index("event")        # detected only: CSV records log no state
+    assert events.loc["ignition", "t_detected"] == 0.0 and events["t_logged"].isna().all()
+    assert events.loc["burnout", "t_detected"] == pytest.approx(46.0 - t0, abs=0.5)
     # 1 Hz epochs inside each closed segment
     assert np.all(np.abs(table["n_epochs"] - table["duration"]) <= 1.0)
     fit = sample.fit.set_index(["quantity", "axis"])

@@ -24,8 +24,16 @@ Assumptions that matter (all visible in ``FlightAssessment.options``): the senso
 records' median rate unless given), and, for flights whose heading cannot be estimated
 from the motion (quasi-static drones), a fallback initial heading.
 
+How well each state is known, in navigation axes and units (position and velocity north,
+east, down; roll, pitch, yaw; IMU errors per body axis in deg/h, mg, ppm), per segment:
+:meth:`FlightAssessment.states_table` (:mod:`.states`), the ``states.csv`` of
+``python -m navlib assess``. Times are seconds since a rocket's ignition (the start of its
+first boost) and since the first sample for other vehicles; the zero on the log's own clock
+is ``FlightAssessment.t_ignition`` / ``options["t_zero"]`` (:mod:`.clock`).
+
 Modules: :mod:`.inputs` (summary and checks of the records), :mod:`.fit` (the trajectory fit,
-its report and residuals), :mod:`.result` (:class:`FlightAssessment`, the segment table) and
+its report and residuals), :mod:`.result` (:class:`FlightAssessment`, the segment table),
+:mod:`.states` (sigma in navigation axes and units), :mod:`.clock` (the time zero) and
 :mod:`.pipeline` (:func:`assess_flight`).
 """
 

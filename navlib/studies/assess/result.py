@@ -65,6 +65,11 @@ class FlightAssessment(SegmentedAnalysis):
         before the fit); each ``message`` was also issued as a
         :class:`~navlib.io.FlightDataWarning`.
 
+    Every time (``segment_table``, the trajectory, the model epochs, the residuals, the
+    automatic segmentation) is on the result's clock: seconds since a rocket's ignition, since
+    the record's first sample for other vehicles; :attr:`t_ignition` (``options["t_zero"]``)
+    is that zero on the log's own clock (:mod:`navlib.studies.assess.clock`).
+
     The long frames name each segment by ``segment`` (1-based) and ``phase``, and each state
     by ``state``, ``paper_id`` (e1..e21) and ``group``; the wide
     :meth:`~navlib.metrics.SegmentedAnalysis.excitability_table` labels its columns
@@ -96,6 +101,15 @@ class FlightAssessment(SegmentedAnalysis):
         if self.options.get("time_zero") == "ignition":
             return float(self.options["t_zero"])
         return float("nan")
+
+    @property
+    def events(self) -> pd.DataFrame | None:
+        """A rocket's events (ignition, burnout, apogee, main deployment, landing), logged
+        by its flight computer and detected from the kinematics side by side, on this
+        result's clock (:func:`navlib.segmentation.logged.flight_events`); None for other
+        vehicles."""
+        events = getattr(self.automatic, "events", None)
+        return None if events is None else events.copy()
 
     @property
     def labels(self) -> tuple[str, ...]:
