@@ -35,11 +35,13 @@ from navlib.studies.plan import plan_mission
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
 SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "t_ignition",
-                   "n_segments", "phases", "excitable", "sensible", "warnings", "seconds",
-                   "page")
+                   "n_segments", "phases", "events", "excitable", "sensible", "warnings",
+                   "seconds", "page")
 """Columns of ``summary.csv``, in order (a mission's file name in ``log``). ``t_ignition``:
 a rocket's ignition on the log's own clock, s, the zero of the ``phases`` times (which are
-since the first sample for other vehicles; NaN there)."""
+since the first sample for other vehicles; NaN there). ``events``: a rocket's events on that
+clock, ``<event> <logged> s (detected <detected> s)`` when the flight computer logged its
+states, ``<event> <detected> s (detected)`` otherwise."""
 
 
 def _keywords(fn, *skip: str) -> tuple[str, ...]:
@@ -49,6 +51,19 @@ def _keywords(fn, *skip: str) -> tuple[str, ...]:
 def _per_segment(summary: pd.DataFrame, column: str) -> str:
     return " | ".join(f"{r.segment} {r.phase}: {getattr(r, column)}"
                       for r in summary.itertuples(index=False))
+
+
+def _events_text(events) -> str:
+    if events is None:
+        return ""
+
+    def when(t):
+        return "-" if t != t else f"{t:.2f} s"
+
+    logged = events["t_logged"].notna().any()
+    return "; ".join(f"{r.event} {when(r.t_logged)} (detected {when(r.t_detected)})" if logged
+                     else f"{r.event} {when(r.t_detected)} (detected)"
+                     for r in events.itertuples(index=False))
 
 
 def _warning_text(w) -> str:
@@ -83,7 +98,8 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
                                         for r in seg.itertuples(index=False)),
                        excitable=_per_segment(summary, "excitable"),
                        sensible=_per_segment(summary, "sensible"),
-                       t_ignition=result.t_ignition, states=result.states_table(label))
+                       t_ignition=result.t_ignition, events=_events_text(result.events),
+                       states=result.states_table(label))
         except Exception as exc:  # a bad input is reported, never stops the others
             row["error"] = f"{type(exc).__name__}: {exc}"
     row["warnings"] = " | ".join(sorted({_warning_text(w) for w in caught}))

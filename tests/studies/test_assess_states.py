@@ -177,6 +177,10 @@ def test_altos_flights_phases_since_ignition(altos_run):
         assert row["t_ignition"] == pytest.approx(-0.3, abs=0.35)
         if "2018-04-08" not in path:                       # the newer export logs its states
             assert {"drogue", "main"} <= set(phases)
+            assert row["events"].startswith("ignition 0.00 s (detected ")
+            assert "apogee " in row["events"] and "main " in row["events"]
+        else:
+            assert row["events"].startswith("ignition 0.00 s (detected)")
     states = pd.read_csv(out / "states.csv")
     assert set(states["log"]) == set(paths)
     assert set(states["unit"]) == {"m", "m/s", "deg", "deg/h", "mg", "ppm"}

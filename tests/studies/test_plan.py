@@ -170,6 +170,9 @@ def test_plan_command_with_a_flight(tmp_path):
     assert main(["plan", "sounding_rocket", "--flight", flight, "--output", str(out)]) == 0
     page = (out / pd.read_csv(out / "summary.csv")["page"][0]).read_text(encoding="utf-8")
     assert "Planned beside flown" in page and "sensible_only_flown" in page
+    states = pd.read_csv(out / "states.csv")        # how well, in navigation axes and units
+    assert set(states["log"]) == {"sounding_rocket"} and "gyro_bias_along" in set(states["state"])
+    assert len(states) == 21 * pd.read_csv(out / "summary.csv")["n_segments"][0]
 
 
 def test_plan_panel_replans_only_for_the_mission_controls():
