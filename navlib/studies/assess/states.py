@@ -32,7 +32,8 @@ a navigation state ``c' x`` (a row ``c`` of ``T_k``) is the direction ``w = D0^1
 state's own ``s``) and its excitability over a segment ``sqrt(mean_k ||U[:, :ne-1]' w_k||^2)``
 over the segment's epochs (Def. 4; a row that does not turn within the segment gives
 ``||U[:, :ne-1]' w||``). ``excitable`` and ``sensible`` then use the assessment's
-thresholds, as :meth:`navlib.metrics.SegmentedAnalysis.state_table` does for the model states.
+thresholds, as :meth:`navlib.metrics.SegmentedAnalysis.state_table` does for the model states
+(``docs/assumptions.md`` V3).
 """
 
 from __future__ import annotations
