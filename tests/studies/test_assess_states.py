@@ -199,3 +199,27 @@ def test_assessment_states_table_matches_the_csv_columns():
     assert set(LOGGED_WORDS.values()) <= set(VEHICLE_PHASES["rocket"])
     assert navigation_state_names("rocket")[9:12] == ("gyro_bias_along", "gyro_bias_cross_y",
                                                       "gyro_bias_cross_z")
+
+
+def test_both_attitude_error_definitions_give_the_same_roll_pitch_yaw(tmp_path):
+    """``psi^e = C_hat dtheta^b`` relates the model's two attitude errors (spec A4): rotated
+    to body roll, pitch and yaw (ECEF -> NED -> body, or nothing for the body error) the two
+    models must give the same sigma and flags, although the body-to-ECEF rotation of a
+    level vehicle is far from the identity."""
+    preset = tmp_path / "quiet.toml"
+    preset.write_text(QUIET, encoding="utf-8")
+    spec = sensors.load_preset(preset)
+    truth = stationary(duration_s=30.0, rate_hz=100.0)
+    imu = sensors.simulate_imu(truth, spec, seed=7).to_frame()
+    gnss = sensors.simulate_gnss(truth, spec, rate_hz=1.0, seed=8)
+    tables = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FlightDataWarning)
+        for error in ("ecef", "body"):
+            result = assess_flight(imu, gnss, preset=str(preset),
+                                   model_options={"attitude_error": error})
+            tables.append(result.states_table().set_index("state"))
+    ecef, body = tables
+    np.testing.assert_allclose(ecef["sigma_end"], body["sigma_end"], rtol=1e-4)
+    np.testing.assert_array_equal(ecef["excitable"], body["excitable"])
+    assert ecef.loc["roll", "sigma_end"] < 0.5 * ecef.loc["roll", "sigma_start"]   # levelled
