@@ -17,26 +17,14 @@ import numpy as np
 from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
+from navlib.plots.phases import phase_colour
 from navlib.units import DEG
 
-PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
-                 "free_fall": "tab:cyan", "coast": "tab:blue", "cruise": "tab:green",
-                 "climb": "tab:orange", "hover": "tab:olive", "descent": "tab:brown"}
-"""Colour of each automatic phase (the words of every vehicle class,
-:data:`navlib.segmentation.VEHICLE_PHASES`); user-named segments cycle through
-:data:`OTHER_COLOURS`."""
-OTHER_COLOURS = ("tab:pink", "gold", "navy", "darkslategray", "0.3")
 _MAX_POINTS = 20_000
 
 
 def _thin(n: int) -> slice:
     return slice(None, None, max(1, int(np.ceil(n / _MAX_POINTS))))
-
-
-def _phase_colour(phase: str, others: dict) -> str:
-    if phase in PHASE_COLOURS:
-        return PHASE_COLOURS[phase]
-    return others.setdefault(phase, OTHER_COLOURS[len(others) % len(OTHER_COLOURS)])
 
 
 def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
@@ -46,10 +34,9 @@ def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
 
     Returns the artists added (their ``gid`` set to ``gid``), for :func:`reshade_phases`.
     """
-    others: dict = {}
     artists = []
     for k, row in enumerate(segment_table.itertuples(index=False)):
-        colour = _phase_colour(row.phase, others)
+        colour = phase_colour(row.phase)
         artists.append(ax.axvspan(row.t_start, row.t_end, color=colour, alpha=alpha,
                                   linewidth=0, gid=gid))
         if label:
@@ -94,8 +81,8 @@ def phases_figure(assessment):
     shade_phases(axes[2], auto, label=False, alpha=1.0)
     axes[2].set_yticks([])
     axes[2].set_ylabel("auto", fontsize=8)
-    present = [p for p in PHASE_COLOURS if p in set(auto["phase"])]
-    axes[2].legend(handles=[Patch(color=PHASE_COLOURS[p], label=p) for p in present],
+    present = list(dict.fromkeys(auto["phase"]))  # in order of appearance
+    axes[2].legend(handles=[Patch(color=phase_colour(p), label=p) for p in present],
                    fontsize=7, loc="center left", bbox_to_anchor=(1.005, 0.5),
                    frameon=False)
     axes[2].set_xlabel("t [s]")
