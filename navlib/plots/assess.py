@@ -21,6 +21,10 @@ from navlib.plots.phases import phase_colour
 from navlib.units import DEG
 
 _MAX_POINTS = 20_000
+_LABEL_SHARE = 0.09
+"""Segments narrower than this share of the flight are labelled with their number only."""
+_HEATMAP_MAX_WIDTH_IN = 12.0
+"""Widest estimable-states figure: about a page's width, so its 9 pt labels stay readable."""
 
 
 def _thin(n: int) -> slice:
@@ -35,14 +39,21 @@ def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
     Returns the artists added (their ``gid`` set to ``gid``), for :func:`reshade_phases`.
     """
     artists = []
+    span = float(segment_table["t_end"].max() - segment_table["t_start"].min()) or 1.0
+    narrow = 0
     for k, row in enumerate(segment_table.itertuples(index=False)):
         colour = phase_colour(row.phase)
         artists.append(ax.axvspan(row.t_start, row.t_end, color=colour, alpha=alpha,
                                   linewidth=0, gid=gid))
         if label:
             number = getattr(row, "segment", k + 1)
-            artists.append(ax.annotate(f"{number} {row.phase}",
+            # a segment too narrow for "<n> <phase>" gets its number only, raised every
+            # other time, so neighbouring labels do not overlap (the legend names phases)
+            wide = (row.t_end - row.t_start) / span >= _LABEL_SHARE
+            narrow = 0 if wide else narrow + 1
+            artists.append(ax.annotate(f"{number} {row.phase}" if wide else f"{number}",
                                        ((row.t_start + row.t_end) / 2, 1.0),
+                                       xytext=(0, 7 * (narrow % 2)), textcoords="offset points",
                                        xycoords=("data", "axes fraction"), ha="center",
                                        va="bottom", fontsize=7, color="0.25", gid=gid))
     return artists
@@ -132,8 +143,9 @@ def estimable_figure(assessment):
     th = assessment.thresholds
     labels = [f"{r.segment} {r.phase}\n{r.t_start:.4g}–{r.t_end:.4g} s"
               for r in segs.itertuples(index=False)]
-    width = 3.2 + 1.3 * len(segs)
+    width = min(3.2 + 1.3 * len(segs), _HEATMAP_MAX_WIDTH_IN / 2)
     fig, axes = subplots(1, 2, figsize=(2 * width, 7.2), layout="constrained")
+    many = len(segs) > 4  # column labels turned upright when they would run into each other
     panels = ((axes[0], e.to_numpy(), th["e_threshold"], "excitability e"),
               (axes[1], frac.to_numpy(), th["min_fraction"],
                f"share of epochs with s ≥ {th['s_threshold']:.3g}"))
@@ -141,14 +153,14 @@ def estimable_figure(assessment):
         image = ax.imshow(values, cmap="Blues", vmin=0.0, vmax=1.0, aspect="auto")
         for (j, k), v in np.ndenumerate(values):
             good = v >= threshold
-            ax.text(k, j, f"{v:.2f}", ha="center", va="center", fontsize=7,
+            ax.text(k, j, f"{v:.2f}", ha="center", va="center", fontsize=8 if many else 9,
                     color="white" if v > 0.6 else "0.2", fontweight="bold" if good else None)
             if good:
                 ax.add_patch(plt.Rectangle((k - 0.5, j - 0.5), 1, 1, fill=False,
                                            edgecolor="tab:red", linewidth=1.2))
-        ax.set_xticks(np.arange(len(labels)), labels, fontsize=7)
-        ax.set_yticks(np.arange(len(names)), names, fontsize=7)
-        ax.set_title(f"{title} (outlined: ≥ {threshold:.3g})", fontsize=9)
+        ax.set_xticks(np.arange(len(labels)), labels, fontsize=9, rotation=90 if many else 0)
+        ax.set_yticks(np.arange(len(names)), names, fontsize=9)
+        ax.set_title(f"{title} (outlined: ≥ {threshold:.3g})", fontsize=10)
         fig.colorbar(image, ax=ax, shrink=0.6)
     fig.suptitle(f"Which states this flight could estimate, segment by segment "
                  f"(η = {th['eta']:.0e}, ν = {th['nu']:.3f}, preset "
