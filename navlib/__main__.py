@@ -101,7 +101,7 @@ def _add_assess(sub) -> None:
         "assess", help="assess one or many flights (Dask tasks) into a summary table",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Assess each flight with navlib.studies.assess.assess_flight as a Dask "
-                    "task; write DIR/summary.csv (one row per flight) and one HTML page per "
+                    "task;\nwrite DIR/summary.csv (one row per flight) and one HTML page per "
                     "assessed flight.\nA failed flight is reported in the table; the exit "
                     "status is 1 when any failed.\n\n" + LOG_FORMS)
     ass.add_argument("logs", nargs="+", metavar="LOG",

@@ -21,6 +21,8 @@ import pandas as pd
 import pytest
 from locations import REPO
 
+from navlib.io.logs import LOG_KINDS
+
 README = REPO / "README.md"
 TEXT = README.read_text(encoding="utf-8")
 MAX_LINES = 160
@@ -102,6 +104,16 @@ def test_readme_assess_example_runs(command, tmp_path):
     assert (tmp_path / "assessments" / summary.page[0]).exists()
 
 
+def test_readme_python_example_runs():
+    """The Python example of "Assess your flight", run from the repository's root."""
+    blocks = re.findall(r"```python\n(.*?)```", _section("Assess your flight"), re.S)
+    assert len(blocks) == 1
+    script = blocks[0] + "\nassert set(result.summary().columns) >= {'phase', 'excitable'}\n"
+    done = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True,
+                          text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+
+
 @pytest.mark.parametrize("command", PLAN)
 def test_readme_plan_example_runs(command, tmp_path):
     _run(command, tmp_path)
@@ -110,7 +122,11 @@ def test_readme_plan_example_runs(command, tmp_path):
 
 
 def test_assess_help_lists_every_log_form():
+    """Every kind navlib.io.parse_log tells apart is in ``assess --help`` (a new kind fails
+    here until the help names it), and so is the default output folder."""
+    forms = {"ulog": ".ulg", "dataflash": ".bin", "altos": "AltOS", "csv": "imu.csv,gnss.csv"}
+    assert set(LOG_KINDS) == set(forms)
     done = subprocess.run([sys.executable, "-m", "navlib", "assess", "--help"],
                           capture_output=True, text=True, check=True, timeout=120)
-    for form in (".ulg", ".bin", "AltOS", "imu.csv,gnss.csv", "./assessments"):
-        assert form in done.stdout, form
+    for text in (*forms.values(), "./assessments"):
+        assert text in done.stdout, text

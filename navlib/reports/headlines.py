@@ -4,8 +4,9 @@
   markdown cell (every report notebook opens with one), else its title.
 * The **headline** is read from the executed notebook, never typed: the outputs of the cells
   tagged :data:`HEADLINE_TAG` when the notebook has any; else the first generated text
-  (a ``text/markdown`` output, e.g. the claims summary or a notebook's claims reading);
-  else the last table of the page (e.g. a flight's segments with their excitable and
+  (a ``text/markdown`` output, e.g. the claims summary or a notebook's claims reading) with
+  the next table when it is short (the claims reproduced, explained and unexplained per
+  paper); else the last table of the page (e.g. a flight's segments with their excitable and
   sensible states). A long text shows the verdict counts of a claims reading
   (``**Reproduced** (4):`` ...) or its first lines, the rest behind a "more" toggle; a
   table of more than 12 rows is folded the same way.
@@ -58,7 +59,7 @@ def _output_html(out) -> str:
         return _long_markdown(_text(data["text/markdown"]))
     if "text/html" in data and "<table" in _text(data["text/html"]):
         table = _text(data["text/html"])
-        rows = table.count("<tr") - 1  # the header row
+        rows = _rows(out)
         if rows > _LONG_TABLE_ROWS:
             return f"<details><summary>table of {rows} rows</summary>{table}</details>"
         return table
@@ -91,9 +92,16 @@ def headline(executed) -> str:
     if tagged:
         return "".join(_output_html(o) for c in tagged for o in _outputs(c))
     outputs = [o for c in cells for o in _outputs(c)]
-    for out in outputs:
+    tables = [i for i, o in enumerate(outputs)
+              if 'class="dataframe' in _text(o.get("data", {}).get("text/html", ""))]
+    for i, out in enumerate(outputs):
         if "text/markdown" in out.get("data", {}):
-            return _output_html(out)
-    tables = [o for o in outputs if 'class="dataframe' in _text(o.get("data", {})
-                                                               .get("text/html", ""))]
-    return _output_html(tables[-1]) if tables else ""
+            after = [k for k in tables if k > i][:1]
+            short = [k for k in after if _rows(outputs[k]) <= _LONG_TABLE_ROWS]
+            return "".join(_output_html(outputs[k]) for k in (i, *short))
+    return _output_html(outputs[tables[-1]]) if tables else ""
+
+
+def _rows(out) -> int:
+    """Body rows of a table output (its ``<tr>`` less the header row)."""
+    return _text(out.get("data", {}).get("text/html", "")).count("<tr") - 1

@@ -22,7 +22,8 @@ _STYLE = ("body{font-family:sans-serif;font-size:16px;line-height:1.4;max-width:
           "margin:auto;padding:0 1em} "
           "table{border-collapse:collapse;font-size:14px} "
           "td,th{border:1px solid #ccc;padding:2px 6px;vertical-align:top} "
-          "img{max-width:100%;height:auto} .path{color:#555;font-size:14px}")
+          "img{max-width:100%;height:auto} .path{color:#555;font-size:14px} "
+          "h1,h2,.path{overflow-wrap:anywhere}")
 """Page style: 16 px text, 14 px tables, figures never wider than the page and always at
 their own aspect ratio (``height: auto``)."""
 _DPI = 110
