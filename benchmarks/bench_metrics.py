@@ -1,4 +1,4 @@
-"""Benchmarks of navlib.metrics (performance goals in the README).
+"""Benchmarks of navlib.metrics (goals: benchmarks/run.py).
 
 * ``metrics.rocket_chain``: the whole chain on the VS30-like flight — 21-state ECEF model along
   86 s at 100 Hz, chaining to the 1 Hz GNSS epochs, sensability at all 87 epochs and

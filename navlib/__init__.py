@@ -1,6 +1,6 @@
 """navlib: which parts of the navigation state can this flight estimate, and how well?
 
-A workbook library for navigation-system designers. See the README for the data flow;
+A workbook library for navigation-system designers. See docs/library.md for the data flow;
 the public contract is the set of names in ``navlib.trajectory``, ``navlib.models``,
 ``navlib.observability``, ``navlib.metrics``, ``navlib.io`` and the report command.
 Submodules are imported on first attribute access, so ``import navlib`` stays cheap and

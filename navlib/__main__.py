@@ -1,10 +1,10 @@
 """Command line: ``python -m navlib report [--quick] [--only NAME ...] [-p key value ...]
 [--jobs N] [--no-cache]``
-``python -m navlib assess LOG [LOG ...] --output DIR [--scheduler ADDR] [--preset NAME]
+``python -m navlib assess LOG [LOG ...] [--output DIR] [--scheduler ADDR] [--preset NAME]
 [--vehicle CLASS] [--initial-attitude YAW,PITCH,ROLL] [--launch-elevation DEG]
-[--launch-azimuth DEG] [-p key value ...]``,
+[--launch-azimuth DEG] [-p key value ...]`` (default DIR: ``./assessments``),
 ``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] [--flight LOG]
---output DIR [-p key value ...]`` and
+[--output DIR] [-p key value ...]`` (default DIR: ``./plans``) and
 ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
@@ -23,6 +23,18 @@ from navlib.errors import NavlibInputError
 from navlib.vehicles import VEHICLES
 
 _TRACEBACK_LINES = 12
+DEFAULT_ASSESS_DIR = "assessments"
+"""Folder (in the current folder) ``assess`` writes to when ``--output`` is not given."""
+DEFAULT_PLAN_DIR = "plans"
+"""Folder (in the current folder) ``plan`` writes to when ``--output`` is not given."""
+LOG_FORMS = """LOG forms (navlib.io.read_log):
+  flight.ulg             PX4 ULog (sensor_combined, vehicle_gps_position or sensor_gps)
+  flight.bin             ArduPilot DataFlash log (IMU, GPS, ATT)
+  flight.csv             Altus Metrum AltOS CSV export (TeleMega: IMU and GPS in one file;
+                         recognised by its first line, whatever its name)
+  imu.csv,gnss.csv       a CSV pair joined by a comma (one shell word): IMU (t, f_x, f_y, f_z,
+                         w_x, w_y, w_z) and GNSS (t and lat_deg, lon_deg, alt or ECEF x, y, z)
+Example: python -m navlib assess data/sample_flight/imu.csv,data/sample_flight/gnss.csv"""
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -86,15 +98,17 @@ def _add_scheduler(parser) -> None:
 
 def _add_assess(sub) -> None:
     ass = sub.add_parser(
-        "assess", help="assess many flights (Dask tasks) into a summary table",
+        "assess", help="assess one or many flights (Dask tasks) into a summary table",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Assess each flight with navlib.studies.assess.assess_flight as a Dask "
-                    "task; write DIR/summary.csv (one row per flight) and one HTML page per "
-                    "assessed flight. A failed flight is reported in the table; the exit "
-                    "status is 1 when any failed.")
+                    "task;\nwrite DIR/summary.csv (one row per flight) and one HTML page per "
+                    "assessed flight.\nA failed flight is reported in the table; the exit "
+                    "status is 1 when any failed.\n\n" + LOG_FORMS)
     ass.add_argument("logs", nargs="+", metavar="LOG",
-                     help="a .ulg file, a DataFlash .bin file or an 'imu.csv,gnss.csv' pair")
-    ass.add_argument("--output", type=Path, required=True, metavar="DIR",
-                     help="folder for summary.csv and the flight pages")
+                     help="a flight log, in one of the forms listed above")
+    ass.add_argument("--output", type=Path, default=Path(DEFAULT_ASSESS_DIR), metavar="DIR",
+                     help="folder for summary.csv and the flight pages (default: "
+                          f"./{DEFAULT_ASSESS_DIR} in the current folder)")
     _add_scheduler(ass)
     ass.add_argument("--preset", default=None, metavar="NAME_OR_FILE",
                      help="sensor preset (data/sensors/*.toml name or a .toml file); default: "
@@ -217,10 +231,12 @@ def _add_plan(sub) -> None:
     pln.add_argument("--sensors", default=None, metavar="PRESET_OR_FILE",
                      help="sensor preset name or TOML file (default: the mission's, else "
                           "the default of its vehicle class)")
-    pln.add_argument("--output", type=Path, required=True, metavar="DIR",
-                     help="folder for summary.csv and the mission pages")
+    pln.add_argument("--output", type=Path, default=Path(DEFAULT_PLAN_DIR), metavar="DIR",
+                     help="folder for summary.csv and the mission pages (default: "
+                          f"./{DEFAULT_PLAN_DIR} in the current folder)")
     pln.add_argument("--flight", default=None, metavar="LOG",
-                     help="a recorded flight of the same vehicle (a LOG as for assess): its "
+                     help="a recorded flight of the same vehicle (a LOG as for assess: .ulg, "
+                          ".bin, AltOS .csv or an imu.csv,gnss.csv pair): its "
                           "assessment is shown beside each plan, per phase")
     _add_parameter_option(pln, "a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
                                "s_threshold, ...); VALUE parsed as JSON or a Python literal, "

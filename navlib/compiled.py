@@ -2,8 +2,8 @@
 
 :func:`compile_kernels` runs each kernel once on tiny inputs: on the first run on a machine
 it compiles them, afterwards it loads them from numba's disk cache (``cache=True``), so the
-notebook kernels a report starts at once only load (README "Compiled kernels" gives the
-costs). The kernels live beside the NumPy code they replace: the Kalman algebra
+notebook kernels a report starts at once only load (docs/performance.md, "Compiled
+kernels", gives the costs). The kernels live beside the NumPy code they replace: the Kalman algebra
 (:mod:`navlib.kalman`), the linear simulation (:mod:`navlib.filters.linear_recursion`), the
 strapdown mechanisation (:mod:`navlib.strapdown_kernel`) and the every-step observability
 test (:mod:`navlib.observability.sliding`).

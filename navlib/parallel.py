@@ -9,7 +9,7 @@ Where it runs (``scheduler``):
 * ``None``: ``$NAVLIB_SCHEDULER`` if set, else a local Dask cluster sized to the machine
   (one single-threaded worker process per core), started and closed by the call;
 * a ``dask.distributed.Client``, or an address ``"tcp://host:8786"`` of a running
-  scheduler whose workers have the same environment (the README explains the set-up);
+  scheduler whose workers have the same environment (docs/sweeps.md explains the set-up);
 * ``"processes"`` / ``"threads"``: a local cluster of processes / of threads in this process;
 * ``"synchronous"``: no Dask at all, the same tasks one after the other in this process
   (small grids, notebooks run headless, debugging).

@@ -1,5 +1,5 @@
 """The import graph of navlib/ (every import, inside functions too, read with ``ast``) has no
-cycle and no arrow from a lower layer to a higher one (:data:`LAYERS`, the README's
+cycle and no arrow from a lower layer to a higher one (:data:`LAYERS`, docs/library.md
 "Layers"): the parallel engine and the sweep know no study (the studies register their named
 evaluations from above), the linear filter's Monte Carlo lives with the filters, and the
 figures draw study results but no study draws a figure."""

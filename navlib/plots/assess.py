@@ -17,28 +17,18 @@ import numpy as np
 from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
+from navlib.plots.phases import phase_colour
 from navlib.units import DEG
 
-PHASE_COLOURS = {"rest": "0.55", "powered": "tab:red", "turn": "tab:purple",
-                 "free_fall": "tab:cyan", "coast": "tab:blue", "cruise": "tab:green",
-                 "climb": "tab:orange", "hover": "tab:olive", "descent": "tab:brown",
-                 "pad": "0.55", "boost": "tab:red", "drogue": "peru", "main": "darkkhaki",
-                 "landed": "0.75"}
-"""Colour of each automatic phase (the words of every vehicle class,
-:data:`navlib.segmentation.VEHICLE_PHASES`); user-named segments cycle through
-:data:`OTHER_COLOURS`."""
-OTHER_COLOURS = ("tab:pink", "gold", "navy", "darkslategray", "0.3")
 _MAX_POINTS = 20_000
+_LABEL_SHARE = 0.09
+"""Segments narrower than this share of the flight are labelled with their number only."""
+_HEATMAP_MAX_WIDTH_IN = 12.0
+"""Widest estimable-states figure: about a page's width, so its 9 pt labels stay readable."""
 
 
 def _thin(n: int) -> slice:
     return slice(None, None, max(1, int(np.ceil(n / _MAX_POINTS))))
-
-
-def _phase_colour(phase: str, others: dict) -> str:
-    if phase in PHASE_COLOURS:
-        return PHASE_COLOURS[phase]
-    return others.setdefault(phase, OTHER_COLOURS[len(others) % len(OTHER_COLOURS)])
 
 
 def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
@@ -48,16 +38,22 @@ def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
 
     Returns the artists added (their ``gid`` set to ``gid``), for :func:`reshade_phases`.
     """
-    others: dict = {}
     artists = []
+    span = float(segment_table["t_end"].max() - segment_table["t_start"].min()) or 1.0
+    narrow = 0
     for k, row in enumerate(segment_table.itertuples(index=False)):
-        colour = _phase_colour(row.phase, others)
+        colour = phase_colour(row.phase)
         artists.append(ax.axvspan(row.t_start, row.t_end, color=colour, alpha=alpha,
                                   linewidth=0, gid=gid))
         if label:
             number = getattr(row, "segment", k + 1)
-            artists.append(ax.annotate(f"{number} {row.phase}",
+            # a segment too narrow for "<n> <phase>" gets its number only, raised every
+            # other time, so neighbouring labels do not overlap (the legend names phases)
+            wide = (row.t_end - row.t_start) / span >= _LABEL_SHARE
+            narrow = 0 if wide else narrow + 1
+            artists.append(ax.annotate(f"{number} {row.phase}" if wide else f"{number}",
                                        ((row.t_start + row.t_end) / 2, 1.0),
+                                       xytext=(0, 7 * (narrow % 2)), textcoords="offset points",
                                        xycoords=("data", "axes fraction"), ha="center",
                                        va="bottom", fontsize=7, color="0.25", gid=gid))
     return artists
@@ -96,8 +92,8 @@ def phases_figure(assessment):
     shade_phases(axes[2], auto, label=False, alpha=1.0)
     axes[2].set_yticks([])
     axes[2].set_ylabel("auto", fontsize=8)
-    present = [p for p in PHASE_COLOURS if p in set(auto["phase"])]
-    axes[2].legend(handles=[Patch(color=PHASE_COLOURS[p], label=p) for p in present],
+    present = list(dict.fromkeys(auto["phase"]))  # in order of appearance
+    axes[2].legend(handles=[Patch(color=phase_colour(p), label=p) for p in present],
                    fontsize=7, loc="center left", bbox_to_anchor=(1.005, 0.5),
                    frameon=False)
     axes[2].set_xlabel("t [s]")
@@ -147,8 +143,9 @@ def estimable_figure(assessment):
     th = assessment.thresholds
     labels = [f"{r.segment} {r.phase}\n{r.t_start:.4g}–{r.t_end:.4g} s"
               for r in segs.itertuples(index=False)]
-    width = 3.2 + 1.3 * len(segs)
+    width = min(3.2 + 1.3 * len(segs), _HEATMAP_MAX_WIDTH_IN / 2)
     fig, axes = subplots(1, 2, figsize=(2 * width, 7.2), layout="constrained")
+    many = len(segs) > 4  # column labels turned upright when they would run into each other
     panels = ((axes[0], e.to_numpy(), th["e_threshold"], "excitability e"),
               (axes[1], frac.to_numpy(), th["min_fraction"],
                f"share of epochs with s ≥ {th['s_threshold']:.3g}"))
@@ -156,14 +153,14 @@ def estimable_figure(assessment):
         image = ax.imshow(values, cmap="Blues", vmin=0.0, vmax=1.0, aspect="auto")
         for (j, k), v in np.ndenumerate(values):
             good = v >= threshold
-            ax.text(k, j, f"{v:.2f}", ha="center", va="center", fontsize=7,
+            ax.text(k, j, f"{v:.2f}", ha="center", va="center", fontsize=8 if many else 9,
                     color="white" if v > 0.6 else "0.2", fontweight="bold" if good else None)
             if good:
                 ax.add_patch(plt.Rectangle((k - 0.5, j - 0.5), 1, 1, fill=False,
                                            edgecolor="tab:red", linewidth=1.2))
-        ax.set_xticks(np.arange(len(labels)), labels, fontsize=7)
-        ax.set_yticks(np.arange(len(names)), names, fontsize=7)
-        ax.set_title(f"{title} (outlined: ≥ {threshold:.3g})", fontsize=9)
+        ax.set_xticks(np.arange(len(labels)), labels, fontsize=9, rotation=90 if many else 0)
+        ax.set_yticks(np.arange(len(names)), names, fontsize=9)
+        ax.set_title(f"{title} (outlined: ≥ {threshold:.3g})", fontsize=10)
         fig.colorbar(image, ax=ax, shrink=0.6)
     fig.suptitle(f"Which states this flight could estimate, segment by segment "
                  f"(η = {th['eta']:.0e}, ν = {th['nu']:.3f}, preset "

@@ -26,9 +26,12 @@ from navlib.covariance import covariance_ratio
 from navlib.metrics import E_THRESHOLD, LOW
 from navlib.models.ecef import PAPER_IDS
 from navlib.plots.figure import figure, subplots
+from navlib.plots.phases import phase_colour, segment_phases
 from navlib.units import DEG, PPM
 
 SEGMENT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
+"""Colours of the segments of an analysis without phases (the papers' τ1, τ2, ...); the
+segments of a flight or a plan take their phase's colour (:mod:`navlib.plots.phases`)."""
 SPECTRUM_FLOOR = 1e-45
 """Smallest S drawn on the log axis (exact zeros of rank-deficient segments)."""
 _DISPLAY = {"P": (1.0, "m"), "V": (1.0, "m/s"), "theta": (DEG, "deg"), "bg": (DEG, "deg/s"),
@@ -49,6 +52,23 @@ def _segment_label(i: int, segment) -> str:
     return f"τ{i + 1} [{segment[0]:g}, {segment[1]:g}] s"
 
 
+def segment_colours(analysis) -> list:
+    """One colour per segment of ``analysis`` (or of a plain list of ``(start, end)``
+    segments): its phase's colour when the segments have phases
+    (:func:`navlib.plots.phases.segment_phases`), else :data:`SEGMENT_COLOURS` in turn."""
+    phases = segment_phases(analysis)
+    if phases is not None:
+        return [phase_colour(p) for p in phases]
+    segments = getattr(analysis, "segments", analysis)
+    return [SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)] for i in range(len(segments))]
+
+
+def segment_legend(analysis) -> list[str]:
+    """Legend text of each segment: ``τ1`` or, with phases, ``τ1 coast``."""
+    phases = segment_phases(analysis) or [""] * len(analysis.segments)
+    return [f"τ{i + 1} {p}".rstrip() for i, p in enumerate(phases)]
+
+
 def excitability_bars(analysis, ax=None):
     """Fig. 2 analogue: bars of ``e_tau^i`` for each state (the 21 components, labelled with
     the paper's e1-e21 when they are the 21-state model's), one colour per segment.
@@ -61,10 +81,9 @@ def excitability_bars(analysis, ax=None):
     k = len(analysis.segments)
     width = 0.8 / k
     x = np.arange(len(names))
+    colours, labels = segment_colours(analysis), segment_legend(analysis)
     for i, ex in enumerate(analysis.excitability):
-        ax.bar(x - 0.4 + width * (i + 0.5), ex.e, width,
-               color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)],
-               label=f"τ{i + 1}")
+        ax.bar(x - 0.4 + width * (i + 0.5), ex.e, width, color=colours[i], label=labels[i])
     ax.axhline(analysis.settings["e_threshold"], color="0.3", linestyle="--", linewidth=0.8,
                gid="e_threshold")
     ax.axhline(LOW, color="0.6", linestyle=":", linewidth=0.8)
@@ -89,10 +108,11 @@ def energy_spectrum(analysis, ax=None):
     fig, ax = (subplots(figsize=(6, 3.6)) if ax is None else (ax.figure, ax))
     n = len(analysis.state_names)
     i_dir = np.arange(1, n + 1)
+    colours, labels = segment_colours(analysis), segment_legend(analysis)
     for i, ex in enumerate(analysis.excitability):
-        colour = SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)]
+        colour = colours[i]
         ax.semilogy(i_dir, np.maximum(ex.S, SPECTRUM_FLOOR), "o-", color=colour,
-                    markersize=3, label=f"τ{i + 1}", gid=f"spectrum{i}")
+                    markersize=3, label=labels[i], gid=f"spectrum{i}")
         ax.axvline(min(ex.ne, n), color=colour, linestyle=":", linewidth=1.0,
                    visible=ex.ne <= n, gid=f"ne{i}")
     eta = analysis.settings["eta"]
@@ -145,8 +165,9 @@ def _update_in_place(fig, analysis) -> bool:
     threshold = [ln.get_ydata()[0] for ln in bars.get_lines() if ln.get_gid() == "e_threshold"]
     if len(containers) != k or any(f"spectrum{i}" not in lines for i in range(k)) \
             or len(containers[0].patches) != n \
-            or threshold != [analysis.settings["e_threshold"]]:
-        return False
+            or threshold != [analysis.settings["e_threshold"]] \
+            or [c.get_label() for c in containers] != segment_legend(analysis):
+        return False  # other segments, states, threshold or phases (colours, legend)
     for i, ex in enumerate(analysis.excitability):
         for patch, height in zip(containers[i].patches, ex.e, strict=True):
             patch.set_height(height)
@@ -166,26 +187,29 @@ def excitability_dynamic_artists(fig) -> list:
     return [*bars.patches, bars.title, *spectrum.get_lines(), spectrum.title]
 
 
-def _shade_segments(ax, segments) -> list:
+def _shade_segments(ax, analysis) -> list:
     artists = []
-    for i, (a, b) in enumerate(segments):
-        artists.append(ax.axvspan(a, b, color=SEGMENT_COLOURS[i % len(SEGMENT_COLOURS)],
-                                  alpha=0.06, linewidth=0, gid="segment"))
+    colours = segment_colours(analysis)
+    for i, (a, b) in enumerate(getattr(analysis, "segments", analysis)):
+        artists.append(ax.axvspan(a, b, color=colours[i], alpha=0.06 if colours[i] in
+                                  SEGMENT_COLOURS else 0.12, linewidth=0, gid="segment"))
         artists.append(ax.annotate(f"τ{i + 1}", ((a + b) / 2, 1.0),
                                    xycoords=("data", "axes fraction"), ha="center",
                                    va="bottom", fontsize=7, color="0.35", gid="segment"))
     return artists
 
 
-def reshade_segments(fig, segments) -> list:
-    """Replace the segment shading of a :func:`sensability_figure` by that of
-    ``segments`` in place; returns the new artists (for blitting renderers)."""
+def reshade_segments(fig, analysis) -> list:
+    """Replace the segment shading of a :func:`sensability_figure` by that of the segments
+    of ``analysis`` (coloured by phase when they have phases; or a plain list of
+    ``(start, end)`` segments) in place; returns the new artists (for blitting
+    renderers)."""
     axes = [ax for ax in fig.axes if any(a.get_gid() == "segment" for a in ax.patches)]
     for ax in axes:
         for artist in [*ax.patches, *ax.texts]:
             if artist.get_gid() == "segment":
                 artist.remove()
-    return [artist for ax in axes for artist in _shade_segments(ax, segments)]
+    return [artist for ax in axes for artist in _shade_segments(ax, analysis)]
 
 
 def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: str = ""):
@@ -213,7 +237,7 @@ def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: s
                    linewidth=0.8)
         ax.set_ylim(-0.03, 1.05)
         ax.set_ylabel(f"s({state})", color="tab:blue")
-        _shade_segments(ax, analysis.segments)
+        _shade_segments(ax, analysis)
         scale, unit = display_unit(state)
         twin = ax.twinx()
         band = k * se.sigma[:, j] / scale
@@ -238,7 +262,7 @@ def measures_figure(analysis, states: Sequence[str]):
         line, = ax_s.plot(se.t, se.s[:, j], label=state)
         ax_r.semilogy(se.t, ratio[:, j], color=line.get_color(), label=state)
     for ax in (ax_s, ax_r):
-        _shade_segments(ax, analysis.segments)
+        _shade_segments(ax, analysis)
         ax.set_xlabel("t [s]")
     ax_s.axhline(analysis.settings["s_threshold"], color="0.4", linestyle=":")
     ax_s.set_ylabel("sensability s")

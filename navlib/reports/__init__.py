@@ -2,7 +2,8 @@
 
 Contract: spec/api.md "Reports — command line". :func:`run_reports` executes every
 ``NN_*.ipynb`` of a notebooks folder with papermill and writes each executed notebook, its
-HTML page and an ``index.html`` linking the pages with their status and run time. Publishing
+HTML page (results only, no code) and an ``index.html`` saying what each page answers, with
+its headline, status and run time. Publishing
 is all-or-nothing: on failure the previous report stays untouched and :class:`ReportError`
 names the notebook and the failing cell.
 
@@ -13,6 +14,7 @@ The package, one module a step:
 - :mod:`~navlib.reports.execution`: one notebook run, its failure located, its HTML page;
 - :mod:`~navlib.reports.runner`: :func:`run_reports`, the queue and the worker threads;
 - :mod:`~navlib.reports.publishing`: staging folder, atomic swap, manifest and index;
+- :mod:`~navlib.reports.headlines`: what each page answers and its headline, for the index;
 - :mod:`~navlib.reports.signals`: Ctrl-C and SIGTERM as :class:`ReportInterrupted`;
 - :mod:`~navlib.reports.results`: :class:`NotebookRun`, :class:`CellFailure`,
   :class:`ReportError`.

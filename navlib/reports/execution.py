@@ -3,7 +3,8 @@
 Each notebook runs in its own kernel (launched with the interpreter running navlib, cwd =
 the notebooks folder so relative paths work) through
 :func:`~navlib.reports.kernel_watch.execute_notebook`; a stalled kernel gets one restart of
-the whole notebook. The executed notebook is exported to HTML with nbconvert (inputs shown).
+the whole notebook. The executed notebook is exported to HTML with nbconvert (outputs and
+markdown only: no code inputs).
 Kernels are started with BLAS/OpenMP thread counts that share the cores between the
 notebooks running at once, and with ``NAVLIB_NO_CACHE=1`` when the run does not use the
 cache (:mod:`navlib.cache`).
@@ -67,22 +68,53 @@ def _failure_from(exc: BaseException, executed_path: Path, source_nb) -> CellFai
     return CellFailure(index, exc.ename, exc.evalue, source, tb)
 
 
+HIDE_TAG = "report-hide"
+"""Cell tag: the cell (input and outputs) is left off the report page (kept in the executed
+notebook)."""
+HIDE_OUTPUT_TAG = "report-hide-output"
+"""Cell tag: the cell's outputs (e.g. internal timings) are left off the report page."""
+
+PAGE_CSS = """
+body { max-width: 1200px; margin: 0 auto; }
+:root { --jp-content-font-size1: 16px; --jp-ui-font-size1: 14px; --jp-code-font-size: 14px;
+        --jp-content-line-height: 1.5; }
+.jp-RenderedHTMLCommon table { font-size: 14px; }
+.jp-RenderedHTMLCommon td, .jp-RenderedHTMLCommon th { max-width: 40em; white-space: normal;
+        vertical-align: top; }
+.jp-OutputArea-output { overflow-x: auto; }
+.jp-OutputArea-output img, .navlib-static img { max-width: 100%; height: auto; }
+.jp-OutputArea-output pre { font-size: 14px; }
+"""
+"""Style added to every report page: content at most 1200 px wide, text at 16 px and
+tables at 14 px (JupyterLab's 12-13 px are small at 100 % zoom), table cells wrapping
+instead of running off the page, and images never wider than the page, always at their
+own aspect ratio (``height: auto``)."""
+
+
 def _export_html(executed_path: Path, html_path: Path, title: str) -> None:
-    """The executed notebook as a static page; widget outputs (the panels) are replaced by
-    the HTML of their final state (:func:`navlib.widgets.static.freeze_widgets`: last
-    figures as inline PNG, settings as text), so the page needs no kernel, no widget
-    script and no network to show them."""
+    """The executed notebook as a static page of its results: code inputs and prompts are
+    left out (the executed notebook keeps them), and so are the cells tagged
+    :data:`HIDE_TAG` and the outputs of cells tagged :data:`HIDE_OUTPUT_TAG`. Widget
+    outputs (the panels) are replaced by the HTML of their final state
+    (:func:`navlib.widgets.static.freeze_widgets`: last figures as inline PNG, settings as
+    text), so the page needs no kernel, no widget script and no network to show them. The
+    page gets :data:`PAGE_CSS`."""
     # nbconvert and the widget stack (ipywidgets, matplotlib) are heavy: loaded only when
     # a page is exported
     nbformat = notebook_format()
     from nbconvert import HTMLExporter
+    from nbconvert.preprocessors import TagRemovePreprocessor
 
     from navlib.widgets.static import freeze_widgets
 
     nb = nbformat.read(executed_path, as_version=4)
     freeze_widgets(nb)
-    exporter = HTMLExporter(template_name="lab", exclude_input=False)
+    exporter = HTMLExporter(template_name="lab", exclude_input=True,
+                            exclude_input_prompt=True, exclude_output_prompt=True)
+    exporter.register_preprocessor(TagRemovePreprocessor(
+        remove_cell_tags={HIDE_TAG}, remove_all_outputs_tags={HIDE_OUTPUT_TAG}), enabled=True)
     body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
+    body = body.replace("</head>", f"<style>{PAGE_CSS}</style>\n</head>", 1)
     html_path.write_text(body, encoding="utf-8")
 
 

@@ -4,8 +4,10 @@ Pages are written to a staging folder next to the output folder and swapped into
 when every selected notebook succeeded (spec/api.md "Reports — command line"). Output layout
 (flat, inside the output folder)::
 
-    index.html            table: notebook, title, status, time, mode, parameters
-    NN_name.html          the executed notebook as a static page (inputs shown)
+    index.html            per page: what it answers and its headline
+                          (:mod:`navlib.reports.headlines`); then the run details
+                          (status, time, mode, parameters)
+    NN_name.html          the executed notebook as a static page (outputs, no code)
     NN_name.ipynb         the executed notebook (papermill output, with parameters cell)
     manifest.json         machine-readable status of every page in the folder
     README*               any README already there is kept
@@ -31,6 +33,7 @@ import psutil
 
 from navlib import __version__
 from navlib.errors import NavlibInputError
+from navlib.reports import headlines
 from navlib.reports.results import NotebookRun
 from navlib.reports.signals import signals_deferred
 from navlib.resources import source_checkout
@@ -63,11 +66,42 @@ def load_manifest(output: Path) -> dict:
         return {}
 
 
-def _entry(run: NotebookRun, finished: str) -> dict:
+def _page_summary(executed: Path) -> dict:
+    """``question`` and ``headline`` (HTML) of an executed notebook for the index (empty
+    when it cannot be read)."""
+    from navlib.reports.discovery import notebook_format  # nbformat: only when publishing
+
+    try:
+        nb = notebook_format().read(executed, as_version=4)
+    except Exception:  # an unreadable notebook gets an index row without its summary
+        return {"question": "", "headline": ""}
+    return {"question": headlines.question(nb), "headline": headlines.headline(nb)}
+
+
+def _entry(run: NotebookRun, finished: str, folder: Path) -> dict:
+    summary = (_page_summary(folder / run.ipynb) if run.ipynb
+               and (folder / run.ipynb).exists() else {"question": "", "headline": ""})
     return {"title": run.title, "status": run.status, "seconds": round(run.seconds, 3),
             "quick": run.parameters.get("quick") is True,
             "parameters": {k: repr(v) for k, v in run.parameters.items()},
-            "html": run.html, "ipynb": run.ipynb, "finished": finished}
+            "html": run.html, "ipynb": run.ipynb, "finished": finished, **summary}
+
+
+def _page_sections(entries: Mapping[str, dict]) -> str:
+    """One section per page: its title (linked), what it answers and its headline."""
+    sections = []
+    for name, e in sorted(entries.items()):
+        title = html.escape(str(e.get("title") or name))
+        link = (f'<a href="{html.escape(e["html"])}">{title}</a>' if e.get("html") else title)
+        question = e.get("question") or ""
+        answer = e.get("headline") or ""
+        sections.append(
+            f'<section class="page" id="{html.escape(name)}"><h2>{link} '
+            f'<span class="stem">{html.escape(name)}</span></h2>'
+            + (f'<div class="question"><b>Answers:</b> {question}</div>' if question else "")
+            + (f'<div class="headline">{answer}</div>' if answer else "")
+            + "</section>")
+    return "\n".join(sections)
 
 
 def _index_html(entries: Mapping[str, dict], generated: str) -> str:
@@ -89,12 +123,24 @@ def _index_html(entries: Mapping[str, dict], generated: str) -> str:
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>navlib reports</title>
 <style>
-body {{ font-family: system-ui, sans-serif; margin: 2em; }}
-table {{ border-collapse: collapse; }}
-th, td {{ border-bottom: 1px solid #ccc; padding: 0.3em 0.8em; text-align: left; }}
+body {{ font-family: system-ui, sans-serif; font-size: 16px; line-height: 1.45;
+        max-width: 1200px; margin: 0 auto; padding: 1em 2em; }}
+table {{ border-collapse: collapse; font-size: 14px; }}
+th, td {{ border-bottom: 1px solid #ccc; padding: 0.3em 0.8em; text-align: left;
+          vertical-align: top; }}
 td.num {{ text-align: right; }} tr.failed {{ background: #fdd; }}
+section.page {{ border-top: 1px solid #ddd; padding: 0.4em 0 0.8em; }}
+section.page h2 {{ font-size: 1.2em; margin: 0.4em 0; }}
+.stem {{ color: #777; font-size: 0.75em; font-weight: normal; }}
+.question p, .headline p {{ margin: 0.3em 0; }}
+.headline {{ overflow-x: auto; }}
 </style></head><body>
 <h1>navlib reports</h1>
+<p>Which parts of the navigation state can a flight estimate, and how well; and which claims
+of the three papers navlib reproduces. Each page below says the question it answers and
+shows its headline result; open it for the figures, tables and the reasoning.</p>
+{_page_sections(entries)}
+<h2>Run details</h2>
 <p>Generated {html.escape(generated)} by <code>python -m navlib report</code>
 (navlib {html.escape(__version__)}, Python {html.escape(sys.version.split()[0])}).
 Each page is an executed notebook; “quick” pages ran with shrunken durations for
@@ -128,7 +174,7 @@ def publish(staging: Path, output: Path, runs: Sequence[NotebookRun], partial: b
                 shutil.copy2(item, target, follow_symlinks=False)
     entries = {name: e for name, e in old_entries.items()
                if isinstance(e, dict) and e.get("html") and (staging / e["html"]).exists()}
-    entries.update({r.name: _entry(r, finished) for r in runs})
+    entries.update({r.name: _entry(r, finished, staging) for r in runs})
     manifest = {"generator": "navlib report", "generated": finished, "notebooks": entries}
     (staging / MANIFEST).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
     (staging / INDEX).write_text(_index_html(entries, finished), encoding="utf-8")

@@ -154,7 +154,7 @@ _COMPILE_SHARED = "from navlib.compiled import compile_shared_kernels; compile_s
 def _compile_shared_kernels(stopped: Callable[[], bool]) -> None:
     """Compile navlib's shared numba kernels (or load them from numba's disk cache) in a
     process of their own, so that the notebook kernels started after it load them instead
-    of each compiling the same code on a machine's first run (README "Compiled kernels").
+    of each compiling the same code on a machine's first run (docs/performance.md).
     Killed when ``stopped()``; should it fail, each notebook compiles what it uses on first
     use (a broken kernel then fails the cell that calls it, with its traceback)."""
     process = subprocess.Popen([sys.executable, "-c", _COMPILE_SHARED])

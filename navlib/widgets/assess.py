@@ -141,10 +141,10 @@ class AssessPanel(Panel):
                                      title="Sensability (ν on the slider) and ±2σ bands")
             self._sens_lines = [ln for ax in fig.axes for ln in ax.get_lines()
                                 if ln.get_label() == "sensability"]
-            shading = reshade_segments(fig, result.segments)
+            shading = reshade_segments(fig, result)
             blitter = Blitter(fig, [*shading, *self._sens_lines], self.dpi)
         elif new_segments:
-            shading = reshade_segments(blitter.fig, result.segments)
+            shading = reshade_segments(blitter.fig, result)
             blitter.set_dynamic([*shading, *self._sens_lines],
                                 redraw_background=False)
         se = result.sensability

@@ -281,7 +281,7 @@ class KeptFigures:
 
 def table_html(frame: pd.DataFrame, index: bool = False) -> str:
     """A DataFrame as a compact HTML table for a panel."""
-    return ("<div style='font-size:11px;overflow-x:auto'>"
+    return ("<div style='font-size:13px;overflow-x:auto'>"
             + frame.to_html(index=index, border=0, float_format=lambda v: f"{v:.4g}")
             + "</div>")
 

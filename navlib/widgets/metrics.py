@@ -33,6 +33,7 @@ from navlib.plots.metrics import (
 )
 from navlib.studies import rocket
 from navlib.widgets.base import Blitter, Panel, look
+from navlib.widgets.static import TIMING_CLASS
 
 
 def _timing(start: float, computed: float, rendered: float) -> dict:
@@ -42,8 +43,11 @@ def _timing(start: float, computed: float, rendered: float) -> dict:
 
 
 def _timing_text(timing: dict) -> str:
-    return (f"update {timing['total_ms']:.0f} ms (compute {timing['compute_ms']:.0f}, "
-            f"render {timing['render_ms']:.0f}, table {timing['table_ms']:.0f})")
+    """The update's timing for the status line, in a ``navlib-timing`` span (a report page
+    leaves it out: :func:`navlib.widgets.static.freeze_widgets`)."""
+    return (f'<span class="{TIMING_CLASS}">update {timing["total_ms"]:.0f} ms (compute '
+            f'{timing["compute_ms"]:.0f}, render {timing["render_ms"]:.0f}, table '
+            f'{timing["table_ms"]:.0f})</span>')
 
 
 def _claims_html(table) -> str:
@@ -52,7 +56,7 @@ def _claims_html(table) -> str:
         f"<tr><td><b>{r.claim_id}</b></td><td style='color:{colour.get(r.verdict, '#000')}'>"
         f"{r.verdict}</td><td style='text-align:left'>{r.ours}</td></tr>"
         for r in table.itertuples())
-    return (f"<table style='font-size:11px'><tr><th>claim</th><th>verdict</th>"
+    return (f"<table style='font-size:13px'><tr><th>claim</th><th>verdict</th>"
             f"<th>ours</th></tr>{rows}</table>")
 
 

@@ -10,7 +10,8 @@ panels' last figures with no script at all:
 
 * boxes become ``div`` blocks of their visible children;
 * an ``Image`` becomes an ``<img>`` with its PNG inline (a data URL);
-* ``HTML`` / ``Label`` widgets keep their HTML / text;
+* ``HTML`` / ``Label`` widgets keep their HTML / text (less a panel's update timing, a
+  :data:`TIMING_CLASS` span);
 * value controls (sliders, dropdowns, text boxes, ...) become ``description: value``
   lines, so the reader sees the settings the figures were made with;
 * ``Output`` widgets show their PNG, HTML and text outputs; buttons are dropped.
@@ -22,11 +23,18 @@ widget loader (the CDN script) to the page.
 from __future__ import annotations
 
 import html
+import re
 
 WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 WIDGET_STATE = "application/vnd.jupyter.widget-state+json"
 _BOXES = {"VBoxModel": "column", "HBoxModel": "row", "BoxModel": "column",
           "GridBoxModel": "row"}
+TIMING_CLASS = "navlib-timing"
+"""Class of the spans a panel's status line gives its own update timing: internal, left out
+of report pages."""
+_TIMING = re.compile(rf'[;,]?\s*<span class="{TIMING_CLASS}">.*?</span>', re.S)
+_IMG_STYLE = "max-width:100%;height:auto"
+"""Style of a frozen figure: at most the page's width, always at its own aspect ratio."""
 _SKIPPED = {"ButtonModel", "LayoutModel", "DescriptionStyleModel", "SliderStyleModel",
             "ButtonStyleModel", "ProgressStyleModel", "StyleModel"}
 
@@ -67,7 +75,8 @@ def _outputs_html(outputs) -> str:
     for out in outputs:
         data = out.get("data", {})
         if "image/png" in data:
-            parts.append(f'<img src="data:image/png;base64,{data["image/png"]}">')
+            parts.append(f'<img style="{_IMG_STYLE}" src="data:image/png;base64,'
+                         f'{data["image/png"]}">')
         elif "text/html" in data:
             html_data = data["text/html"]
             parts.append("".join(html_data) if isinstance(html_data, list) else html_data)
@@ -92,21 +101,25 @@ def widget_html(model_id: str, models: dict, depth: int = 0) -> str:
     if name in _BOXES:
         children = "".join(widget_html(_ref(c) or "", models, depth + 1)
                            for c in state.get("children", ()))
+        # align-items: flex-start, not the default stretch: a stretched <img> in a column
+        # box takes the box's width at its own height (a panel figure drawn 2x wide)
         return (f'<div class="navlib-static {classes}" style="display:flex;'
-                f'flex-direction:{_BOXES[name]};gap:4px;flex-wrap:wrap">{children}</div>')
+                f'flex-direction:{_BOXES[name]};gap:4px;flex-wrap:wrap;'
+                f'align-items:flex-start">{children}</div>')
     if name == "ImageModel":
         data = _buffer(model, "value")
         fmt = state.get("format", "png")
-        return f'<img class="{classes}" src="data:image/{fmt};base64,{data}">' if data else ""
+        return (f'<img class="{classes}" style="{_IMG_STYLE}" '
+                f'src="data:image/{fmt};base64,{data}">') if data else ""
     if name in ("HTMLModel", "HTMLMathModel"):
-        return f'<div class="{classes}">{state.get("value", "")}</div>'
+        return f'<div class="{classes}">{_TIMING.sub("", state.get("value", ""))}</div>'
     if name == "LabelModel":
         return f"<div>{html.escape(str(state.get('value', '')))}</div>"
     if name == "OutputModel":
         return f'<div class="{classes}">{_outputs_html(state.get("outputs", ()))}</div>'
     if "value" in state or "index" in state:
         description = html.escape(str(state.get("description", "")))
-        return (f'<div class="navlib-static-control" style="font-size:12px">'
+        return (f'<div class="navlib-static-control" style="font-size:14px">'
                 f"<b>{description}</b> {html.escape(_control_value(state))}</div>")
     return ""
 

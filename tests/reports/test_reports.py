@@ -46,9 +46,13 @@ def _write(path: Path, cells) -> None:
 def _make_notebooks(folder: Path) -> Path:
     folder.mkdir()
     _write(folder / "01_good.ipynb", [
-        ("md", "# Good notebook\nThe question."),
+        ("md", "# Good notebook\n**Question.** Does the probe *run* in the kernel?\n\nMore."),
         ("code", "quick = False\nscale = 2.0  # a factor", "parameters"),
         ("code", PROBE),
+        ("code", "print('hidden-output-marker')", "report-hide-output"),
+        ("code", "print('hidden-cell-marker')", "report-hide"),
+        ("code", "from IPython.display import Markdown\nMarkdown('headline-marker: **yes**')",
+         "headline"),
     ])
     _write(folder / "02_other.ipynb", [
         ("md", "# Other notebook"),
@@ -106,8 +110,15 @@ def test_success_writes_pages_index_and_manifest(good):
     index = (out / "index.html").read_text()
     assert 'href="01_good.html"' in index and 'href="02_other.html"' in index
     assert "Good notebook" in index and "quick" in index and "scale=3" in index
+    assert "Does the probe <em>run</em> in the kernel?" in index  # what the page answers
+    assert "headline-marker: <strong>yes</strong>" in index  # its tagged headline
     page = (out / "01_good.html").read_text()
-    assert "<html" in page and "probe-input-marker" in page  # inputs are shown
+    assert "<html" in page and "quick=True scale=3" in page  # outputs are shown,
+    assert "probe-input-marker" not in page  # code is not,
+    assert "hidden-output-marker" not in page and "hidden-cell-marker" not in page  # nor tagged
+    executed = (out / "01_good.ipynb").read_text()  # the executed notebook keeps it all
+    assert all(marker in executed for marker in (
+        "probe-input-marker", "hidden-output-marker", "hidden-cell-marker"))
     manifest = json.loads((out / "manifest.json").read_text())["notebooks"]
     assert manifest["01_good"]["status"] == "ok" and manifest["01_good"]["quick"] is True
     assert not list(out.parent.glob(".out.*")), "staging folder left behind"
