@@ -37,6 +37,7 @@ from navlib.studies.assess.inputs import (
     median_rate,
     validate_records,
 )
+from navlib.studies.assess.outages import gnss_outages, measured_epochs, outage_note
 from navlib.studies.assess.result import FlightAssessment, automatic_segment_table, segment_pairs
 from navlib.trajectory.fit import FIT_DEFAULTS
 
@@ -220,7 +221,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
               "fit_options": fit_options, "segment_options": segment_options,
               "model_options": model_options, "model_step_s": model_step_s,
               "vehicle": vehicle, "vehicle_reason": vehicle_reason,
-              "findings": checked.findings}
+              "findings": checked.findings,
+              "outage_report_s": checked.thresholds["gnss"]["outage_report_s"]}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -252,7 +254,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
                  segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings) -> FlightAssessment:
+                 findings, outage_report_s) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -281,6 +283,8 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
+    model, outages = _as_recorded(model, gnss, trajectory.t, outage_report_s)
+    notes += [n for n in (outage_note(outages, outage_report_s),) if n]
     table, joined = automatic_segment_table(
         automatic.segments if segments is None else segments, model, automatic, trajectory.t,
         automatic_segments=segments is None)
@@ -298,7 +302,43 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     return FlightAssessment.build(
         model, segment_pairs(table), trajectory=trajectory, **thresholds, settings=settings,
         inputs=inputs, fit=fit, automatic=automatic, segment_table=table, options=options,
-        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=findings)
+        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=findings,
+        gnss_outages=outages, logged=_logged(imu, trajectory.t))
+
+
+def _as_recorded(model, gnss: pd.DataFrame, t_flight, outage_report_s: float):
+    """The model with a zero measurement matrix at the epochs no kept fix aids
+    (:func:`~navlib.studies.assess.outages.measured_epochs`, assumption Q5) and the GNSS
+    outages longer than ``outage_report_s`` over the flight ``t_flight``."""
+    xyz = gnss[["x", "y", "z"]].to_numpy(dtype=float)
+    t_fix = gnss["t"].to_numpy(dtype=float)[np.all(np.isfinite(xyz), axis=1)]
+    measured = measured_epochs(model.t, t_fix)
+    if not measured.all():
+        H = np.array(model.H)
+        H[~measured] = 0.0
+        model = replace(model, H=H)
+    outages = gnss_outages(t_fix, float(t_flight[0]), float(t_flight[-1]), outage_report_s)
+    return model, outages
+
+
+LOGGED_CHANNELS = {"baro": ("t", "alt_m"), "tilt": ("t", "tilt"),
+                   "attitude": ("t", "qw", "qx", "qy", "qz")}
+"""What a reader attaches to ``imu.attrs`` beside the IMU that the flight figure compares
+the reference with (:attr:`FlightAssessment.logged`)."""
+
+
+def _logged(imu: pd.DataFrame, t_flight) -> dict:
+    """The :data:`LOGGED_CHANNELS` the reader attached, inside the flight ``t_flight``."""
+    out = {}
+    for name, columns in LOGGED_CHANNELS.items():
+        frame = getattr(imu, "attrs", {}).get(name)
+        if not isinstance(frame, pd.DataFrame) or not set(columns) <= set(frame.columns):
+            continue
+        t = frame["t"].to_numpy(dtype=float)
+        inside = (t >= t_flight[0]) & (t <= t_flight[-1])
+        if inside.any():
+            out[name] = frame.loc[inside, list(columns)].reset_index(drop=True)
+    return out
 
 
 

@@ -63,6 +63,16 @@ class FlightAssessment(SegmentedAnalysis):
         saturated IMU samples, frozen, disagreeing or jumping GNSS fixes, all dropped
         before the fit); each ``message`` was also issued as a
         :class:`~navlib.io.FlightDataWarning`.
+    gnss_outages : DataFrame or None
+        Spans without a kept GNSS fix longer than ``[gnss] outage_report_s`` of
+        ``data/quality.toml`` (:func:`navlib.studies.assess.outages.gnss_outages`:
+        ``t_start``, ``t_end``, ``duration``, s). The model has no measurement at the epochs
+        no kept fix aids, whatever their length (assumption Q5).
+    logged : dict
+        What the reader attached beside the IMU, inside the flight, for comparison with the
+        reference: ``baro`` (``t, alt_m``), ``tilt`` (``t, tilt``: body x from vertical,
+        rad), ``attitude`` (``t, qw, qx, qy, qz``, body -> NED); keys the log lacks are
+        absent.
 
     The long frames name each segment by ``segment`` (1-based) and ``phase``, and each state
     by ``state``, ``paper_id`` (e1..e21) and ``group``; the wide
@@ -81,6 +91,8 @@ class FlightAssessment(SegmentedAnalysis):
     notes: tuple[str, ...] = ()
     spans: tuple = ()
     quality: pd.DataFrame | None = None
+    gnss_outages: pd.DataFrame | None = None
+    logged: dict = field(default_factory=dict)
 
     @property
     def vehicle(self) -> str:
