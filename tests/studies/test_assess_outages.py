@@ -4,25 +4,34 @@ them, long ones are named; and the flight figure that shows them."""
 
 from __future__ import annotations
 
+import os
 import warnings
 from dataclasses import replace
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
 from flights import multicopter, records
+from locations import REPO
 
-from navlib import earth
+from navlib import earth, io
+from navlib.errors import NavlibInputError
 from navlib.metrics import S_THRESHOLD
+from navlib.models.ecef import ecef21_at_epochs, epoch_samples
 from navlib.plots.assess import flight_figure
 from navlib.studies.assess import assess_flight
 from navlib.studies.assess.outages import gnss_outages, measured_epochs
+from navlib.trajectory import stationary
 
 OUTAGE = (30.0, 56.0)
 """The generated outage: no fix strictly between these times (26 s, in the survey)."""
 FROZEN = (70.0, 76.0)
 """A held position: the fixes in this window repeat the one at its start."""
+ALTOS_DIR = Path(os.environ.get("NAVLIB_ALTOS_DIR") or REPO.parent / "shared" / "data" / "altos")
+"""The public AltOS exports: ``../shared/data/altos`` beside the checkout, or
+NAVLIB_ALTOS_DIR."""
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +74,28 @@ def test_each_kept_fix_aids_the_epoch_nearest_it():
     assert measured_epochs(epochs, epochs[:-1] + 0.5).sum() == 10
     # a fix far outside the epochs aids none
     assert not measured_epochs(epochs, [-3.0, 14.0]).any()
+
+
+def test_epochs_are_a_grid_in_time_whatever_the_log_rate():
+    uniform = np.arange(0.0, 10.0 + 1e-9, 0.01)
+    assert epoch_samples(uniform, 1.0).tolist() == list(range(0, 1001, 100))
+    # 100 Hz, then 10 Hz (an AltOS export in descent): still one epoch a second
+    slowing = np.r_[np.arange(0.0, 2.0, 0.01), np.arange(2.0, 6.0 + 1e-9, 0.1)]
+    assert slowing[epoch_samples(slowing, 1.0)] == pytest.approx(np.arange(7.0))
+    # a grid finer than the samples takes each sample once
+    assert np.all(np.diff(epoch_samples(slowing, 20.0)) >= 1)
+
+
+def test_model_at_given_epochs_matches_the_sample_grid():
+    traj = stationary(duration_s=6.0, rate_hz=50.0)
+    grid = ecef21_at_epochs(traj, 1.0)
+    given = ecef21_at_epochs(traj, 1.0, epochs=tuple(range(0, 301, 50)))
+    assert given.t.tolist() == grid.t.tolist()
+    np.testing.assert_allclose(given.F, grid.F, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(given.Q, grid.Q, rtol=1e-12, atol=1e-30)
+    for bad in ([3], [0, 0, 5], [0, 400], [0.0, 50.0]):
+        with pytest.raises(NavlibInputError, match="epochs:"):
+            ecef21_at_epochs(traj, 1.0, epochs=bad)
 
 
 def test_outages_are_the_long_spans_without_a_fix():
@@ -124,3 +155,23 @@ def test_flight_figure_shows_the_records_and_marks(with_outage):
     fig = flight_figure(with_outage)
     assert not [p for p in fig.axes[0].patches if p.get_hatch() == "////"]
     plt.close(fig)
+
+
+def test_altos_descent_at_10_hz_keeps_one_epoch_a_second():
+    path = ALTOS_DIR / "2019-05-26-serial-1257-flight-0018.csv"
+    if not path.is_file():
+        pytest.skip(f"AltOS export not found: {path} (set NAVLIB_ALTOS_DIR)")
+    imu, gnss = io.read_altos(path)
+    result = _assess(imu, gnss)
+    t = np.asarray(result.model.t)
+    assert np.diff(t).max() == pytest.approx(1.0, abs=0.11)      # the IMU logs 10 Hz late
+    t_fix = result.gnss_residuals["t"].to_numpy()          # the fixes the checks kept
+    assert t_fix.size < np.count_nonzero((gnss["t"] >= t[0]) & (gnss["t"] <= t[-1]))
+    measured = np.any(np.asarray(result.model.H) != 0.0, axis=(1, 2))
+    # every epoch with a kept fix within half a second is measured, and only those
+    near = np.array([np.min(np.abs(t_fix - x)) <= 0.5 for x in t])
+    assert np.array_equal(measured, near)
+    # the receiver had no fix in boost: named, and the model has no measurement there
+    first = result.gnss_outages.iloc[0]
+    assert first.t_start == pytest.approx(t[0]) and first.duration > 5.0
+    assert not measured[(t > first.t_start + 0.5) & (t < first.t_end - 0.5)].any()

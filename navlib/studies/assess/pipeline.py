@@ -20,7 +20,7 @@ from navlib.metrics import (
     S_THRESHOLD,
     check_thresholds,
 )
-from navlib.models.ecef import ecef21_at_epochs
+from navlib.models.ecef import ecef21_at_epochs, epoch_samples
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
     check_vehicle,
@@ -282,7 +282,8 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     automatic = segment_flight(trajectory, vehicle=vehicle, **seg_opts)
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
-                             max_step_s=model_step_s, **model_options)
+                             max_step_s=model_step_s,
+                             epochs=epoch_samples(trajectory.t, gnss_rate_hz), **model_options)
     model, outages = _as_recorded(model, gnss, trajectory.t, outage_report_s)
     notes += [n for n in (outage_note(outages, outage_report_s),) if n]
     table, joined = automatic_segment_table(
