@@ -120,6 +120,14 @@ def test_gap_and_held_fixes_are_outages_on_the_result(with_outage):
     measured = np.any(np.asarray(with_outage.model.H) != 0.0, axis=(1, 2))
     assert not measured[(t > OUTAGE[0] + 0.2) & (t < OUTAGE[1] - 0.2)].any()
     assert measured[(t < OUTAGE[0] - 0.2) | ((t > OUTAGE[1] + 0.2) & (t < FROZEN[0]))].all()
+    # the segment table counts the measured epochs only, and a segment given inside the
+    # outage is refused
+    table = with_outage.segment_table
+    row = table[(table["t_start"] < 40.0) & (table["t_end"] > 40.0)].iloc[0]
+    inside = min(row.t_end, OUTAGE[1]) - max(row.t_start, OUTAGE[0])
+    assert row.n_epochs <= (row.duration - inside) * 5.0 + 2
+    with pytest.raises(NavlibInputError, match="segment 2"):
+        with_outage.with_settings([(0.0, 35.0), (35.0, 50.0), (50.0, 90.0)])
 
 
 def test_position_sensability_falls_inside_the_outage(flight, with_outage):

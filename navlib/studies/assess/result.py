@@ -46,7 +46,7 @@ class FlightAssessment(SegmentedAnalysis):
         The automatic segmentation (features and phases), whatever segments were used.
     segment_table : DataFrame
         The segments assessed: ``segment`` (1-based), ``phase``, ``t_start``, ``t_end``,
-        ``duration``, ``n_epochs`` (GNSS epochs of the model inside).
+        ``duration``, ``n_epochs`` (GNSS epochs of the model inside that a kept fix aids).
     options : dict
         Assumed values: ``preset``, ``gnss_rate_hz``, ``gnss_sigma_m``, fit and segmentation
         options, model options.
@@ -134,9 +134,11 @@ def segment_pairs(table: pd.DataFrame) -> tuple[tuple[float, float], ...]:
 
 def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.DataFrame:
     """Normalise ``segments`` (inside the fitted flight ``t_flight``) and count the model
-    epochs each holds (at least 2 needed; the last epoch may precede the flight's end)."""
+    epochs with a measurement each holds (at least 2 needed; epochs inside a GNSS outage do
+    not count, assumption Q5; the last epoch may precede the flight's end)."""
     table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
-    counts = _epoch_counts(table, model.t)
+    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    counts = _epoch_counts(table, np.asarray(model.t)[measured])
     for k, (count, row) in enumerate(zip(counts, table.itertuples(index=False), strict=True)):
         if count < 2:
             raise NavlibInputError(
