@@ -142,7 +142,11 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         Sensability threshold (spec A11; 0.985 is the paper's value for 21 states).
     gnss_rate_hz : float, optional
         Measurement rate of the model; None: the median rate of the GNSS record (at most
-        the IMU rate).
+        the IMU rate). The epochs are a regular grid in time at this rate
+        (:func:`navlib.models.ecef.epoch_samples`); each kept fix aids the epoch nearest it
+        and an epoch no kept fix aids (a gap, a frozen or excluded fix) has no measurement
+        (assumption Q5). Spans without a kept fix longer than ``[gnss] outage_report_s`` are
+        named in ``notes`` and listed in ``gnss_outages``.
     e_threshold, s_threshold, min_fraction : float in [0, 1]
         Summary thresholds (module docstring).
     gnss_sigma_m : float, optional
