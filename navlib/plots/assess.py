@@ -221,10 +221,12 @@ def _mark_spans(axes, assessment) -> list:
                            hatch="////", linewidth=0.0, zorder=0)
         for row in bad.itertuples(index=False):
             reason = getattr(row, "fit_reason", "")
-            axes[0].annotate(f"not represented{': ' + str(reason) if reason else ''}",
+            axes[0].annotate("not represented" + (f"\n{reason}" if reason else ""),
                              ((row.t_start + row.t_end) / 2, 0.02),
                              xycoords=("data", "axes fraction"), ha="center", va="bottom",
-                             fontsize=6, color="tab:red", wrap=True)
+                             fontsize=6, color="tab:red",
+                             bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none",
+                                   "pad": 1.0})
         if len(bad):
             handles.append(Patch(facecolor="none", edgecolor="tab:red", hatch="////",
                                  label="segment the fit does not represent"))
