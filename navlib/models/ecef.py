@@ -348,7 +348,7 @@ def initial_covariance(sensors=None, **sigmas) -> np.ndarray:
 
 def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "series",
                      hold: str = "mean", sensors=None, max_step_s: float | None = None,
-                     **model_options) -> DiscreteModel:
+                     epochs=None, **model_options) -> DiscreteModel:
     """The 21-state model discretised to the GNSS epochs of ``trajectory`` (cached).
 
     Builds the model of :func:`ecef21` along the trajectory and chains the steps to epochs
@@ -378,6 +378,10 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
         order in the group length; the fitted trajectories are smooth at that scale). On
         the sounding rocket at 1 Hz epochs, 0.02 s steps change ``F`` by 3e-4 and ``Q`` by
         4e-3 relative (``benchmarks/bench_assess.py`` prints both).
+    epochs : sequence of int, optional
+        Indices of the trajectory samples that are the epochs (increasing, at least 2),
+        e.g. :func:`epoch_samples` on a log whose IMU rate changes during the flight, where
+        a grid in samples is not one in time. None: ``trajectory.at_rate(gnss_rate_hz)``.
     **model_options
         Passed to :func:`ecef21` (``attitude_error``, ``gnss_sigma_m``, P0 sigmas).
     """
@@ -396,7 +400,36 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
         hash(key)
     except TypeError as exc:
         raise NavlibInputError("model options must be plain numbers or strings") from exc
-    return _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s)
+    if epochs is not None:
+        epochs = _checked_epochs(epochs, len(trajectory.t))
+    return _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s,
+                         epochs)
+
+
+def _checked_epochs(epochs, n_samples: int) -> tuple:
+    """``epochs`` as a tuple of sample indices (hashable, for the cache), or an error."""
+    arr = np.asarray(epochs)
+    if (arr.ndim != 1 or arr.size < 2 or not np.issubdtype(arr.dtype, np.integer)
+            or arr[0] < 0 or arr[-1] >= n_samples or np.any(np.diff(arr) <= 0)):
+        raise NavlibInputError(f"epochs: expected at least 2 increasing sample indices in "
+                               f"[0, {n_samples}), got {epochs!r:.80}")
+    return tuple(int(k) for k in arr)
+
+
+def epoch_samples(t, rate_hz: float) -> np.ndarray:
+    """Indices of the samples of ``t`` nearest the times ``t[0] + k / rate_hz`` (each once).
+
+    The epochs of a regular grid in time. On a log sampled at a constant rate that is a
+    multiple of ``rate_hz`` they are those of ``Trajectory.at_rate``; on a log whose rate
+    changes (an AltOS export: 100 Hz in boost, 10 Hz in descent) they stay ``1 / rate_hz``
+    apart where ``at_rate``, every so many samples, would drift to 10 times that.
+    """
+    t = np.asarray(t, dtype=float)
+    rate_hz = finite_scalar(rate_hz, "rate_hz", 0.0, low_open=True)
+    grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1) / rate_hz
+    k = np.clip(np.searchsorted(t, grid), 1, t.size - 1)
+    k -= (grid - t[k - 1]) <= (t[k] - grid)
+    return np.unique(k)
 
 
 STREAM_SAMPLES = 20_000
@@ -404,16 +437,18 @@ STREAM_SAMPLES = 20_000
 
 
 @cache.memoized(maxsize=32)
-def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
+def _cached_chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s,
+                  epochs=None):
     """:func:`_chain` kept per trajectory object in memory (and on disk by its content)."""
-    discrete = _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s)
+    discrete = _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s,
+                      epochs)
     for arr in (discrete.F, discrete.Q, discrete.H, discrete.R, discrete.P0, discrete.t):
         arr.flags.writeable = False  # shared by every caller of the cache
     return discrete
 
 
 @cache.cached
-def _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
+def _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s, epochs=None):
     """The streamed build of :func:`ecef21_at_epochs` (arguments validated and frozen)."""
     if isinstance(sensors, tuple):
         sensors = dict(sensors)
@@ -425,7 +460,7 @@ def _chain(trajectory, gnss_rate_hz, method, hold, sensors, key, max_step_s):
     if hold not in HOLDS:
         raise NavlibInputError(f"hold: expected one of {HOLDS}, got {hold!r}")
     t = np.asarray(trajectory.t, dtype=float)
-    epochs = trajectory.at_rate(gnss_rate_hz)
+    epochs = trajectory.at_rate(gnss_rate_hz) if epochs is None else np.asarray(epochs)
     if epochs.size < 2:
         raise NavlibInputError(f"gnss_rate_hz: {gnss_rate_hz:g} Hz gives fewer than 2 epochs "
                                f"over the {t[-1] - t[0]:.3g} s trajectory")

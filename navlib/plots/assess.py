@@ -1,13 +1,16 @@
 """Figures for assessing a recorded flight (notebook 07) that :mod:`navlib.plots.metrics`
-does not draw: the phases over the fitted specific force and angular rate, the fit
-residuals over time, and the per-segment "which states" map.
+does not draw: the flight itself (the reference against the records), the phases over the
+fitted specific force and angular rate, the fit residuals over time, and the per-segment
+"which states" map.
 
 The excitability bars, energy spectrum and sensability curves come from
 :mod:`navlib.plots.metrics` unchanged: a :class:`navlib.studies.assess.FlightAssessment`
 offers the same ``segments``, ``excitability``, ``sensability``, ``settings`` and
 ``state_names`` as the rocket analysis those builders were written for. Every builder here
 takes a ``FlightAssessment`` and returns a new Figure; nothing is computed beyond unit
-conversion and thinning long records for display.
+conversion, frame changes and thinning long records for display (and, in
+:func:`flight_figure`, the 1 s moving average of the IMU residuals and the barometer's
+offset to the reference, both named on the figure).
 """
 
 from __future__ import annotations
@@ -15,7 +18,10 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Patch
+from scipy.ndimage import uniform_filter1d
+from scipy.spatial.transform import Rotation
 
+from navlib import earth
 from navlib.plots.figure import subplots
 from navlib.plots.phases import phase_colour
 from navlib.units import DEG
@@ -165,4 +171,192 @@ def estimable_figure(assessment):
     fig.suptitle(f"Which states this flight could estimate, segment by segment "
                  f"(η = {th['eta']:.0e}, ν = {th['nu']:.3f}, preset "
                  f"{assessment.options.get('preset')})", fontsize=10)
+    return fig
+
+
+MOVING_AVERAGE_S = 1.0
+"""Window of the moving average of the IMU residuals in :func:`flight_figure`, s (vibration
+is not motion; the window of the fit's ``fit_f_rms`` / ``fit_w_rms``)."""
+
+
+def _wrapped(angle_deg: np.ndarray) -> np.ndarray:
+    """``angle_deg`` with NaN where it wraps by more than 180 deg (no vertical lines)."""
+    out = np.asarray(angle_deg, dtype=float).copy()
+    if out.size > 1:
+        jump = np.flatnonzero(np.abs(np.diff(out)) > 180.0)
+        out = np.insert(out, jump + 1, np.nan)
+    return out
+
+
+def _wrapped_t(t: np.ndarray, angle_deg: np.ndarray) -> np.ndarray:
+    t = np.asarray(t, dtype=float)
+    jump = np.flatnonzero(np.abs(np.diff(angle_deg)) > 180.0)
+    return np.insert(t, jump + 1, np.nan)
+
+
+def _tilt_deg(C_b_n: np.ndarray) -> np.ndarray:
+    """Angle of body x from the local upward vertical, deg."""
+    return np.degrees(np.arccos(np.clip(-C_b_n[:, 2, 0], -1.0, 1.0)))
+
+
+def _mark_spans(axes, assessment) -> list:
+    """Hatch the GNSS outages and the segments the fit does not represent on every axes;
+    returns legend handles for what was drawn."""
+    handles = []
+    outages = getattr(assessment, "gnss_outages", None)
+    if outages is not None and len(outages):
+        for ax in axes:
+            for row in outages.itertuples(index=False):
+                ax.axvspan(row.t_start, row.t_end, facecolor="none", edgecolor="0.45",
+                           hatch="xx", linewidth=0.0, zorder=0)
+        handles.append(Patch(facecolor="none", edgecolor="0.45", hatch="xx",
+                             label="GNSS outage (no kept fix)"))
+    table = assessment.segment_table
+    if "represented" in table:
+        bad = table[~table["represented"].astype(bool)]
+        for ax in axes:
+            for row in bad.itertuples(index=False):
+                ax.axvspan(row.t_start, row.t_end, facecolor="none", edgecolor="tab:red",
+                           hatch="////", linewidth=0.0, zorder=0)
+        for row in bad.itertuples(index=False):
+            reason = getattr(row, "fit_reason", "")
+            axes[0].annotate("not represented" + (f"\n{reason}" if reason else ""),
+                             ((row.t_start + row.t_end) / 2, 0.02),
+                             xycoords=("data", "axes fraction"), ha="center", va="bottom",
+                             fontsize=6, color="tab:red",
+                             bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none",
+                                   "pad": 1.0})
+        if len(bad):
+            handles.append(Patch(facecolor="none", edgecolor="tab:red", hatch="////",
+                                 label="segment the fit does not represent"))
+    return handles
+
+
+def flight_figure(assessment):
+    """The flight: altitude, speed and attitude of the reference trajectory against the
+    records, with residual-over-time panels beneath.
+
+    Top to bottom: geodetic height of the reference, the kept GNSS fixes and the barometer
+    (``assessment.logged["baro"]``, shifted by its median offset to the reference, which
+    the legend gives); speed of the reference and of the GNSS (its velocity when recorded,
+    else differenced consecutive fixes); attitude: the angle of body x from the vertical
+    for rockets and logs with a tilt column (``logged["tilt"]``, AltOS), else roll, pitch
+    and yaw against the local NED frame (with the logger's own estimate,
+    ``logged["attitude"]``, dashed); GNSS minus reference in north, east, down; IMU minus
+    reference specific force and angular rate per body axis after a
+    :data:`MOVING_AVERAGE_S` moving average. Assessed segments are shaded by phase, GNSS
+    outages (``assessment.gnss_outages``) cross-hatched in grey and segments the fit does
+    not represent (``segment_table["represented"]``, when present) hatched in red.
+    """
+    traj = assessment.trajectory
+    sl = _thin(len(traj.t))
+    t = traj.t[sl]
+    lat, lon, alt = earth.ecef_to_geodetic(traj.position[sl])
+    C_n_e = earth.ned_to_ecef_matrix(lat, lon)
+    C_b_n = np.swapaxes(C_n_e, 1, 2) @ traj.attitude[sl].as_matrix()
+    logged = getattr(assessment, "logged", None) or {}
+    fig, axes = subplots(6, 1, figsize=(11, 12.5), sharex=True, layout="constrained",
+                         gridspec_kw={"height_ratios": [3, 2.2, 2.2, 1.8, 1.8, 1.8]})
+
+    # altitude
+    ax = axes[0]
+    ax.plot(t, alt, color="k", linewidth=1.0, label="reference")
+    gnss = assessment.gnss_residuals
+    if gnss is not None and len(gnss):
+        t_g = gnss["t"].to_numpy(dtype=float)
+        d = gnss[["dx", "dy", "dz"]].to_numpy(dtype=float)
+        p_g = np.column_stack([np.interp(t_g, traj.t, traj.position[:, i]) for i in range(3)])
+        _, _, alt_g = earth.ecef_to_geodetic(p_g + d)
+        ax.plot(t_g, alt_g, ".", color="tab:green", markersize=3, label="GNSS (kept fixes)")
+    baro = logged.get("baro")
+    if baro is not None and len(baro):
+        t_b = baro["t"].to_numpy(dtype=float)
+        h_b = baro["alt_m"].to_numpy(dtype=float)
+        offset = float(np.nanmedian(np.interp(t_b, t, alt) - h_b))
+        ax.plot(t_b[_thin(t_b.size)], (h_b + offset)[_thin(t_b.size)], color="tab:orange",
+                linewidth=0.8, label=f"barometer {offset:+.1f} m (median offset)")
+    ax.set_ylabel("height [m]")
+
+    # speed
+    ax = axes[1]
+    ax.plot(t, np.linalg.norm(traj.velocity[sl], axis=1), color="k", linewidth=1.0,
+            label="reference")
+    if gnss is not None and len(gnss) > 1:
+        if {"dvx", "dvy", "dvz"} <= set(gnss.columns):
+            v_g = np.column_stack([np.interp(t_g, traj.t, traj.velocity[:, i])
+                                   + gnss[f"dv{a}"].to_numpy(dtype=float)
+                                   for i, a in enumerate("xyz")])
+            ax.plot(t_g, np.linalg.norm(v_g, axis=1), ".", color="tab:green", markersize=3,
+                    label="GNSS velocity")
+        else:
+            dt = np.diff(t_g)
+            near = dt <= 1.5 * np.median(dt)
+            speed = np.linalg.norm(np.diff(p_g + d, axis=0), axis=1)[near] / dt[near]
+            ax.plot(0.5 * (t_g[1:] + t_g[:-1])[near], speed, ".", color="tab:green",
+                    markersize=3, label="GNSS (differenced fixes)")
+    ax.set_ylabel("speed [m/s]")
+
+    # attitude
+    ax = axes[2]
+    tilt = logged.get("tilt")
+    if tilt is not None or assessment.options.get("vehicle") == "rocket":
+        ax.plot(t, _tilt_deg(C_b_n), color="k", linewidth=1.0, label="reference")
+        if tilt is not None:
+            ax.plot(tilt["t"].iloc[_thin(len(tilt))], tilt["tilt"].iloc[_thin(len(tilt))] / DEG,
+                    color="tab:purple", linewidth=0.8, label="logger tilt")
+        ax.set_ylabel("body x from\nvertical [deg]")
+    else:
+        ypr = np.degrees(Rotation.from_matrix(C_b_n).as_euler("ZYX"))
+        att = logged.get("attitude")
+        if att is not None:
+            q = att[["qx", "qy", "qz", "qw"]].to_numpy(dtype=float)
+            ok = np.linalg.norm(q, axis=1) > 0.5
+            t_a = att["t"].to_numpy(dtype=float)[ok]
+            ypr_a = np.degrees(Rotation.from_quat(q[ok]).as_euler("ZYX"))
+        colours = ("tab:blue", "tab:orange", "tab:green")
+        for k, (name, colour) in enumerate(zip(("yaw", "pitch", "roll"), colours,
+                                               strict=True)):
+            ax.plot(_wrapped_t(t, ypr[:, k]), _wrapped(ypr[:, k]), color=colour,
+                    linewidth=1.0, label=f"{name} reference")
+            if att is not None and t_a.size:
+                ax.plot(_wrapped_t(t_a, ypr_a[:, k]), _wrapped(ypr_a[:, k]), "--",
+                        color=colour, linewidth=0.8, label=f"{name} logger")
+        ax.set_ylabel("attitude vs NED [deg]")
+
+    # residuals
+    ax = axes[3]
+    if gnss is not None and len(gnss):
+        lat_g, lon_g, _ = earth.ecef_to_geodetic(p_g)
+        d_n = np.einsum("nji,nj->ni", earth.ned_to_ecef_matrix(lat_g, lon_g), d)
+        for i, name in enumerate(("north", "east", "down")):
+            ax.plot(t_g, d_n[:, i], ".", markersize=2.5, label=f"Δ{name}")
+    sigma = assessment.options.get("gnss_sigma_m")
+    if sigma:
+        ax.axhspan(-sigma, sigma, color="0.88", zorder=0, label=f"±σ = {sigma:.3g} m")
+    ax.set_ylabel("GNSS − ref [m]")
+    imu = assessment.imu_residuals
+    if imu is not None and len(imu) > 1:
+        t_i = imu["t"].to_numpy(dtype=float)
+        width = max(round(MOVING_AVERAGE_S / float(np.median(np.diff(t_i)))), 1)
+        sl_i = _thin(t_i.size)
+        for ax, prefix, scale, unit in ((axes[4], "df", 1.0, "m/s²"),
+                                        (axes[5], "dw", DEG, "deg/s")):
+            for axis in "xyz":
+                smooth = uniform_filter1d(imu[f"{prefix}_{axis}"].to_numpy(dtype=float),
+                                          width, mode="nearest") / scale
+                ax.plot(t_i[sl_i], smooth[sl_i], linewidth=0.8, label=f"{prefix[1]}_{axis}")
+            ax.axhline(0.0, color="0.6", linewidth=0.5)
+            ax.set_ylabel(f"IMU − ref [{unit}]\n{MOVING_AVERAGE_S:g} s mean")
+    axes[-1].set_xlabel("t [s]")
+    for k, ax in enumerate(axes):
+        shade_phases(ax, assessment.segment_table, label=k == 0, alpha=0.1)
+    marks = _mark_spans(axes, assessment)
+    for k, ax in enumerate(axes):
+        handles, _ = ax.get_legend_handles_labels()
+        if k == 0:
+            handles = handles + marks
+        if handles:
+            ax.legend(handles=handles, fontsize=7, ncol=4, loc="upper right")
+    fig.suptitle(f"The flight: reference trajectory against the records "
+                 f"({traj.name or 'flight'}); shading: assessed segments", fontsize=10)
     return fig

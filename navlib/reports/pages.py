@@ -80,7 +80,8 @@ def _page(title: str, parts: Sequence[str], notes: Sequence[str], notes_heading:
 def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
     """The page of one assessed flight (a :class:`~navlib.studies.assess.FlightAssessment`)."""
     aplots, excitability_figure, _ = _plots()
-    figures = [("Flight phases", aplots.phases_figure(result)),
+    figures = [("The flight: reference against the records", aplots.flight_figure(result)),
+               ("Flight phases", aplots.phases_figure(result)),
                ("Excitability per segment", excitability_figure(result)),
                ("Which states each segment could estimate", aplots.estimable_figure(result)),
                ("Fit residuals", aplots.fit_residuals_figure(result))]
@@ -98,6 +99,10 @@ def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
              "and thresholds.</p>",
              "<h2>Assumed</h2>", assumed.to_html(index=False),
              "<h2>Inputs</h2>", result.inputs.to_html(index=False)]
+    if result.gnss_outages is not None and len(result.gnss_outages):
+        parts += ["<h2>GNSS outages</h2><p>No kept fix (the model has no GNSS measurement "
+                  "there, so sensability falls inside them):</p>",
+                  result.gnss_outages.to_html(index=False, float_format="%.6g")]
     return _page(log_title(log), parts, [*warning_texts, *result.notes], "Warnings and notes",
                  figures, ["<h2>Fit residuals (table)</h2>" + result.fit.to_html(index=False)])
 

@@ -51,10 +51,11 @@ def _frame(frame, t_zero: float, columns=("t", "t_first", "t_last")):
 
 
 def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residuals,
-             imu_residuals) -> dict:
+             imu_residuals, gnss_outages, logged: dict) -> dict:
     """Every time of an assessment's pieces minus ``t_zero``: the trajectory (``t`` and its
     ``events``), the model epochs, the segmentation, the input summary (``t_first``,
-    ``t_last``) and the residual frames (:func:`~navlib.segmentation.phases.clock_time`).
+    ``t_last``), the residual frames, the GNSS outages (``t_start``, ``t_end``) and the
+    logged channels beside the IMU (``t``; :func:`~navlib.segmentation.phases.clock_time`).
     Returns them by name."""
     events = {k: float(clock_time(v, t_zero)) if isinstance(v, int | float) else v
               for k, v in trajectory.events.items()}
@@ -63,4 +64,6 @@ def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residu
             "model": replace(model, t=clock_time(model.t, t_zero)),
             "automatic": automatic.shifted(t_zero), "inputs": _frame(inputs, t_zero),
             "gnss_residuals": _frame(gnss_residuals, t_zero),
-            "imu_residuals": _frame(imu_residuals, t_zero)}
+            "imu_residuals": _frame(imu_residuals, t_zero),
+            "gnss_outages": _frame(gnss_outages, t_zero, ("t_start", "t_end")),
+            "logged": {name: _frame(frame, t_zero) for name, frame in logged.items()}}

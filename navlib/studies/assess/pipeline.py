@@ -20,7 +20,7 @@ from navlib.metrics import (
     S_THRESHOLD,
     check_thresholds,
 )
-from navlib.models.ecef import ecef21_at_epochs
+from navlib.models.ecef import ecef21_at_epochs, epoch_samples
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
     check_vehicle,
@@ -38,6 +38,7 @@ from navlib.studies.assess.inputs import (
     median_rate,
     validate_records,
 )
+from navlib.studies.assess.outages import gnss_outages, measured_epochs, outage_note
 from navlib.studies.assess.result import FlightAssessment, automatic_segment_table, segment_pairs
 from navlib.trajectory.fit import FIT_DEFAULTS
 
@@ -142,7 +143,11 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         Sensability threshold (spec A11; 0.985 is the paper's value for 21 states).
     gnss_rate_hz : float, optional
         Measurement rate of the model; None: the median rate of the GNSS record (at most
-        the IMU rate).
+        the IMU rate). The epochs are a regular grid in time at this rate
+        (:func:`navlib.models.ecef.epoch_samples`); each kept fix aids the epoch nearest it
+        and an epoch no kept fix aids (a gap, a frozen or excluded fix) has no measurement
+        (assumption Q5). Spans without a kept fix longer than ``[gnss] outage_report_s`` are
+        named in ``notes`` and listed in ``gnss_outages``.
     e_threshold, s_threshold, min_fraction : float in [0, 1]
         Summary thresholds (module docstring).
     gnss_sigma_m : float, optional
@@ -221,7 +226,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
               "fit_options": fit_options, "segment_options": segment_options,
               "model_options": model_options, "model_step_s": model_step_s,
               "vehicle": vehicle, "vehicle_reason": vehicle_reason,
-              "findings": checked.findings, "t_record": float(imu["t"].iloc[0])}
+              "findings": checked.findings, "t_record": float(imu["t"].iloc[0]),
+              "outage_report_s": checked.thresholds["gnss"]["outage_report_s"]}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -253,7 +259,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
                  segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings, t_record) -> FlightAssessment:
+                 findings, t_record, outage_report_s) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -282,15 +288,20 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     automatic = segment_flight(trajectory, vehicle=vehicle, flight_states=logged, **seg_opts)
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
-                             max_step_s=model_step_s, **model_options)
+                             max_step_s=model_step_s,
+                             epochs=epoch_samples(trajectory.t, gnss_rate_hz), **model_options)
+    model, outages = _as_recorded(model, gnss, trajectory.t, outage_report_s)
     t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, t_record)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
-                           inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res)
+                           inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res,
+                           gnss_outages=outages, logged=logged_channels)
     trajectory, model, automatic = moved["trajectory"], moved["model"], moved["automatic"]
     inputs, gnss_res, imu_res = moved["inputs"], moved["gnss_residuals"], moved["imu_residuals"]
+    outages, logged_channels = moved["gnss_outages"], moved["logged"]
     notes.append(f"times are seconds since the {zero}, at {t_zero:.6g} s on the log's clock"
                  + (" (phases from the flight computer's logged states; detected beside them "
                     "in .automatic.events)" if automatic.source == "logged" else ""))
+    notes += [n for n in (outage_note(outages, outage_report_s),) if n]
     table, joined = automatic_segment_table(
         automatic.segments if segments is None else segments, model, automatic, trajectory.t,
         automatic_segments=segments is None)
@@ -309,7 +320,43 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     return FlightAssessment.build(
         model, segment_pairs(table), trajectory=trajectory, **thresholds, settings=settings,
         inputs=inputs, fit=fit, automatic=automatic, segment_table=table, options=options,
-        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=findings)
+        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=findings,
+        gnss_outages=outages, logged=logged_channels)
+
+
+def _as_recorded(model, gnss: pd.DataFrame, t_flight, outage_report_s: float):
+    """The model with a zero measurement matrix at the epochs no kept fix aids
+    (:func:`~navlib.studies.assess.outages.measured_epochs`, assumption Q5) and the GNSS
+    outages longer than ``outage_report_s`` over the flight ``t_flight``."""
+    xyz = gnss[["x", "y", "z"]].to_numpy(dtype=float)
+    t_fix = gnss["t"].to_numpy(dtype=float)[np.all(np.isfinite(xyz), axis=1)]
+    measured = measured_epochs(model.t, t_fix)
+    if not measured.all():
+        H = np.array(model.H)
+        H[~measured] = 0.0
+        model = replace(model, H=H)
+    outages = gnss_outages(t_fix, float(t_flight[0]), float(t_flight[-1]), outage_report_s)
+    return model, outages
+
+
+LOGGED_CHANNELS = {"baro": ("t", "alt_m"), "tilt": ("t", "tilt"),
+                   "attitude": ("t", "qw", "qx", "qy", "qz")}
+"""What a reader attaches to ``imu.attrs`` beside the IMU that the flight figure compares
+the reference with (:attr:`FlightAssessment.logged`)."""
+
+
+def _logged(imu: pd.DataFrame, t_flight) -> dict:
+    """The :data:`LOGGED_CHANNELS` the reader attached, inside the flight ``t_flight``."""
+    out = {}
+    for name, columns in LOGGED_CHANNELS.items():
+        frame = getattr(imu, "attrs", {}).get(name)
+        if not isinstance(frame, pd.DataFrame) or not set(columns) <= set(frame.columns):
+            continue
+        t = frame["t"].to_numpy(dtype=float)
+        inside = (t >= t_flight[0]) & (t <= t_flight[-1])
+        if inside.any():
+            out[name] = frame.loc[inside, list(columns)].reset_index(drop=True)
+    return out
 
 
 

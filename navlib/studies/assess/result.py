@@ -47,7 +47,7 @@ class FlightAssessment(SegmentedAnalysis):
         The automatic segmentation (features and phases), whatever segments were used.
     segment_table : DataFrame
         The segments assessed: ``segment`` (1-based), ``phase``, ``t_start``, ``t_end``,
-        ``duration``, ``n_epochs`` (GNSS epochs of the model inside).
+        ``duration``, ``n_epochs`` (GNSS epochs of the model inside that a kept fix aids).
     options : dict
         Assumed values: ``preset``, ``gnss_rate_hz``, ``gnss_sigma_m``, fit and segmentation
         options, model options.
@@ -64,6 +64,16 @@ class FlightAssessment(SegmentedAnalysis):
         saturated IMU samples, frozen, disagreeing or jumping GNSS fixes, all dropped
         before the fit); each ``message`` was also issued as a
         :class:`~navlib.io.FlightDataWarning`.
+    gnss_outages : DataFrame or None
+        Spans without a kept GNSS fix longer than ``[gnss] outage_report_s`` of
+        ``data/quality.toml`` (:func:`navlib.studies.assess.outages.gnss_outages`:
+        ``t_start``, ``t_end``, ``duration``, s). The model has no measurement at the epochs
+        no kept fix aids, whatever their length (assumption Q5).
+    logged : dict
+        What the reader attached beside the IMU, inside the flight, for comparison with the
+        reference: ``baro`` (``t, alt_m``), ``tilt`` (``t, tilt``: body x from vertical,
+        rad), ``attitude`` (``t, qw, qx, qy, qz``, body -> NED); keys the log lacks are
+        absent.
 
     Every time (``segment_table``, the trajectory, the model epochs, the residuals, the
     automatic segmentation) is on the result's clock: seconds since a rocket's ignition, since
@@ -87,6 +97,8 @@ class FlightAssessment(SegmentedAnalysis):
     notes: tuple[str, ...] = ()
     spans: tuple = ()
     quality: pd.DataFrame | None = None
+    gnss_outages: pd.DataFrame | None = None
+    logged: dict = field(default_factory=dict)
 
     @property
     def vehicle(self) -> str:
@@ -153,9 +165,11 @@ def segment_pairs(table: pd.DataFrame) -> tuple[tuple[float, float], ...]:
 
 def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.DataFrame:
     """Normalise ``segments`` (inside the fitted flight ``t_flight``) and count the model
-    epochs each holds (at least 2 needed; the last epoch may precede the flight's end)."""
+    epochs with a measurement each holds (at least 2 needed; epochs inside a GNSS outage do
+    not count, assumption Q5; the last epoch may precede the flight's end)."""
     table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
-    counts = _epoch_counts(table, model.t)
+    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    counts = _epoch_counts(table, np.asarray(model.t)[measured])
     for k, (count, row) in enumerate(zip(counts, table.itertuples(index=False), strict=True)):
         if count < 2:
             raise NavlibInputError(
