@@ -36,7 +36,8 @@ def phase_colour(phase: str) -> str:
     word = str(phase)
     if word in PHASE_COLOURS:
         return PHASE_COLOURS[word]
-    base = word.split()[0] if word.split() else word  # "boost 2" is a boost
+    base = word.replace("+", " ").split()[0] if word.strip() else word
+    # "boost 2" is a boost, and so is "boost+coast" (a boost joined to the coast after it)
     if base in PHASE_COLOURS:
         return PHASE_COLOURS[base]
     return OTHER_COLOURS[zlib.crc32(word.encode("utf-8")) % len(OTHER_COLOURS)]

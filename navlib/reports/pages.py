@@ -16,6 +16,7 @@ from pathlib import PurePath
 
 import pandas as pd
 
+from navlib.studies.assess.states import EXCITABLE_MARK, SENSIBLE_MARK, how_well
 from navlib.studies.plan import plan_beside_flight
 
 _STYLE = ("body{font-family:sans-serif;font-size:16px;line-height:1.4;max-width:1200px;"
@@ -89,6 +90,12 @@ def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
         "vehicle", "preset", "gnss_rate_hz", "gnss_sigma_m", "heading_deg")}])
     parts = [f"<h1>Flight assessment: {html.escape(log_title(log))}</h1>",
              f'<p class="path">Log: <code>{html.escape(log)}</code></p>',
+             "<h2>What this flight can estimate, and how well</h2>",
+             "<p>1-sigma of each state in navigation axes at the flight's start and at the "
+             f"end of each segment; {SENSIBLE_MARK} sensible (the measurements pin it down), "
+             f"{EXCITABLE_MARK} excitable only (the motion makes it observable). Times are "
+             "seconds since ignition (rockets) or the first sample.</p>",
+             how_well(result.states_table()).to_html(index=False),
              "<h2>Segments and estimable states</h2>",
              "<p>Per segment, the states the flight's motion makes observable "
              "(excitable) and the ones the measurements pin down (sensible).</p>",

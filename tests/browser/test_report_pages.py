@@ -14,7 +14,8 @@ with every network request refused:
 * the flight page's title is the log's file name, not its path;
 * no internal timing (a panel's update milliseconds, a notebook's run time) is shown;
 * 00_claims leads with its claims: its first table of claims (a ``claim_id`` column) starts
-  within the first screen, and a flight page with its segment verdicts (``excitable``).
+  within the first screen, and a flight page with its "how well" table of states and units
+  (the segment verdicts, ``excitable``, after it).
 
 Each page is screenshot (full page) into the test's temporary folder; the path is printed.
 """
@@ -202,8 +203,11 @@ def test_flight_page_reads_as_results(assessment, browser, shots):
         images = _check_reading(page, assessment.name)
         assert len(images) >= 4
         assert page.title() == "imu.csv + gnss.csv"
-        first = page.evaluate(FIRST_TABLE_JS, "excitable")  # the segment verdicts
+        first = page.evaluate(FIRST_TABLE_JS, "")
         assert first is not None and first["top"] < VIEWPORT["height"], first
+        assert first["heads"][:3] == ["state", "unit", "start"], first  # how well, in units
+        verdicts = page.evaluate(FIRST_TABLE_JS, "excitable")  # the segment verdicts follow
+        assert verdicts is not None and verdicts["top"] > first["top"], verdicts
     finally:
         page.close()
 

@@ -17,7 +17,13 @@ from navlib.__main__ import main
 from navlib.io import FlightDataWarning
 from navlib.models.ecef import P0_DEFAULTS, parameter_sigmas
 from navlib.studies.assess import assess_flight
-from navlib.studies.assess.states import STATES_COLUMNS, navigation_state_names
+from navlib.studies.assess.states import (
+    EXCITABLE_MARK,
+    SENSIBLE_MARK,
+    STATES_COLUMNS,
+    how_well,
+    navigation_state_names,
+)
 from navlib.trajectory import stationary
 
 ALTOS_DIR = REPO.parent / "shared" / "data" / "altos"
@@ -164,7 +170,9 @@ def altos_run(tmp_path_factory):
 def test_altos_flights_phases_since_ignition(altos_run):
     """Real TeleMega flights: rocket words, boost from 0 s, the logged states (drogue, main)
     where the computer logged them, the ignition on the log's clock (AltOS counts from boost
-    detection; its buffer starts 0.3 s before)."""
+    detection; its buffer starts 0.3 s before). A boost without a GNSS fix (the receiver of
+    flight 0018 lost lock from the pad to 6.5 s) is joined to the coast after it and named
+    ``boost+coast``: it still starts the flight at 0 s."""
     out, paths, status = altos_run
     assert status == 0
     summary = pd.read_csv(out / "summary.csv").set_index("log")
@@ -172,8 +180,9 @@ def test_altos_flights_phases_since_ignition(altos_run):
         row = summary.loc[path]
         assert row["vehicle"] == "rocket"
         phases = [p.split(" ")[0] for p in row["phases"].split("; ")]
-        assert phases[0] == "boost" and row["phases"].startswith("boost 0.0-")
-        assert "coast" in phases
+        assert phases[0].split("+")[0] == "boost" and row["phases"].startswith("boost")
+        assert row["phases"].split(" ")[1].startswith("0.0-")
+        assert "coast" in "+".join(phases).split("+")
         assert row["t_ignition"] == pytest.approx(-0.3, abs=0.35)
         if "2018-04-08" not in path:                       # the newer export logs its states
             assert {"drogue", "main"} <= set(phases)
@@ -186,7 +195,8 @@ def test_altos_flights_phases_since_ignition(altos_run):
     assert set(states["unit"]) == {"m", "m/s", "deg", "deg/h", "mg", "ppm"}
     assert {"position_north", "velocity_down", "roll", "gyro_bias_along",
             "accel_scale_cross_z"} <= set(states["state"])
-    boost = states[(states["phase"] == "boost") & (states["state"] == "accel_scale_along")]
+    boost = states[states["phase"].str.startswith("boost")
+                   & (states["state"] == "accel_scale_along")]
     assert (boost["t_start"] == 0.0).all()
     assert (boost["sigma_end"] < boost["sigma_start"]).all()   # the thrust shows the scale
 
@@ -223,3 +233,18 @@ def test_both_attitude_error_definitions_give_the_same_roll_pitch_yaw(tmp_path):
     np.testing.assert_allclose(ecef["sigma_end"], body["sigma_end"], rtol=1e-4)
     np.testing.assert_array_equal(ecef["excitable"], body["excitable"])
     assert ecef.loc["roll", "sigma_end"] < 0.5 * ecef.loc["roll", "sigma_start"]   # levelled
+
+
+    rows = []
+    for seg, (phase, t0, t1) in enumerate([("pad", -2.0, 0.0), ("boost", 0.0, 3.5)], start=1):
+        for k, (state, unit) in enumerate([("position_north", "m"), ("roll", "deg")]):
+            rows.append({"log": "", "segment": seg, "phase": phase, "t_start": t0, "t_end": t1,
+                         "state": state, "unit": unit, "sigma_start": 10.0 * seg + k,
+                         "sigma_end": 1.23456 * seg + k, "excitable": k == 0 or seg == 2,
+                         "sensible": k == 0})
+    out = how_well(pd.DataFrame(rows))
+    assert list(out.columns) == ["state", "unit", "start", "1 pad -2.0..0.0 s",
+                                 "2 boost 0.0..3.5 s"]
+    assert list(out["start"]) == ["10", "11"]
+    assert list(out["1 pad -2.0..0.0 s"]) == [f"1.23 {SENSIBLE_MARK}", "2.23"]
+    assert list(out["2 boost 0.0..3.5 s"]) == [f"2.47 {SENSIBLE_MARK}", f"3.47 {EXCITABLE_MARK}"]

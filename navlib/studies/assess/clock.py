@@ -6,9 +6,10 @@ whose zero is
 
 * for a rocket, its ignition: the start of the first ``boost`` segment of the automatic
   segment table (the flight computer's logged boost state when the log has states,
-  :mod:`navlib.segmentation.logged`, else the detected powered run; after short segments are
-  joined, :func:`~navlib.studies.assess.automatic_segment_table`), so that boost starts at
-  0 s;
+  :mod:`navlib.segmentation.logged`, else the detected powered run), so that boost starts at
+  0 s, also when a boost without GNSS fixes is joined to the coast after it
+  (:func:`~navlib.studies.assess.automatic_segment_table`: ignition is an event of the
+  flight, not of its measurements);
 * for a rocket without a boost in the record, and for every other vehicle, the first sample
   of the record (of the whole record when holes split it into spans assessed separately:
   the spans share its clock; a rocket's spans each take the ignition they hold).
@@ -22,8 +23,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from navlib.segmentation import segments_table
 from navlib.segmentation.phases import clock_time
-from navlib.studies.assess.result import automatic_segment_table
 
 
 def time_zero(automatic, model, t_flight, vehicle: str | None,
@@ -32,8 +33,8 @@ def time_zero(automatic, model, t_flight, vehicle: str | None,
     it is (``"ignition"`` or ``"first sample"``). ``t_record``: the first sample of the
     whole record, when the span ``t_flight`` is one of several (None: ``t_flight[0]``)."""
     if vehicle == "rocket":
-        table, _ = automatic_segment_table(automatic.segments, model, automatic, t_flight,
-                                           automatic_segments=True)
+        table = segments_table(automatic.segments, float(t_flight[0]), float(t_flight[-1]),
+                               automatic)
         boost = table.loc[table["phase"] == "boost", "t_start"]
         if len(boost):
             return float(boost.iloc[0]), "ignition"

@@ -294,7 +294,7 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, t_record)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
                            inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res,
-                           gnss_outages=outages, logged=logged_channels)
+                           gnss_outages=outages, logged=_logged(imu, trajectory.t))
     trajectory, model, automatic = moved["trajectory"], moved["model"], moved["automatic"]
     inputs, gnss_res, imu_res = moved["inputs"], moved["gnss_residuals"], moved["imu_residuals"]
     outages, logged_channels = moved["gnss_outages"], moved["logged"]

@@ -187,12 +187,20 @@ def _epoch_counts(table: pd.DataFrame, t) -> list[int]:
             for a, b in zip(table["t_start"], table["t_end"], strict=True)]
 
 
+def _joined_phase(first: str, second: str) -> str:
+    """The phase of two joined segments in time order: ``"boost+coast"`` (the words of both,
+    once each), so a boost inside a GNSS outage is still named where the flight starts."""
+    words = [*str(first).split("+"), *str(second).split("+")]
+    return "+".join(dict.fromkeys(words))
+
+
 def automatic_segment_table(segments, model, automatic: Segmentation, t_flight, *,
                             automatic_segments: bool) -> tuple[pd.DataFrame, list[str]]:
     """:func:`_segment_table` of ``segments``, with each automatic segment that holds fewer
     than two measured epochs of the model (a short phase between GNSS fixes, or one inside a
     GNSS outage: rows of ``model.H`` that are zero) joined to the segment before it (after
-    it, for the first), with a note: excitability needs measurements (assumptions V1, M6).
+    it, for the first; the joined segment takes both phase words, :func:`_joined_phase`), with
+    a note: excitability needs measurements (assumptions V1, M6).
     Segments the user gave (``automatic_segments=False``) are refused instead, naming the
     segment. Returns the table and the notes."""
     t = np.asarray(model.t)
@@ -218,7 +226,8 @@ def automatic_segment_table(segments, model, automatic: Segmentation, t_flight, 
         notes.append(f"segment {phase} {a:.6g}-{b:.6g} s {why}: joined to the "
                      f"{entries[other][0]} segment next to it")
         lo, hi = min(k, other), max(k, other)
-        entries[lo] = [entries[other][0], entries[lo][1], entries[hi][2]]
+        entries[lo] = [_joined_phase(entries[lo][0], entries[hi][0]), entries[lo][1],
+                       entries[hi][2]]
         del entries[hi]
         k = lo
     return _segment_table([tuple(e) for e in entries], model, automatic, t_flight), notes

@@ -152,3 +152,38 @@ def states_table(analysis, log: str = "") -> pd.DataFrame:
             "reduction": 1.0 - sigma[1] / sigma[0], "excitable": e >= settings["e_threshold"],
             "sensible": fraction >= settings["min_fraction"]}))
     return pd.concat(frames, ignore_index=True)[list(STATES_COLUMNS)]
+
+
+SENSIBLE_MARK, EXCITABLE_MARK = "\u25cf", "\u25cb"
+"""Marks of :func:`how_well`: sensible (the measurements pin the state down), excitable only
+(the motion makes it observable, the measurements do not pin it down)."""
+
+
+def how_well(states: pd.DataFrame) -> pd.DataFrame:
+    """The compact "what this flight can estimate and how well" table of a
+    :func:`states_table`: one row per navigation state (with its unit), the 1-sigma at the
+    flight's start, then the 1-sigma at the end of each segment, written to three
+    significant digits and marked :data:`SENSIBLE_MARK` where the state is sensible in that
+    segment and :data:`EXCITABLE_MARK` where it is only excitable.
+
+    Parameters
+    ----------
+    states : DataFrame
+        A :func:`states_table` (one log).
+
+    Returns
+    -------
+    DataFrame
+        Columns ``state``, ``unit``, ``start``, then one per segment named
+        ``"<segment> <phase> <t_start>..<t_end> s"``.
+    """
+    first = states[states["segment"] == states["segment"].iloc[0]]
+    out = pd.DataFrame({"state": first["state"].to_numpy(), "unit": first["unit"].to_numpy(),
+                        "start": [f"{v:.3g}" for v in first["sigma_start"]]})
+    for (segment, phase, t0, t1), rows in states.groupby(
+            ["segment", "phase", "t_start", "t_end"], sort=False):
+        marks = np.where(rows["sensible"], SENSIBLE_MARK,
+                         np.where(rows["excitable"], EXCITABLE_MARK, ""))
+        out[f"{segment} {phase} {t0:.1f}..{t1:.1f} s"] = [
+            f"{v:.3g} {m}".rstrip() for v, m in zip(rows["sigma_end"], marks, strict=True)]
+    return out
