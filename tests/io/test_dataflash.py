@@ -3,30 +3,23 @@
 import subprocess
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from dataflash_writer import write_flight
 from flights import multicopter, records
-from locations import REPO
+from locations import REPO, shared_file
 from scipy.spatial.transform import Rotation
 
 from navlib import NavlibInputError, earth, io
 from navlib.studies.assess import assess_flight
 
-AP_DIR = REPO.parent / "shared" / "data" / "ardupilot"
-if not AP_DIR.is_dir():
-    AP_DIR = Path("/work/shared/data/ardupilot")
 ROOT = REPO
 
 
 def _public(name):
-    path = AP_DIR / name
-    if not path.is_file():
-        pytest.skip(f"ArduPilot sample log not found: {path}")
-    return path
+    return shared_file("ardupilot", name)
 
 
 @pytest.fixture(scope="module")
