@@ -349,7 +349,7 @@ def _jerk_bound(imu, p: dict) -> tuple[np.ndarray, np.ndarray]:
     f = imu[list(_ACCEL)].to_numpy(dtype=float)
     w = imu[list(_GYRO)].to_numpy(dtype=float)
     dt = float(np.median(np.diff(t)))
-    n = max(round(p["jerk_smoothing_s"] / dt), 1)
+    n = min(max(round(p["jerk_smoothing_s"] / dt), 1), t.size)  # "same" keeps t.size rows
     kernel = np.ones(n) / n
     f_s = np.column_stack([np.convolve(f[:, i], kernel, mode="same") for i in range(3)])
     df = np.gradient(f_s, t, axis=0)

@@ -33,6 +33,7 @@ from navlib.studies.assess.inputs import (
     GNSS_KEYS,
     IMU_KEYS,
     check_frame,
+    check_imu_record,
     describe_inputs,
     median_rate,
     validate_records,
@@ -187,6 +188,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
+    check_imu_record(imu)   # before the quality checks, which judge the GNSS by the IMU
     gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
     preset, preset_reason = choose_preset(imu, preset)
     spec = sensors.load_preset(preset)  # unknown names fail here, before the fit
