@@ -134,7 +134,8 @@ def real_originals() -> list[Original]:
 BAD_FIELDS = ("", "nan", "inf", "-inf", "-", "1e400", "abc", "9" * 40, "0x1f", "1,5", " ",
               "-0", "1e-400", "\"", "NaN NaN")
 TEXT_DAMAGES = ("cut", "flip", "zero", "block", "delete rows", "duplicate rows", "swap rows",
-                "field", "zero column", "crlf", "bom", "header only")
+                "field", "zero column", "crlf", "bom", "header only", "few rows", "scale column",
+                "constant column", "decimate", "shift time")
 BINARY_DAMAGES = ("cut", "flip", "zero", "block", "delete block", "duplicate block",
                   "swap blocks")
 
@@ -177,6 +178,28 @@ def _bytes_damage(rng, data: bytes, damage: str) -> tuple[bytes, str]:
             f"bytes {a}..{b} and {c}..{d} swapped")
 
 
+def _with_cell(row: bytes, k: int, change) -> bytes:
+    cells = row.split(b",")
+    if k < len(cells):
+        cells[k] = change(cells[k])
+    return b",".join(cells)
+
+
+def _scaled(cell: bytes, factor: float, offset: float = 0.0) -> bytes:
+    try:
+        return repr(float(cell) * factor + offset).encode()
+    except ValueError:
+        return cell
+
+
+def _time_column(header: bytes) -> int:
+    names = [c.strip().lstrip(b"#").split(b" ")[0].lower() for c in header.split(b",")]
+    for name in (b"time", b"t"):
+        if name in names:
+            return names.index(name)
+    return 0
+
+
 def _text_damage(rng, data: bytes, damage: str) -> tuple[bytes, str]:
     lines = data.split(b"\n")
     if lines and lines[-1] == b"":
@@ -206,9 +229,31 @@ def _text_damage(rng, data: bytes, damage: str) -> tuple[bytes, str]:
         what = f"row {i + 1} field {k + 1} set to {cells[k]!r}"
     elif damage == "zero column":
         k = int(rng.integers(0, len(rows[0].split(b","))))
-        rows = [b",".join(c if j != k else b"0" for j, c in enumerate(r.split(b",")))
-                for r in rows]
+        rows = [_with_cell(r, k, lambda c: b"0") for r in rows]
         what = f"column {k + 1} set to 0"
+    elif damage == "few rows":
+        keep = int(rng.choice([1, 2, 3, 5, 9, 12, 30]))
+        rows = rows[:keep]
+        what = f"the first {keep} row(s) kept"
+    elif damage == "scale column":
+        k = int(rng.integers(0, len(rows[0].split(b","))))
+        factor = float(rng.choice([1e3, 1e-3, -1.0, 0.1, 9.80665]))
+        rows = [_with_cell(r, k, lambda c: _scaled(c, factor)) for r in rows]
+        what = f"column {k + 1} times {factor:g}"
+    elif damage == "constant column":
+        k = int(rng.integers(0, len(rows[0].split(b","))))
+        first = rows[0].split(b",")[k] if k < len(rows[0].split(b",")) else b""
+        rows = [_with_cell(r, k, lambda c: first) for r in rows]
+        what = f"column {k + 1} held at its first value {first!r}"
+    elif damage == "decimate":
+        step = int(rng.choice([2, 5, 20, 100]))
+        rows = rows[::step]
+        what = f"every {step}th row kept"
+    elif damage == "shift time":
+        k = _time_column(head[0])
+        offset = float(rng.choice([-1e3, -20.0, 0.5, 20.0, 1e6]))
+        rows = [_with_cell(r, k, lambda c: _scaled(c, 1.0, offset)) for r in rows]
+        what = f"time column {k + 1} shifted by {offset:g}"
     elif damage == "crlf":
         return data.replace(b"\n", b"\r\n"), "CRLF line ends"
     elif damage == "bom":
