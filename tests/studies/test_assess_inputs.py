@@ -86,3 +86,44 @@ def test_gnss_faults_on_an_imu_record_shorter_than_the_jerk_smoothing(gnss):
         bad, findings = quality.gnss_faults(imu, gnss, 5.0)
     assert bad.shape == (len(gnss),)
     assert list(findings.columns) == list(quality.FINDING_COLUMNS)
+
+
+def _still(seconds=5.0, rate=100.0):
+    t = np.arange(0.0, seconds, 1.0 / rate)
+    imu = pd.DataFrame({"t": t, "f_x": 0 * t, "f_y": 0 * t, "f_z": -9.8 + 0 * t,
+                        "w_x": 0 * t, "w_y": 0 * t, "w_z": 1e-3 + 0 * t})
+    tg = t[::20]
+    gnss = pd.DataFrame({"t": tg, "x": 4.2e6 + 0 * tg, "y": 0.7e6 + 0 * tg,
+                         "z": 4.7e6 + 0 * tg})
+    return imu, gnss
+
+
+def test_imu_times_out_of_order_are_named_before_the_quality_checks():
+    """A DataFrame in another order than time: scipy's maximum_filter1d raised
+    RuntimeError('incorrect filter size') inside the GNSS jump check."""
+    imu, gnss = _still()
+    shuffled = imu.sample(frac=1.0, random_state=1).reset_index(drop=True)
+    for call in (lambda: assess_flight(shuffled, gnss),
+                 lambda: quality.check_records(shuffled, gnss),
+                 lambda: quality.gnss_faults(shuffled, gnss, 5.0)):
+        with pytest.raises(NavlibInputError, match=r"imu column 't': times must be strictly "
+                                                   r"increasing"):
+            call()
+
+
+@pytest.mark.parametrize("rows", [0, 1])
+def test_quality_checks_of_a_record_of_fewer_than_two_rows(rows):
+    """check_records on its own: ValueError from NumPy (an empty maximum, NaN to int)."""
+    imu, gnss = _still()
+    with pytest.raises(NavlibInputError, match=rf"imu column 't': need at least 2 samples, "
+                                               rf"got {rows}"):
+        quality.check_records(imu.iloc[:rows], gnss)
+
+
+def test_gnss_positions_far_from_the_earth_are_named_before_the_quality_checks():
+    """A GNSS record of zeros: refused as '99.2 % of the fixes are faulty' (frozen)."""
+    imu, gnss = _still()
+    gnss[["x", "y", "z"]] = 0.0
+    with pytest.raises(NavlibInputError, match=r"^gnss: the position of row 0 \(t = 0 s\) is "
+                                               r"0 m from the Earth's centre, and 25 of 25"):
+        assess_flight(imu, gnss)

@@ -8,8 +8,10 @@ import numpy as np
 import pandas as pd
 
 from navlib import units
+from navlib._validation import increasing_times
 from navlib.errors import NavlibInputError
 from navlib.io import check_overlap
+from navlib.io.checks import R_MAX_M, R_MIN_M
 from navlib.trajectory.fit import MIN_IMU_RATE_HZ
 
 MIN_DURATION_S = 2.0
@@ -49,12 +51,23 @@ def _channel_text(name: str, x: np.ndarray) -> str:
     return f"{name} median {np.median(x):.4g} ({np.min(x):.4g}..{np.max(x):.4g})"
 
 
+def _finite_columns(frame: pd.DataFrame, name: str, keys) -> None:
+    """``keys`` of ``frame`` finite numbers, ``t`` strictly increasing."""
+    for key in keys:
+        x = frame[key].to_numpy(dtype=float, na_value=np.nan)
+        bad = np.flatnonzero(~np.isfinite(x))
+        if bad.size:
+            raise NavlibInputError(f"{name}: column {key!r} is not finite at row {int(bad[0])} "
+                                   f"({x[bad[0]]}; {bad.size} row(s) in all)")
+    increasing_times(frame["t"].to_numpy(dtype=float), f"{name} column 't'")
+
+
 def check_imu_record(imu: pd.DataFrame) -> None:
     """The IMU checks every assessment runs before the data-quality checks that rely on the
     IMU (:func:`navlib.quality.check_records`: the GNSS faults are judged against it).
 
     * at least :data:`MIN_IMU_SAMPLES` samples;
-    * finite samples;
+    * finite samples, strictly increasing times;
     * a specific-force norm reaching :data:`MIN_PEAK_ACCEL_G` (assumption Q5): an
       accelerometer reading zeros (dead, unplugged, zeroed columns) or values in g is
       refused, naming what each axis read.
@@ -65,12 +78,7 @@ def check_imu_record(imu: pd.DataFrame) -> None:
             f"imu: {n} sample(s); an assessment needs at least {MIN_IMU_SAMPLES} IMU samples "
             f"({MIN_DURATION_S:g} s of data at the fit's lowest rate of {MIN_IMU_RATE_HZ:g} "
             f"Hz)")
-    for key in IMU_KEYS:
-        x = imu[key].to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(x))
-        if bad.size:
-            raise NavlibInputError(f"imu: column {key!r} is not finite at row {int(bad[0])} "
-                                   f"({x[bad[0]]}; {bad.size} row(s) in all)")
+    _finite_columns(imu, "imu", IMU_KEYS)
     f_b = imu[list(IMU_KEYS[1:4])].to_numpy(dtype=float)
     peak = float(np.max(np.linalg.norm(f_b, axis=1)))
     if peak < MIN_PEAK_ACCEL_G * units.G0:
@@ -82,6 +90,22 @@ def check_imu_record(imu: pd.DataFrame) -> None:
             "a vehicle is held against gravity some time of any record (the ground, thrust, "
             "lift, drag): a dead or unplugged accelerometer, zeroed columns, or data in g "
             "(the CSV reader's accel_unit='g')?")
+
+
+def check_gnss_record(gnss: pd.DataFrame) -> None:
+    """The GNSS checks every assessment runs before the data-quality checks: finite fixes at
+    strictly increasing times, every position between :data:`navlib.io.checks.R_MIN_M` and
+    :data:`~navlib.io.checks.R_MAX_M` from the Earth's centre (ECEF, m), as the readers
+    demand (a record of zeros was refused as frozen fixes)."""
+    _finite_columns(gnss, "gnss", GNSS_KEYS)
+    r = np.linalg.norm(gnss[list(GNSS_KEYS[1:])].to_numpy(dtype=float), axis=1)
+    bad = np.flatnonzero((r < R_MIN_M) | (r > R_MAX_M))
+    if bad.size:
+        k = int(bad[0])
+        raise NavlibInputError(
+            f"gnss: the position of row {k} (t = {gnss['t'].iloc[k]:.6g} s) is {r[k]:.6g} m "
+            f"from the Earth's centre, and {bad.size} of {r.size} fixes lie outside "
+            f"{R_MIN_M:g}..{R_MAX_M:g} m; expected ECEF x, y, z in m (navlib.io readers)")
 
 
 def median_rate(t: np.ndarray) -> float:

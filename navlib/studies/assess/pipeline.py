@@ -33,6 +33,7 @@ from navlib.studies.assess.inputs import (
     GNSS_KEYS,
     IMU_KEYS,
     check_frame,
+    check_gnss_record,
     check_imu_record,
     describe_inputs,
     median_rate,
@@ -188,7 +189,6 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
-    check_imu_record(imu)   # before the quality checks, which judge the GNSS by the IMU
     gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
     preset, preset_reason = choose_preset(imu, preset)
     spec = sensors.load_preset(preset)  # unknown names fail here, before the fit
@@ -209,6 +209,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         vehicle, vehicle_reason = check_vehicle(vehicle), "given"
     else:
         vehicle, vehicle_reason = vehicle_from_log(imu.attrs)
+    check_imu_record(imu)   # before the quality checks, which judge the GNSS by the IMU
+    check_gnss_record(gnss)
     sigma = _gnss_sigma(gnss, spec) if gnss_sigma_m is None else gnss_sigma_m
     checked = quality.check_records(imu, gnss, spec,
                                     finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True),
