@@ -12,7 +12,9 @@ never copied into the repository).
 A mutant is one seeded damage of one file: cut, flipped or zeroed bytes, a deleted,
 duplicated or moved block; for text files also deleted, duplicated or swapped rows, a
 damaged field, a column set to zero, CRLF line ends, a byte-order mark, the header alone.
-Its outcome is ``assessed``, ``refused`` (:class:`navlib.NavlibInputError`), ``bare`` (any
+:func:`frame_mutant` damages the ``imu, gnss`` DataFrames a user hands to ``assess_flight``
+without a reader (rows out of order, NaN cells, repeated times, missing or string columns...).
+An outcome is ``assessed``, ``refused`` (:class:`navlib.NavlibInputError`), ``bare`` (any
 other exception: a bug) or ``hung`` (over the time limit).
 """
 
@@ -287,6 +289,78 @@ def mutants(originals: list[Original], folder: Path, per_original: int,
             out.append(Mutant(",".join(str(f) for f in files),
                               f"{original.name}: {source.name} {damage} ({what})"))
     return out
+
+
+FRAME_DAMAGES = ("shuffle rows", "nan cell", "inf cell", "duplicate time", "few rows",
+                 "scale column", "constant column", "drop column", "shift time",
+                 "string column", "baro")
+
+
+def frame_mutant(rng, imu: pd.DataFrame, gnss: pd.DataFrame, damage: str):
+    """One seeded damage of an ``imu, gnss`` pair of DataFrames (what a user hands to
+    :func:`~navlib.studies.assess.assess_flight` without a reader): the damaged pair and
+    what was done."""
+    imu, gnss = imu.copy(), gnss.copy()
+    which = int(rng.integers(0, 2))
+    name, frame = ("imu", imu) if which == 0 else ("gnss", gnss)
+    columns = list(frame.columns)
+    col = columns[int(rng.integers(0, len(columns)))]
+    row = int(rng.integers(0, len(frame)))
+    if damage == "shuffle rows":
+        frame = frame.sample(frac=1.0, random_state=int(rng.integers(0, 2**31)))
+        what = "rows shuffled"
+    elif damage in ("nan cell", "inf cell"):
+        frame.loc[frame.index[row], col] = np.nan if damage == "nan cell" else np.inf
+        what = f"{col} of row {row} set to {frame[col].iloc[row]}"
+    elif damage == "duplicate time":
+        frame = pd.concat([frame, frame.iloc[[row]]]).sort_values("t", kind="stable")
+        what = f"row {row} repeated"
+    elif damage == "few rows":
+        keep = int(rng.choice([0, 1, 2, 3, 5, 9]))
+        frame = frame.iloc[:keep]
+        what = f"the first {keep} row(s) kept"
+    elif damage == "scale column":
+        factor = float(rng.choice([1e3, 1e-3, -1.0, 0.0]))
+        frame[col] = frame[col] * factor
+        what = f"{col} times {factor:g}"
+    elif damage == "constant column":
+        frame[col] = frame[col].iloc[0]
+        what = f"{col} held at {frame[col].iloc[0]:.6g}"
+    elif damage == "drop column":
+        frame = frame.drop(columns=col)
+        what = f"{col} dropped"
+    elif damage == "shift time":
+        offset = float(rng.choice([-1e3, 0.5, 10.0, 1e6]))
+        frame["t"] = frame["t"] + offset
+        what = f"t shifted by {offset:g}"
+    elif damage == "string column":
+        frame[col] = frame[col].astype(str)
+        what = f"{col} as strings"
+    else:
+        baro = pd.DataFrame({"t": frame["t"].to_numpy()[:int(rng.integers(0, 4))],
+                             "alt_m": np.nan})
+        imu.attrs["baro"] = baro
+        return imu, gnss, f"imu.attrs['baro'] of {len(baro)} NaN row(s)"
+    frame.attrs = dict(imu.attrs if which == 0 else gnss.attrs)
+    pair = (frame, gnss) if which == 0 else (imu, frame)
+    return *pair, f"{name}: {what}"
+
+
+def run_frames(imu: pd.DataFrame, gnss: pd.DataFrame, limit_s: float) -> tuple[str, str, float]:
+    """:func:`run` for DataFrames: assess them within ``limit_s`` seconds."""
+    start = time.perf_counter()
+    try:
+        with warnings.catch_warnings(), time_limit(limit_s):
+            warnings.simplefilter("ignore")
+            assess_flight(imu, gnss)
+        outcome, text = "assessed", ""
+    except NavlibInputError as exc:
+        outcome, text = "refused", str(exc)
+    except _Hung:
+        outcome, text = "hung", f"over {limit_s:g} s"
+    except Exception as exc:  # the bare errors are what the fuzz test hunts
+        outcome, text = "bare", f"{type(exc).__name__}: {exc}"
+    return outcome, text, time.perf_counter() - start
 
 
 # --------------------------------------------------------------------------- running

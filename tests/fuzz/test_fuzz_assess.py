@@ -15,8 +15,10 @@ import collections
 import zlib
 
 import mutants
+import numpy as np
 import pandas as pd
 import pytest
+from flights import multicopter, records
 
 from navlib.reports import fleet
 
@@ -54,6 +56,32 @@ def test_mutants_are_assessed_or_refused(originals, tmp_path, name):
     assert not _failures(results), _failures(results)
 
 
+@pytest.fixture(scope="module")
+def frames():
+    """The records of the CSV pair as DataFrames (a small simulated multicopter flight)."""
+    truth = multicopter(24.0, 50.0, pad_s=6.0)
+    return records(truth, seed=5)
+
+
+def _frame_results(frames, per_damage: int, seed: int):
+    rng = np.random.default_rng(seed)
+    results = []
+    for damage in mutants.FRAME_DAMAGES * per_damage:
+        imu, gnss, what = mutants.frame_mutant(rng, *frames, damage)
+        results.append((mutants.Mutant("DataFrames", what),
+                        mutants.run_frames(imu, gnss, LIMIT_S)))
+    return results
+
+
+def test_damaged_dataframes_are_assessed_or_refused(frames):
+    """The records a user hands to assess_flight without a reader: rows out of order,
+    NaN or infinite cells, repeated times, few rows, scaled, constant, missing or string
+    columns, shifted times, an odd barometer record."""
+    results = _frame_results(frames, 2, SEED)
+    assert not _failures(results), _failures(results)
+    assert {"assessed", "refused"} == {outcome for _, (outcome, _, _) in results}
+
+
 def _fleet_rows(specs, folder) -> pd.DataFrame:
     table, pages = fleet.assess_logs(specs, scheduler="synchronous")
     path = fleet.write_fleet(table, pages, folder)
@@ -82,12 +110,12 @@ def test_a_fleet_of_mutants_keeps_a_row_for_each(originals, tmp_path):
 
 
 @pytest.mark.slow
-def test_campaign(originals, tmp_path):
-    """Every original, generated and shared, :data:`CAMPAIGN_PER_ORIGINAL` times: the counts
-    per outcome printed; no bare error and no hang; a fleet run of every refused mutant and
-    the first :data:`FLEET_ASSESSED` assessed ones (each assessed flight costs its HTML
-    page, several seconds) agrees row by row (assessed: ok; refused: failed with the same
-    NavlibInputError)."""
+def test_campaign(originals, frames, tmp_path):
+    """Every original, generated and shared, :data:`CAMPAIGN_PER_ORIGINAL` times, and every
+    DataFrame damage 6 times: the counts per outcome printed; no bare error and no hang; a
+    fleet run of every refused mutant and the first :data:`FLEET_ASSESSED` assessed ones
+    (each assessed flight costs its HTML page, several seconds) agrees row by row
+    (assessed: ok; refused: failed with the same NavlibInputError)."""
     pool = list(originals.values()) + mutants.real_originals()
     made = mutants.mutants(pool, tmp_path / "mutants", CAMPAIGN_PER_ORIGINAL, SEED)
     results = [(m, mutants.run(m.spec, LIMIT_S)) for m in made]
@@ -96,7 +124,11 @@ def test_campaign(originals, tmp_path):
     print(f"\nfuzz campaign: {len(made)} mutants of {len(pool)} logs (seed {SEED}): "
           + ", ".join(f"{counts[k]} {k}" for k in mutants.OUTCOMES)
           + f"; slowest {slowest:.1f} s")
-    assert not _failures(results), _failures(results)
+    frame_results = _frame_results(frames, 6, SEED + 1)
+    counts = collections.Counter(outcome for _, (outcome, _, _) in frame_results)
+    print(f"fuzz campaign: {len(frame_results)} damaged DataFrame pairs: "
+          + ", ".join(f"{counts[k]} {k}" for k in mutants.OUTCOMES))
+    assert not _failures(results + frame_results), _failures(results + frame_results)
     assessed = [r for r in results if r[1][0] == "assessed"][:FLEET_ASSESSED]
     fleet_run = [r for r in results if r[1][0] == "refused" or r in assessed]
     rows = _fleet_rows([m.spec for m, _ in fleet_run], tmp_path / "out")
