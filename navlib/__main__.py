@@ -20,6 +20,7 @@ from pathlib import Path
 
 from navlib import reports
 from navlib.errors import NavlibInputError
+from navlib.reports.terminal import warning_lines
 from navlib.vehicles import VEHICLES
 
 _TRACEBACK_LINES = 12
@@ -393,6 +394,7 @@ def _negative_angles(argv: list[str]) -> list[str]:
     return out
 
 
+@warning_lines   # library warnings as one line each, without a source location
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m navlib``; returns the exit status."""
     args = _parser().parse_args(_negative_angles(sys.argv[1:] if argv is None else list(argv)))

@@ -35,7 +35,7 @@ import pandas as pd
 from scipy.ndimage import maximum_filter1d
 
 from navlib import earth
-from navlib._validation import finite_scalar, reject_unknown
+from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir
 from navlib.units import DEG
@@ -112,6 +112,21 @@ def _frame(rows: list[dict]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=list(FINDING_COLUMNS))
 
 
+def _check_record(frame, name: str, columns) -> None:
+    """A DataFrame with ``t`` and ``columns`` finite, at least 2 rows, times strictly
+    increasing (as the navlib.io readers return); NavlibInputError naming what is not."""
+    if not isinstance(frame, pd.DataFrame):
+        raise NavlibInputError(f"{name}: expected a pandas DataFrame, got {type(frame).__name__}")
+    missing = [c for c in ("t", *columns) if c not in frame.columns]
+    if missing:
+        raise NavlibInputError(f"{name}: missing column(s) {missing}; columns are "
+                               f"{list(frame.columns)}")
+    for column in columns:
+        finite_array(frame[column].to_numpy(dtype=float, na_value=np.nan),
+                     f"{name} column {column!r}", ndim=1)
+    increasing_times(frame["t"].to_numpy(dtype=float, na_value=np.nan), f"{name} column 't'")
+
+
 # --------------------------------------------------------------------------- saturation
 
 
@@ -172,6 +187,7 @@ def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = No
         One row per saturated channel (:data:`FINDING_COLUMNS`; ``check`` is
         ``saturation`` at a known limit, ``flat top`` otherwise).
     """
+    _check_record(imu, "imu", (*_ACCEL, *_GYRO))
     p = dict(thresholds or load_thresholds()["saturation"])
     t = imu["t"].to_numpy(dtype=float)
     ranges = _ranges(imu, spec)
@@ -349,7 +365,7 @@ def _jerk_bound(imu, p: dict) -> tuple[np.ndarray, np.ndarray]:
     f = imu[list(_ACCEL)].to_numpy(dtype=float)
     w = imu[list(_GYRO)].to_numpy(dtype=float)
     dt = float(np.median(np.diff(t)))
-    n = max(round(p["jerk_smoothing_s"] / dt), 1)
+    n = min(max(round(p["jerk_smoothing_s"] / dt), 1), t.size)  # "same" keeps t.size rows
     kernel = np.ones(n) / n
     f_s = np.column_stack([np.convolve(f[:, i], kernel, mode="same") for i in range(3)])
     df = np.gradient(f_s, t, axis=0)
@@ -445,6 +461,8 @@ def gnss_faults(imu: pd.DataFrame, gnss: pd.DataFrame, sigma_m: float,
     findings : DataFrame
         One row per kind of fault found (:data:`FINDING_COLUMNS`).
     """
+    _check_record(imu, "imu", (*_ACCEL, *_GYRO))
+    _check_record(gnss, "gnss", _XYZ)
     p = dict(thresholds or load_thresholds()["gnss"])
     sigma_m = finite_scalar(sigma_m, "sigma_m", 0.0, low_open=True)
     frozen, rows = _frozen(imu, gnss, p)
@@ -507,9 +525,13 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
     Raises
     ------
     NavlibInputError
-        More than ``[saturation] max_fraction`` of the IMU samples saturated, or more than
-        ``[gnss] max_excluded_fraction`` of the fixes faulty (naming the findings).
+        Records that are not DataFrames, lack columns, hold fewer than 2 rows, non-finite
+        values or times that do not increase; more than ``[saturation] max_fraction`` of the
+        IMU samples saturated, or more than ``[gnss] max_excluded_fraction`` of the fixes
+        faulty (naming the findings).
     """
+    _check_record(imu, "imu", (*_ACCEL, *_GYRO))
+    _check_record(gnss, "gnss", _XYZ)
     p = load_thresholds(thresholds)
     saturated, sat = imu_saturation(imu, spec, p["saturation"])
     _refuse_share(saturated, "imu: {} % of the samples are saturated",

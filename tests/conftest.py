@@ -9,29 +9,17 @@ run; tests/test_cache.py turns it on in a folder of its own.
 """
 
 import os
-from pathlib import Path
 
 import matplotlib
 import pytest
+from locations import shared_file
 
 matplotlib.use("Agg")
 os.environ["NAVLIB_NO_CACHE"] = "1"
 
-PX4_DIR = Path(
-    os.environ.get("NAVLIB_PX4_DIR")
-    or Path(__file__).resolve().parents[2] / "shared" / "data" / "px4"
-)
-"""The public PX4 sample logs: ``../shared/data/px4`` beside the checkout, or NAVLIB_PX4_DIR."""
-
 
 @pytest.fixture(scope="session")
 def px4_log_path():
-    """Locate a PX4 sample log by file name; skip cleanly when it is absent."""
-
-    def locate(name: str) -> Path:
-        path = PX4_DIR / name
-        if not path.is_file():
-            pytest.skip(f"PX4 sample log not found: {path} (set NAVLIB_PX4_DIR)")
-        return path
-
-    return locate
+    """Locate a public PX4 sample log (``../shared/data/px4``, :mod:`locations`) by file
+    name; skip with a reason when it is absent."""
+    return lambda name: shared_file("px4", name)

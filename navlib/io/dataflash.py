@@ -122,8 +122,16 @@ class _NoProgress(Exception):
 
 
 class _GuardedReader(DFReader.DFReader_binary):
-    """``DFReader_binary`` that refuses to return a message without advancing: a damaged FMT
-    declaring a record length of 0 makes pymavlink parse the same bytes forever."""
+    """``DFReader_binary`` that refuses to return a message without advancing (a damaged FMT
+    declaring a record length of 0 makes pymavlink parse the same bytes forever) and indexes
+    the log in Python: pymavlink's compiled indexer prints a line per damaged byte straight
+    to the process's stderr, past any redirection (thousands of ``bad header`` lines on the
+    terminal for one damaged block); the Python indexer prints through ``sys.stderr``,
+    which :func:`_load` catches (measured: both public ArduPilot logs read in 9.4 s instead
+    of 7.6 s)."""
+
+    def init_arrays_fast(self, progress_callback=None):
+        self.init_arrays(progress_callback=progress_callback)
 
     def _parse_next(self):
         start = self.offset
@@ -167,8 +175,11 @@ def _load(path) -> dict[str, dict]:
     finally:
         if log is not None:
             log.close()
-    if "Skipped" in sink.getvalue():
-        warnings.warn(f"{label}: pymavlink skipped bad bytes; data may be incomplete",
+    notices = sink.getvalue()
+    if "Skipped" in notices or "bad header" in notices:
+        bad = notices.count("bad header")
+        where = f" ({bad} byte(s) without a record header)" if bad else ""
+        warnings.warn(f"{label}: pymavlink skipped bad bytes{where}; data may be incomplete",
                       FlightDataWarning, stacklevel=3)
     columns = {key: {f: _numbers([r.get(f, np.nan) for r in rs]) for f in rs[0]}
                for key, rs in rows.items()}

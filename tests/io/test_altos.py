@@ -1,20 +1,16 @@
 """navlib.io.read_altos: AltOS CSV exports written here (both generations) and the shared ones."""
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from altos_writer import IMU, rocket_rows, write_altos
-from locations import REPO
+from locations import shared_file
 
 from navlib import NavlibInputError, earth, io, units
 from navlib.io.altos import TELEMEGA_RANGE, looks_like_altos
 
-ALTOS_DIR = REPO.parent / "shared" / "data" / "altos"
-if not ALTOS_DIR.is_dir():
-    ALTOS_DIR = Path("/work/shared/data/altos")
 SHARED = ("2018-04-08-serial-1257-flight-0014.csv", "2019-05-04-serial-1257-flight-0017.csv",
           "2019-05-26-serial-1257-flight-0018.csv")
 
@@ -158,10 +154,7 @@ def test_recognised_by_header_not_name(rows, tmp_path):
 
 
 def _shared(name):
-    path = ALTOS_DIR / name
-    if not path.is_file():
-        pytest.skip(f"AltOS sample export not found: {path}")
-    return path
+    return shared_file("altos", name)
 
 
 @pytest.mark.parametrize("name", SHARED)

@@ -3,11 +3,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pandas as pd
 import pytest
-from locations import REPO
+from locations import REPO, shared_file
 
 from navlib import NavlibInputError, io
 from navlib.__main__ import main
@@ -16,7 +14,6 @@ from navlib.reports import fleet
 ROOT = REPO
 SAMPLE = ROOT / "data" / "sample_flight"
 PAIR = f"{SAMPLE / 'imu.csv'},{SAMPLE / 'gnss.csv'}"
-SHARED = Path("/work/shared/data")
 
 
 @pytest.mark.parametrize("spec, kind, n", [("a.ulg", "ulog", 1), ("b.BIN", "dataflash", 1),
@@ -89,10 +86,8 @@ def test_fleet_all_ok_exit_zero_and_bad_options(tmp_path, capsys):
     assert main(["assess", PAIR, "--output", str(out), "--scheduler", "nowhere"]) == 2
 
 
-@pytest.mark.skipif(not (SHARED / "px4" / "sample_log_small.ulg").is_file(),
-                    reason="shared PX4 logs absent")
 def test_fleet_on_a_px4_log(tmp_path):
-    table, pages = fleet.assess_logs([str(SHARED / "px4" / "sample_log_small.ulg")],
+    table, pages = fleet.assess_logs([str(shared_file("px4", "sample_log_small.ulg"))],
                                      scheduler="synchronous")
     row = table.iloc[0]
     assert row.status == "ok", row.error

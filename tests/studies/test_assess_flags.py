@@ -5,12 +5,11 @@ vehicle words and GNSS warnings."""
 from __future__ import annotations
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from locations import REPO, shared_file
 
 from navlib import io
 from navlib.__main__ import _negative_angles, _parser, assess_options, main
@@ -22,7 +21,6 @@ from navlib.studies.assess import assess_flight
 ROOT = REPO
 SAMPLE = ROOT / "data" / "sample_flight"
 PAIR = f"{SAMPLE / 'imu.csv'},{SAMPLE / 'gnss.csv'}"
-SHARED = Path("/work/shared/data")
 
 
 def _options(*words):
@@ -124,12 +122,6 @@ def test_saturation_reaches_the_warnings_column_and_the_thresholds_the_cli(tmp_p
 # --------------------------------------------------------------------------- shared logs
 
 
-def _shared(path):
-    if not path.is_file():
-        pytest.skip(f"{path} not present (shared data of the real-flight checks)")
-    return path
-
-
 def _assess_log(reader, path):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -140,7 +132,7 @@ def _assess_log(reader, path):
 
 def test_sitl_copter_speaks_multicopter():
     _, result, _ = _assess_log(io.read_dataflash,
-                                  _shared(SHARED / "ardupilot" / "sitl_copter_flight.bin"))
+                                  shared_file("ardupilot", "sitl_copter_flight.bin"))
     assert result.vehicle == "multicopter"
     assert "ArduCopter" in result.options["vehicle_reason"]
     phases = set(result.segment_table["phase"])
@@ -159,7 +151,7 @@ def _px4_baro(path, imu):
 
 
 def test_octocopter_speaks_multicopter_and_checks_its_gnss_altitude():
-    path = _shared(SHARED / "px4" / "octocopter_log83.ulg")
+    path = shared_file("px4", "octocopter_log83.ulg")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         imu, gnss = io.read_ulog(path)
@@ -178,7 +170,7 @@ def test_octocopter_speaks_multicopter_and_checks_its_gnss_altitude():
 def test_px4_vehicle_type_from_the_log_in_a_fleet(tmp_path):
     """The PX4 SITL log barely moves (kinematics would say ground); its MAV_TYPE 2 says
     quadrotor, and the fleet row says multicopter."""
-    path = _shared(SHARED / "px4" / "sample_px4_events.ulg")
+    path = shared_file("px4", "sample_px4_events.ulg")
     assert main(["assess", str(path), "--output", str(tmp_path), "--scheduler",
                  "synchronous"]) == 0
     row = pd.read_csv(tmp_path / "summary.csv", keep_default_na=False).iloc[0]

@@ -1,18 +1,33 @@
 """The records of a flight to assess: their summary and the checks the pipeline runs first
-(columns, a common IMU/GNSS span long enough for the fit)."""
+(columns, enough IMU samples, an accelerometer that feels gravity, a common IMU/GNSS span
+long enough for the fit)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
+from navlib import units
+from navlib._validation import increasing_times
 from navlib.errors import NavlibInputError
 from navlib.io import check_overlap
+from navlib.io.checks import R_MAX_M, R_MIN_M
+from navlib.trajectory.fit import MIN_IMU_RATE_HZ
 
 MIN_DURATION_S = 2.0
 """Shortest common IMU/GNSS span accepted, s."""
 MIN_GNSS_EPOCHS = 4
 """Fewest GNSS epochs accepted inside the common span (the fit needs four)."""
+
+MIN_IMU_SAMPLES = int(np.ceil(MIN_DURATION_S * MIN_IMU_RATE_HZ)) + 1
+"""Fewest IMU samples accepted: :data:`MIN_DURATION_S` of data at the fit's lowest IMU rate
+(:data:`navlib.trajectory.fit.MIN_IMU_RATE_HZ`), by construction."""
+MIN_PEAK_ACCEL_G = 0.5
+"""Specific-force norm, g, an IMU record must reach at least once (assumption Q6 of
+docs/assumptions.md): an accelerometer reads about 1 g whenever something holds gravity off
+(the ground at rest, thrust or rotors, lift, drag under a parachute); a record that never
+reads half of it fell freely from its first sample to its last, which cannot be told from a
+dead accelerometer."""
 
 IMU_KEYS = ("t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z")
 GNSS_KEYS = ("t", "x", "y", "z")
@@ -28,6 +43,69 @@ def check_frame(frame, name: str, keys) -> None:
                                f"{list(frame.columns)}")
     if len(frame) < 2:
         raise NavlibInputError(f"{name}: need at least 2 rows, got {len(frame)}")
+
+
+def _channel_text(name: str, x: np.ndarray) -> str:
+    if x.size and np.all(x == x[0]):
+        return f"{name} reads {x[0]:.4g} in every sample"
+    return f"{name} median {np.median(x):.4g} ({np.min(x):.4g}..{np.max(x):.4g})"
+
+
+def _finite_columns(frame: pd.DataFrame, name: str, keys) -> None:
+    """``keys`` of ``frame`` finite numbers, ``t`` strictly increasing."""
+    for key in keys:
+        x = frame[key].to_numpy(dtype=float, na_value=np.nan)
+        bad = np.flatnonzero(~np.isfinite(x))
+        if bad.size:
+            raise NavlibInputError(f"{name}: column {key!r} is not finite at row {int(bad[0])} "
+                                   f"({x[bad[0]]}; {bad.size} row(s) in all)")
+    increasing_times(frame["t"].to_numpy(dtype=float), f"{name} column 't'")
+
+
+def check_imu_record(imu: pd.DataFrame) -> None:
+    """The IMU checks every assessment runs before the data-quality checks that rely on the
+    IMU (:func:`navlib.quality.check_records`: the GNSS faults are judged against it).
+
+    * at least :data:`MIN_IMU_SAMPLES` samples;
+    * finite samples, strictly increasing times;
+    * a specific-force norm reaching :data:`MIN_PEAK_ACCEL_G` (assumption Q6): an
+      accelerometer reading zeros (dead, unplugged, zeroed columns) or values in g is
+      refused, naming what each axis read.
+    """
+    n = len(imu)
+    if n < MIN_IMU_SAMPLES:
+        raise NavlibInputError(
+            f"imu: {n} sample(s); an assessment needs at least {MIN_IMU_SAMPLES} IMU samples "
+            f"({MIN_DURATION_S:g} s of data at the fit's lowest rate of {MIN_IMU_RATE_HZ:g} "
+            f"Hz)")
+    _finite_columns(imu, "imu", IMU_KEYS)
+    f_b = imu[list(IMU_KEYS[1:4])].to_numpy(dtype=float)
+    peak = float(np.max(np.linalg.norm(f_b, axis=1)))
+    if peak < MIN_PEAK_ACCEL_G * units.G0:
+        axes = "; ".join(_channel_text(k, f_b[:, i]) for i, k in enumerate(IMU_KEYS[1:4]))
+        raise NavlibInputError(
+            f"imu f_x, f_y, f_z: the accelerometer never reads {MIN_PEAK_ACCEL_G:g} g: its "
+            f"specific-force norm is at most {peak:.4g} m/s^2 ({peak / units.G0:.3g} g) over "
+            f"{n} samples ({axes}); at rest it reads gravity, about {units.G0:.3g} m/s^2, and "
+            "a vehicle is held against gravity some time of any record (the ground, thrust, "
+            "lift, drag): a dead or unplugged accelerometer, zeroed columns, or data in g "
+            "(the CSV reader's accel_unit='g')?")
+
+
+def check_gnss_record(gnss: pd.DataFrame) -> None:
+    """The GNSS checks every assessment runs before the data-quality checks: finite fixes at
+    strictly increasing times, every position between :data:`navlib.io.checks.R_MIN_M` and
+    :data:`~navlib.io.checks.R_MAX_M` from the Earth's centre (ECEF, m), as the readers
+    demand (a record of zeros was refused as frozen fixes)."""
+    _finite_columns(gnss, "gnss", GNSS_KEYS)
+    r = np.linalg.norm(gnss[list(GNSS_KEYS[1:])].to_numpy(dtype=float), axis=1)
+    bad = np.flatnonzero((r < R_MIN_M) | (r > R_MAX_M))
+    if bad.size:
+        k = int(bad[0])
+        raise NavlibInputError(
+            f"gnss: the position of row {k} (t = {gnss['t'].iloc[k]:.6g} s) is {r[k]:.6g} m "
+            f"from the Earth's centre, and {bad.size} of {r.size} fixes lie outside "
+            f"{R_MIN_M:g}..{R_MAX_M:g} m; expected ECEF x, y, z in m (navlib.io readers)")
 
 
 def median_rate(t: np.ndarray) -> float:

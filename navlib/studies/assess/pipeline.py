@@ -34,6 +34,8 @@ from navlib.studies.assess.inputs import (
     GNSS_KEYS,
     IMU_KEYS,
     check_frame,
+    check_gnss_record,
+    check_imu_record,
     describe_inputs,
     median_rate,
     validate_records,
@@ -213,6 +215,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         vehicle, vehicle_reason = check_vehicle(vehicle), "given"
     else:
         vehicle, vehicle_reason = vehicle_from_log(imu.attrs)
+    check_imu_record(imu)   # before the quality checks, which judge the GNSS by the IMU
+    check_gnss_record(gnss)
     sigma = _gnss_sigma(gnss, spec) if gnss_sigma_m is None else gnss_sigma_m
     checked = quality.check_records(imu, gnss, spec,
                                     finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True),
