@@ -32,8 +32,10 @@ from navlib.studies.plan import plan_mission
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
 SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
-                   "excitable", "sensible", "warnings", "seconds", "page")
-"""Columns of ``summary.csv``, in order (a mission's file name in ``log``)."""
+                   "excitable", "sensible", "unrepresented", "warnings", "seconds", "page")
+"""Columns of ``summary.csv``, in order (a mission's file name in ``log``); ``unrepresented``
+lists the segments whose reference motion departs from the records (their excitable and
+sensible states do not describe the flight flown; the warnings say why)."""
 
 
 def _keywords(fn, *skip: str) -> tuple[str, ...]:
@@ -74,6 +76,10 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
                                         for r in seg.itertuples(index=False)),
                        excitable=_per_segment(summary, "excitable"),
                        sensible=_per_segment(summary, "sensible"))
+            if "represented" in seg.columns:
+                row["unrepresented"] = "; ".join(
+                    f"{r.segment} {r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
+                    for r in seg.itertuples(index=False) if not r.represented)
         except Exception as exc:  # a bad input is reported, never stops the others
             row["error"] = f"{type(exc).__name__}: {exc}"
     row["warnings"] = " | ".join(sorted({_warning_text(w) for w in caught}))
