@@ -99,7 +99,8 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   (``keyword``, ``initial_attitude``, ``log`` or ``estimated``);
   ``initial_attitude_source`` (``user``, ``log``, ``level``, ``tilt`` or ``rail``) and
   ``initial_attitude_note`` (the same in words, for reports); ``n_imu``, ``n_gnss``,
-  ``n_knots``, ``imu_rate_hz``;
+  ``n_knots``, ``imu_rate_hz``; ``liftoff_s`` (the lift-off found from the records, or
+  None; also ``events["liftoff"]``);
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
   statistics, empty when not levelled), ``sigma_specific_force_used_mps2`` and
@@ -131,6 +132,7 @@ from navlib.trajectory.initial_attitude import (
     logged_attitude,
     start_attitude,
 )
+from navlib.trajectory.liftoff import find_liftoff, liftoff_knots
 from navlib.trajectory.position_spline import (
     ATTITUDE_SAMPLES_PER_KNOT,
     MAX_KNOT_SPACING_S,
@@ -161,6 +163,7 @@ FIT_DEFAULTS = {
     "preset": None,
     "vibration_allowance_mps2": 2.0,
     "use_logged_attitude": True,
+    "hold_pad": True,
     "max_bridge_s": 1.0,
     "sigma_accel_bias_mps2": None,
     "attitude_prior_deg": 5.0,
@@ -227,6 +230,8 @@ def _options(options):
     if p["knot_spacing_s"] > MAX_KNOT_SPACING_S:
         raise NavlibInputError(f"knot_spacing_s: {p['knot_spacing_s']:g} s exceeds "
                                f"{MAX_KNOT_SPACING_S:g} s (MAX_KNOT_SPACING_S)")
+    if not isinstance(p["hold_pad"], bool):
+        raise NavlibInputError(f"hold_pad: expected True or False, got {p['hold_pad']!r}")
     if not isinstance(p["use_logged_attitude"], bool):
         raise NavlibInputError("use_logged_attitude: expected True or False, got "
                                f"{p['use_logged_attitude']!r}")
@@ -340,6 +345,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
         IMU sample of the overlap; replaces levelling and heading),
         ``use_logged_attitude=True`` (start from ``imu.attrs["attitude"]`` when present),
+        ``hold_pad=True`` (zero velocity and the lift-off attitude from the first sample
+        until the lift-off :func:`~navlib.trajectory.liftoff.find_liftoff` reads from the
+        recorded specific force; levelling only on that pad; docs/assumptions.md FIT4),
         ``initial_attitude_deg=None`` (yaw, pitch, roll of the body against the local NED
         frame at the first sample, deg; replaces levelling and heading),
         ``launch_elevation_deg=None``, ``launch_azimuth_deg=None`` (launch-rail angles of
@@ -416,6 +424,9 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
     earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
     relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
+    pad = find_liftoff(t, f_b, w_b, float(np.linalg.norm(gamma0)), p["level_tolerance"]) \
+        if p["hold_pad"] else None
+    pad_end = None if pad is None else pad[1]
     user = p["initial_attitude"] is not None or p["initial_attitude_deg"] is not None
     logged = logged_attitude(imu, t[0], C_n_e) if (
         not user and p["use_logged_attitude"]) else None
@@ -432,7 +443,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         note = "logger attitude (the autopilot's own attitude estimate logged at the start)"
     else:
         att0, kind, note, level_info = start_attitude(
-            imu, t, f_b, w_b, p, gamma0, C_n_e, (t_g, P_g, V_g), earth_turn, relative)
+            imu, t, f_b, w_b, p, gamma0, C_n_e, (t_g, P_g, V_g), earth_turn, relative,
+            pad_end)
         if azimuth_deg is not None:
             x_down = att0.apply([1.0, 0.0, 0.0]) @ (gamma0 / np.linalg.norm(gamma0))
             if 1.0 - x_down**2 < VERTICAL_SIN2:
@@ -463,9 +475,13 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         note += (", azimuth " + ("estimated from GNSS" if azimuth_deg is None else
                                  f"{azimuth_deg:g} deg given") + ", " + roll)
 
+    attitude = _hold_pad(attitude, pad_end)
+
     # 3: position spline and attitude correction --------------------------------------
     knots = place_knots(t, p["knot_spacing_s"])
-    rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start)
+    if pad is not None:
+        knots = liftoff_knots(knots, t, pad_end)
+    rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end)
     correction = AttitudeCorrection(t, p, accel_bias_sigma(p))
     coef = None
     for _ in range(p["iterations"]):
@@ -476,6 +492,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         attitude = Rotation.from_rotvec(eps) * attitude
 
     # 4: smooth attitude on SO(3) --------------------------------------------------------
+    attitude = _hold_pad(attitude, pad_end)    # the correction's slow drift, undone there
     rate_norm = np.linalg.norm(w_b, axis=1)
     turn = np.r_[0.0, np.cumsum(0.5 * (rate_norm[1:] + rate_norm[:-1]) * np.diff(t))]
     att_knots = place_knots(t, p["attitude_knot_spacing_s"], turn)
@@ -488,8 +505,10 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         coef, _ = rows.solve(f_e, coef)
     P, V, a = rows.evaluate(coef)
     attitude_fit = Rotation.from_matrix(C_b_e)
-    traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events={"start": float(t[0]),
-                            "end": float(t[-1])}, name=str(p["name"]))
+    events = {"start": float(t[0]), "end": float(t[-1])}
+    if pad is not None:
+        events["liftoff"] = pad[0]
+    traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events=events, name=str(p["name"]))
     residuals = _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g)
     residuals.update({
         "heading_deg": float(np.degrees(heading_of(attitude_fit[0], C_n_e))),
@@ -499,6 +518,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         "imu_holes": hole_bounds(t, f_b, w_b, holes), "level": level_info,
         "sigma_specific_force_used_mps2": float(rows.sigma_f),
         "accel_bias_mps2": [float(b) for b in correction.bias],
+        "liftoff_s": None if pad is None else pad[0],
     })
     params = {k: v for k, v in p.items() if k not in ("initial_attitude", "initial_attitude_deg")}
     params["fit_residuals"] = residuals
@@ -506,6 +526,15 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
                       attitude=traj.attitude, specific_force=traj.specific_force,
                       angular_rate=traj.angular_rate, events=traj.events, name=traj.name,
                       parameters=params)
+
+
+def _hold_pad(attitude, pad_end):
+    """The attitude samples with the pad (up to ``pad_end``) at the attitude of lift-off
+    (docs/assumptions.md FIT4); unchanged without a pad."""
+    if pad_end is None:
+        return attitude
+    n = len(attitude)
+    return attitude[np.r_[np.full(pad_end + 1, pad_end), np.arange(pad_end + 1, n)]]
 
 
 def _rms(x):

@@ -35,6 +35,8 @@ ATTITUDE_SAMPLES_PER_KNOT = 6
 """About this many attitude samples per knot interval enter the attitude spline's fit (every
 n-th of a denser interval): the samples are integrated gyro readings, smooth at that scale,
 and the Gauss-Newton cost grows with their number (a 250 Hz record has 25 per 0.1 s)."""
+PAD_SIGMA_MPS = 1e-3
+"""Standard deviation of the zero-velocity rows on the pad, m/s (a constraint in effect)."""
 MAX_CORRECTION_INTERVALS = 60
 """Most knot intervals of the attitude correction: flights longer than 60
 ``correction_knot_spacing_s`` get wider intervals (10 min at the default 10 s), which keeps
@@ -105,7 +107,7 @@ class PositionRows:
     optionally, the attitude correction. The three axes share the banded normal matrix.
     """
 
-    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref):
+    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref, pad_end=None):
         self.P_ref = P_ref
         self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
         self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
@@ -118,6 +120,9 @@ class PositionRows:
             w_v2 = 1.0 / p["sigma_velocity_mps"] ** 2
             self.N_gnss = self.N_gnss + w_v2 * (self.G1.T @ self.G1)
             rhs_gnss = rhs_gnss + w_v2 * (self.G1.T @ V_g)
+        if pad_end is not None:     # standing still on the pad: P' = 0 up to lift-off
+            B1 = self.B1[:pad_end + 1]
+            self.N_gnss = self.N_gnss + (B1.T @ B1) / PAD_SIGMA_MPS**2
         self.rhs_gnss = rhs_gnss
         self.set_weights(np.ones(t.size))
         # first linearisation point: GNSS positions interpolated to the IMU times

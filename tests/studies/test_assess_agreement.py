@@ -18,6 +18,7 @@ from navlib.studies.assess.agreement import (
     moving_average,
     segment_agreement,
 )
+from navlib.trajectory.liftoff import find_liftoff
 from navlib.trajectory.mission import from_mission, read_mission, with_values
 
 
@@ -158,3 +159,34 @@ def test_moving_average_of_uneven_samples():
     x = np.array([[1.0], [2.0], [3.0], [10.0], [20.0]])
     avg = moving_average(t, x, 1.0)
     assert avg[:, 0] == pytest.approx([2.0, 2.0, 2.0, 15.0, 15.0])
+
+
+def test_the_pad_is_held_still_until_the_liftoff_the_records_show(hpr, hpr_records):
+    imu, gnss = hpr_records
+    result, _ = _assess(imu, gnss, t_max=40.0)
+    traj = result.trajectory
+    res = traj.parameters["fit_residuals"]
+    liftoff = res["liftoff_s"]
+    # found from the recorded specific force: within 0.05 s of the truth's lift-off
+    assert liftoff == pytest.approx(hpr.events["liftoff"], abs=0.05)
+    assert traj.events["liftoff"] == liftoff
+    pad = traj.t <= liftoff
+    assert np.linalg.norm(traj.velocity[pad], axis=1).max() < 0.01
+    turn = traj.C_b_e()[pad] @ traj.C_b_e()[0].T
+    assert np.degrees(np.arccos(np.clip((np.trace(turn, axis1=1, axis2=2) - 1) / 2, -1, 1))
+                      ).max() < 0.01
+    # levelled on the pad, never after lift-off
+    assert res["level"]["t_end"] <= liftoff
+    # without the hold the same records let the pad move (the fit's freedom before)
+    free, _ = _assess(imu, gnss, t_max=40.0, fit_options={"hold_pad": False})
+    free_pad = free.trajectory.t <= liftoff
+    assert np.linalg.norm(free.trajectory.velocity[free_pad], axis=1).max() > 0.1
+    assert free.trajectory.parameters["fit_residuals"]["liftoff_s"] is None
+
+
+def test_a_record_starting_in_the_air_has_no_pad(hpr_records):
+    imu, _ = hpr_records
+    air = imu[(imu["t"] >= 8.0) & (imu["t"] <= 16.0)].reset_index(drop=True)
+    f = air[["f_x", "f_y", "f_z"]].to_numpy()
+    w = air[["w_x", "w_y", "w_z"]].to_numpy()
+    assert find_liftoff(air["t"].to_numpy(), f, w, 9.8, 0.05) is None

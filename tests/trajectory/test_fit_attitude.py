@@ -233,13 +233,20 @@ def test_short_pre_launch_window_levels_the_start():
     res = fit.parameters["fit_residuals"]
     assert res["initial_attitude_source"] == "level"
     assert res["level"]["short"] and 0.25 <= res["level"]["window_s"] <= 0.3
-    assert re.match(r"levelled from 0\.(29|30) s pre-launch window",
+    assert re.match(r"levelled from 0\.(2[5-9]|30) s pre-launch window",
                     res["initial_attitude_note"])
     assert res["heading_deg"] == pytest.approx(120.0, abs=0.5)
     att, d_p, _, _ = _compare(fit, truth)
     # within what the accelerometer-bias prior of the preset (0.1 m/s^2: 0.6 deg) leaves
     assert att[0] < np.radians(0.6) and np.median(att) < np.radians(0.6)
-    assert d_p.max() < 0.5
+    # the pad held still (docs/assumptions.md FIT4) costs position here: the thrust ramps
+    # from 0 to 60 m/s^2 in 0.05 s, 0.02 s after the lift-off knot, inside one knot
+    # interval of the position spline (the free fit, hold_pad=False, stays within 0.5 m
+    # by letting the pad move); a known limit, measured: 1.1 m
+    assert d_p.max() < 1.5
+    free = fit_flight_data(imu, gnss, preset="pixhawk_mems", launch_azimuth_deg=120.0,
+                           hold_pad=False)
+    assert _compare(free, truth)[1].max() < 0.5
 
 
 def test_logger_tilt_starts_a_record_in_flight():
@@ -309,7 +316,7 @@ def test_assessment_notes_name_the_initial_attitude_source():
     imu, gnss = _records(truth, sigma_f=0.02, sigma_w=2e-4)
     result = assess_flight(imu, gnss, preset="pixhawk_mems",
                            fit_options={"launch_azimuth_deg": 120.0})
-    assert any(re.match(r"initial attitude: levelled from 0\.(29|30) s pre-launch window", n)
+    assert any(re.match(r"initial attitude: levelled from 0\.(2[5-9]|30) s pre-launch window", n)
                for n in result.notes)
     imu, gnss = imu[imu.t >= 1.0], gnss[gnss.t >= 1.0]
     result = assess_flight(imu, gnss, preset="pixhawk_mems", fit_options={

@@ -7,7 +7,7 @@ fit's IMU calibration (:func:`fit_calibration`, one scale and bias per axis), av
 ``moving_average_s``; :func:`segment_agreement` reduces them per segment (the worst axis)
 and checks them against the bounds of ``data/quality.toml`` ``[fit]``
 (:func:`fit_bounds`), naming a likely cause for every segment outside them
-(docs/assumptions.md F1-F3).
+(docs/assumptions.md FIT1-FIT3).
 """
 
 from __future__ import annotations
