@@ -50,9 +50,11 @@ Method (:func:`fit_flight_data`)
    (cubic B-spline, knots every ``correction_knot_spacing_s``, at most
    ``MAX_CORRECTION_INTERVALS`` intervals; prior ``attitude_prior_deg`` on its value and
    ``attitude_drift_deg_s`` on its change) that absorbs levelling/heading errors and gyro
-   drift, and a constant accelerometer bias (body axes; prior ``sigma_accel_bias_mps2``,
-   by default the ``preset``'s turn-on bias; without a preset none is estimated), which
-   the fit would otherwise take for motion; all solved jointly through a Schur complement.
+   drift, and a constant accelerometer bias and scale-factor error per body axis (priors
+   ``sigma_accel_bias_mps2`` and ``sigma_accel_scale``, by default the ``preset``'s
+   turn-on bias and scale factor; without a preset none is estimated), which the fit
+   would otherwise take for motion (a 3 % scale error bends a boost); all solved jointly
+   through a Schur complement.
    Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times; specific-force
    rows whose residual exceeds 4 sigma are down-weighted (Huber; on the first pass
    ``sigma_specific_force_mps2`` is raised to the robust scale of the residuals, so
@@ -104,7 +106,8 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
   statistics, empty when not levelled), ``sigma_specific_force_used_mps2`` and
-  ``accel_bias_mps2`` (the estimated accelerometer bias, body axes).
+  ``accel_bias_mps2`` and ``accel_scale`` (the estimated accelerometer bias and scale,
+  body axes: recorded ``= accel_scale * f + accel_bias``).
 
 With noiseless data of a trajectory the splines can represent, all residuals are near
 zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
@@ -126,6 +129,7 @@ from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.trajectory.initial_attitude import (
     VERTICAL_SIN2,
     accel_bias_sigma,
+    accel_scale_sigma,
     coarse_heading,
     gyro_drift_deg_s,
     heading_of,
@@ -166,6 +170,7 @@ FIT_DEFAULTS = {
     "hold_pad": True,
     "max_bridge_s": 1.0,
     "sigma_accel_bias_mps2": None,
+    "sigma_accel_scale": None,
     "attitude_prior_deg": 5.0,
     "attitude_drift_deg_s": None,
     "correction_knot_spacing_s": 10.0,
@@ -224,6 +229,9 @@ def _options(options):
                                               0.0, low_open=True)
     p["vibration_allowance_mps2"] = finite_scalar(p["vibration_allowance_mps2"],
                                                   "vibration_allowance_mps2", 0.0)
+    if p["sigma_accel_scale"] is not None:
+        p["sigma_accel_scale"] = finite_scalar(p["sigma_accel_scale"], "sigma_accel_scale",
+                                               0.0, 0.5)
     if p["sigma_accel_bias_mps2"] is not None:
         p["sigma_accel_bias_mps2"] = finite_scalar(p["sigma_accel_bias_mps2"],
                                                    "sigma_accel_bias_mps2", 0.0)
@@ -365,6 +373,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         motor vibration accepted at rest), ``max_bridge_s=1`` (longest IMU hole bridged),
         ``sigma_accel_bias_mps2=None`` (prior sigma of the constant accelerometer bias the
         fit estimates; None: the named ``preset``'s turn-on bias, no bias without a preset),
+        ``sigma_accel_scale=None`` (prior sigma of its per-axis scale-factor error; None:
+        the ``preset``'s scale factor, none without a preset),
         ``iterations=3`` (gravity/Coriolis/heading relinearisations), ``name``.
 
     Returns
@@ -482,12 +492,12 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     if pad is not None:
         knots = liftoff_knots(knots, t, pad_end)
     rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end)
-    correction = AttitudeCorrection(t, p, accel_bias_sigma(p))
+    correction = AttitudeCorrection(t, p, accel_bias_sigma(p), accel_scale_sigma(p))
     coef = None
     for _ in range(p["iterations"]):
         C = attitude.as_matrix()
-        f_e = np.einsum("nij,nj->ni", C, f_b - correction.bias)
-        coef, eps = rows.solve(f_e, coef, correction, C)
+        f_e = np.einsum("nij,nj->ni", C, correction.corrected(f_b))
+        coef, eps = rows.solve(f_e, coef, correction, C, f_b)
         rows.robust_weights(coef, f_e, eps)
         attitude = Rotation.from_rotvec(eps) * attitude
 
@@ -500,7 +510,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     C_b_e, w_eb_b = SO3Spline.fit(t[used], attitude[used], att_knots, SPLINE_DEGREE).evaluate(t)
 
     # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
-    f_e = np.einsum("nij,nj->ni", C_b_e, f_b - correction.bias)
+    f_e = np.einsum("nij,nj->ni", C_b_e, correction.corrected(f_b))
     for _ in range(p["iterations"]):
         coef, _ = rows.solve(f_e, coef)
     P, V, a = rows.evaluate(coef)
@@ -518,6 +528,7 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         "imu_holes": hole_bounds(t, f_b, w_b, holes), "level": level_info,
         "sigma_specific_force_used_mps2": float(rows.sigma_f),
         "accel_bias_mps2": [float(b) for b in correction.bias],
+        "accel_scale": [float(1.0 + s) for s in correction.scale],
         "liftoff_s": None if pad is None else pad[0],
     })
     params = {k: v for k, v in p.items() if k not in ("initial_attitude", "initial_attitude_deg")}

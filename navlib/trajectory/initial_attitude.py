@@ -393,3 +393,14 @@ def accel_bias_sigma(p):
         return 0.0
     bias = _imu_preset(p["preset"]).accel.bias
     return float(bias) if bias > 0 else TURN_ON_FALLBACK["accel_bias_m_s2"]
+
+
+def accel_scale_sigma(p):
+    """Prior sigma of the fit's accelerometer scale-factor error (dimensionless):
+    ``sigma_accel_scale``, else the named ``preset``'s scale factor, else 0 (none
+    estimated)."""
+    if p["sigma_accel_scale"] is not None:
+        return p["sigma_accel_scale"]
+    if p["preset"] is None:
+        return 0.0
+    return float(_imu_preset(p["preset"]).accel.scale_factor)

@@ -26,6 +26,9 @@ of gravity (the thrust ramp starts there; the rest acceleration of
 PAD_RATE_DEG_S = 3.0
 """Largest mean angular rate on the pad, deg/s (the segmentation's rest rate)."""
 MIN_PAD_SAMPLES = 3
+LIFTOFF_KNOTS_S = 0.4
+"""Span after lift-off with knots every ``SAMPLES_PER_KNOT`` samples, s: twice
+``LIFTOFF_HOLD_S``, time for the thrust to build up."""
 
 
 def _smoothed_norm(t, f_b, window_s):
@@ -70,16 +73,23 @@ def find_liftoff(t, f_b, w_b, g, tolerance):
 
 
 def liftoff_knots(knots, t, pad_end):
-    """``knots`` with lift-off ``t[pad_end]`` as a knot of multiplicity ``degree - 1``: the
-    position spline keeps a continuous velocity there but its acceleration may jump, as
-    thrust does when the vehicle leaves the pad (docs/assumptions.md FIT4). Knots closer to
-    lift-off than ``SAMPLES_PER_KNOT`` samples are dropped so no interval is left empty."""
+    """``knots`` with lift-off ``t[pad_end]`` as a knot of multiplicity ``degree - 1`` and
+    knots every ``SAMPLES_PER_KNOT`` samples over the ``LIFTOFF_KNOTS_S`` after it.
+
+    At the multiple knot the position spline keeps a continuous velocity but its
+    acceleration may jump, as thrust does when the vehicle leaves the pad; the dense knots
+    let it follow a thrust ramp of a few hundredths of a second, which one knot interval of
+    0.1 s cannot (docs/assumptions.md FIT4). Knots of ``knots`` in that stretch are replaced.
+    """
     t_lift = float(t[pad_end])
-    lo = t[max(pad_end - SAMPLES_PER_KNOT, 0)]
-    hi = t[min(pad_end + SAMPLES_PER_KNOT, t.size - 1)]
-    inner = knots[SPLINE_DEGREE + 1:-SPLINE_DEGREE - 1]
-    inner = inner[(inner < lo) | (inner > hi)]
     if not t[0] < t_lift < t[-1]:
         return knots
-    inner = np.sort(np.r_[inner, np.full(SPLINE_DEGREE - 1, t_lift)])
+    end = int(np.searchsorted(t, t_lift + LIFTOFF_KNOTS_S, side="right"))
+    dense = t[pad_end + SAMPLES_PER_KNOT:end:SAMPLES_PER_KNOT]
+    dense = dense[t.size - np.searchsorted(t, dense) > SAMPLES_PER_KNOT]
+    lo = t[max(pad_end - SAMPLES_PER_KNOT, 0)]
+    hi = dense[-1] + (t[SAMPLES_PER_KNOT] - t[0]) if dense.size else t_lift
+    inner = knots[SPLINE_DEGREE + 1:-SPLINE_DEGREE - 1]
+    inner = inner[(inner < lo) | (inner > hi)]
+    inner = np.sort(np.r_[inner, np.full(SPLINE_DEGREE - 1, t_lift), dense])
     return np.r_[knots[:SPLINE_DEGREE + 1], inner, knots[-SPLINE_DEGREE - 1:]]

@@ -159,7 +159,7 @@ class PositionRows:
     def evaluate(self, coef):
         return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
 
-    def solve(self, f_e, coef, correction=None, C=None):
+    def solve(self, f_e, coef, correction=None, C=None, f_b=None):
         """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
 
         With a :class:`AttitudeCorrection`, the specific force rows read
@@ -175,7 +175,7 @@ class PositionRows:
         rhs = self.B2.T @ (w * r) + self.rhs_gnss
         if correction is None:
             return self._solve(rhs), np.zeros_like(f_e)
-        G = correction.columns(f_e, C)                    # 3 x sparse (N, n_u)
+        G = correction.columns(f_e, C, f_b)               # 3 x sparse (N, n_u)
         Q = [sp.csr_array(self.B2.T @ (G[a] * w)) for a in range(3)]
         n_u = G[0].shape[1]
         sol = self._solve(np.hstack([rhs, *(q.toarray() for q in Q)]))
@@ -194,18 +194,20 @@ class PositionRows:
 
 class AttitudeCorrection:
     """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector, cubic B-spline)
-    and a constant accelerometer bias ``b_a`` (body axes).
+    and a constant accelerometer bias ``b_a`` and scale-factor error ``s_a`` (body axes).
 
     ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
-    the recorded specific force and GNSS reveal; ``f <- f - b_a`` the accelerometer bias,
-    which would otherwise be taken for motion (a parked vehicle drifting at a few m/s).
-    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and neighbouring
-    coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2), so
-    stretches without attitude information (free fall) keep the gyro attitude; each bias
-    component ~ N(0, ``sigma_ba``^2), the preset's turn-on accelerometer bias.
+    the recorded specific force and GNSS reveal; ``f <- f - b_a - s_a f`` the accelerometer
+    bias and scale error (the recorded ``(1 + s_a) f + b_a`` to first order), which would
+    otherwise be taken for motion (a parked vehicle drifting at a few m/s, a boost bent by a
+    3 % scale). Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and
+    neighbouring coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2),
+    so stretches without attitude information (free fall) keep the gyro attitude; each bias
+    component ~ N(0, ``sigma_ba``^2), each scale error ~ N(0, ``sigma_sa``^2) (the preset's
+    turn-on bias and scale factor); a zero sigma leaves that term out.
     """
 
-    def __init__(self, t, p, sigma_ba):
+    def __init__(self, t, p, sigma_ba, sigma_sa=0.0):
         k = 3
         n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
         n_int = min(n_int, MAX_CORRECTION_INTERVALS)
@@ -218,23 +220,38 @@ class AttitudeCorrection:
         D = np.diff(np.eye(n_c), axis=0)
         per_axis = (np.eye(n_c) / (p["attitude_prior_deg"] * DEG) ** 2
                     + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
-        # unknowns ordered (axis j, coef i) for eps, then the three bias components
-        n_b = 3 if sigma_ba > 0 else 0                  # no bias unknowns without a prior
-        self.prior = np.zeros((3 * n_c + n_b, 3 * n_c + n_b))
+        # unknowns ordered (axis j, coef i) for eps, then the bias, then the scale errors
+        self.n_b = 3 if sigma_ba > 0 else 0              # no bias unknowns without a prior
+        self.n_s = 3 if sigma_sa > 0 else 0
+        n = 3 * n_c + self.n_b + self.n_s
+        self.prior = np.zeros((n, n))
         self.prior[:3 * n_c, :3 * n_c] = np.kron(np.eye(3), per_axis)
-        if n_b:
-            self.prior[3 * n_c:, 3 * n_c:] = np.eye(3) / sigma_ba**2
+        if self.n_b:
+            self.prior[3 * n_c:3 * n_c + 3, 3 * n_c:3 * n_c + 3] = np.eye(3) / sigma_ba**2
+        if self.n_s:
+            self.prior[n - 3:, n - 3:] = np.eye(3) / sigma_sa**2
         self.n_c = n_c
-        self.total = np.zeros(3 * n_c + n_b)             # sum of the increments applied
+        self.total = np.zeros(n)                         # sum of the increments applied
 
     @property
     def bias(self):
         """Accumulated accelerometer bias estimate (body axes, m/s^2)."""
-        return self.total[3 * self.n_c:] if self.total.size > 3 * self.n_c else np.zeros(3)
+        i = 3 * self.n_c
+        return self.total[i:i + 3] if self.n_b else np.zeros(3)
 
-    def columns(self, f_e, C):
+    @property
+    def scale(self):
+        """Accumulated accelerometer scale-factor error estimate (body axes)."""
+        return self.total[-3:] if self.n_s else np.zeros(3)
+
+    def corrected(self, f_b):
+        """The recorded specific force ``f_b`` with the bias and scale error removed."""
+        return f_b - self.bias - self.scale * f_b
+
+    def columns(self, f_e, C, f_b=None):
         """Sparse ``G[a]`` (N, n_u) for the axes a: ``beta_i(t_k) (e_j x f_e(t_k))_a`` for
-        ``eps`` and ``-C_b_e[k, a, j]`` for the bias."""
+        ``eps``, ``-C_b_e[k, a, j]`` for the bias and ``-C_b_e[k, a, j] f_b[k, j]`` for the
+        scale error."""
         out = []
         for a in range(3):
             blocks = []
@@ -243,8 +260,10 @@ class AttitudeCorrection:
                 e_j[j] = 1.0
                 cross = np.cross(e_j, f_e)[:, a]          # (N,)
                 blocks.append(sp.diags_array(cross) @ self.beta)
-            if self.total.size > 3 * self.n_c:
+            if self.n_b:
                 blocks.append(sp.csr_array(-C[:, a, :]))
+            if self.n_s:
+                blocks.append(sp.csr_array(-C[:, a, :] * f_b))
             out.append(sp.csr_array(sp.hstack(blocks)))
         return out
 

@@ -190,3 +190,25 @@ def test_a_record_starting_in_the_air_has_no_pad(hpr_records):
     f = air[["f_x", "f_y", "f_z"]].to_numpy()
     w = air[["w_x", "w_y", "w_z"]].to_numpy()
     assert find_liftoff(air["t"].to_numpy(), f, w, 9.8, 0.05) is None
+
+
+def test_a_3_percent_accelerometer_scale_error_does_not_bend_the_motion(hpr, hpr_records):
+    imu, gnss = hpr_records
+    scaled = imu.copy()
+    scaled[["f_x", "f_y", "f_z"]] *= 1.03
+
+    def errors(records, **fit_options):
+        result, _ = _assess(*records, t_max=40.0, fit_options=fit_options)
+        traj = result.trajectory
+        k = np.searchsorted(hpr.t, traj.t)
+        return (np.linalg.norm(traj.velocity - hpr.velocity[k], axis=1).max(),
+                result)
+
+    clean, _ = errors(hpr_records)
+    fixed, _ = errors((scaled, gnss), sigma_accel_scale=0.0)     # no scale estimated
+    estimated, result = errors((scaled, gnss), sigma_accel_scale=0.03)
+    assert fixed > 1.5 * clean                     # the scale error bends the motion ...
+    assert estimated < 1.2 * clean                 # ... unless estimated with it
+    scale = result.trajectory.parameters["fit_residuals"]["accel_scale"]
+    assert scale[0] == pytest.approx(1.03, abs=0.005)        # the thrust axis sees it
+    assert result.segment_table["represented"].all()
