@@ -107,7 +107,8 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
   statistics, empty when not levelled), ``sigma_specific_force_used_mps2`` and
   ``accel_bias_mps2`` and ``accel_scale`` (the estimated accelerometer bias and scale,
-  body axes: recorded ``= accel_scale * f + accel_bias``).
+  body axes: recorded ``= accel_scale * f + accel_bias``; ``accel_scale_note`` says why
+  no scale was kept, see :data:`SCALE_CREDIBLE_SIGMAS`).
 
 With noiseless data of a trajectory the splines can represent, all residuals are near
 zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
@@ -145,6 +146,7 @@ from navlib.trajectory.position_spline import (
     AttitudeCorrection,
     PositionRows,
     place_knots,
+    resolved_samples,
     thin,
 )
 from navlib.units import DEG
@@ -187,6 +189,10 @@ MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
 above (Nyquist), below which the gyro integration aliases the attitude."""
+SCALE_CREDIBLE_SIGMAS = 3.0
+"""An accelerometer scale error the fit estimates beyond this many prior sigmas (the
+preset's scale-factor tolerance) is not a calibration but the fit shrinking a motion it
+cannot follow (a tumble it does not resolve); the fit is then redone without a scale."""
 HOLE_FACTOR = 10.0
 """An IMU interval longer than this many median intervals is a hole (as the readers'
 ``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
@@ -491,15 +497,19 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     knots = place_knots(t, p["knot_spacing_s"])
     if pad is not None:
         knots = liftoff_knots(knots, t, pad_end)
-    rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end)
-    correction = AttitudeCorrection(t, p, accel_bias_sigma(p), accel_scale_sigma(p))
-    coef = None
-    for _ in range(p["iterations"]):
-        C = attitude.as_matrix()
-        f_e = np.einsum("nij,nj->ni", C, correction.corrected(f_b))
-        coef, eps = rows.solve(f_e, coef, correction, C, f_b)
-        rows.robust_weights(coef, f_e, eps)
-        attitude = Rotation.from_rotvec(eps) * attitude
+    resolved = resolved_samples(t, w_b)
+    sigma_sa, scale_note = accel_scale_sigma(p), ""
+    while True:
+        rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end, resolved)
+        correction, corrected, coef = _correct(rows, attitude, f_b, t, p, sigma_sa)
+        worst = float(np.abs(correction.scale).max())
+        if sigma_sa == 0.0 or worst <= SCALE_CREDIBLE_SIGMAS * sigma_sa:
+            break
+        scale_note = (f"accelerometer scale error {worst:.3g} found, beyond "
+                      f"{SCALE_CREDIBLE_SIGMAS:g} x its prior {sigma_sa:.3g}: taken as the fit "
+                      "absorbing a motion it does not follow, refitted without a scale")
+        sigma_sa = 0.0
+    attitude = corrected
 
     # 4: smooth attitude on SO(3) --------------------------------------------------------
     attitude = _hold_pad(attitude, pad_end)    # the correction's slow drift, undone there
@@ -529,6 +539,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         "sigma_specific_force_used_mps2": float(rows.sigma_f),
         "accel_bias_mps2": [float(b) for b in correction.bias],
         "accel_scale": [float(1.0 + s) for s in correction.scale],
+        "accel_scale_note": scale_note,
+        "unresolved_fraction": float(1.0 - resolved.mean()),
         "liftoff_s": None if pad is None else pad[0],
     })
     params = {k: v for k, v in p.items() if k not in ("initial_attitude", "initial_attitude_deg")}
@@ -537,6 +549,21 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
                       attitude=traj.attitude, specific_force=traj.specific_force,
                       angular_rate=traj.angular_rate, events=traj.events, name=traj.name,
                       parameters=params)
+
+
+def _correct(rows, attitude, f_b, t, p, sigma_sa):
+    """Method step 3: the position spline, the attitude correction, the accelerometer bias
+    and scale error, relinearised ``iterations`` times. Returns the correction, the
+    corrected attitude samples and the spline coefficients."""
+    correction = AttitudeCorrection(t, p, accel_bias_sigma(p), sigma_sa)
+    coef = None
+    for _ in range(p["iterations"]):
+        C = attitude.as_matrix()
+        f_e = np.einsum("nij,nj->ni", C, correction.corrected(f_b))
+        coef, eps = rows.solve(f_e, coef, correction, C, f_b)
+        rows.robust_weights(coef, f_e, eps)
+        attitude = Rotation.from_rotvec(eps) * attitude
+    return correction, attitude, coef
 
 
 def _hold_pad(attitude, pad_end):

@@ -35,6 +35,16 @@ ATTITUDE_SAMPLES_PER_KNOT = 6
 """About this many attitude samples per knot interval enter the attitude spline's fit (every
 n-th of a denser interval): the samples are integrated gyro readings, smooth at that scale,
 and the Gauss-Newton cost grows with their number (a 250 Hz record has 25 per 0.1 s)."""
+MAX_TURN_PER_SAMPLE_RAD = np.radians(30.0)
+"""A sample whose recorded rate turns the body by more than this since the previous one is
+not resolved by the record's rate: the gyro chain cannot follow a rotation axis that moves
+within a sample (900 deg/s at 10 Hz is 90 deg per sample); the assessment's bound
+``max_turn_per_sample_deg`` in data/quality.toml [fit] is the same 30 deg."""
+UNRESOLVED_WEIGHT = 1e-4
+"""Weight factor of the specific-force rows within ``UNRESOLVED_MARGIN_S`` of an unresolved
+sample: their attitude is unknown, so the GNSS carries the position there and they do not
+set the accelerometer calibration or the attitude correction."""
+UNRESOLVED_MARGIN_S = 0.5
 PAD_SIGMA_MPS = 1e-3
 """Standard deviation of the zero-velocity rows on the pad, m/s (a constraint in effect)."""
 MAX_CORRECTION_INTERVALS = 60
@@ -107,7 +117,8 @@ class PositionRows:
     optionally, the attitude correction. The three axes share the banded normal matrix.
     """
 
-    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref, pad_end=None):
+    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref, pad_end=None,
+                 resolved=None):
         self.P_ref = P_ref
         self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
         self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
@@ -124,6 +135,7 @@ class PositionRows:
             B1 = self.B1[:pad_end + 1]
             self.N_gnss = self.N_gnss + (B1.T @ B1) / PAD_SIGMA_MPS**2
         self.rhs_gnss = rhs_gnss
+        self.resolved = np.ones(t.size, bool) if resolved is None else resolved
         self.set_weights(np.ones(t.size))
         # first linearisation point: GNSS positions interpolated to the IMU times
         self.P0 = np.column_stack([np.interp(t, t_g, P_g[:, i]) for i in range(3)])
@@ -131,8 +143,9 @@ class PositionRows:
                                    for i in range(3)])
 
     def set_weights(self, factor):
-        """IMU row weights ``factor / sigma_f^2`` and the banded normal matrix."""
-        self.w_f2 = factor / self.sigma_f**2
+        """IMU row weights ``factor / sigma_f^2`` (times ``UNRESOLVED_WEIGHT`` where the
+        rotation is not resolved) and the banded normal matrix."""
+        self.w_f2 = factor * np.where(self.resolved, 1.0, UNRESOLVED_WEIGHT) / self.sigma_f**2
         self.N = sp.csr_array(self.B2.T @ (self.B2 * self.w_f2[:, None]) + self.N_gnss)
         self.ab = _banded(self.N)
 
@@ -147,7 +160,8 @@ class PositionRows:
         r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
              - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
         if not self.scaled:
-            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(np.abs(a - r))))
+            d = np.abs(a - r)[self.resolved] if self.resolved.any() else np.abs(a - r)
+            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(d)))
             self.scaled = True
         size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
         self.set_weights(1.0 / np.maximum(size, 1.0))
@@ -270,3 +284,14 @@ class AttitudeCorrection:
     def evaluate(self, e):
         return np.column_stack([self.beta @ e[j * self.n_c:(j + 1) * self.n_c]
                                 for j in range(3)])
+
+
+def resolved_samples(t, w_b):
+    """True where no sample within ``UNRESOLVED_MARGIN_S`` turns the body by more than
+    ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one."""
+    step = np.diff(t, prepend=t[0])
+    fast = np.linalg.norm(w_b, axis=1) * step > MAX_TURN_PER_SAMPLE_RAD
+    c = np.r_[0, np.cumsum(fast)]
+    i0 = np.searchsorted(t, t - UNRESOLVED_MARGIN_S, side="left")
+    i1 = np.searchsorted(t, t + UNRESOLVED_MARGIN_S, side="right")
+    return c[i1] - c[i0] == 0

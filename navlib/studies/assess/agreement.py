@@ -140,7 +140,7 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         reason = ""
         if outside or unresolved:
             causes = _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g,
-                             bounds)
+                             bounds, (f_rms > f_bound, w_rms > w_bound))
             shown = "; ".join(outside) if outside else "residuals within bounds"
             reason = f"{shown}; likely cause: {'; '.join(causes)}"
             messages.append(f"segment {int(row.segment)} {row.phase} {row.t_start:.6g}-"
@@ -151,8 +151,9 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
     return pd.DataFrame(rows, columns=list(AGREEMENT_COLUMNS)), messages
 
 
-def _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g, bounds):
-    """Likely causes of one segment's disagreement, in words (module docstring)."""
+def _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g, bounds, imu_out):
+    """Likely causes of one segment's disagreement, in words (module docstring); the axis
+    regressions only for the sensor (accelerometer, gyro) outside its bound, ``imu_out``."""
     causes = []
     if fast > bounds["turn_fraction"]:
         rate = 1.0 / float(np.median(np.diff(t[sel]))) if sel.sum() > 1 else np.nan
@@ -160,9 +161,11 @@ def _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g, bounds):
                       f"its samples turn by more than {bounds['max_turn_per_sample_deg']:g} deg,"
                       f" up to {np.max(turn[sel]):.0f} deg, at {rate:.3g} Hz)")
     window = bounds["moving_average_s"]
-    for name, label, d_avg, ref in (
-            ("accel", "accelerometer", df, trajectory.specific_force),
-            ("gyro", "gyro", dw, trajectory.angular_rate)):
+    for name, label, d_avg, ref, out in (
+            ("accel", "accelerometer", df, trajectory.specific_force, imu_out[0]),
+            ("gyro", "gyro", dw, trajectory.angular_rate, imu_out[1])):
+        if not out:
+            continue
         ref_avg = moving_average(t, ref, window)[sel]
         scale, bias, r = axis_regression(ref_avg + d_avg[sel], ref_avg)
         strong = np.abs(r) >= bounds["cause_correlation"]
@@ -178,6 +181,19 @@ def _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g, bounds):
                           "calibration: " + ", ".join(
                               f"{AXES[a]} scale {scale[a]:.4g} bias {bias[a]:.3g}"
                               for a in np.flatnonzero(off)) + ")")
+    around = np.flatnonzero(sel_g)
+    if around.size:
+        around = np.arange(max(around[0] - 1, 0), min(around[-1] + 2, t_g.size))
+    else:
+        around = np.flatnonzero(in_segment(t_g, t[sel][0] - bounds["gnss_gap_s"],
+                                           t[sel][-1] + bounds["gnss_gap_s"])) if sel.any() \
+            else around
+    gaps = np.flatnonzero(np.diff(t_g[around]) > bounds["gnss_gap_s"])
+    if gaps.size:
+        k = around[gaps[np.argmax(np.diff(t_g[around])[gaps])]]
+        causes.append(f"a GNSS outage of {t_g[k + 1] - t_g[k]:.3g} s ({t_g[k]:.6g}-"
+                      f"{t_g[k + 1]:.6g} s): the IMU carries the motion across it and the fixes "
+                      "on either side (a receiver re-acquiring) disagree with it")
     if sel_g.sum() >= 3:
         v = np.column_stack([np.interp(t_g[sel_g], trajectory.t, trajectory.velocity[:, i])
                              for i in range(3)])
@@ -197,5 +213,5 @@ def _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g, bounds):
             n = int(np.count_nonzero(same & (moved > bounds["held_fix_motion_m"])))
             causes.append(f"a held GNSS fix ({n} fix(es) repeat the previous one while the "
                           "reference moves)")
-    return causes or ["not identified (no fast rotation, axis sign, calibration, GNSS lag "
-                      "or held fix explains it)"]
+    return causes or ["not identified (no fast rotation, axis sign, calibration, GNSS "
+                      "outage, GNSS lag or held fix explains it)"]

@@ -110,10 +110,15 @@ class FlightAssessment(SegmentedAnalysis):
         """The per-segment :meth:`~navlib.metrics.SegmentedAnalysis.summary`."""
         return self.summary()
 
+    def _agreement(self, column: str, default) -> dict:
+        """``segment -> segment_table[column]``; ``default`` for every segment of a table
+        without it (a planned motion is the motion by construction)."""
+        table = self.segment_table
+        values = table[column] if column in table.columns else [default] * len(table)
+        return dict(zip(table["segment"], values, strict=True))
+
     def _validity(self, frame: pd.DataFrame) -> pd.DataFrame:
-        valid = dict(zip(self.segment_table["segment"], self.segment_table["represented"],
-                         strict=True))
-        frame["valid"] = frame["segment"].map(valid).astype(bool)
+        frame["valid"] = frame["segment"].map(self._agreement("represented", True)).astype(bool)
         return frame
 
     def excitability_frame(self) -> pd.DataFrame:
@@ -126,8 +131,7 @@ class FlightAssessment(SegmentedAnalysis):
         """:meth:`~navlib.metrics.SegmentedAnalysis.summary` with ``valid`` (as in
         :meth:`excitability_frame`) and ``fit_reason``."""
         frame = self._validity(super().summary())
-        frame["fit_reason"] = frame["segment"].map(dict(zip(
-            self.segment_table["segment"], self.segment_table["fit_reason"], strict=True)))
+        frame["fit_reason"] = frame["segment"].map(self._agreement("fit_reason", ""))
         return frame
 
     def _segment_changes(self, segments) -> dict:
@@ -138,8 +142,9 @@ class FlightAssessment(SegmentedAnalysis):
         if isinstance(segments, str) and segments == "auto":
             segments = self.automatic.segments
         table = _segment_table(segments, self.model, self.automatic, self.trajectory.t)
-        table, _ = with_agreement(table, self.trajectory, self.imu_residuals,
-                                  self.gnss_residuals, self.options["fit_bounds"])
+        if self.imu_residuals is not None:
+            table, _ = with_agreement(table, self.trajectory, self.imu_residuals,
+                                      self.gnss_residuals, self.options["fit_bounds"])
         return {"segment_table": table, "segments": segment_pairs(table)}
 
 
