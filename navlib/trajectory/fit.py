@@ -117,6 +117,8 @@ small fraction, about ``n_coefficients / n_rows``).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
@@ -124,7 +126,7 @@ from scipy.spatial.transform import Rotation
 from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.io import check_overlap
+from navlib.io import FlightDataWarning, check_overlap
 from navlib.trajectory._so3 import SO3Spline
 from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.trajectory.initial_attitude import (
@@ -490,6 +492,10 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
             roll = "roll about body x 0 (the specific force never leaves that axis)"
         note += (", azimuth " + ("estimated from GNSS" if azimuth_deg is None else
                                  f"{azimuth_deg:g} deg given") + ", " + roll)
+    if p["launch_elevation_deg"] is not None and kind != "rail":
+        unused = _unused_elevation(p["launch_elevation_deg"], attitude[0], C_n_e, note)
+        warnings.warn(unused, FlightDataWarning, stacklevel=2)
+        note += f"; {unused}"
 
     attitude = _hold_pad(attitude, pad_end)
 
@@ -549,6 +555,16 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
                       attitude=traj.attitude, specific_force=traj.specific_force,
                       angular_rate=traj.angular_rate, events=traj.events, name=traj.name,
                       parameters=params)
+
+
+def _unused_elevation(given_deg, C_b_e0, C_n_e, source):
+    """The words for a ``launch_elevation_deg`` that another source outranked: which, and
+    how far the body-x elevation it gave lies from the flag (docs/assumptions.md FIT5)."""
+    x_n = C_n_e.T @ C_b_e0.apply([1.0, 0.0, 0.0])
+    elevation = float(np.degrees(np.arcsin(np.clip(-x_n[2], -1.0, 1.0))))
+    return (f"launch_elevation_deg={given_deg:g} not used: the initial attitude came from "
+            f"{source.split(',')[0]}, whose body-x elevation is {elevation:.1f} deg "
+            f"({elevation - given_deg:+.1f} deg from the flag)")
 
 
 def _correct(rows, attitude, f_b, t, p, sigma_sa):
