@@ -101,7 +101,8 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   (``keyword``, ``initial_attitude``, ``log`` or ``estimated``);
   ``initial_attitude_source`` (``user``, ``log``, ``level``, ``tilt`` or ``rail``) and
   ``initial_attitude_note`` (the same in words, for reports); ``n_imu``, ``n_gnss``,
-  ``n_knots``, ``imu_rate_hz``; ``liftoff_s`` (the lift-off found from the records, or
+  ``n_knots``, ``imu_rate_hz``; ``gnss_lag_s`` (the lag the fixes were moved back by, 0
+  when none was significant); ``liftoff_s`` (the lift-off found from the records, or
   None; also ``events["liftoff"]``);
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
@@ -172,6 +173,7 @@ FIT_DEFAULTS = {
     "vibration_allowance_mps2": 2.0,
     "use_logged_attitude": True,
     "hold_pad": True,
+    "estimate_gnss_lag": True,
     "max_bridge_s": 1.0,
     "sigma_accel_bias_mps2": None,
     "sigma_accel_scale": None,
@@ -191,6 +193,9 @@ MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
 above (Nyquist), below which the gyro integration aliases the attitude."""
+MIN_GNSS_LAG_S = 0.05
+"""Smallest GNSS lag the fit corrects, s (a quarter of a 5 Hz fix interval; below it the
+lag moves a fix by less than 5 m at 100 m/s)."""
 SCALE_CREDIBLE_SIGMAS = 3.0
 """An accelerometer scale error the fit estimates beyond this many prior sigmas (the
 preset's scale-factor tolerance) is not a calibration but the fit shrinking a motion it
@@ -246,8 +251,9 @@ def _options(options):
     if p["knot_spacing_s"] > MAX_KNOT_SPACING_S:
         raise NavlibInputError(f"knot_spacing_s: {p['knot_spacing_s']:g} s exceeds "
                                f"{MAX_KNOT_SPACING_S:g} s (MAX_KNOT_SPACING_S)")
-    if not isinstance(p["hold_pad"], bool):
-        raise NavlibInputError(f"hold_pad: expected True or False, got {p['hold_pad']!r}")
+    for key in ("hold_pad", "estimate_gnss_lag"):
+        if not isinstance(p[key], bool):
+            raise NavlibInputError(f"{key}: expected True or False, got {p[key]!r}")
     if not isinstance(p["use_logged_attitude"], bool):
         raise NavlibInputError("use_logged_attitude: expected True or False, got "
                                f"{p['use_logged_attitude']!r}")
@@ -364,6 +370,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``hold_pad=True`` (zero velocity and the lift-off attitude from the first sample
         until the lift-off :func:`~navlib.trajectory.liftoff.find_liftoff` reads from the
         recorded specific force; levelling only on that pad; docs/assumptions.md FIT4),
+        ``estimate_gnss_lag=True`` (fixes that trail the fitted motion by a significant lag
+        are moved back by it and the fit redone; ``fit_residuals["gnss_lag_s"]``; FIT6),
         ``initial_attitude_deg=None`` (yaw, pitch, roll of the body against the local NED
         frame at the first sample, deg; replaces levelling and heading),
         ``launch_elevation_deg=None``, ``launch_azimuth_deg=None`` (launch-rail angles of
@@ -402,6 +410,54 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         estimated, unknown options.
     """
     p = _options(options)
+    traj, lag = _fit(imu, gnss, p), 0.0
+    first = _gnss_lag(traj, gnss) if p["estimate_gnss_lag"] else 0.0
+    if first:
+        # each fit follows part of the lag it is given: the lag seen after a refit with the
+        # first estimate gives the fraction, and the fixed point is extrapolated (Aitken)
+        lag = first
+        traj = _fit(imu, _shifted(gnss, lag), p)
+        second = _gnss_lag(traj, _shifted(gnss, lag), minimum=0.0)
+        if second and abs(second) < abs(first) and second * first > 0:
+            lag = first / (1.0 - second / first)
+            traj = _fit(imu, _shifted(gnss, lag), p)
+    traj.parameters["fit_residuals"]["gnss_lag_s"] = lag
+    return traj
+
+
+def _shifted(gnss, lag):
+    out = gnss.copy()
+    out["t"] = gnss["t"].to_numpy(dtype=float) - lag
+    return out
+
+
+def _gnss_lag(traj, gnss, minimum=None) -> float:
+    """The lag of the GNSS fixes behind the fitted motion, s, when the fit's own residuals
+    show one: recorded ``P(t) = P_fit(t - lag)``, so ``P - P_fit ~ -lag V`` at the fixes;
+    the least-squares ``lag`` counts when it exceeds ``minimum`` (None:
+    ``MIN_GNSS_LAG_S``) and three of its standard errors (docs/assumptions.md FIT6), else
+    0."""
+    t_g = gnss["t"].to_numpy(dtype=float)
+    keep = (t_g >= traj.t[0]) & (t_g <= traj.t[-1])
+    if keep.sum() < _MIN_GNSS:
+        return 0.0
+    P_g = gnss[["x", "y", "z"]].to_numpy(dtype=float)[keep]
+    P = np.column_stack([np.interp(t_g[keep], traj.t, traj.position[:, i]) for i in range(3)])
+    V = np.column_stack([np.interp(t_g[keep], traj.t, traj.velocity[:, i]) for i in range(3)])
+    d = P_g - P
+    vv = float(np.sum(V * V))
+    if vv == 0.0:
+        return 0.0
+    lag = -float(np.sum(d * V)) / vv
+    sigma = float(np.sqrt(np.mean((d + lag * V) ** 2)))
+    minimum = MIN_GNSS_LAG_S if minimum is None else minimum
+    if abs(lag) < minimum or abs(lag) < 3.0 * sigma / np.sqrt(vv):
+        return 0.0
+    return lag
+
+
+def _fit(imu, gnss, p) -> Trajectory:
+    """:func:`fit_flight_data` with checked options ``p`` and the fixes at their times."""
     imu_cols = _columns(imu, "imu", IMU_COLUMNS)
     gnss_cols = _columns(gnss, "gnss", GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS)
     if "sigma" in gnss.columns:

@@ -212,3 +212,24 @@ def test_a_3_percent_accelerometer_scale_error_does_not_bend_the_motion(hpr, hpr
     scale = result.trajectory.parameters["fit_residuals"]["accel_scale"]
     assert scale[0] == pytest.approx(1.03, abs=0.005)        # the thrust axis sees it
     assert result.segment_table["represented"].all()
+
+
+def test_a_gnss_lag_of_0_2_s_is_recovered(hpr, hpr_records):
+    imu, gnss = hpr_records
+    late = gnss.copy()
+    late["t"] += 0.2                          # every fix stamped 0.2 s after its position
+
+    def worst_position_error(records, **fit_options):
+        result, _ = _assess(*records, t_max=40.0, fit_options=fit_options)
+        k = np.searchsorted(hpr.t, result.trajectory.t)
+        return np.linalg.norm(result.trajectory.position - hpr.position[k], axis=1).max(), \
+            result
+
+    clean, _ = worst_position_error(hpr_records)
+    ignored, _ = worst_position_error((imu, late), estimate_gnss_lag=False)
+    found, result = worst_position_error((imu, late))
+    assert ignored > 2.0 * clean
+    assert found < 1.2 * clean
+    assert result.trajectory.parameters["fit_residuals"]["gnss_lag_s"] == pytest.approx(
+        0.2, abs=0.03)
+    assert result.segment_table["represented"].all()

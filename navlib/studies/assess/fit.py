@@ -72,7 +72,8 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
     Returns
     -------
     gnss_residuals : DataFrame
-        At the GNSS epochs inside the trajectory span: ``t``, ``dx, dy, dz`` (recorded minus
+        At the GNSS epochs inside the trajectory span (moved back by the lag the fit found,
+        ``parameters["fit_residuals"]["gnss_lag_s"]``): ``t``, ``dx, dy, dz`` (recorded minus
         fitted ECEF position, m), ``d3`` (their norm) and, with GNSS velocity, ``dvx, dvy,
         dvz`` (m/s). The fit is interpolated linearly between its samples (error below
         ``|a| dt^2 / 8``: 1.4 mm at 110 m/s^2 and 100 Hz).
@@ -89,7 +90,8 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
     t = np.asarray(trajectory.t, dtype=float)
-    t_g = gnss["t"].to_numpy(dtype=float)
+    lag = trajectory.parameters.get("fit_residuals", {}).get("gnss_lag_s", 0.0)
+    t_g = gnss["t"].to_numpy(dtype=float) - lag     # the fixes where the fit put them
     keep = (t_g >= t[0]) & (t_g <= t[-1])
     out = {"t": t_g[keep]}
     for i, axis in enumerate("xyz"):
