@@ -196,6 +196,12 @@ above (Nyquist), below which the gyro integration aliases the attitude."""
 MIN_GNSS_LAG_S = 0.05
 """Smallest GNSS lag the fit corrects, s (a quarter of a 5 Hz fix interval; below it the
 lag moves a fix by less than 5 m at 100 m/s)."""
+LAG_MIN_GAIN = 0.25
+"""The fit with the lag must bring the GNSS residual (3-D RMS) down by at least this fraction,
+else the lag is dropped (a slow vehicle's residual moves the estimate without being a lag)."""
+MAX_LAG_FRACTION = 0.8
+"""The lag seen after the refit may be at most this fraction of the first for the
+extrapolation (which then multiplies the first by at most 5)."""
 SCALE_CREDIBLE_SIGMAS = 3.0
 """An accelerometer scale error the fit estimates beyond this many prior sigmas (the
 preset's scale-factor tolerance) is not a calibration but the fit shrinking a motion it
@@ -412,15 +418,19 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     p = _options(options)
     traj, lag = _fit(imu, gnss, p), 0.0
     first = _gnss_lag(traj, gnss) if p["estimate_gnss_lag"] else 0.0
+    base = traj
     if first:
         # each fit follows part of the lag it is given: the lag seen after a refit with the
         # first estimate gives the fraction, and the fixed point is extrapolated (Aitken)
         lag = first
         traj = _fit(imu, _shifted(gnss, lag), p)
         second = _gnss_lag(traj, _shifted(gnss, lag), minimum=0.0)
-        if second and abs(second) < abs(first) and second * first > 0:
+        if second and abs(second) <= MAX_LAG_FRACTION * abs(first) and second * first > 0:
             lag = first / (1.0 - second / first)
             traj = _fit(imu, _shifted(gnss, lag), p)
+        rms = [x.parameters["fit_residuals"]["gnss_position_rms_3d_m"] for x in (base, traj)]
+        if rms[1] > (1.0 - LAG_MIN_GAIN) * rms[0]:     # the lag explains little: not a lag
+            traj, lag = base, 0.0
     traj.parameters["fit_residuals"]["gnss_lag_s"] = lag
     return traj
 
@@ -434,9 +444,8 @@ def _shifted(gnss, lag):
 def _gnss_lag(traj, gnss, minimum=None) -> float:
     """The lag of the GNSS fixes behind the fitted motion, s, when the fit's own residuals
     show one: recorded ``P(t) = P_fit(t - lag)``, so ``P - P_fit ~ -lag V`` at the fixes;
-    the least-squares ``lag`` counts when it exceeds ``minimum`` (None:
-    ``MIN_GNSS_LAG_S``) and three of its standard errors (docs/assumptions.md FIT6), else
-    0."""
+    the least-squares ``lag`` counts when it exceeds ``minimum`` and three of its standard
+    errors (docs/assumptions.md FIT6), else 0 (``minimum=None``: ``MIN_GNSS_LAG_S``)."""
     t_g = gnss["t"].to_numpy(dtype=float)
     keep = (t_g >= traj.t[0]) & (t_g <= traj.t[-1])
     if keep.sum() < _MIN_GNSS:
