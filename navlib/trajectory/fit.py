@@ -140,7 +140,7 @@ from navlib.trajectory.initial_attitude import (
     logged_attitude,
     start_attitude,
 )
-from navlib.trajectory.liftoff import find_liftoff, liftoff_knots
+from navlib.trajectory.liftoff import find_liftoff, gnss_still, liftoff_knots
 from navlib.trajectory.position_spline import (
     ATTITUDE_SAMPLES_PER_KNOT,
     MAX_KNOT_SPACING_S,
@@ -509,6 +509,8 @@ def _fit(imu, gnss, p) -> Trajectory:
     relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
     pad = find_liftoff(t, f_b, w_b, float(np.linalg.norm(gamma0)), p["level_tolerance"]) \
         if p["hold_pad"] else None
+    if pad is not None and not gnss_still(t_g, P_g, pad[0]):
+        pad = None                 # an IMU at rest over a moving vehicle: a hover, not a pad
     pad_end = None if pad is None else pad[1]
     user = p["initial_attitude"] is not None or p["initial_attitude_deg"] is not None
     logged = logged_attitude(imu, t[0], C_n_e) if (

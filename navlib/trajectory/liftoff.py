@@ -26,6 +26,9 @@ of gravity (the thrust ramp starts there; the rest acceleration of
 PAD_RATE_DEG_S = 3.0
 """Largest mean angular rate on the pad, deg/s (the segmentation's rest rate)."""
 MIN_PAD_SAMPLES = 3
+PAD_GNSS_SPEED_MPS = 0.5
+"""Largest speed of the straight line through the fixes before lift-off, m/s (the
+segmentation's rest acceleration scale: a pad does not travel)."""
 LIFTOFF_KNOTS_S = 0.4
 """Span after lift-off with knots every ``SAMPLES_PER_KNOT`` samples, s: twice
 ``LIFTOFF_HOLD_S``, time for the thrust to build up."""
@@ -93,3 +96,19 @@ def liftoff_knots(knots, t, pad_end):
     inner = inner[(inner < lo) | (inner > hi)]
     inner = np.sort(np.r_[inner, np.full(SPLINE_DEGREE - 1, t_lift), dense])
     return np.r_[knots[:SPLINE_DEGREE + 1], inner, knots[-SPLINE_DEGREE - 1:]]
+
+
+def gnss_still(t_g, P_g, t_liftoff):
+    """Whether the fixes up to ``t_liftoff`` stand still: the straight line through them
+    (least squares, at least 3 fixes; fewer say nothing against a pad) moves slower than
+    ``PAD_GNSS_SPEED_MPS`` plus three standard errors of its speed (from the scatter of the
+    fixes about the line). An IMU at rest on a hovering or drifting vehicle reads as a pad;
+    the GNSS tells them apart (docs/assumptions.md FIT4)."""
+    sel = t_g <= t_liftoff
+    if sel.sum() < 3:
+        return True
+    x = t_g[sel] - t_g[sel].mean()
+    slope, offset = np.polyfit(x, P_g[sel], 1)
+    noise = float(np.sqrt(np.mean((P_g[sel] - offset - np.outer(x, slope)) ** 2)))
+    limit = PAD_GNSS_SPEED_MPS + 3.0 * noise * np.sqrt(3.0 / np.sum(x**2))
+    return bool(np.linalg.norm(slope) <= limit)

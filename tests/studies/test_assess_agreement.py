@@ -18,7 +18,7 @@ from navlib.studies.assess.agreement import (
     moving_average,
     segment_agreement,
 )
-from navlib.trajectory.liftoff import find_liftoff
+from navlib.trajectory.liftoff import find_liftoff, gnss_still
 from navlib.trajectory.mission import from_mission, read_mission, with_values
 
 
@@ -249,3 +249,12 @@ def test_a_reversed_gyro_axis_is_flagged(hpr_records, axis):
     assert len(powered) == 1 and not powered["represented"].iloc[0]
     assert "specific force" in powered["fit_reason"].iloc[0]
     assert any(f"segment {int(powered['segment'].iloc[0])} powered" in m for m in messages)
+
+
+def test_a_pad_must_stand_still_in_the_gnss_too():
+    t_g = np.arange(0.0, 10.0, 1.0)
+    still = np.array([6.4e6, 0.0, 0.0]) + np.random.default_rng(0).normal(0.0, 0.5, (10, 3))
+    assert gnss_still(t_g, still, 9.5)
+    drifting = still + np.outer(t_g, [0.0, 1.0, 0.0])          # 1 m/s: a hover drifting
+    assert not gnss_still(t_g, drifting, 9.5)
+    assert gnss_still(t_g[:2], drifting[:2], 9.5)               # two fixes say nothing
