@@ -51,7 +51,7 @@ def _clip(imu, t0, n, value=LIMIT, column="w_x"):
 
 def test_thresholds_are_data_and_overridable():
     p = load_thresholds()
-    assert set(p) == {"saturation", "gnss"}
+    assert set(p) == {"saturation", "gnss", "fit"}
     assert p["gnss"]["frozen_min_duration_s"] > 0
     q = load_thresholds({"gnss": {"jump_min_m": 20}})
     assert q["gnss"]["jump_min_m"] == 20.0

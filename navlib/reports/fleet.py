@@ -35,13 +35,15 @@ from navlib.studies.plan import plan_mission
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
 SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "t_ignition",
-                   "n_segments", "phases", "events", "excitable", "sensible", "warnings",
-                   "seconds", "page")
+                   "n_segments", "phases", "events", "excitable", "sensible", "unrepresented",
+                   "warnings", "seconds", "page")
 """Columns of ``summary.csv``, in order (a mission's file name in ``log``). ``t_ignition``:
 a rocket's ignition on the log's own clock, s, the zero of the ``phases`` times (which are
 since the first sample for other vehicles; NaN there). ``events``: a rocket's events on that
 clock, ``<event> <logged> s (detected <detected> s)`` when the flight computer logged its
-states, ``<event> <detected> s (detected)`` otherwise."""
+states, ``<event> <detected> s (detected)`` otherwise. ``unrepresented`` lists the segments
+whose reference motion departs from the records (their excitable and sensible states do not
+describe the flight flown; the warnings say why)."""
 
 
 def _keywords(fn, *skip: str) -> tuple[str, ...]:
@@ -100,6 +102,10 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
                        sensible=_per_segment(summary, "sensible"),
                        t_ignition=result.t_ignition, events=_events_text(result.events),
                        states=result.states_table(label))
+            if "represented" in seg.columns:
+                row["unrepresented"] = "; ".join(
+                    f"{r.segment} {r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
+                    for r in seg.itertuples(index=False) if not r.represented)
         except Exception as exc:  # a bad input is reported, never stops the others
             row["error"] = f"{type(exc).__name__}: {exc}"
     row["warnings"] = " | ".join(sorted({_warning_text(w) for w in caught}))

@@ -93,8 +93,10 @@ def flight_page(log: str, result, warning_texts: Sequence[str]) -> str:
              "<h2>What this flight can estimate, and how well</h2>",
              "<p>1-sigma of each state in navigation axes at the flight's start and at the "
              f"end of each segment; {SENSIBLE_MARK} sensible (the measurements pin it down), "
-             f"{EXCITABLE_MARK} excitable only (the motion makes it observable). Times are "
-             "seconds since ignition (rockets) or the first sample.</p>",
+             f"{EXCITABLE_MARK} excitable only (the motion makes it observable); a segment "
+             "marked not represented has no verdicts, its reference motion departs from the "
+             "records (see the warnings). Times are seconds since ignition (rockets) or the "
+             "first sample.</p>",
              how_well(result.states_table()).to_html(index=False),
              "<h2>Segments and estimable states</h2>",
              "<p>Per segment, the states the flight's motion makes observable "

@@ -50,9 +50,11 @@ Method (:func:`fit_flight_data`)
    (cubic B-spline, knots every ``correction_knot_spacing_s``, at most
    ``MAX_CORRECTION_INTERVALS`` intervals; prior ``attitude_prior_deg`` on its value and
    ``attitude_drift_deg_s`` on its change) that absorbs levelling/heading errors and gyro
-   drift, and a constant accelerometer bias (body axes; prior ``sigma_accel_bias_mps2``,
-   by default the ``preset``'s turn-on bias; without a preset none is estimated), which
-   the fit would otherwise take for motion; all solved jointly through a Schur complement.
+   drift, and a constant accelerometer bias and scale-factor error per body axis (priors
+   ``sigma_accel_bias_mps2`` and ``sigma_accel_scale``, by default the ``preset``'s
+   turn-on bias and scale factor; without a preset none is estimated), which the fit
+   would otherwise take for motion (a 3 % scale error bends a boost); all solved jointly
+   through a Schur complement.
    Gravity, Coriolis and ``eps`` are relinearised ``iterations`` times; specific-force
    rows whose residual exceeds 4 sigma are down-weighted (Huber; on the first pass
    ``sigma_specific_force_mps2`` is raised to the robust scale of the residuals, so
@@ -99,11 +101,15 @@ Residuals (``trajectory.parameters["fit_residuals"]``)
   (``keyword``, ``initial_attitude``, ``log`` or ``estimated``);
   ``initial_attitude_source`` (``user``, ``log``, ``level``, ``tilt`` or ``rail``) and
   ``initial_attitude_note`` (the same in words, for reports); ``n_imu``, ``n_gnss``,
-  ``n_knots``, ``imu_rate_hz``;
+  ``n_knots``, ``imu_rate_hz``; ``gnss_lag_s`` (the lag the fixes were moved back by, 0
+  when none was significant); ``liftoff_s`` (the lift-off found from the records, or
+  None; also ``events["liftoff"]``);
 * ``imu_holes`` (bridged holes: ``t_start``, ``t_end``, ``duration_s``,
   ``attitude_bound_deg``, ``position_bound_m``), ``level`` (the levelling window and its
   statistics, empty when not levelled), ``sigma_specific_force_used_mps2`` and
-  ``accel_bias_mps2`` (the estimated accelerometer bias, body axes).
+  ``accel_bias_mps2`` and ``accel_scale`` (the estimated accelerometer bias and scale,
+  body axes: recorded ``= accel_scale * f + accel_bias``; ``accel_scale_note`` says why
+  no scale was kept, see :data:`SCALE_CREDIBLE_SIGMAS`).
 
 With noiseless data of a trajectory the splines can represent, all residuals are near
 zero; with noisy data they sit at the noise level (the fit's degrees of freedom absorb a
@@ -112,6 +118,8 @@ small fraction, about ``n_coefficients / n_rows``).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
@@ -119,18 +127,20 @@ from scipy.spatial.transform import Rotation
 from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.io import check_overlap
+from navlib.io import FlightDataWarning, check_overlap
 from navlib.trajectory._so3 import SO3Spline
 from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.trajectory.initial_attitude import (
     VERTICAL_SIN2,
     accel_bias_sigma,
+    accel_scale_sigma,
     coarse_heading,
     gyro_drift_deg_s,
     heading_of,
     logged_attitude,
     start_attitude,
 )
+from navlib.trajectory.liftoff import find_liftoff, gnss_still, liftoff_knots
 from navlib.trajectory.position_spline import (
     ATTITUDE_SAMPLES_PER_KNOT,
     MAX_KNOT_SPACING_S,
@@ -139,6 +149,7 @@ from navlib.trajectory.position_spline import (
     AttitudeCorrection,
     PositionRows,
     place_knots,
+    resolved_samples,
     thin,
 )
 from navlib.units import DEG
@@ -161,8 +172,11 @@ FIT_DEFAULTS = {
     "preset": None,
     "vibration_allowance_mps2": 2.0,
     "use_logged_attitude": True,
+    "hold_pad": True,
+    "estimate_gnss_lag": True,
     "max_bridge_s": 1.0,
     "sigma_accel_bias_mps2": None,
+    "sigma_accel_scale": None,
     "attitude_prior_deg": 5.0,
     "attitude_drift_deg_s": None,
     "correction_knot_spacing_s": 10.0,
@@ -179,6 +193,19 @@ MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
 above (Nyquist), below which the gyro integration aliases the attitude."""
+MIN_GNSS_LAG_S = 0.05
+"""Smallest GNSS lag the fit corrects, s (a quarter of a 5 Hz fix interval; below it the
+lag moves a fix by less than 5 m at 100 m/s)."""
+LAG_MIN_GAIN = 0.25
+"""The fit with the lag must bring the GNSS residual (3-D RMS) down by at least this fraction,
+else the lag is dropped (a slow vehicle's residual moves the estimate without being a lag)."""
+MAX_LAG_FRACTION = 0.8
+"""The lag seen after the refit may be at most this fraction of the first for the
+extrapolation (which then multiplies the first by at most 5)."""
+SCALE_CREDIBLE_SIGMAS = 3.0
+"""An accelerometer scale error the fit estimates beyond this many prior sigmas (the
+preset's scale-factor tolerance) is not a calibration but the fit shrinking a motion it
+cannot follow (a tumble it does not resolve); the fit is then redone without a scale."""
 HOLE_FACTOR = 10.0
 """An IMU interval longer than this many median intervals is a hole (as the readers'
 ``max_gap_s=None``, :data:`navlib.io.checks.AUTO_GAP_FACTOR`)."""
@@ -221,12 +248,18 @@ def _options(options):
                                               0.0, low_open=True)
     p["vibration_allowance_mps2"] = finite_scalar(p["vibration_allowance_mps2"],
                                                   "vibration_allowance_mps2", 0.0)
+    if p["sigma_accel_scale"] is not None:
+        p["sigma_accel_scale"] = finite_scalar(p["sigma_accel_scale"], "sigma_accel_scale",
+                                               0.0, 0.5)
     if p["sigma_accel_bias_mps2"] is not None:
         p["sigma_accel_bias_mps2"] = finite_scalar(p["sigma_accel_bias_mps2"],
                                                    "sigma_accel_bias_mps2", 0.0)
     if p["knot_spacing_s"] > MAX_KNOT_SPACING_S:
         raise NavlibInputError(f"knot_spacing_s: {p['knot_spacing_s']:g} s exceeds "
                                f"{MAX_KNOT_SPACING_S:g} s (MAX_KNOT_SPACING_S)")
+    for key in ("hold_pad", "estimate_gnss_lag"):
+        if not isinstance(p[key], bool):
+            raise NavlibInputError(f"{key}: expected True or False, got {p[key]!r}")
     if not isinstance(p["use_logged_attitude"], bool):
         raise NavlibInputError("use_logged_attitude: expected True or False, got "
                                f"{p['use_logged_attitude']!r}")
@@ -340,6 +373,11 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         ``initial_attitude=None`` (a scipy Rotation or 3x3 body -> ECEF matrix at the first
         IMU sample of the overlap; replaces levelling and heading),
         ``use_logged_attitude=True`` (start from ``imu.attrs["attitude"]`` when present),
+        ``hold_pad=True`` (zero velocity and the lift-off attitude from the first sample
+        until the lift-off :func:`~navlib.trajectory.liftoff.find_liftoff` reads from the
+        recorded specific force; levelling only on that pad; docs/assumptions.md FIT4),
+        ``estimate_gnss_lag=True`` (fixes that trail the fitted motion by a significant lag
+        are moved back by it and the fit redone; ``fit_residuals["gnss_lag_s"]``; FIT6),
         ``initial_attitude_deg=None`` (yaw, pitch, roll of the body against the local NED
         frame at the first sample, deg; replaces levelling and heading),
         ``launch_elevation_deg=None``, ``launch_azimuth_deg=None`` (launch-rail angles of
@@ -357,6 +395,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         motor vibration accepted at rest), ``max_bridge_s=1`` (longest IMU hole bridged),
         ``sigma_accel_bias_mps2=None`` (prior sigma of the constant accelerometer bias the
         fit estimates; None: the named ``preset``'s turn-on bias, no bias without a preset),
+        ``sigma_accel_scale=None`` (prior sigma of its per-axis scale-factor error; None:
+        the ``preset``'s scale factor, none without a preset),
         ``iterations=3`` (gravity/Coriolis/heading relinearisations), ``name``.
 
     Returns
@@ -376,6 +416,57 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         estimated, unknown options.
     """
     p = _options(options)
+    traj, lag = _fit(imu, gnss, p), 0.0
+    first = _gnss_lag(traj, gnss) if p["estimate_gnss_lag"] else 0.0
+    base = traj
+    if first:
+        # each fit follows part of the lag it is given: the lag seen after a refit with the
+        # first estimate gives the fraction, and the fixed point is extrapolated (Aitken)
+        lag = first
+        traj = _fit(imu, _shifted(gnss, lag), p)
+        second = _gnss_lag(traj, _shifted(gnss, lag), minimum=0.0)
+        if second and abs(second) <= MAX_LAG_FRACTION * abs(first) and second * first > 0:
+            lag = first / (1.0 - second / first)
+            traj = _fit(imu, _shifted(gnss, lag), p)
+        rms = [x.parameters["fit_residuals"]["gnss_position_rms_3d_m"] for x in (base, traj)]
+        if rms[1] > (1.0 - LAG_MIN_GAIN) * rms[0]:     # the lag explains little: not a lag
+            traj, lag = base, 0.0
+    traj.parameters["fit_residuals"]["gnss_lag_s"] = lag
+    return traj
+
+
+def _shifted(gnss, lag):
+    out = gnss.copy()
+    out["t"] = gnss["t"].to_numpy(dtype=float) - lag
+    return out
+
+
+def _gnss_lag(traj, gnss, minimum=None) -> float:
+    """The lag of the GNSS fixes behind the fitted motion, s, when the fit's own residuals
+    show one: recorded ``P(t) = P_fit(t - lag)``, so ``P - P_fit ~ -lag V`` at the fixes;
+    the least-squares ``lag`` counts when it exceeds ``minimum`` and three of its standard
+    errors (docs/assumptions.md FIT6), else 0 (``minimum=None``: ``MIN_GNSS_LAG_S``)."""
+    t_g = gnss["t"].to_numpy(dtype=float)
+    keep = (t_g >= traj.t[0]) & (t_g <= traj.t[-1])
+    if keep.sum() < _MIN_GNSS:
+        return 0.0
+    P_g = gnss[["x", "y", "z"]].to_numpy(dtype=float)[keep]
+    P = np.column_stack([np.interp(t_g[keep], traj.t, traj.position[:, i]) for i in range(3)])
+    V = np.column_stack([np.interp(t_g[keep], traj.t, traj.velocity[:, i]) for i in range(3)])
+    d = P_g - P
+    vv = float(np.sum(V * V))
+    if vv == 0.0:
+        return 0.0
+    lag = -float(np.sum(d * V)) / vv
+    sigma = float(np.sqrt(np.mean((d + lag * V) ** 2)))
+    minimum = MIN_GNSS_LAG_S if minimum is None else minimum
+    if abs(lag) < minimum or abs(lag) < 3.0 * sigma / np.sqrt(vv):
+        return 0.0
+    return lag
+
+
+def _fit(imu, gnss, p) -> Trajectory:
+    """:func:`fit_flight_data` with checked options ``p`` and the fixes at their times."""
     imu_cols = _columns(imu, "imu", IMU_COLUMNS)
     gnss_cols = _columns(gnss, "gnss", GNSS_COLUMNS, GNSS_VELOCITY_COLUMNS)
     if "sigma" in gnss.columns:
@@ -416,6 +507,11 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
     earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
     relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
+    pad = find_liftoff(t, f_b, w_b, float(np.linalg.norm(gamma0)), p["level_tolerance"]) \
+        if p["hold_pad"] else None
+    if pad is not None and not gnss_still(t_g, P_g, pad[0]):
+        pad = None                 # an IMU at rest over a moving vehicle: a hover, not a pad
+    pad_end = None if pad is None else pad[1]
     user = p["initial_attitude"] is not None or p["initial_attitude_deg"] is not None
     logged = logged_attitude(imu, t[0], C_n_e) if (
         not user and p["use_logged_attitude"]) else None
@@ -432,7 +528,8 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         note = "logger attitude (the autopilot's own attitude estimate logged at the start)"
     else:
         att0, kind, note, level_info = start_attitude(
-            imu, t, f_b, w_b, p, gamma0, C_n_e, (t_g, P_g, V_g), earth_turn, relative)
+            imu, t, f_b, w_b, p, gamma0, C_n_e, (t_g, P_g, V_g), earth_turn, relative,
+            pad_end)
         if azimuth_deg is not None:
             x_down = att0.apply([1.0, 0.0, 0.0]) @ (gamma0 / np.linalg.norm(gamma0))
             if 1.0 - x_down**2 < VERTICAL_SIN2:
@@ -462,20 +559,33 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
             roll = "roll about body x 0 (the specific force never leaves that axis)"
         note += (", azimuth " + ("estimated from GNSS" if azimuth_deg is None else
                                  f"{azimuth_deg:g} deg given") + ", " + roll)
+    if p["launch_elevation_deg"] is not None and kind != "rail":
+        unused = _unused_elevation(p["launch_elevation_deg"], attitude[0], C_n_e, note)
+        warnings.warn(unused, FlightDataWarning, stacklevel=2)
+        note += f"; {unused}"
+
+    attitude = _hold_pad(attitude, pad_end)
 
     # 3: position spline and attitude correction --------------------------------------
     knots = place_knots(t, p["knot_spacing_s"])
-    rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start)
-    correction = AttitudeCorrection(t, p, accel_bias_sigma(p))
-    coef = None
-    for _ in range(p["iterations"]):
-        C = attitude.as_matrix()
-        f_e = np.einsum("nij,nj->ni", C, f_b - correction.bias)
-        coef, eps = rows.solve(f_e, coef, correction, C)
-        rows.robust_weights(coef, f_e, eps)
-        attitude = Rotation.from_rotvec(eps) * attitude
+    if pad is not None:
+        knots = liftoff_knots(knots, t, pad_end)
+    resolved = resolved_samples(t, w_b)
+    sigma_sa, scale_note = accel_scale_sigma(p), ""
+    while True:
+        rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end, resolved)
+        correction, corrected, coef = _correct(rows, attitude, f_b, t, p, sigma_sa)
+        worst = float(np.abs(correction.scale).max())
+        if sigma_sa == 0.0 or worst <= SCALE_CREDIBLE_SIGMAS * sigma_sa:
+            break
+        scale_note = (f"accelerometer scale error {worst:.3g} found, beyond "
+                      f"{SCALE_CREDIBLE_SIGMAS:g} x its prior {sigma_sa:.3g}: taken as the fit "
+                      "absorbing a motion it does not follow, refitted without a scale")
+        sigma_sa = 0.0
+    attitude = corrected
 
     # 4: smooth attitude on SO(3) --------------------------------------------------------
+    attitude = _hold_pad(attitude, pad_end)    # the correction's slow drift, undone there
     rate_norm = np.linalg.norm(w_b, axis=1)
     turn = np.r_[0.0, np.cumsum(0.5 * (rate_norm[1:] + rate_norm[:-1]) * np.diff(t))]
     att_knots = place_knots(t, p["attitude_knot_spacing_s"], turn)
@@ -483,13 +593,15 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
     C_b_e, w_eb_b = SO3Spline.fit(t[used], attitude[used], att_knots, SPLINE_DEGREE).evaluate(t)
 
     # 5: final position fit with the smooth attitude, exact IMU, residuals ----------------
-    f_e = np.einsum("nij,nj->ni", C_b_e, f_b - correction.bias)
+    f_e = np.einsum("nij,nj->ni", C_b_e, correction.corrected(f_b))
     for _ in range(p["iterations"]):
         coef, _ = rows.solve(f_e, coef)
     P, V, a = rows.evaluate(coef)
     attitude_fit = Rotation.from_matrix(C_b_e)
-    traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events={"start": float(t[0]),
-                            "end": float(t[-1])}, name=str(p["name"]))
+    events = {"start": float(t[0]), "end": float(t[-1])}
+    if pad is not None:
+        events["liftoff"] = pad[0]
+    traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events=events, name=str(p["name"]))
     residuals = _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g)
     residuals.update({
         "heading_deg": float(np.degrees(heading_of(attitude_fit[0], C_n_e))),
@@ -499,6 +611,10 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         "imu_holes": hole_bounds(t, f_b, w_b, holes), "level": level_info,
         "sigma_specific_force_used_mps2": float(rows.sigma_f),
         "accel_bias_mps2": [float(b) for b in correction.bias],
+        "accel_scale": [float(1.0 + s) for s in correction.scale],
+        "accel_scale_note": scale_note,
+        "unresolved_fraction": float(1.0 - resolved.mean()),
+        "liftoff_s": None if pad is None else pad[0],
     })
     params = {k: v for k, v in p.items() if k not in ("initial_attitude", "initial_attitude_deg")}
     params["fit_residuals"] = residuals
@@ -506,6 +622,40 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
                       attitude=traj.attitude, specific_force=traj.specific_force,
                       angular_rate=traj.angular_rate, events=traj.events, name=traj.name,
                       parameters=params)
+
+
+def _unused_elevation(given_deg, C_b_e0, C_n_e, source):
+    """The words for a ``launch_elevation_deg`` that another source outranked: which, and
+    how far the body-x elevation it gave lies from the flag (docs/assumptions.md FIT5)."""
+    x_n = C_n_e.T @ C_b_e0.apply([1.0, 0.0, 0.0])
+    elevation = float(np.degrees(np.arcsin(np.clip(-x_n[2], -1.0, 1.0))))
+    return (f"launch_elevation_deg={given_deg:g} not used: the initial attitude came from "
+            f"{source.split(',')[0]}, whose body-x elevation is {elevation:.1f} deg "
+            f"({elevation - given_deg:+.1f} deg from the flag)")
+
+
+def _correct(rows, attitude, f_b, t, p, sigma_sa):
+    """Method step 3: the position spline, the attitude correction, the accelerometer bias
+    and scale error, relinearised ``iterations`` times. Returns the correction, the
+    corrected attitude samples and the spline coefficients."""
+    correction = AttitudeCorrection(t, p, accel_bias_sigma(p), sigma_sa)
+    coef = None
+    for _ in range(p["iterations"]):
+        C = attitude.as_matrix()
+        f_e = np.einsum("nij,nj->ni", C, correction.corrected(f_b))
+        coef, eps = rows.solve(f_e, coef, correction, C, f_b)
+        rows.robust_weights(coef, f_e, eps)
+        attitude = Rotation.from_rotvec(eps) * attitude
+    return correction, attitude, coef
+
+
+def _hold_pad(attitude, pad_end):
+    """The attitude samples with the pad (up to ``pad_end``) at the attitude of lift-off
+    (docs/assumptions.md FIT4); unchanged without a pad."""
+    if pad_end is None:
+        return attitude
+    n = len(attitude)
+    return attitude[np.r_[np.full(pad_end + 1, pad_end), np.arange(pad_end + 1, n)]]
 
 
 def _rms(x):

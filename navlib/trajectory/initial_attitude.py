@@ -325,16 +325,22 @@ def _triangle_pairs(t, f_e, t_g, P_g, c_f, c_1):
     return gnss_f, imu_f
 
 
-def start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relative):
+def start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relative,
+                   pad_end=None):
     """Initial attitude (body -> ECEF at ``t[0]``, heading still free) without a user's or
     logger's full attitude: levelled in a rest window (:func:`quiet_window`), else the
     body-x elevation from the logger's tilt (``imu.attrs["tilt"]``), else from
     ``launch_elevation_deg``; for the last two the body y axis is horizontal (roll 0) and
-    the caller sets the azimuth and estimates the roll. Returns the attitude, the source (``level``,
-    ``tilt`` or ``rail``), its description and the levelling window (empty unless level).
+    the caller sets the azimuth and estimates the roll. Returns the attitude, the source
+    (``level``, ``tilt`` or ``rail``), its description and the levelling window (empty
+    unless level). ``pad_end``: index of the lift-off sample
+    (:func:`navlib.trajectory.liftoff.find_liftoff`); the levelling window then lies on the
+    pad, never after lift-off (docs/assumptions.md FIT4).
     """
+    pad = slice(None) if pad_end is None else slice(0, pad_end + 1)
     try:
-        k0, k1, info = quiet_window(t, f_b, w_b, np.linalg.norm(gamma0), p, gnss)
+        k0, k1, info = quiet_window(t[pad], f_b[pad], w_b[pad], np.linalg.norm(gamma0), p,
+                                    gnss)
     except NavlibInputError as exc:
         tilt = _logged_tilt(imu, t[0])
         if tilt is not None:
@@ -387,3 +393,14 @@ def accel_bias_sigma(p):
         return 0.0
     bias = _imu_preset(p["preset"]).accel.bias
     return float(bias) if bias > 0 else TURN_ON_FALLBACK["accel_bias_m_s2"]
+
+
+def accel_scale_sigma(p):
+    """Prior sigma of the fit's accelerometer scale-factor error (dimensionless):
+    ``sigma_accel_scale``, else the named ``preset``'s scale factor, else 0 (none
+    estimated)."""
+    if p["sigma_accel_scale"] is not None:
+        return p["sigma_accel_scale"]
+    if p["preset"] is None:
+        return 0.0
+    return float(_imu_preset(p["preset"]).accel.scale_factor)

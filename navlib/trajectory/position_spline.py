@@ -35,6 +35,18 @@ ATTITUDE_SAMPLES_PER_KNOT = 6
 """About this many attitude samples per knot interval enter the attitude spline's fit (every
 n-th of a denser interval): the samples are integrated gyro readings, smooth at that scale,
 and the Gauss-Newton cost grows with their number (a 250 Hz record has 25 per 0.1 s)."""
+MAX_TURN_PER_SAMPLE_RAD = np.radians(30.0)
+"""A sample whose recorded rate turns the body by more than this since the previous one is
+not resolved by the record's rate: the gyro chain cannot follow a rotation axis that moves
+within a sample (900 deg/s at 10 Hz is 90 deg per sample); the assessment's bound
+``max_turn_per_sample_deg`` in data/quality.toml [fit] is the same 30 deg."""
+UNRESOLVED_WEIGHT = 1e-4
+"""Weight factor of the specific-force rows within ``UNRESOLVED_MARGIN_S`` of an unresolved
+sample: their attitude is unknown, so the GNSS carries the position there and they do not
+set the accelerometer calibration or the attitude correction."""
+UNRESOLVED_MARGIN_S = 0.5
+PAD_SIGMA_MPS = 1e-3
+"""Standard deviation of the zero-velocity rows on the pad, m/s (a constraint in effect)."""
 MAX_CORRECTION_INTERVALS = 60
 """Most knot intervals of the attitude correction: flights longer than 60
 ``correction_knot_spacing_s`` get wider intervals (10 min at the default 10 s), which keeps
@@ -105,7 +117,8 @@ class PositionRows:
     optionally, the attitude correction. The three axes share the banded normal matrix.
     """
 
-    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref):
+    def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref, pad_end=None,
+                 resolved=None):
         self.P_ref = P_ref
         self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
         self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
@@ -118,7 +131,11 @@ class PositionRows:
             w_v2 = 1.0 / p["sigma_velocity_mps"] ** 2
             self.N_gnss = self.N_gnss + w_v2 * (self.G1.T @ self.G1)
             rhs_gnss = rhs_gnss + w_v2 * (self.G1.T @ V_g)
+        if pad_end is not None:     # standing still on the pad: P' = 0 up to lift-off
+            B1 = self.B1[:pad_end + 1]
+            self.N_gnss = self.N_gnss + (B1.T @ B1) / PAD_SIGMA_MPS**2
         self.rhs_gnss = rhs_gnss
+        self.resolved = np.ones(t.size, bool) if resolved is None else resolved
         self.set_weights(np.ones(t.size))
         # first linearisation point: GNSS positions interpolated to the IMU times
         self.P0 = np.column_stack([np.interp(t, t_g, P_g[:, i]) for i in range(3)])
@@ -126,8 +143,9 @@ class PositionRows:
                                    for i in range(3)])
 
     def set_weights(self, factor):
-        """IMU row weights ``factor / sigma_f^2`` and the banded normal matrix."""
-        self.w_f2 = factor / self.sigma_f**2
+        """IMU row weights ``factor / sigma_f^2`` (times ``UNRESOLVED_WEIGHT`` where the
+        rotation is not resolved) and the banded normal matrix."""
+        self.w_f2 = factor * np.where(self.resolved, 1.0, UNRESOLVED_WEIGHT) / self.sigma_f**2
         self.N = sp.csr_array(self.B2.T @ (self.B2 * self.w_f2[:, None]) + self.N_gnss)
         self.ab = _banded(self.N)
 
@@ -142,7 +160,8 @@ class PositionRows:
         r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
              - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
         if not self.scaled:
-            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(np.abs(a - r))))
+            d = np.abs(a - r)[self.resolved] if self.resolved.any() else np.abs(a - r)
+            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(d)))
             self.scaled = True
         size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
         self.set_weights(1.0 / np.maximum(size, 1.0))
@@ -154,7 +173,7 @@ class PositionRows:
     def evaluate(self, coef):
         return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
 
-    def solve(self, f_e, coef, correction=None, C=None):
+    def solve(self, f_e, coef, correction=None, C=None, f_b=None):
         """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
 
         With a :class:`AttitudeCorrection`, the specific force rows read
@@ -170,7 +189,7 @@ class PositionRows:
         rhs = self.B2.T @ (w * r) + self.rhs_gnss
         if correction is None:
             return self._solve(rhs), np.zeros_like(f_e)
-        G = correction.columns(f_e, C)                    # 3 x sparse (N, n_u)
+        G = correction.columns(f_e, C, f_b)               # 3 x sparse (N, n_u)
         Q = [sp.csr_array(self.B2.T @ (G[a] * w)) for a in range(3)]
         n_u = G[0].shape[1]
         sol = self._solve(np.hstack([rhs, *(q.toarray() for q in Q)]))
@@ -189,18 +208,20 @@ class PositionRows:
 
 class AttitudeCorrection:
     """Slowly varying attitude correction ``eps(t)`` (ECEF rotation vector, cubic B-spline)
-    and a constant accelerometer bias ``b_a`` (body axes).
+    and a constant accelerometer bias ``b_a`` and scale-factor error ``s_a`` (body axes).
 
     ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
-    the recorded specific force and GNSS reveal; ``f <- f - b_a`` the accelerometer bias,
-    which would otherwise be taken for motion (a parked vehicle drifting at a few m/s).
-    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and neighbouring
-    coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2), so
-    stretches without attitude information (free fall) keep the gyro attitude; each bias
-    component ~ N(0, ``sigma_ba``^2), the preset's turn-on accelerometer bias.
+    the recorded specific force and GNSS reveal; ``f <- f - b_a - s_a f`` the accelerometer
+    bias and scale error (the recorded ``(1 + s_a) f + b_a`` to first order), which would
+    otherwise be taken for motion (a parked vehicle drifting at a few m/s, a boost bent by a
+    3 % scale). Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and
+    neighbouring coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2),
+    so stretches without attitude information (free fall) keep the gyro attitude; each bias
+    component ~ N(0, ``sigma_ba``^2), each scale error ~ N(0, ``sigma_sa``^2) (the preset's
+    turn-on bias and scale factor); a zero sigma leaves that term out.
     """
 
-    def __init__(self, t, p, sigma_ba):
+    def __init__(self, t, p, sigma_ba, sigma_sa=0.0):
         k = 3
         n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
         n_int = min(n_int, MAX_CORRECTION_INTERVALS)
@@ -213,23 +234,38 @@ class AttitudeCorrection:
         D = np.diff(np.eye(n_c), axis=0)
         per_axis = (np.eye(n_c) / (p["attitude_prior_deg"] * DEG) ** 2
                     + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
-        # unknowns ordered (axis j, coef i) for eps, then the three bias components
-        n_b = 3 if sigma_ba > 0 else 0                  # no bias unknowns without a prior
-        self.prior = np.zeros((3 * n_c + n_b, 3 * n_c + n_b))
+        # unknowns ordered (axis j, coef i) for eps, then the bias, then the scale errors
+        self.n_b = 3 if sigma_ba > 0 else 0              # no bias unknowns without a prior
+        self.n_s = 3 if sigma_sa > 0 else 0
+        n = 3 * n_c + self.n_b + self.n_s
+        self.prior = np.zeros((n, n))
         self.prior[:3 * n_c, :3 * n_c] = np.kron(np.eye(3), per_axis)
-        if n_b:
-            self.prior[3 * n_c:, 3 * n_c:] = np.eye(3) / sigma_ba**2
+        if self.n_b:
+            self.prior[3 * n_c:3 * n_c + 3, 3 * n_c:3 * n_c + 3] = np.eye(3) / sigma_ba**2
+        if self.n_s:
+            self.prior[n - 3:, n - 3:] = np.eye(3) / sigma_sa**2
         self.n_c = n_c
-        self.total = np.zeros(3 * n_c + n_b)             # sum of the increments applied
+        self.total = np.zeros(n)                         # sum of the increments applied
 
     @property
     def bias(self):
         """Accumulated accelerometer bias estimate (body axes, m/s^2)."""
-        return self.total[3 * self.n_c:] if self.total.size > 3 * self.n_c else np.zeros(3)
+        i = 3 * self.n_c
+        return self.total[i:i + 3] if self.n_b else np.zeros(3)
 
-    def columns(self, f_e, C):
+    @property
+    def scale(self):
+        """Accumulated accelerometer scale-factor error estimate (body axes)."""
+        return self.total[-3:] if self.n_s else np.zeros(3)
+
+    def corrected(self, f_b):
+        """The recorded specific force ``f_b`` with the bias and scale error removed."""
+        return f_b - self.bias - self.scale * f_b
+
+    def columns(self, f_e, C, f_b=None):
         """Sparse ``G[a]`` (N, n_u) for the axes a: ``beta_i(t_k) (e_j x f_e(t_k))_a`` for
-        ``eps`` and ``-C_b_e[k, a, j]`` for the bias."""
+        ``eps``, ``-C_b_e[k, a, j]`` for the bias and ``-C_b_e[k, a, j] f_b[k, j]`` for the
+        scale error."""
         out = []
         for a in range(3):
             blocks = []
@@ -238,11 +274,24 @@ class AttitudeCorrection:
                 e_j[j] = 1.0
                 cross = np.cross(e_j, f_e)[:, a]          # (N,)
                 blocks.append(sp.diags_array(cross) @ self.beta)
-            if self.total.size > 3 * self.n_c:
+            if self.n_b:
                 blocks.append(sp.csr_array(-C[:, a, :]))
+            if self.n_s:
+                blocks.append(sp.csr_array(-C[:, a, :] * f_b))
             out.append(sp.csr_array(sp.hstack(blocks)))
         return out
 
     def evaluate(self, e):
         return np.column_stack([self.beta @ e[j * self.n_c:(j + 1) * self.n_c]
                                 for j in range(3)])
+
+
+def resolved_samples(t, w_b):
+    """True where no sample within ``UNRESOLVED_MARGIN_S`` turns the body by more than
+    ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one."""
+    step = np.diff(t, prepend=t[0])
+    fast = np.linalg.norm(w_b, axis=1) * step > MAX_TURN_PER_SAMPLE_RAD
+    c = np.r_[0, np.cumsum(fast)]
+    i0 = np.searchsorted(t, t - UNRESOLVED_MARGIN_S, side="left")
+    i1 = np.searchsorted(t, t + UNRESOLVED_MARGIN_S, side="right")
+    return c[i1] - c[i0] == 0

@@ -19,6 +19,7 @@ from navlib.models.ecef import P0_DEFAULTS, parameter_sigmas
 from navlib.studies.assess import assess_flight
 from navlib.studies.assess.states import (
     EXCITABLE_MARK,
+    NOT_REPRESENTED,
     SENSIBLE_MARK,
     STATES_COLUMNS,
     how_well,
@@ -248,3 +249,12 @@ def test_both_attitude_error_definitions_give_the_same_roll_pitch_yaw(tmp_path):
     assert list(out["start"]) == ["10", "11"]
     assert list(out["1 pad -2.0..0.0 s"]) == [f"1.23 {SENSIBLE_MARK}", "2.23"]
     assert list(out["2 boost 0.0..3.5 s"]) == [f"2.47 {SENSIBLE_MARK}", f"3.47 {EXCITABLE_MARK}"]
+
+
+def test_how_well_drops_the_verdicts_of_an_unrepresented_segment():
+    rows = [{"log": "", "segment": 1, "phase": "descent", "t_start": 20.0, "t_end": 90.0,
+             "state": "roll", "unit": "deg", "sigma_start": 5.0, "sigma_end": 1.0,
+             "excitable": True, "sensible": True, "valid": False}]
+    out = how_well(pd.DataFrame(rows))
+    assert list(out.columns)[-1] == "1 descent 20.0..90.0 s" + NOT_REPRESENTED
+    assert list(out.iloc[:, -1]) == ["1"]

@@ -233,7 +233,7 @@ def test_short_pre_launch_window_levels_the_start():
     res = fit.parameters["fit_residuals"]
     assert res["initial_attitude_source"] == "level"
     assert res["level"]["short"] and 0.25 <= res["level"]["window_s"] <= 0.3
-    assert re.match(r"levelled from 0\.(29|30) s pre-launch window",
+    assert re.match(r"levelled from 0\.(2[5-9]|30) s pre-launch window",
                     res["initial_attitude_note"])
     assert res["heading_deg"] == pytest.approx(120.0, abs=0.5)
     att, d_p, _, _ = _compare(fit, truth)
@@ -274,6 +274,26 @@ def test_launch_rail_angles_start_a_record_in_flight():
     assert att.max() < 1e-3 and d_p.max() < 0.05
 
 
+def test_a_launch_elevation_outranked_by_levelling_is_named_not_ignored():
+    truth = rail_rocket(rest_s=2.0)
+    imu, gnss = _records(truth, sigma_f=0.02, sigma_w=2e-4)
+    with pytest.warns(Warning, match=r"launch_elevation_deg=80 not used: the initial attitude "
+                                     r"came from levelled .* body-x elevation is 85\.\d deg "
+                                     r"\(\+5\.\d deg from the flag\)"):
+        fit = fit_flight_data(imu, gnss, preset="pixhawk_mems", launch_elevation_deg=80.0,
+                              launch_azimuth_deg=120.0)
+    res = fit.parameters["fit_residuals"]
+    assert res["initial_attitude_source"] == "level"
+    assert "launch_elevation_deg=80 not used" in res["initial_attitude_note"]
+    # the flag is used when nothing outranks it: no warning then
+    late = imu[imu.t >= 3.0].reset_index(drop=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit = fit_flight_data(late, gnss[gnss.t >= 3.0], preset="pixhawk_mems",
+                              launch_elevation_deg=85.0, launch_azimuth_deg=120.0)
+    assert fit.parameters["fit_residuals"]["initial_attitude_source"] == "rail"
+
+
 def test_roll_on_the_rail_is_estimated_once_the_rocket_pitches_over():
     """The rail gives the body x axis; the roll about it shows once that axis turns away
     from the specific force (a 20 deg pitch-over), and the GNSS fixes it."""
@@ -309,7 +329,7 @@ def test_assessment_notes_name_the_initial_attitude_source():
     imu, gnss = _records(truth, sigma_f=0.02, sigma_w=2e-4)
     result = assess_flight(imu, gnss, preset="pixhawk_mems",
                            fit_options={"launch_azimuth_deg": 120.0})
-    assert any(re.match(r"initial attitude: levelled from 0\.(29|30) s pre-launch window", n)
+    assert any(re.match(r"initial attitude: levelled from 0\.(2[5-9]|30) s pre-launch window", n)
                for n in result.notes)
     imu, gnss = imu[imu.t >= 1.0], gnss[gnss.t >= 1.0]
     result = assess_flight(imu, gnss, preset="pixhawk_mems", fit_options={

@@ -13,6 +13,11 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning
 from navlib.models.ecef import imu_noise_densities
+from navlib.studies.assess.agreement import (
+    fit_bounds,
+    fit_calibration,
+    smoothed_residuals,
+)
 from navlib.studies.assess.inputs import GNSS_KEYS, IMU_KEYS, check_frame
 from navlib.trajectory import fit_flight_data
 
@@ -60,26 +65,33 @@ def fit_report(trajectory, preset=None, gnss_sigma_m: float | None = None) -> pd
     return frame.reset_index(drop=True)
 
 
-def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame
+def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dict | None = None
                   ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Residuals of the records against a fitted trajectory, over time.
 
     Returns
     -------
     gnss_residuals : DataFrame
-        At the GNSS epochs inside the trajectory span: ``t``, ``dx, dy, dz`` (recorded minus
+        At the GNSS epochs inside the trajectory span (moved back by the lag the fit found,
+        ``parameters["fit_residuals"]["gnss_lag_s"]``): ``t``, ``dx, dy, dz`` (recorded minus
         fitted ECEF position, m), ``d3`` (their norm) and, with GNSS velocity, ``dvx, dvy,
         dvz`` (m/s). The fit is interpolated linearly between its samples (error below
         ``|a| dt^2 / 8``: 1.4 mm at 110 m/s^2 and 100 Hz).
     imu_residuals : DataFrame
         At the trajectory samples (the IMU times of the fit): ``t``, ``df_x, df_y, df_z``
         (recorded minus the fit's exact specific force, m/s^2), ``dw_x, dw_y, dw_z``
-        (angular rate, rad/s) and the norms ``df``, ``dw``.
+        (angular rate, rad/s) and the norms ``df``, ``dw``; ``df_x_avg ... dw_z_avg``: the
+        same after the fit's IMU calibration and a moving average
+        (:func:`~navlib.studies.assess.agreement.smoothed_residuals`); ``turn_deg``: the
+        recorded rotation since the previous sample, deg.
+    bounds : dict, optional
+        :func:`~navlib.studies.assess.agreement.fit_bounds` (None: ``data/quality.toml``).
     """
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
     t = np.asarray(trajectory.t, dtype=float)
-    t_g = gnss["t"].to_numpy(dtype=float)
+    lag = trajectory.parameters.get("fit_residuals", {}).get("gnss_lag_s", 0.0)
+    t_g = gnss["t"].to_numpy(dtype=float) - lag     # the fixes where the fit put them
     keep = (t_g >= t[0]) & (t_g <= t[-1])
     out = {"t": t_g[keep]}
     for i, axis in enumerate("xyz"):
@@ -107,6 +119,16 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame
         imu_out[f"dw_{axis}"] = dw[:, i]
     imu_out["df"] = np.linalg.norm(df, axis=1)
     imu_out["dw"] = np.linalg.norm(dw, axis=1)
+    bounds = fit_bounds() if bounds is None else bounds
+    df_avg, dw_avg = smoothed_residuals(t, f_rec, trajectory.specific_force, w_rec,
+                                        trajectory.angular_rate, fit_calibration(trajectory),
+                                        bounds["moving_average_s"])
+    for i, axis in enumerate("xyz"):
+        imu_out[f"df_{axis}_avg"] = df_avg[:, i]
+    for i, axis in enumerate("xyz"):
+        imu_out[f"dw_{axis}_avg"] = dw_avg[:, i]
+    step = np.diff(t, prepend=t[0] - (t[1] - t[0] if t.size > 1 else 0.0))
+    imu_out["turn_deg"] = np.degrees(np.linalg.norm(w_rec, axis=1) * step)
     return pd.DataFrame(out), pd.DataFrame(imu_out)
 
 

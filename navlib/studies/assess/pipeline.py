@@ -29,6 +29,7 @@ from navlib.segmentation import (
     vehicle_from_log,
 )
 from navlib.studies.assess import clock
+from navlib.studies.assess.agreement import fit_bounds
 from navlib.studies.assess.fit import fit_notes, fit_records, fit_report, fit_residuals
 from navlib.studies.assess.inputs import (
     GNSS_KEYS,
@@ -41,7 +42,12 @@ from navlib.studies.assess.inputs import (
     validate_records,
 )
 from navlib.studies.assess.outages import gnss_outages, measured_epochs, outage_note
-from navlib.studies.assess.result import FlightAssessment, automatic_segment_table, segment_pairs
+from navlib.studies.assess.result import (
+    FlightAssessment,
+    automatic_segment_table,
+    segment_pairs,
+    with_agreement,
+)
 from navlib.trajectory.fit import FIT_DEFAULTS
 
 
@@ -231,7 +237,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
               "model_options": model_options, "model_step_s": model_step_s,
               "vehicle": vehicle, "vehicle_reason": vehicle_reason,
               "findings": checked.findings, "t_record": float(imu["t"].iloc[0]),
-              "outage_report_s": checked.thresholds["gnss"]["outage_report_s"]}
+              "outage_report_s": checked.thresholds["gnss"]["outage_report_s"],
+              "bounds": fit_bounds(quality_thresholds)}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -263,7 +270,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
                  segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings, t_record, outage_report_s) -> FlightAssessment:
+                 findings, t_record, outage_report_s, bounds) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -280,7 +287,7 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     notes = [f"sensor preset {preset!r}: {preset_reason}", *notes, *fit_notes(trajectory),
              *_outlier_notes(imu)]
     fit = fit_report(trajectory, preset, sigma)
-    gnss_res, imu_res = fit_residuals(trajectory, imu, gnss)
+    gnss_res, imu_res = fit_residuals(trajectory, imu, gnss, bounds)
 
     min_epochs_s = 2.0 / gnss_rate_hz
     seg_opts = dict(segment_options)
@@ -310,6 +317,10 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
         automatic.segments if segments is None else segments, model, automatic, trajectory.t,
         automatic_segments=segments is None)
     notes += joined
+    table, unrepresented = with_agreement(table, trajectory, imu_res, gnss_res, bounds)
+    for message in unrepresented:
+        warnings.warn(message, FlightDataWarning, stacklevel=3)
+    notes += unrepresented
     residuals = trajectory.parameters.get("fit_residuals", {})
     options = {"preset": preset, "preset_reason": preset_reason, "gnss_rate_hz": gnss_rate_hz,
                "gnss_sigma_m": sigma, "heading_fallback_deg": heading_fallback_deg,
@@ -318,7 +329,7 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
                "attitude_source": residuals.get("heading_source"), "vehicle": vehicle,
                "vehicle_reason": vehicle_reason, "t_zero": t_zero, "time_zero": zero,
-               "phase_source": automatic.source}
+               "phase_source": automatic.source, "fit_bounds": bounds}
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return FlightAssessment.build(

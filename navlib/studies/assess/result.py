@@ -18,6 +18,7 @@ from navlib.segmentation import (
     segments_table,
 )
 from navlib.studies.assess import states
+from navlib.studies.assess.agreement import AGREEMENT_COLUMNS, segment_agreement
 
 _GROUP_OF = {name: group for group, names in STATE_GROUPS.items() for name in names}
 
@@ -47,7 +48,13 @@ class FlightAssessment(SegmentedAnalysis):
         The automatic segmentation (features and phases), whatever segments were used.
     segment_table : DataFrame
         The segments assessed: ``segment`` (1-based), ``phase``, ``t_start``, ``t_end``,
-        ``duration``, ``n_epochs`` (GNSS epochs of the model inside that a kept fix aids).
+        ``duration``, ``n_epochs`` (GNSS epochs of the model inside that a kept fix aids)
+        and the fit's agreement
+        with the records (:func:`~navlib.studies.assess.agreement.segment_agreement`):
+        ``fit_f_rms`` (m/s^2), ``fit_w_rms`` (rad/s), ``fit_gnss_rms`` (m), ``represented``
+        and ``fit_reason`` (empty when represented). The excitability and sensability of a
+        segment that is not represented describe a motion that was not flown: the long
+        frames and :meth:`summary` carry ``valid = represented``.
     options : dict
         Assumed values: ``preset``, ``gnss_rate_hz``, ``gnss_sigma_m``, fit and segmentation
         options, model options.
@@ -147,6 +154,30 @@ class FlightAssessment(SegmentedAnalysis):
         the table ``python -m navlib assess`` writes to ``states.csv``."""
         return states.states_table(self, log)
 
+    def _agreement(self, column: str, default) -> dict:
+        """``segment -> segment_table[column]``; ``default`` for every segment of a table
+        without it (a planned motion is the motion by construction)."""
+        table = self.segment_table
+        values = table[column] if column in table.columns else [default] * len(table)
+        return dict(zip(table["segment"], values, strict=True))
+
+    def _validity(self, frame: pd.DataFrame) -> pd.DataFrame:
+        frame["valid"] = frame["segment"].map(self._agreement("represented", True)).astype(bool)
+        return frame
+
+    def excitability_frame(self) -> pd.DataFrame:
+        """:meth:`~navlib.metrics.SegmentedAnalysis.excitability_frame` with ``valid``: the
+        segment is represented by the reference motion (``segment_table``), so its numbers
+        describe the flight flown."""
+        return self._validity(super().excitability_frame())
+
+    def summary(self) -> pd.DataFrame:
+        """:meth:`~navlib.metrics.SegmentedAnalysis.summary` with ``valid`` (as in
+        :meth:`excitability_frame`) and ``fit_reason``."""
+        frame = self._validity(super().summary())
+        frame["fit_reason"] = frame["segment"].map(self._agreement("fit_reason", ""))
+        return frame
+
     def _segment_changes(self, segments) -> dict:
         """``segments`` as in :func:`assess_flight` (None keeps the current ones; ``"auto"``
         returns to the automatic segmentation)."""
@@ -155,7 +186,19 @@ class FlightAssessment(SegmentedAnalysis):
         if isinstance(segments, str) and segments == "auto":
             segments = self.automatic.segments
         table = _segment_table(segments, self.model, self.automatic, self.trajectory.t)
+        if self.imu_residuals is not None:
+            table, _ = with_agreement(table, self.trajectory, self.imu_residuals,
+                                      self.gnss_residuals, self.options["fit_bounds"])
         return {"segment_table": table, "segments": segment_pairs(table)}
+
+
+def with_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
+    """``table`` with the :data:`~navlib.studies.assess.agreement.AGREEMENT_COLUMNS` of
+    :func:`~navlib.studies.assess.agreement.segment_agreement`, and its messages."""
+    columns, messages = segment_agreement(table, trajectory, imu_residuals, gnss_residuals,
+                                          bounds)
+    table = table.drop(columns=[c for c in AGREEMENT_COLUMNS if c in table.columns])
+    return pd.concat([table.reset_index(drop=True), columns], axis=1), messages
 
 
 def segment_pairs(table: pd.DataFrame) -> tuple[tuple[float, float], ...]:

@@ -50,8 +50,10 @@ UNITS = {"position": ("m", 1.0), "velocity": ("m/s", 1.0), "attitude": ("deg", u
 """Group -> (unit, its size in SI) of the navigation states, in model order."""
 
 STATES_COLUMNS = ("log", "segment", "phase", "t_start", "t_end", "state", "group", "unit",
-                  "sigma_start", "sigma_end", "reduction", "excitable", "sensible")
-"""Columns of :func:`states_table` (and of ``states.csv``)."""
+                  "sigma_start", "sigma_end", "reduction", "excitable", "sensible", "valid")
+"""Columns of :func:`states_table` (and of ``states.csv``). ``valid``: the segment's reference
+motion agrees with the records (``represented`` in the segment table, docs/assumptions.md
+FIT1-FIT3; always true for a plan), so its numbers describe the flight flown."""
 
 _AXES = {"body": ("x", "y", "z"), "rocket": ("along", "cross_y", "cross_z")}
 _NED = ("north", "east", "down")
@@ -122,7 +124,8 @@ def states_table(analysis, log: str = "") -> pd.DataFrame:
         the segment table's clock), ``state`` (:func:`navigation_state_names`), ``group``,
         ``unit``, ``sigma_start`` and ``sigma_end`` (1-sigma in ``unit`` at the segment's
         first and last model epoch), ``reduction`` (``1 - sigma_end / sigma_start``;
-        negative when the uncertainty grew), ``excitable``, ``sensible``.
+        negative when the uncertainty grew), ``excitable``, ``sensible``, ``valid``
+        (:data:`STATES_COLUMNS`).
     """
     se = analysis.sensability
     settings = analysis.settings
@@ -134,9 +137,11 @@ def states_table(analysis, log: str = "") -> pd.DataFrame:
     w_sens = _directions(T, se.d0)
     keep = np.arange(se.V.shape[-1])[None, :] < se.nr[:, None]
     table = analysis.segment_table
+    valid = (table["represented"].to_numpy(dtype=bool) if "represented" in table.columns
+             else np.ones(len(table), dtype=bool))
     frames = []
-    for row, (a, b), ex in zip(table.itertuples(index=False), analysis.segments,
-                               analysis.excitability, strict=True):
+    for row, (a, b), ex, held in zip(table.itertuples(index=False), analysis.segments,
+                                     analysis.excitability, valid, strict=True):
         sel = analysis.epochs(a, b)
         ends = sel[[0, -1]]
         P = np.einsum("kij,kjl,kil->ki", T[ends], se.P[ends], T[ends])
@@ -150,13 +155,16 @@ def states_table(analysis, log: str = "") -> pd.DataFrame:
             "t_start": float(row.t_start), "t_end": float(row.t_end), "state": names,
             "group": groups, "unit": unit_names, "sigma_start": sigma[0], "sigma_end": sigma[1],
             "reduction": 1.0 - sigma[1] / sigma[0], "excitable": e >= settings["e_threshold"],
-            "sensible": fraction >= settings["min_fraction"]}))
+            "sensible": fraction >= settings["min_fraction"], "valid": bool(held)}))
     return pd.concat(frames, ignore_index=True)[list(STATES_COLUMNS)]
 
 
 SENSIBLE_MARK, EXCITABLE_MARK = "\u25cf", "\u25cb"
 """Marks of :func:`how_well`: sensible (the measurements pin the state down), excitable only
 (the motion makes it observable, the measurements do not pin it down)."""
+NOT_REPRESENTED = " (not represented)"
+"""Ending of a :func:`how_well` segment heading whose reference motion departs from the
+records."""
 
 
 def how_well(states: pd.DataFrame) -> pd.DataFrame:
@@ -164,7 +172,9 @@ def how_well(states: pd.DataFrame) -> pd.DataFrame:
     :func:`states_table`: one row per navigation state (with its unit), the 1-sigma at the
     flight's start, then the 1-sigma at the end of each segment, written to three
     significant digits and marked :data:`SENSIBLE_MARK` where the state is sensible in that
-    segment and :data:`EXCITABLE_MARK` where it is only excitable.
+    segment and :data:`EXCITABLE_MARK` where it is only excitable. A segment whose reference
+    motion departs from the records (``valid`` false) gets no marks and a heading ending in
+    :data:`NOT_REPRESENTED`: its verdicts would describe a motion that was not flown.
 
     Parameters
     ----------
@@ -182,8 +192,12 @@ def how_well(states: pd.DataFrame) -> pd.DataFrame:
                         "start": [f"{v:.3g}" for v in first["sigma_start"]]})
     for (segment, phase, t0, t1), rows in states.groupby(
             ["segment", "phase", "t_start", "t_end"], sort=False):
+        held = bool(rows["valid"].all()) if "valid" in rows.columns else True
         marks = np.where(rows["sensible"], SENSIBLE_MARK,
                          np.where(rows["excitable"], EXCITABLE_MARK, ""))
-        out[f"{segment} {phase} {t0:.1f}..{t1:.1f} s"] = [
+        if not held:
+            marks = np.full(len(rows), "")
+        heading = f"{segment} {phase} {t0:.1f}..{t1:.1f} s" + ("" if held else NOT_REPRESENTED)
+        out[heading] = [
             f"{v:.3g} {m}".rstrip() for v, m in zip(rows["sigma_end"], marks, strict=True)]
     return out

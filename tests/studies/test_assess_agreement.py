@@ -1,0 +1,260 @@
+"""The fit's agreement with the records per segment (navlib.studies.assess.agreement,
+data/quality.toml [fit], docs/assumptions.md F1-F3): generated rocket flights whose reference
+follows the records are represented; a tumbling descent logged at 10 Hz, a GNSS lag and a
+held fix are flagged with their cause; the segment table, summary and long frames carry the
+verdict."""
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from flights import exact_records
+
+from navlib.studies.assess import assess_flight
+from navlib.studies.assess.agreement import (
+    AGREEMENT_COLUMNS,
+    fit_bounds,
+    moving_average,
+    segment_agreement,
+)
+from navlib.trajectory.liftoff import find_liftoff, gnss_still
+from navlib.trajectory.mission import from_mission, read_mission, with_values
+
+
+def _assess(imu, gnss, t_max=None, **kw):
+    if t_max is not None:
+        imu = imu[imu["t"] <= t_max].reset_index(drop=True)
+        gnss = gnss[gnss["t"] <= t_max].reset_index(drop=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = assess_flight(imu, gnss, preset="pixhawk_mems", vehicle="rocket", **kw)
+    return result, [str(w.message) for w in caught]
+
+
+@pytest.fixture(scope="module")
+def hpr():
+    return from_mission("hpr_rocket")
+
+
+@pytest.fixture(scope="module")
+def hpr_records(hpr):
+    return exact_records(hpr, sigma_f=0.05, sigma_w=0.002, sigma_p=2.0, gnss_hz=5.0, seed=1)
+
+
+def test_a_flight_the_fit_follows_is_represented(hpr_records):
+    result, messages = _assess(*hpr_records, t_max=40.0)
+    table = result.segment_table
+    assert list(table.columns[-len(AGREEMENT_COLUMNS):]) == list(AGREEMENT_COLUMNS)
+    assert table["represented"].all() and (table["fit_reason"] == "").all()
+    bounds = fit_bounds()
+    assert (table["fit_f_rms"] < bounds["specific_force_mps2"]).all()
+    assert (table["fit_w_rms"] < np.radians(bounds["angular_rate_deg_s"])).all()
+    assert (table["fit_gnss_rms"] < bounds["gnss_m"]).all()
+    assert not any("not represented" in m for m in messages)
+    assert result.summary()["valid"].all()
+    assert result.excitability_frame()["valid"].all()
+
+
+def test_tumbling_descent_at_10_hz_is_flagged_with_its_cause(hpr):
+    # the rocket turns at 2.5 rev/s (900 deg/s) under the drogue, logged at 10 Hz: 90 deg
+    # per sample, more than the record resolves (a 10 s pad to level on at 10 Hz)
+    mission = with_values(read_mission("hpr_rocket")[0], {"phase.3.spin_hz": 2.5,
+                                                              "phase.1.start_s": 10.0})
+    truth = from_mission(mission)
+    imu, gnss = exact_records(truth, sigma_f=0.05, sigma_w=0.002, sigma_p=2.0, gnss_hz=5.0)
+    imu = imu.iloc[::10].reset_index(drop=True)
+    result, messages = _assess(imu, gnss, t_max=50.0)
+    table = result.segment_table
+    late = table[table["t_end"] > truth.events["drogue"] + 1.0]
+    assert len(late) >= 1 and not late["represented"].any()
+    assert late["fit_reason"].str.contains("rotation per sample beyond what the log rate "
+                                           "resolves").all()
+    flagged = [m for m in messages if "is not represented" in m]
+    assert len(flagged) >= len(late)
+    assert all(f"segment {int(s)} " in " ".join(flagged) for s in late["segment"])
+    summary = result.summary()
+    assert not summary.loc[summary["segment"].isin(late["segment"]), "valid"].any()
+    # re-reading with other segments recomputes the verdict
+    again = result.with_settings(segments=[truth.events["drogue"]])
+    assert not again.segment_table["represented"].iloc[-1]
+
+
+def _residual_frames(t, t_g, d_g, df=0.0, dw=0.0, turn=1.0):
+    imu = pd.DataFrame({"t": t, **{f"df_{a}_avg": df for a in "xyz"},
+                        **{f"dw_{a}_avg": dw for a in "xyz"}, "turn_deg": turn})
+    gnss = pd.DataFrame({"t": t_g, "dx": d_g[:, 0], "dy": d_g[:, 1], "dz": d_g[:, 2]})
+    return imu, gnss
+
+
+class _Line:
+    """A reference moving along x at ``speed`` m/s."""
+
+    def __init__(self, t, speed):
+        self.t = t
+        self.position = np.column_stack([speed * t, np.zeros_like(t), np.zeros_like(t)])
+        self.position += np.array([6.4e6, 0.0, 0.0])
+        self.velocity = np.column_stack([np.full_like(t, speed), np.zeros_like(t),
+                                         np.zeros_like(t)])
+        self.specific_force = np.zeros((t.size, 3))
+        self.angular_rate = np.zeros((t.size, 3))
+
+
+TABLE = pd.DataFrame({"segment": [1, 2], "phase": ["powered", "coast"],
+                      "t_start": [0.0, 10.0], "t_end": [10.0, 20.0]})
+
+
+def test_bounds_per_phase_and_worst_axis():
+    t = np.arange(0.0, 20.0, 0.01)
+    t_g = np.arange(0.0, 20.0, 1.0)
+    ref = _Line(t, 0.0)
+    bounds = fit_bounds()
+    # 0.8 m/s^2 on one axis: within the powered bound (1.0), beyond the coast one (0.5)
+    imu, gnss = _residual_frames(t, t_g, np.zeros((t_g.size, 3)))
+    imu["df_y_avg"] = 0.8
+    cols, messages = segment_agreement(TABLE, ref, imu, gnss, bounds)
+    assert cols["fit_f_rms"].tolist() == pytest.approx([0.8, 0.8])
+    assert cols["represented"].tolist() == [True, False]
+    assert "specific force 0.8 m/s^2 RMS (bound 0.5)" in cols["fit_reason"][1]
+    assert len(messages) == 1 and messages[0].startswith("segment 2 coast 10-20 s")
+    # a rate residual of 3 deg/s and a GNSS residual of 20 m are each outside
+    imu, gnss = _residual_frames(t, t_g, np.full((t_g.size, 3), 20.0 / np.sqrt(3.0)),
+                                 dw=np.radians(3.0))
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, bounds)
+    assert cols["fit_gnss_rms"].tolist() == pytest.approx([20.0, 20.0])
+    assert not cols["represented"].any()
+    assert cols["fit_reason"].str.contains("angular rate 3 deg/s").all()
+    assert cols["fit_reason"].str.contains("GNSS position 20 m").all()
+    # no fixes in a segment: NaN, and no verdict from them
+    imu, gnss = _residual_frames(t, t_g[t_g < 10.0], np.zeros((10, 3)))
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, bounds)
+    assert np.isnan(cols["fit_gnss_rms"][1]) and cols["represented"].all()
+
+
+def test_gnss_lag_and_held_fix_are_named():
+    t = np.arange(0.0, 20.0, 0.01)
+    t_g = np.arange(0.0, 20.0, 0.2)
+    speed = 200.0
+    ref = _Line(t, speed)
+    # fixes 0.3 s late: recorded minus reference is -0.3 s x velocity (60 m)
+    d = np.zeros((t_g.size, 3))
+    d[:, 0] = -0.3 * speed
+    imu, gnss = _residual_frames(t, t_g, d)
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert not cols["represented"].any()
+    assert cols["fit_reason"].str.contains(r"GNSS lag \(0.3 s").all()
+    # a fix held for 3 s in the coast segment while the reference moves
+    fixes = ref.position[::20][: t_g.size].copy()
+    held = (t_g > 12.0) & (t_g <= 15.0)
+    fixes[held] = fixes[np.flatnonzero(held)[0] - 1]
+    d = fixes - ref.position[::20][: t_g.size]
+    imu, gnss = _residual_frames(t, t_g, d)
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert cols["represented"].tolist() == [True, False]
+    assert "a held GNSS fix (15 fix(es)" in cols["fit_reason"][1]
+
+
+def test_moving_average_of_uneven_samples():
+    t = np.array([0.0, 0.1, 0.2, 1.5, 1.6])
+    x = np.array([[1.0], [2.0], [3.0], [10.0], [20.0]])
+    avg = moving_average(t, x, 1.0)
+    assert avg[:, 0] == pytest.approx([2.0, 2.0, 2.0, 15.0, 15.0])
+
+
+def test_the_pad_is_held_still_until_the_liftoff_the_records_show(hpr, hpr_records):
+    imu, gnss = hpr_records
+    result, _ = _assess(imu, gnss, t_max=40.0)
+    traj = result.trajectory
+    res = traj.parameters["fit_residuals"]
+    liftoff = res["liftoff_s"]
+    # found from the recorded specific force: within 0.05 s of the truth's lift-off
+    assert liftoff == pytest.approx(hpr.events["liftoff"], abs=0.05)
+    assert traj.events["liftoff"] == liftoff
+    pad = traj.t <= liftoff
+    assert np.linalg.norm(traj.velocity[pad], axis=1).max() < 0.01
+    turn = traj.C_b_e()[pad] @ traj.C_b_e()[0].T
+    assert np.degrees(np.arccos(np.clip((np.trace(turn, axis1=1, axis2=2) - 1) / 2, -1, 1))
+                      ).max() < 0.01
+    # levelled on the pad, never after lift-off
+    assert res["level"]["t_end"] <= liftoff
+    # without the hold the same records let the pad move (the fit's freedom before)
+    free, _ = _assess(imu, gnss, t_max=40.0, fit_options={"hold_pad": False})
+    free_pad = free.trajectory.t <= liftoff
+    assert np.linalg.norm(free.trajectory.velocity[free_pad], axis=1).max() > 0.1
+    assert free.trajectory.parameters["fit_residuals"]["liftoff_s"] is None
+
+
+def test_a_record_starting_in_the_air_has_no_pad(hpr_records):
+    imu, _ = hpr_records
+    air = imu[(imu["t"] >= 8.0) & (imu["t"] <= 16.0)].reset_index(drop=True)
+    f = air[["f_x", "f_y", "f_z"]].to_numpy()
+    w = air[["w_x", "w_y", "w_z"]].to_numpy()
+    assert find_liftoff(air["t"].to_numpy(), f, w, 9.8, 0.05) is None
+
+
+def test_a_3_percent_accelerometer_scale_error_does_not_bend_the_motion(hpr, hpr_records):
+    imu, gnss = hpr_records
+    scaled = imu.copy()
+    scaled[["f_x", "f_y", "f_z"]] *= 1.03
+
+    def errors(records, **fit_options):
+        result, _ = _assess(*records, t_max=40.0, fit_options=fit_options)
+        traj = result.trajectory
+        k = np.searchsorted(hpr.t, traj.t)
+        return (np.linalg.norm(traj.velocity - hpr.velocity[k], axis=1).max(),
+                result)
+
+    clean, _ = errors(hpr_records)
+    fixed, _ = errors((scaled, gnss), sigma_accel_scale=0.0)     # no scale estimated
+    estimated, result = errors((scaled, gnss), sigma_accel_scale=0.03)
+    assert fixed > 1.5 * clean                     # the scale error bends the motion ...
+    assert estimated < 1.2 * clean                 # ... unless estimated with it
+    scale = result.trajectory.parameters["fit_residuals"]["accel_scale"]
+    assert scale[0] == pytest.approx(1.03, abs=0.005)        # the thrust axis sees it
+    assert result.segment_table["represented"].all()
+
+
+def test_a_gnss_lag_of_0_2_s_is_recovered(hpr, hpr_records):
+    imu, gnss = hpr_records
+    late = gnss.copy()
+    late["t"] += 0.2                          # every fix stamped 0.2 s after its position
+
+    def worst_position_error(records, **fit_options):
+        result, _ = _assess(*records, t_max=40.0, fit_options=fit_options)
+        k = np.searchsorted(hpr.t, result.trajectory.t)
+        return np.linalg.norm(result.trajectory.position - hpr.position[k], axis=1).max(), \
+            result
+
+    clean, _ = worst_position_error(hpr_records)
+    ignored, _ = worst_position_error((imu, late), estimate_gnss_lag=False)
+    found, result = worst_position_error((imu, late))
+    assert ignored > 2.0 * clean
+    assert found < 1.2 * clean
+    assert result.trajectory.parameters["fit_residuals"]["gnss_lag_s"] == pytest.approx(
+        0.2, abs=0.03)
+    assert result.segment_table["represented"].all()
+
+
+@pytest.mark.parametrize("axis", ["w_x", "w_z"])
+def test_a_reversed_gyro_axis_is_flagged(hpr_records, axis):
+    """A gyro axis logged with the wrong sign bends the reference attitude: the boost is not
+    represented. The cause is not identified yet (no check separates a reversed gyro from
+    other attitude errors: the reference is fitted to the reversed rates)."""
+    imu, gnss = hpr_records
+    flipped = imu.copy()
+    flipped[axis] *= -1
+    result, messages = _assess(flipped, gnss, t_max=40.0)
+    table = result.segment_table
+    powered = table[table["phase"] == "powered"]
+    assert len(powered) == 1 and not powered["represented"].iloc[0]
+    assert "specific force" in powered["fit_reason"].iloc[0]
+    assert any(f"segment {int(powered['segment'].iloc[0])} powered" in m for m in messages)
+
+
+def test_a_pad_must_stand_still_in_the_gnss_too():
+    t_g = np.arange(0.0, 10.0, 1.0)
+    still = np.array([6.4e6, 0.0, 0.0]) + np.random.default_rng(0).normal(0.0, 0.5, (10, 3))
+    assert gnss_still(t_g, still, 9.5)
+    drifting = still + np.outer(t_g, [0.0, 1.0, 0.0])          # 1 m/s: a hover drifting
+    assert not gnss_still(t_g, drifting, 9.5)
+    assert gnss_still(t_g[:2], drifting[:2], 9.5)               # two fixes say nothing
