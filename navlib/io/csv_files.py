@@ -274,7 +274,8 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
                   angle_unit: str | None = None, position: str | None = None,
                   velocity: str | None = None, columns: Mapping[str, str] | None = None,
                   sep: str | None = None, max_gap_s: float | None = None,
-                  on_gap: str = "warn", check_magnitudes: bool = True) -> pd.DataFrame:
+                  on_gap: str = "warn", check_magnitudes: bool = True,
+                  baro: pd.DataFrame | None = None) -> pd.DataFrame:
     """Read GNSS fixes (time, position, optional velocity and sigma) from a CSV file.
 
     Position is given either in ECEF (``x, y, z``) or geodetic (``lat_deg, lon_deg, alt``,
@@ -300,6 +301,10 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
     columns, sep, max_gap_s, on_gap, check_magnitudes
         As in :func:`read_imu_csv`. Magnitude checks: every position within
         6300..7500 km of the Earth's centre, every speed below 12 km/s.
+    baro : DataFrame, optional
+        A barometer record (``t, alt_m``, :func:`navlib.io.baro.read_baro_csv`): a geodetic
+        file without a height column takes the barometric altitude at each fix as its
+        height (assumptions.md B1; ``attrs["height_source"] = "baro"``).
 
     Returns
     -------
@@ -350,6 +355,13 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
     else:
         need = ["lat" if "lat" in cols else "lat_deg", "lon" if "lon" in cols else "lon_deg",
                 "alt"]
+        if "alt" not in cols:
+            if baro is None:
+                raise src.error(None, None, "latitude and longitude but no height column "
+                                            "(alt, altitude, height, ...): give a barometer "
+                                            "record for the height (LOG 'imu.csv,gnss.csv,"
+                                            f"baro.csv', or baro=); header is {table.header}")
+            need.remove("alt")
     need += {"ecef": list(V_KEYS), "ned": list(NED_KEYS), None: []}[vel]
     if "sigma" in cols:
         need.append("sigma")
@@ -379,8 +391,13 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
         lat, lon = values[kl] * fac[kl], values[ko] * fac[ko]
         _check_angles(lat, np.pi / 2, cols[kl], src, fac[kl])
         _check_angles(lon, 2 * np.pi, cols[ko], src, fac[ko])
-        r_e = geodetic_to_ecef(lat, lon, values["alt"] * fac["alt"])
-        labels = _labels(cols, (kl, ko, "alt"))
+        if "alt" in values:
+            height = values["alt"] * fac["alt"]
+        else:
+            height = np.interp(t, baro["t"].to_numpy(dtype=float),
+                               baro["alt_m"].to_numpy(dtype=float))
+        r_e = geodetic_to_ecef(lat, lon, height)
+        labels = _labels(cols, (kl, ko, "alt") if "alt" in cols else (kl, ko))
     if check_magnitudes:
         check_positions(r_e, src, labels, fac.get("x"))
     out = {"t": t, **dict(zip(R_KEYS, r_e.T, strict=True))}
@@ -404,7 +421,8 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
         s_h, s_v = values["sigma_h"] * fac["sigma_h"], values["sigma_v"] * fac["sigma_v"]
         out["sigma"] = combine_sigma(s_h, s_v)
     frame = pd.DataFrame(out)
-    frame.attrs.update(source=str(path), position_input=pos, velocity_input=vel)
+    frame.attrs.update(source=str(path), position_input=pos, velocity_input=vel,
+                       height_source="gnss" if pos == "ecef" or "alt" in cols else "baro")
     return apply_gap_policy(frame, src, cols["t"].label, max_gap_s, on_gap)
 
 

@@ -31,9 +31,10 @@ from navlib.studies.plan import plan_mission
 
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
-SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
-                   "excitable", "sensible", "warnings", "seconds", "page")
-"""Columns of ``summary.csv``, in order (a mission's file name in ``log``)."""
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "aiding", "duration_s", "n_segments",
+                   "phases", "excitable", "sensible", "warnings", "seconds", "page")
+"""Columns of ``summary.csv``, in order (a mission's file name in ``log``; ``aiding``: what
+aided the IMU, ``gnss``, ``baro`` or ``gnss+baro``, :data:`navlib.models.baro.AIDINGS`)."""
 
 
 def _keywords(fn, *skip: str) -> tuple[str, ...]:
@@ -68,6 +69,7 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
             summary = result.summary()
             seg = result.segment_table
             row.update(status="ok", vehicle=result.vehicle,
+                       aiding=str(getattr(result, "options", {}).get("aiding", "gnss")),
                        duration_s=float(seg.t_end.max() - seg.t_start.min()),
                        n_segments=len(seg),
                        phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"

@@ -20,6 +20,7 @@ from navlib.metrics import (
     S_THRESHOLD,
     check_thresholds,
 )
+from navlib.models.baro import aided_model, sigma_note
 from navlib.models.ecef import ecef21_at_epochs
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
@@ -28,6 +29,7 @@ from navlib.segmentation import (
     segment_flight,
     vehicle_from_log,
 )
+from navlib.studies.assess.aiding import aiding_records
 from navlib.studies.assess.fit import fit_notes, fit_records, fit_report, fit_residuals
 from navlib.studies.assess.inputs import (
     GNSS_KEYS,
@@ -56,11 +58,11 @@ def _gnss_sigma(gnss: pd.DataFrame, spec) -> float:
 DEFAULT_PRESET = "motionpak_tactical"
 """Sensor preset of records that do not say what their hardware is (CSV files)."""
 AUTOPILOT_PRESETS = {"px4": "pixhawk_mems", "ardupilot": "pixhawk_mems",
-                     "altos": "altus_telemega"}
+                     "altos": "altus_telemega", "firm": "pixhawk_mems", "cats": "pixhawk_mems"}
 """Preset chosen by default for logs whose reader found the autopilot or flight computer
 (``attrs["autopilot"]``): the consumer MEMS class of the Pixhawk family
-(``data/sensors/pixhawk_mems.toml``), the MPU-6000 class of the Altus Metrum TeleMega
-(``data/sensors/altus_telemega.toml``)."""
+(``data/sensors/pixhawk_mems.toml``, also for the FIRM and CATS flight computers' MEMS
+IMUs), the MPU-6000 class of the Altus Metrum TeleMega (``data/sensors/altus_telemega.toml``)."""
 MODEL_STEP_S = 0.02
 """Longest model step of the assessment (``ecef21_at_epochs(max_step_s=...)``), s: IMU steps
 are grouped to 50 Hz, which keeps long flights fast while the 1 s transitions move by less
@@ -124,7 +126,11 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         separately; shorter holes are bridged by the fit, with a stated bound
         (``notes``); GNSS gaps (and a GNSS ``segment`` column) are bridged by the IMU. An
         autopilot attitude in ``imu.attrs["attitude"]`` (ULog, DataFlash) is the initial
-        attitude unless ``fit_options`` say otherwise.
+        attitude unless ``fit_options`` say otherwise. ``gnss`` None (a flight without
+        GNSS) or a record whose height is barometric (``attrs["height_source"]``) is aided
+        by the barometer ``imu.attrs["baro"]`` and the pad
+        (:func:`navlib.studies.assess.aiding.aiding_records`,
+        :func:`navlib.models.baro.aided_model`); ``options["aiding"]`` names it.
     preset : str, optional
         Sensor preset (``data/sensors/*.toml``) giving the IMU noise densities and the
         turn-on sigmas of ``P0`` (:func:`navlib.models.ecef.parameter_sigmas`). None:
@@ -186,6 +192,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     """
     thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
     check_frame(imu, "imu", IMU_KEYS)
+    gnss, aiding, aiding_notes = aiding_records(imu, gnss)
     check_frame(gnss, "gnss", GNSS_KEYS)
     gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
     preset, preset_reason = choose_preset(imu, preset)
@@ -220,7 +227,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
               "fit_options": fit_options, "segment_options": segment_options,
               "model_options": model_options, "model_step_s": model_step_s,
               "vehicle": vehicle, "vehicle_reason": vehicle_reason,
-              "findings": checked.findings}
+              "findings": checked.findings, "aiding": aiding, "aiding_notes": aiding_notes}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -252,7 +259,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
                  segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings) -> FlightAssessment:
+                 findings, aiding, aiding_notes) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -266,8 +273,8 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
 
     trajectory, notes = fit_records(imu, gnss, fit_options, heading_fallback_deg)
     gnss_rate_hz = min(gnss_rate_hz, trajectory.rate_hz)
-    notes = [f"sensor preset {preset!r}: {preset_reason}", *notes, *fit_notes(trajectory),
-             *_outlier_notes(imu)]
+    notes = [f"sensor preset {preset!r}: {preset_reason}", *aiding_notes, *notes,
+             *fit_notes(trajectory), *_outlier_notes(imu)]
     fit = fit_report(trajectory, preset, sigma)
     gnss_res, imu_res = fit_residuals(trajectory, imu, gnss)
 
@@ -281,6 +288,9 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
 
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
+    model = aided_model(model, trajectory, aiding, gnss_sigma_m=sigma)
+    if aiding != "gnss":
+        notes.append(sigma_note(model, trajectory, aiding))
     table, joined = automatic_segment_table(
         automatic.segments if segments is None else segments, model, automatic, trajectory.t,
         automatic_segments=segments is None)
@@ -292,7 +302,7 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                "model_options": model_options, "model_step_s": model_step_s,
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
                "attitude_source": residuals.get("heading_source"), "vehicle": vehicle,
-               "vehicle_reason": vehicle_reason}
+               "vehicle_reason": vehicle_reason, "aiding": aiding}
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return FlightAssessment.build(
