@@ -51,6 +51,7 @@ from navlib.io.checks import (
     reader_limits,
     validated_imu,
 )
+from navlib.io.sensor_health import check_imu_alive
 
 ACCEL_COLUMNS = ("accel_x", "accel_y", "accel_z")
 """AltOS accelerometer columns (m/s^2) on the along, across, through axes."""
@@ -241,6 +242,9 @@ max_outlier_fraction, require_overlap
                             "tilt", "baro_altitude") if c in index]]
     cols = {c: Column(c, table.header[index[c]], index[c]) for c in wanted}
     data = parse_columns(table, cols)
+    for optional in ("tilt", "baro_altitude"):       # an all-empty optional column: ignored
+        if optional in data and not np.isfinite(data[optional]).any():
+            del data[optional], cols[optional]
     check_finite(data, cols, src)
 
     t_all = data["time"]
@@ -251,6 +255,8 @@ max_outlier_fraction, require_overlap
     t = t_all[rows]
     f_b = imu_values[rows, :3]
     w_ib_b = imu_values[rows, 3:] * units.DEG
+    check_imu_alive(f_b, w_ib_b, imu_src, "'accel_x'/'accel_y'/'accel_z'",
+                    "'gyro_roll'/'gyro_pitch'/'gyro_yaw'")
 
     hardware = _hardware(table, index, path)
     sensor_range = dict(TELEMEGA_RANGE)  # _layout accepts gyro + GPS boards only: TeleMega

@@ -65,6 +65,7 @@ from navlib.io.checks import (
     check_velocities,
     flag_imu_outliers,
 )
+from navlib.io.sensor_health import check_imu_alive
 
 AXES = ("x", "y", "z")
 F_KEYS = ("f_x", "f_y", "f_z")
@@ -249,6 +250,7 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
             src = replace(src, lines=None if src.lines is None else src.lines[keep],
                           raw=None if src.raw is None else [r for r, k in zip(
                               src.raw, keep, strict=True) if k])
+        check_imu_alive(f_b, w_ib_b, src, _labels(cols, F_KEYS), _labels(cols, W_KEYS))
     frame = pd.DataFrame({"t": t, **dict(zip(F_KEYS, f_b.T, strict=True)),
                           **dict(zip(W_KEYS, w_ib_b.T, strict=True))})
     frame.attrs["source"] = str(path)
@@ -357,10 +359,11 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
                 "alt"]
         if "alt" not in cols:
             if baro is None:
-                raise src.error(None, None, "latitude and longitude but no height column "
-                                            "(alt, altitude, height, ...): give a barometer "
-                                            "record for the height (LOG 'imu.csv,gnss.csv,"
-                                            f"baro.csv', or baro=); header is {table.header}")
+                raise src.error("'alt'", None, "missing column: latitude and longitude but "
+                                               "no height (alt, altitude, height, ...); give a "
+                                               "barometer record for the height (LOG 'imu.csv,"
+                                               "gnss.csv,baro.csv', or baro=); header is "
+                                               f"{table.header}")
             need.remove("alt")
     need += {"ecef": list(V_KEYS), "ned": list(NED_KEYS), None: []}[vel]
     if "sigma" in cols:

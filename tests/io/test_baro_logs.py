@@ -89,7 +89,7 @@ def test_log_pairs_and_triples_with_a_barometer(tmp_path):
     _, _, h = io_geodetic(gnss)
     np.testing.assert_allclose(h, np.interp(gnss.t, imu.attrs["baro"].t,
                                             imu.attrs["baro"].alt_m), atol=1e-3)
-    with pytest.raises(NavlibInputError, match=r"no height column .* barometer"):
+    with pytest.raises(NavlibInputError, match=r"missing column: latitude and longitude but no height.*barometer"):
         io.read_log(f"{imu_path},{gnss_path}")
 
 
@@ -175,3 +175,49 @@ def test_shared_cats_export_reads_gnss_with_barometric_height():
     _, gnss = io.read_log(str(CATS_LOG))
     assert gnss.attrs["height_source"] == "baro"
     assert gnss.attrs["held_fixes_dropped"] > 200   # README: many rows repeat the position
+
+
+def _moving_imu(n=400, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / RATE
+    f = np.column_stack([0.3 * np.sin(t), 0.2 * np.cos(t), -9.81 - 20.0 * (t > 2.0)])
+    w = np.column_stack([np.sin(3 * t), 0.5 * np.cos(2 * t), 0.2 * t])
+    return t, f + 0.01 * rng.standard_normal(f.shape), w + 1e-3 * rng.standard_normal(w.shape)
+
+
+def _write_rows(path, t, f, w):
+    path.write_text("t,f_x,f_y,f_z,w_x,w_y,w_z\n" + "".join(
+        f"{a:.3f},{b[0]:.6f},{b[1]:.6f},{b[2]:.6f},{c[0]:.6f},{c[1]:.6f},{c[2]:.6f}\n"
+        for a, b, c in zip(t, f, w, strict=True)))
+    return path
+
+
+def test_dead_imu_is_refused_by_name(tmp_path):
+    t, f, w = _moving_imu()
+    assert len(io.read_imu_csv(_write_rows(tmp_path / "ok.csv", t, f, w))) == 400
+    with pytest.raises(NavlibInputError, match=r"'f_x'/'f_y'/'f_z'.*dead accelerometer: the "
+                                               r"specific force never exceeds 0 m/s\^2 over 400 samples"):
+        io.read_imu_csv(_write_rows(tmp_path / "a.csv", t, 0.0 * f, w))
+    w_stuck = w.copy()
+    w_stuck[:, 1] = 0.25
+    with pytest.raises(NavlibInputError, match=r"column 'w_y': stuck gyro axis: all 400 "
+                                               r"samples read 0.25"):
+        io.read_imu_csv(_write_rows(tmp_path / "g.csv", t, f, w_stuck))
+    rest = np.zeros_like(w)     # a quiet gyro at rest reads one value: not judged
+    assert len(io.read_imu_csv(_write_rows(tmp_path / "r.csv", t, f[:, [0, 1, 2]] * 0 +
+                                           [0.0, 0.0, -9.81], rest))) == 400
+
+
+def test_altos_dead_imu_is_named_and_an_empty_tilt_column_ignored(tmp_path):
+    from altos_writer import rocket_rows, write_altos
+
+    rows = rocket_rows()
+    path = tmp_path / "empty_tilt.csv"
+    write_altos(path, rows.assign(tilt=np.nan))
+    imu, gnss = io.read_altos(path)
+    assert imu.attrs["tilt"] is None and len(gnss) > 5
+    dead = rows.assign(accel_x=0.0, accel_y=0.0, accel_z=0.0, tilt=np.nan)
+    write_altos(path, dead)
+    with pytest.raises(NavlibInputError, match=r"'accel_x'/'accel_y'/'accel_z'.*dead "
+                                               r"accelerometer"):
+        io.read_altos(path)
