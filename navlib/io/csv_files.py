@@ -243,8 +243,7 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
             t, f_b, w_ib_b, src, _labels(cols, F_KEYS), _labels(cols, W_KEYS),
             max_rate_rad_s=max_rate_rad_s, max_accel_m_s2=max_accel_m_s2,
             max_fraction=max_outlier_fraction,
-            rate_hint="; the data look like deg/s: set gyro_unit='deg/s' (or raise "
-                      "max_rate_rad_s for a fast spinner)")
+            rate_hint=_rate_hint(w_ib_b, max_rate_rad_s))
         if outliers:
             t, f_b, w_ib_b = t[keep], f_b[keep], w_ib_b[keep]
             src = replace(src, lines=None if src.lines is None else src.lines[keep],
@@ -256,6 +255,24 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
     frame.attrs["source"] = str(path)
     frame.attrs["outliers"] = outliers
     return apply_gap_policy(frame, src, cols["t"].label, max_gap_s, on_gap)
+
+
+DEG_S_MEDIAN_RATE = 1.0
+"""Median angular-rate norm above which rates declared in rad/s look like deg/s, rad/s: a
+flight whose typical rotation is 57 deg/s or more is implausible, while the rest noise and slow
+turns of a deg/s gyro read about one unit."""
+
+
+def _rate_hint(w_ib_b: np.ndarray, max_rate_rad_s: float) -> str:
+    """The hint of a refused angular-rate record: deg/s only when the data support it (a
+    median rate of :data:`DEG_S_MEDIAN_RATE` or more that becomes plausible in deg/s)."""
+    norm = np.linalg.norm(w_ib_b, axis=1)
+    median = float(np.median(norm))
+    if median >= DEG_S_MEDIAN_RATE and float(np.max(norm)) * units.DEG <= max_rate_rad_s:
+        return ("; the data look like deg/s: set gyro_unit='deg/s' (or raise max_rate_rad_s "
+                "for a fast spinner)")
+    return (f"; the median rate {median:.3g} rad/s is plausible, so the units look right: a "
+            f"vehicle this fast (a tumble, a break-up) needs a larger max_rate_rad_s")
 
 
 def _choose(mode: str | None, keyword: str, present: dict[str, bool], src) -> str | None:

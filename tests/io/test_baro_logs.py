@@ -89,7 +89,8 @@ def test_log_pairs_and_triples_with_a_barometer(tmp_path):
     _, _, h = io_geodetic(gnss)
     np.testing.assert_allclose(h, np.interp(gnss.t, imu.attrs["baro"].t,
                                             imu.attrs["baro"].alt_m), atol=1e-3)
-    with pytest.raises(NavlibInputError, match=r"missing column: latitude and longitude but no height.*barometer"):
+    with pytest.raises(NavlibInputError,
+                       match=r"missing column: latitude and longitude but no height.*barometer"):
         io.read_log(f"{imu_path},{gnss_path}")
 
 
@@ -196,7 +197,8 @@ def test_dead_imu_is_refused_by_name(tmp_path):
     t, f, w = _moving_imu()
     assert len(io.read_imu_csv(_write_rows(tmp_path / "ok.csv", t, f, w))) == 400
     with pytest.raises(NavlibInputError, match=r"'f_x'/'f_y'/'f_z'.*dead accelerometer: the "
-                                               r"specific force never exceeds 0 m/s\^2 over 400 samples"):
+                                               r"specific force never exceeds 0 m/s\^2 over "
+                                               r"400 samples"):
         io.read_imu_csv(_write_rows(tmp_path / "a.csv", t, 0.0 * f, w))
     w_stuck = w.copy()
     w_stuck[:, 1] = 0.25
@@ -221,3 +223,15 @@ def test_altos_dead_imu_is_named_and_an_empty_tilt_column_ignored(tmp_path):
     with pytest.raises(NavlibInputError, match=r"'accel_x'/'accel_y'/'accel_z'.*dead "
                                                r"accelerometer"):
         io.read_altos(path)
+
+
+def test_deg_s_hint_only_when_the_rates_look_like_deg_s(tmp_path):
+    t, f, w = _moving_imu()
+    w = 0.3 * w                            # a calm flight: median rate about 0.3 rad/s
+    tumble = w.copy()
+    tumble[300:340] = [40.0, 5.0, 0.0]     # a break-up at 2300 deg/s, logged in rad/s
+    with pytest.raises(NavlibInputError, match=r"median rate .* units look right") as err:
+        io.read_imu_csv(_write_rows(tmp_path / "tumble.csv", t, f, tumble))
+    assert "look like deg/s" not in str(err.value)
+    with pytest.raises(NavlibInputError, match=r"look like deg/s"):
+        io.read_imu_csv(_write_rows(tmp_path / "deg.csv", t, f, np.rad2deg(w) + 60.0))
