@@ -235,3 +235,14 @@ def test_deg_s_hint_only_when_the_rates_look_like_deg_s(tmp_path):
     assert "look like deg/s" not in str(err.value)
     with pytest.raises(NavlibInputError, match=r"look like deg/s"):
         io.read_imu_csv(_write_rows(tmp_path / "deg.csv", t, f, np.rad2deg(w) + 60.0))
+
+
+def test_duplicated_time_stamps_are_reported_with_their_lines(tmp_path):
+    t, f, w = _moving_imu()
+    t = t.copy()
+    t[[50, 120, 121]] = t[[49, 119, 119]]
+    # rows 50, 120, 121 are file lines 52, 122, 123 (the header is line 1)
+    with pytest.raises(NavlibInputError, match=r"line 52: duplicate time stamp 0.49 \(same as "
+                                               r"line 51\); 3 duplicated time stamps in all, "
+                                               r"at line 52, line 122, line 123"):
+        io.read_imu_csv(_write_rows(tmp_path / "dup.csv", t, f, w))

@@ -57,3 +57,19 @@ def test_shared_firm_and_cats_flights_are_assessed(tmp_path):
     assert table.aiding.tolist() == ["baro", "gnss+baro"]
     assert table.vehicle.tolist() == ["rocket", "rocket"]
     assert "powered" in table.phases.iloc[0] and "descent" in table.phases.iloc[1]
+
+
+def test_pre_launch_buffer_before_a_long_gap_is_split_off_with_a_note(tmp_path):
+    imu_path, baro_path = _hpr_records(tmp_path)
+    imu, baro = pd.read_csv(imu_path), pd.read_csv(baro_path)
+    buffer = imu.iloc[:150].copy()               # 1.5 s on the pad ...
+    imu.iloc[:, 0] += 1068.0                     # ... 1068 s before the flight's record
+    baro_buffer = baro.iloc[:8].copy()
+    baro.iloc[:, 0] += 1068.0
+    pd.concat([buffer, imu]).to_csv(imu_path, index=False)
+    pd.concat([baro_buffer, baro]).to_csv(baro_path, index=False)
+    status, table, _ = _row(tmp_path, [f"{imu_path},{baro_path}"])
+    row = table.iloc[0]
+    assert status == 0 and row.aiding == "baro"
+    assert "split it into 2 spans" in row.warnings or "split into 2 spans" in row.warnings
+    assert row.phases.startswith("rest 1068")

@@ -20,6 +20,7 @@ from navlib import earth, strapdown, units
 from navlib.errors import NavlibInputError
 from navlib.io.baro import baro_height
 from navlib.models.baro import BARO_SCALE, BARO_SIGMA_M, baro_sigma
+from navlib.trajectory.fit import FIT_DEFAULTS
 from navlib.trajectory.initial_attitude import level_attitude
 
 SITE_DEG = (45.0, 0.0)
@@ -34,6 +35,9 @@ LAUNCH_ACCEL_M_S2 = 3.0
 construction: above a rail's vibration, well below any motor's thrust)."""
 MIN_LEVEL_S = 0.5
 """Shortest rest before launch to level the IMU on, s."""
+GAP_S = FIT_DEFAULTS["max_bridge_s"]
+"""IMU holes longer than this (the fit's longest bridged hole, s) start a new piece whose
+reference rows are built on their own: a pre-launch buffer logged long before the flight."""
 
 
 def aiding_of(imu: pd.DataFrame, gnss: pd.DataFrame | None) -> str:
@@ -66,8 +70,35 @@ def aiding_records(imu: pd.DataFrame, gnss: pd.DataFrame | None
             "barometric altitude (assumptions B1); the model measures GNSS north/east and "
             "the barometer (B2)" + (f"; {held} held fix(es) repeating the previous position "
                                     "were dropped" if held else "")]
-    rows, note = baro_reference_rows(imu, _baro(imu))
-    return rows, aiding, [note]
+    rows, notes = _rows_per_piece(imu, _baro(imu))
+    return rows, aiding, notes
+
+
+def _rows_per_piece(imu: pd.DataFrame, baro: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """:func:`baro_reference_rows` of each IMU piece between holes longer than
+    :data:`GAP_S` (a pre-launch buffer logged long before the flight is levelled on its own,
+    or skipped with a note when it cannot be)."""
+    t = imu["t"].to_numpy(dtype=float)
+    after = np.flatnonzero(np.diff(t) > GAP_S) + 1
+    bounds = list(zip(np.r_[0, after], np.r_[after, t.size], strict=True))
+    rows, notes, errors = [], [], []
+    for a, b in bounds:
+        piece = imu.iloc[a:b]
+        try:
+            r, note = baro_reference_rows(piece, baro)
+        except NavlibInputError as exc:
+            errors.append(f"{t[a]:.6g}..{t[b - 1]:.6g} s: {exc}")
+            continue
+        rows.append(r)
+        notes.append(note)
+    if not rows:
+        raise NavlibInputError("; ".join(errors))
+    if errors:
+        notes.append(f"the IMU record has holes longer than {GAP_S:g} s; no reference rows for "
+                     f"the piece(s) {'; '.join(errors)}")
+    out = pd.concat(rows, ignore_index=True)
+    out.attrs = dict(rows[0].attrs)
+    return out, notes
 
 
 def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
