@@ -92,7 +92,9 @@ def _add_assess(sub) -> None:
                     "assessed flight. A failed flight is reported in the table; the exit "
                     "status is 1 when any failed.")
     ass.add_argument("logs", nargs="+", metavar="LOG",
-                     help="a .ulg file, a DataFlash .bin file or an 'imu.csv,gnss.csv' pair")
+                     help="a .ulg or DataFlash .bin file, an AltOS, FIRM or CATS (imu.csv) "
+                          "export, or 'imu.csv,gnss.csv', 'imu.csv,baro.csv', "
+                          "'imu.csv,gnss.csv,baro.csv'")
     ass.add_argument("--output", type=Path, required=True, metavar="DIR",
                      help="folder for summary.csv and the flight pages")
     _add_scheduler(ass)
