@@ -112,6 +112,8 @@ def read_log(spec: str):
     if kind == "csv":
         if len(paths) == 2:
             paths = (paths[0], None, paths[1]) if _is_baro(str(paths[1])) else (*paths, None)
+        elif _is_baro(str(paths[1])) and not _is_baro(str(paths[2])):
+            paths = (paths[0], paths[2], paths[1])          # 'imu.csv,baro.csv,gnss.csv'
         return _read_csv_files(*paths)
     if kind == "altos":
         return read_altos(paths[0])

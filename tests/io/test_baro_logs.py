@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 from locations import REPO
 
@@ -86,6 +87,8 @@ def test_log_pairs_and_triples_with_a_barometer(tmp_path):
     assert gnss is None and len(imu.attrs["baro"]) == 400
     imu, gnss = io.read_log(f"{imu_path},{gnss_path},{baro_path}")
     assert gnss.attrs["height_source"] == "baro"
+    _, swapped = io.read_log(f"{imu_path},{baro_path},{gnss_path}")
+    pd.testing.assert_frame_equal(swapped, gnss)
     _, _, h = io_geodetic(gnss)
     np.testing.assert_allclose(h, np.interp(gnss.t, imu.attrs["baro"].t,
                                             imu.attrs["baro"].alt_m), atol=1e-3)
