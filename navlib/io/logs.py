@@ -9,7 +9,8 @@ A ``LOG`` is one of (spec api.md "Scale"):
 * CSV files given together: ``imu.csv,gnss.csv``, ``imu.csv,baro.csv`` or
   ``imu.csv,gnss.csv,baro.csv`` (:func:`navlib.io.read_imu_csv`,
   :func:`navlib.io.read_gnss_csv`, :func:`navlib.io.baro.read_baro_csv`; the second of a pair
-  is a barometer when its header has a pressure or altitude column and no position).
+  is a barometer when its header has a pressure or altitude column and no position, and the
+  last two of three may come in either order).
 
 A barometer record goes in ``imu.attrs["baro"]`` (``t, alt_m``); a log without GNSS reads as
 ``gnss = None``. A CSV file that is none of these is refused with what it lacks.
