@@ -31,8 +31,8 @@ from navlib.studies.plan import plan_mission
 
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
-SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "aiding", "duration_s", "n_segments",
-                   "phases", "excitable", "sensible", "warnings", "seconds", "page")
+SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "n_segments", "phases",
+                   "excitable", "sensible", "aiding", "warnings", "seconds", "page")
 """Columns of ``summary.csv``, in order (a mission's file name in ``log``; ``aiding``: what
 aided the IMU, ``gnss``, ``baro`` or ``gnss+baro``, :data:`navlib.models.baro.AIDINGS`)."""
 
