@@ -135,28 +135,46 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None,
     and the HTML pages (None for a mission that failed).
 
     ``options``: keywords of :func:`navlib.studies.plan.plan_mission`, checked before any
-    mission runs. ``flight``: a recorded flight (a ``LOG``) assessed once with the plan's
-    sensor preset and shown beside every plan
+    mission runs; ``aiding`` may name several aidings (``"gnss,baro"``): each mission is then
+    planned once per aiding, one row each (``log``: ``mission (aiding baro)``), so a rocket
+    with and without a GNSS receiver is compared in one run. ``flight``: a recorded flight
+    (a ``LOG``) assessed once with the plan's sensor preset and shown beside every plan
     (:func:`navlib.studies.plan.plan_beside_flight`).
     """
     missions = _checked_labels(missions, "missions")
     options = dict(options or {})
     reject_unknown(options, _keywords(plan_mission, "mission"), "plan options (-p)")
+    aidings = _aidings(options.pop("aiding", None))
     flown = None
     if flight is not None:
         imu, gnss = read_log(flight)
         flown = (flight, assess_flight(imu, gnss, preset=options.get("sensors_preset")))
 
-    def row(mission: str) -> tuple[dict, str | None]:
+    def row(mission: str, aiding: str | None) -> tuple[dict, str | None]:
+        label = mission if len(aidings) == 1 else f"{mission} (aiding {aiding})"
+
         def build(warning_texts):
-            plan = plan_mission(mission, **options)
-            return plan, plan_page(mission, plan, warning_texts(), flown)
+            plan = plan_mission(mission, **options, aiding=aiding)
+            return plan, plan_page(label, plan, warning_texts(), flown)
 
-        return summary_row(mission, build)
+        return summary_row(label, build)
 
-    rows = [row(m) for m in missions]
+    rows = [row(m, a) for m in missions for a in aidings]
     table = pd.DataFrame([r for r, _ in rows], columns=list(SUMMARY_COLUMNS))
     return table, [p for _, p in rows]
+
+
+def _aidings(value) -> list:
+    """The ``aiding`` option of :func:`plan_missions`: None (each mission's own), one name, or
+    several (a list, or names joined by commas: ``-p aiding gnss,baro``), each planned."""
+    if value is None:
+        return [None]
+    names = value.split(",") if isinstance(value, str) else value
+    if not isinstance(names, list | tuple) or not names or not all(
+            isinstance(n, str) and n.strip() for n in names):
+        raise NavlibInputError(f"aiding: expected gnss, baro, gnss+baro or several of them "
+                               f"(gnss,baro), got {value!r}")
+    return [n.strip() for n in names]
 
 
 def _page_name(index: int, log: str) -> str:

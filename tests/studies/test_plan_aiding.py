@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import tomllib
 
+import pandas as pd
 import pytest
 from locations import REPO
 
 from navlib import NavlibInputError
+from navlib.__main__ import main
 from navlib.models.baro import ned_sigmas
 from navlib.studies.plan import plan_mission
 
@@ -42,3 +44,12 @@ def test_the_mission_file_names_its_aiding():
     table["gnss"]["aiding"] = "lidar"
     with pytest.raises(NavlibInputError, match="aiding: expected one of"):
         plan_mission(table)
+
+
+def test_plan_command_compares_aidings_in_one_run(tmp_path):
+    out = tmp_path / "plans"
+    assert main(["plan", "hpr_rocket", "--output", str(out), "-p", "aiding", "gnss,baro"]) == 0
+    table = pd.read_csv(out / "summary.csv", keep_default_na=False)
+    assert table.log.tolist() == ["hpr_rocket (aiding gnss)", "hpr_rocket (aiding baro)"]
+    assert table.aiding.tolist() == ["gnss", "baro"]
+    assert "P_x" in table.sensible.iloc[0] and "P_x" not in table.sensible.iloc[1]
