@@ -162,5 +162,7 @@ def sigma_note(model: DiscreteModel, trajectory, aiding: str) -> str:
     if aiding == "baro":
         text += (f" (from {p[0, 0]:.3g}/{p[0, 1]:.3g}/{p[0, 2]:.3g} m at the start): only the "
                  "vertical is measured; horizontal position and velocity are unobservable "
-                 "and their sigma grows with the IMU errors")
+                 "and their sigma grows with the IMU errors (the excitable/sensible lists "
+                 "name ECEF axes, each holding part of the measured vertical: read north, "
+                 "east and down from these sigmas)")
     return text
