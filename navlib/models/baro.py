@@ -16,7 +16,7 @@ lift-off has ``H = 0`` and carries no information.
 The barometer has no bias state (B4): its altitude is used relative to its own pad value,
 so a constant offset (the day's sea-level pressure, the sensor's offset) cancels; the
 standard atmosphere's scale error and the weather's drift over a flight of minutes enter as
-the height-dependent sigma of :func:`baro_sigma`. Without GNSS, horizontal position and
+the height- and speed-dependent sigma of :func:`baro_sigma`. Without GNSS, horizontal position and
 velocity have no measurement after the pad: their sigma grows with the IMU errors, and they
 come out neither excitable nor sensible.
 """
@@ -27,7 +27,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from navlib import earth
+from navlib import earth, units
 from navlib._validation import finite_scalar
 from navlib.covariance import kalman_covariance, sigma_in_frame
 from navlib.errors import NavlibInputError
@@ -42,6 +42,10 @@ BARO_SCALE = 0.01
 """Relative sigma of the barometric height change (B2, assumed): the standard atmosphere
 differs from the day's by about 0.35 % per kelvin of mean temperature, so 1 % covers a day
 3 K off standard."""
+BARO_PRESSURE_COEFFICIENT = 0.02
+"""Static-port pressure error as a fraction of the dynamic pressure (B2, assumed): a
+vehicle's own airflow shifts the static pressure by ``C_P q``, an altitude error of
+``C_P v^2 / (2 g0)`` (about 40 m at 200 m/s); 0.02 is a well-placed port below Mach 0.8."""
 ZUPT_SIGMA_M_S = 0.05
 """Sigma of the zero-velocity rows on the pad, m/s (B3, assumed: a rocket on its rail moves
 by millimetres; the sigma also covers the model's linearisation)."""
@@ -51,11 +55,14 @@ the pad ends at the first epoch the fitted speed exceeds it."""
 
 
 def baro_sigma(height_change_m, sigma_m: float = BARO_SIGMA_M,
-               scale: float = BARO_SCALE) -> np.ndarray:
-    """``sqrt(sigma_m^2 + (scale dh)^2)``: the sigma of a barometric altitude ``dh`` metres
-    above the pad (B2)."""
+               scale: float = BARO_SCALE, speed_m_s=0.0,
+               pressure_coefficient: float = BARO_PRESSURE_COEFFICIENT) -> np.ndarray:
+    """``sqrt(sigma_m^2 + (scale dh)^2 + (C_P v^2 / (2 g0))^2)``: the sigma of a barometric
+    altitude ``dh`` metres above the pad, read at airspeed ``v`` (B2)."""
     dh = np.asarray(height_change_m, dtype=float)
-    return np.sqrt(sigma_m**2 + (scale * dh) ** 2)
+    v = np.asarray(speed_m_s, dtype=float)
+    dynamic = pressure_coefficient * v**2 / (2.0 * units.G0)
+    return np.sqrt(sigma_m**2 + (scale * dh) ** 2 + dynamic**2)
 
 
 def pad_epochs(t_epochs, t, velocity, speed_m_s: float = PAD_SPEED_M_S) -> np.ndarray:
@@ -119,7 +126,8 @@ def aided_model(model: DiscreteModel, trajectory, aiding: str, *,
     row[:, 0:3] = -C_n_e[:, :, 2]                              # up = -down
     names.append("baro_h")
     H_rows.append(row)
-    sigmas.append(baro_sigma(height - height[0], sig["baro_sigma_m"], baro_scale))
+    speed = np.linalg.norm(np.asarray(trajectory.velocity, dtype=float)[index], axis=1)
+    sigmas.append(baro_sigma(height - height[0], sig["baro_sigma_m"], baro_scale, speed))
     pad = pad_epochs(model.t, t, trajectory.velocity)
     for axis, name in enumerate(("zupt_x", "zupt_y", "zupt_z")):
         row = np.zeros((n_ep, 21))

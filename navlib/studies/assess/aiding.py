@@ -35,6 +35,9 @@ LAUNCH_ACCEL_M_S2 = 3.0
 construction: above a rail's vibration, well below any motor's thrust)."""
 MIN_LEVEL_S = 0.5
 """Shortest rest before launch to level the IMU on, s."""
+SPEED_WINDOW_S = 1.0
+"""Smoothing window of the barometric climb speed, s (by construction: above the sensor's
+noise, below a boost's length)."""
 GAP_S = FIT_DEFAULTS["max_bridge_s"]
 """IMU holes longer than this (the fit's longest bridged hole, s) start a new piece whose
 reference rows are built on their own: a pre-launch buffer logged long before the flight."""
@@ -148,8 +151,9 @@ def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
     lat, lon, _ = earth.ecef_to_geodetic(P_h)
     dh = baro_height(baro, grid) - h_pad
     r_e = earth.geodetic_to_ecef(lat, lon, h_pad + dh)
+    speed = _climb_speed(grid, dh)
     rows = pd.DataFrame({"t": grid, "x": r_e[:, 0], "y": r_e[:, 1], "z": r_e[:, 2],
-                         "sigma": baro_sigma(dh, BARO_SIGMA_M, BARO_SCALE)})
+                         "sigma": baro_sigma(dh, BARO_SIGMA_M, BARO_SCALE, speed)})
     rows.attrs.update(source="barometer + IMU dead reckoning", height_source="baro")
     note = (f"aiding baro: no GNSS; the reference motion is fitted to {len(rows)} rows at "
             f"{ROW_RATE_HZ:g} Hz whose height is the barometer's ({dh.max():.0f} m above the "
@@ -158,6 +162,15 @@ def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
             f"{site_deg[0]:g} N {site_deg[1]:g} E assumed (assumptions B5): horizontal "
             f"position and velocity are not measured, only carried by the IMU")
     return rows, note
+
+
+def _climb_speed(t, dh) -> np.ndarray:
+    """|dh/dt| of the barometric height, smoothed over :data:`SPEED_WINDOW_S` (the airspeed
+    of the barometer sigma's dynamic-pressure term, B2: a rocket's speed is mostly vertical
+    while it is large)."""
+    n = max(int(round(SPEED_WINDOW_S * ROW_RATE_HZ)), 1)
+    smooth = np.convolve(dh, np.ones(n) / n, mode="same")
+    return np.abs(np.gradient(smooth, t)) if t.size > 1 else np.zeros_like(dh)
 
 
 def _launch_index(t, f_b) -> int:
