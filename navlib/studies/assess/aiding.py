@@ -168,7 +168,7 @@ def _climb_speed(t, dh) -> np.ndarray:
     """|dh/dt| of the barometric height, smoothed over :data:`SPEED_WINDOW_S` (the airspeed
     of the barometer sigma's dynamic-pressure term, B2: a rocket's speed is mostly vertical
     while it is large)."""
-    n = max(int(round(SPEED_WINDOW_S * ROW_RATE_HZ)), 1)
+    n = max(round(SPEED_WINDOW_S * ROW_RATE_HZ), 1)
     smooth = np.convolve(dh, np.ones(n) / n, mode="same")
     return np.abs(np.gradient(smooth, t)) if t.size > 1 else np.zeros_like(dh)
 
