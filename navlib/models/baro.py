@@ -86,7 +86,8 @@ def aided_model(model: DiscreteModel, trajectory, aiding: str, *,
         From :func:`navlib.models.ecef.ecef21_at_epochs` along ``trajectory``.
     trajectory : Trajectory
         The reference motion: positions give the up/north/east directions and the height
-        above the first epoch, velocities the pad epochs (:func:`pad_epochs`).
+        above the first epoch, velocities the pad epochs (:func:`pad_epochs`) and the climb
+        rate of the barometer's dynamic-pressure sigma (:func:`baro_sigma`).
     aiding : str
         ``gnss`` returns ``model`` unchanged.
     gnss_sigma_m, baro_sigma_m, baro_scale, zupt_sigma_m_s : float
@@ -126,8 +127,11 @@ def aided_model(model: DiscreteModel, trajectory, aiding: str, *,
     row[:, 0:3] = -C_n_e[:, :, 2]                              # up = -down
     names.append("baro_h")
     H_rows.append(row)
-    speed = np.linalg.norm(np.asarray(trajectory.velocity, dtype=float)[index], axis=1)
-    sigmas.append(baro_sigma(height - height[0], sig["baro_sigma_m"], baro_scale, speed))
+    # the climb rate stands for the airspeed: large speeds of a rocket are mostly vertical,
+    # and the horizontal reference velocity of a flight without GNSS is dead reckoning (B5)
+    climb = np.abs(np.einsum("ki,ki->k", np.asarray(trajectory.velocity, dtype=float)[index],
+                             -C_n_e[:, :, 2]))
+    sigmas.append(baro_sigma(height - height[0], sig["baro_sigma_m"], baro_scale, climb))
     pad = pad_epochs(model.t, t, trajectory.velocity)
     for axis, name in enumerate(("zupt_x", "zupt_y", "zupt_z")):
         row = np.zeros((n_ep, 21))
