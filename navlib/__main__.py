@@ -35,6 +35,11 @@ LOG_FORMS = """LOG forms (navlib.io.read_log):
                          recognised by its first line, whatever its name)
   imu.csv,gnss.csv       a CSV pair joined by a comma (one shell word): IMU (t, f_x, f_y, f_z,
                          w_x, w_y, w_z) and GNSS (t and lat_deg, lon_deg, alt or ECEF x, y, z)
+  imu.csv,baro.csv       IMU and barometer (t and pressure_pa or altitude_m): no GNSS
+  imu.csv,gnss.csv,baro.csv   all three (a GNSS record without height takes the barometer's)
+  firm.csv               FIRM flight computer CSV (IMU and barometer; recognised by its header)
+  imu.csv                CATS Vega export (baro.csv and gnssInfo.csv found beside it)
+  flight.csv             AltOS EasyMega export (IMU and barometer, no GPS)
 Example: python -m navlib assess data/sample_flight/imu.csv,data/sample_flight/gnss.csv"""
 
 

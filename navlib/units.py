@@ -59,5 +59,9 @@ MILLIMETRE = 1e-3
 """One millimetre in metres (PX4 ``alt`` fields)."""
 KILOMETRE = 1e3
 """One kilometre in metres."""
+HECTOPASCAL = 100.0
+"""One hectopascal (= one millibar) in pascals (barometer CSV files)."""
+KILOPASCAL = 1e3
+"""One kilopascal in pascals."""
 DEG_E7 = 1e-7 * DEG
 """One step of the integer 1e-7-degree angle encoding (PX4 ``lat``/``lon``, MAVLink), in rad."""

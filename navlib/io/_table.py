@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import re
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -180,16 +181,29 @@ def read_text_table(path, sep: str | None = None, *,
         counts = np.fromiter((ln.count(sep) for ln in raw), dtype=np.int64, count=len(raw)) + 1
     else:
         counts = np.fromiter((len(ln.split()) for ln in raw), dtype=np.int64, count=len(raw))
+    last = len(raw) - 1
+    cut = last > 0 and (counts[last] < len(header) or (
+        sep is not None and raw[last].rstrip().endswith(sep)
+        and not raw[last - 1].rstrip().endswith(sep)))
+    if cut:
+        _warn_cut(label, int(data_i[last]) + 1, counts[last], len(header))
+        raw, data_i, counts = raw[:last], data_i[:last], counts[:last]
+        source = Source(label, data_i + 1, raw, sep)
     bad = np.flatnonzero(counts != len(header))
     if bad.size:
         k = int(bad[0])
-        if k == len(raw) - 1 and counts[k] < len(header):
-            problem = (f"last row has {counts[k]} of {len(header)} fields: the file looks "
-                       f"truncated")
-        else:
-            problem = f"row has {counts[k]} fields but the header has {len(header)}"
-        raise source.error(None, k, problem)
+        raise source.error(None, k, f"row has {counts[k]} fields but the header has "
+                                    f"{len(header)}")
     return TextTable(header, source)
+
+
+def _warn_cut(label: str, line: int, fields: int, expected: int) -> None:
+    """A last row cut mid-write (a logger that lost power) is dropped, with a warning."""
+    from navlib.io.checks import FlightDataWarning  # checks imports this module
+
+    warnings.warn(f"{label}, line {line}: the last row was cut mid-write ({fields} of "
+                  f"{expected} fields, or its last field empty); it is dropped",
+                  FlightDataWarning, stacklevel=4)
 
 
 def resolve_columns(table: TextTable, specs: Sequence[ColumnSpec],
@@ -259,8 +273,11 @@ def parse_columns(table: TextTable, cols: Mapping[str, Column]) -> dict[str, np.
     for key, col in cols.items():
         series = frame[col.field]
         if not pd.api.types.is_numeric_dtype(series.dtype):
-            num = pd.to_numeric(series, errors="coerce")
-            bad = np.flatnonzero(num.isna().to_numpy() & series.notna().to_numpy())
+            text = series.astype(str).str.strip()          # padded cells such as '    nan'
+            num = pd.to_numeric(text.where(series.notna()), errors="coerce")
+            nan_word = text.str.lower().isin(("nan", "")).to_numpy()
+            bad = np.flatnonzero(num.isna().to_numpy() & series.notna().to_numpy()
+                                 & ~nan_word)
             if bad.size:
                 k = int(bad[0])
                 raise src.error(col.label, k, f"non-numeric value {series.iloc[k]!r}")

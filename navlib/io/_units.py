@@ -17,9 +17,11 @@ LENGTH = {"m": 1.0, "mm": units.MILLIMETRE, "km": units.KILOMETRE}
 VELOCITY = {"m/s": 1.0, "mm/s": units.MILLIMETRE, "km/s": units.KILOMETRE}
 ANGLE = {"rad": 1.0, "deg": units.DEG, "°": units.DEG}
 DEGREES = {"deg": units.DEG, "°": units.DEG}
+PRESSURE = {"pa": 1.0, "hpa": units.HECTOPASCAL, "mbar": units.HECTOPASCAL,
+            "kpa": units.KILOPASCAL}
 
 KINDS = {"time": TIME, "accel": ACCEL, "gyro": GYRO, "length": LENGTH, "velocity": VELOCITY,
-         "angle": ANGLE, "degrees": DEGREES}
+         "angle": ANGLE, "degrees": DEGREES, "pressure": PRESSURE}
 """Unit tables by quantity kind (the kind of each CSV column)."""
 
 VELOCITY_OF_LENGTH = {"m": "m/s", "mm": "mm/s", "km": "km/s"}

@@ -51,6 +51,7 @@ from navlib.io.checks import (
     reader_limits,
     validated_imu,
 )
+from navlib.io.sensor_health import check_imu_alive
 
 ACCEL_COLUMNS = ("accel_x", "accel_y", "accel_z")
 """AltOS accelerometer columns (m/s^2) on the along, across, through axes."""
@@ -123,13 +124,13 @@ def _layout(table: TextTable, label: str) -> dict[str, int]:
                                  f"needs time, a 3-axis accelerometer (accel_x/y/z) and a "
                                  f"3-axis gyro (gyro_roll/pitch/yaw), as TeleMega logs them")
     missing_gps = [c for c in ("latitude", "longitude", "gps_altitude") if c not in index]
-    if missing_gps:
+    if missing_gps and "baro_altitude" not in index:
         names_gps = [c if c != "gps_altitude" else "altitude (GPS, after longitude)"
                      for c in missing_gps]
         raise table.source.error(None, None,
-                                 f"missing GPS column(s) {names_gps} (no GPS receiver: an "
-                                 f"EasyMega or EasyMini export); read_altos needs GPS fixes "
-                                 f"(TeleMega)")
+                                 f"missing GPS column(s) {names_gps} and no barometric "
+                                 f"'altitude' (no GPS receiver: an EasyMega or EasyMini "
+                                 f"export); read_altos needs GPS fixes or the barometer")
     return index
 
 
@@ -187,7 +188,7 @@ def read_altos(path, *, imu_max_gap_s: float | None = None,
                check_magnitudes: bool = True, max_rate_rad_s: float | None = None,
                max_accel_m_s2: float = SAMPLE_ACCEL_MAX,
                max_outlier_fraction: float = MAX_OUTLIER_FRACTION,
-               require_overlap: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
+               require_overlap: bool = True) -> tuple[pd.DataFrame, pd.DataFrame | None]:
     """Read the IMU and GPS records of an Altus Metrum AltOS CSV export.
 
     Parameters
@@ -217,13 +218,14 @@ max_outlier_fraction, require_overlap
         older export), ``tilt`` (``t, tilt``: angle of body x from vertical, rad), ``baro``
         (``t, alt_m``: barometric altitude, m above mean sea level), ``repeated_rows``,
         ``gaps``, ``outliers``. ``gnss.attrs``: ``source``, ``altitude_reference``
-        (``"msl"``), ``dropped_no_fix``, ``gaps``.
+        (``"msl"``), ``dropped_no_fix``, ``gaps``. ``gnss`` is None for an export without
+        GPS columns but with the barometric ``altitude`` (EasyMega): the barometer aids it.
 
     Raises
     ------
     NavlibInputError
         Missing, empty, binary or foreign file; a header of neither generation; no gyro
-        (TeleMetrum) or no GPS (EasyMega) columns; rows with a wrong number of fields
+        (TeleMetrum) columns; neither GPS nor barometer columns; rows with a wrong number of fields
         (truncated file), non-numeric or non-finite cells, repeated or decreasing times with
         different values, fewer than two fixes, implausible magnitudes or positions,
         non-overlapping spans (naming column and line).
@@ -234,10 +236,15 @@ max_outlier_fraction, require_overlap
     table = read_text_table(path, ",", header_prefix=_HEADER_PREFIX)
     index = _layout(table, label)
     src = table.source
-    wanted = ["time", *ACCEL_COLUMNS, *GYRO_COLUMNS, "latitude", "longitude", "gps_altitude",
-              *[c for c in (*FIX_COLUMNS, "locked", "tilt", "baro_altitude") if c in index]]
+    has_gps = all(c in index for c in ("latitude", "longitude", "gps_altitude"))
+    wanted = ["time", *ACCEL_COLUMNS, *GYRO_COLUMNS,
+              *[c for c in ("latitude", "longitude", "gps_altitude", *FIX_COLUMNS, "locked",
+                            "tilt", "baro_altitude") if c in index]]
     cols = {c: Column(c, table.header[index[c]], index[c]) for c in wanted}
     data = parse_columns(table, cols)
+    for optional in ("tilt", "baro_altitude"):       # an all-empty optional column: ignored
+        if optional in data and not np.isfinite(data[optional]).any():
+            del data[optional], cols[optional]
     check_finite(data, cols, src)
 
     t_all = data["time"]
@@ -248,6 +255,8 @@ max_outlier_fraction, require_overlap
     t = t_all[rows]
     f_b = imu_values[rows, :3]
     w_ib_b = imu_values[rows, 3:] * units.DEG
+    check_imu_alive(f_b, w_ib_b, imu_src, "'accel_x'/'accel_y'/'accel_z'",
+                    "'gyro_roll'/'gyro_pitch'/'gyro_yaw'")
 
     hardware = _hardware(table, index, path)
     sensor_range = dict(TELEMEGA_RANGE)  # _layout accepts gyro + GPS boards only: TeleMega
@@ -274,6 +283,8 @@ max_outlier_fraction, require_overlap
                      body_frame="along-across-through", attitude=None, flight_states=states,
                      repeated_rows=int(t_all.size - rows.size), **extras)
     imu = apply_gap_policy(imu, imu_src, "'time'", imu_max_gap_s, on_gap)
+    if not has_gps:                 # EasyMega: aided by its barometer (assumptions B1-B5)
+        return imu, None
 
     fix_rows, dropped = _fixes(data, index)
     gps_src = Source(f"{label} (GPS fixes)", src.lines[fix_rows], [src.raw[k] for k in fix_rows],

@@ -78,6 +78,11 @@ def check_times(t: np.ndarray, source: Source, column: str) -> None:
         prev = source.where(k - 1)
         if dt[k - 1] == 0.0:
             problem = f"duplicate time stamp {t[k]:.10g} (same as {prev})"
+            dup = np.flatnonzero(dt == 0.0) + 1
+            if dup.size > 1:
+                shown = ", ".join(source.where(int(j)) for j in dup[:8])
+                problem += (f"; {dup.size} duplicated time stamps in all, at {shown}"
+                            + (" ..." if dup.size > 8 else ""))
         else:
             problem = (f"time stamp {t[k]:.10g} goes backwards from {t[k - 1]:.10g} at {prev}; "
                        f"time stamps must be strictly increasing")

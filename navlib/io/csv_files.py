@@ -65,6 +65,7 @@ from navlib.io.checks import (
     check_velocities,
     flag_imu_outliers,
 )
+from navlib.io.sensor_health import check_imu_alive
 
 AXES = ("x", "y", "z")
 F_KEYS = ("f_x", "f_y", "f_z")
@@ -242,18 +243,36 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
             t, f_b, w_ib_b, src, _labels(cols, F_KEYS), _labels(cols, W_KEYS),
             max_rate_rad_s=max_rate_rad_s, max_accel_m_s2=max_accel_m_s2,
             max_fraction=max_outlier_fraction,
-            rate_hint="; the data look like deg/s: set gyro_unit='deg/s' (or raise "
-                      "max_rate_rad_s for a fast spinner)")
+            rate_hint=_rate_hint(w_ib_b, max_rate_rad_s))
         if outliers:
             t, f_b, w_ib_b = t[keep], f_b[keep], w_ib_b[keep]
             src = replace(src, lines=None if src.lines is None else src.lines[keep],
                           raw=None if src.raw is None else [r for r, k in zip(
                               src.raw, keep, strict=True) if k])
+        check_imu_alive(f_b, w_ib_b, src, _labels(cols, F_KEYS), _labels(cols, W_KEYS))
     frame = pd.DataFrame({"t": t, **dict(zip(F_KEYS, f_b.T, strict=True)),
                           **dict(zip(W_KEYS, w_ib_b.T, strict=True))})
     frame.attrs["source"] = str(path)
     frame.attrs["outliers"] = outliers
     return apply_gap_policy(frame, src, cols["t"].label, max_gap_s, on_gap)
+
+
+DEG_S_MEDIAN_RATE = 1.0
+"""Median angular-rate norm above which rates declared in rad/s look like deg/s, rad/s: a
+flight whose typical rotation is 57 deg/s or more is implausible, while the rest noise and slow
+turns of a deg/s gyro read about one unit."""
+
+
+def _rate_hint(w_ib_b: np.ndarray, max_rate_rad_s: float) -> str:
+    """The hint of a refused angular-rate record: deg/s only when the data support it (a
+    median rate of :data:`DEG_S_MEDIAN_RATE` or more that becomes plausible in deg/s)."""
+    norm = np.linalg.norm(w_ib_b, axis=1)
+    median = float(np.median(norm))
+    if median >= DEG_S_MEDIAN_RATE and float(np.max(norm)) * units.DEG <= max_rate_rad_s:
+        return ("; the data look like deg/s: set gyro_unit='deg/s' (or raise max_rate_rad_s "
+                "for a fast spinner)")
+    return (f"; the median rate {median:.3g} rad/s is plausible, so the units look right: a "
+            f"vehicle this fast (a tumble, a break-up) needs a larger max_rate_rad_s")
 
 
 def _choose(mode: str | None, keyword: str, present: dict[str, bool], src) -> str | None:
@@ -274,7 +293,8 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
                   angle_unit: str | None = None, position: str | None = None,
                   velocity: str | None = None, columns: Mapping[str, str] | None = None,
                   sep: str | None = None, max_gap_s: float | None = None,
-                  on_gap: str = "warn", check_magnitudes: bool = True) -> pd.DataFrame:
+                  on_gap: str = "warn", check_magnitudes: bool = True,
+                  baro: pd.DataFrame | None = None) -> pd.DataFrame:
     """Read GNSS fixes (time, position, optional velocity and sigma) from a CSV file.
 
     Position is given either in ECEF (``x, y, z``) or geodetic (``lat_deg, lon_deg, alt``,
@@ -300,6 +320,10 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
     columns, sep, max_gap_s, on_gap, check_magnitudes
         As in :func:`read_imu_csv`. Magnitude checks: every position within
         6300..7500 km of the Earth's centre, every speed below 12 km/s.
+    baro : DataFrame, optional
+        A barometer record (``t, alt_m``, :func:`navlib.io.baro.read_baro_csv`): a geodetic
+        file without a height column takes the barometric altitude at each fix as its
+        height (assumptions.md B1; ``attrs["height_source"] = "baro"``).
 
     Returns
     -------
@@ -350,6 +374,14 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
     else:
         need = ["lat" if "lat" in cols else "lat_deg", "lon" if "lon" in cols else "lon_deg",
                 "alt"]
+        if "alt" not in cols:
+            if baro is None:
+                raise src.error("'alt'", None, "missing column: latitude and longitude but "
+                                               "no height (alt, altitude, height, ...); give a "
+                                               "barometer record for the height (LOG 'imu.csv,"
+                                               "gnss.csv,baro.csv', or baro=); header is "
+                                               f"{table.header}")
+            need.remove("alt")
     need += {"ecef": list(V_KEYS), "ned": list(NED_KEYS), None: []}[vel]
     if "sigma" in cols:
         need.append("sigma")
@@ -379,8 +411,13 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
         lat, lon = values[kl] * fac[kl], values[ko] * fac[ko]
         _check_angles(lat, np.pi / 2, cols[kl], src, fac[kl])
         _check_angles(lon, 2 * np.pi, cols[ko], src, fac[ko])
-        r_e = geodetic_to_ecef(lat, lon, values["alt"] * fac["alt"])
-        labels = _labels(cols, (kl, ko, "alt"))
+        if "alt" in values:
+            height = values["alt"] * fac["alt"]
+        else:
+            height = np.interp(t, baro["t"].to_numpy(dtype=float),
+                               baro["alt_m"].to_numpy(dtype=float))
+        r_e = geodetic_to_ecef(lat, lon, height)
+        labels = _labels(cols, (kl, ko, "alt") if "alt" in cols else (kl, ko))
     if check_magnitudes:
         check_positions(r_e, src, labels, fac.get("x"))
     out = {"t": t, **dict(zip(R_KEYS, r_e.T, strict=True))}
@@ -404,7 +441,8 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
         s_h, s_v = values["sigma_h"] * fac["sigma_h"], values["sigma_v"] * fac["sigma_v"]
         out["sigma"] = combine_sigma(s_h, s_v)
     frame = pd.DataFrame(out)
-    frame.attrs.update(source=str(path), position_input=pos, velocity_input=vel)
+    frame.attrs.update(source=str(path), position_input=pos, velocity_input=vel,
+                       height_source="gnss" if pos == "ecef" or "alt" in cols else "baro")
     return apply_gap_policy(frame, src, cols["t"].label, max_gap_s, on_gap)
 
 

@@ -35,15 +35,16 @@ from navlib.studies.plan import plan_mission
 __all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
 
 SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "t_ignition",
-                   "n_segments", "phases", "events", "excitable", "sensible", "unrepresented",
-                   "warnings", "seconds", "page")
+                   "n_segments", "phases", "events", "excitable", "sensible", "aiding",
+                   "unrepresented", "warnings", "seconds", "page")
 """Columns of ``summary.csv``, in order (a mission's file name in ``log``). ``t_ignition``:
 a rocket's ignition on the log's own clock, s, the zero of the ``phases`` times (which are
 since the first sample for other vehicles; NaN there). ``events``: a rocket's events on that
 clock, ``<event> <logged> s (detected <detected> s)`` when the flight computer logged its
-states, ``<event> <detected> s (detected)`` otherwise. ``unrepresented`` lists the segments
-whose reference motion departs from the records (their excitable and sensible states do not
-describe the flight flown; the warnings say why)."""
+states, ``<event> <detected> s (detected)`` otherwise. ``aiding``: what aided the IMU,
+``gnss``, ``baro`` or ``gnss+baro`` (:data:`navlib.models.baro.AIDINGS`). ``unrepresented``
+lists the segments whose reference motion departs from the records (their excitable and
+sensible states do not describe the flight flown; the warnings say why)."""
 
 
 def _keywords(fn, *skip: str) -> tuple[str, ...]:
@@ -94,6 +95,7 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
             summary = result.summary()
             seg = result.segment_table
             row.update(status="ok", vehicle=result.vehicle,
+                       aiding=str(getattr(result, "options", {}).get("aiding", "gnss")),
                        duration_s=float(seg.t_end.max() - seg.t_start.min()),
                        n_segments=len(seg),
                        phases="; ".join(f"{r.phase} {r.t_start:.1f}-{r.t_end:.1f} s"
@@ -164,26 +166,31 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None,
     and the HTML pages (None for a mission that failed).
 
     ``options``: keywords of :func:`navlib.studies.plan.plan_mission`, checked before any
-    mission runs. ``flight``: a recorded flight (a ``LOG``) assessed once with the plan's
-    sensor preset and shown beside every plan
+    mission runs; ``aiding`` may name several aidings (``"gnss,baro"``): each mission is then
+    planned once per aiding, one row each (``log``: ``mission (aiding baro)``), so a rocket
+    with and without a GNSS receiver is compared in one run. ``flight``: a recorded flight
+    (a ``LOG``) assessed once with the plan's sensor preset and shown beside every plan
     (:func:`navlib.studies.plan.plan_beside_flight`).
     """
     missions = _checked_labels(missions, "missions")
     options = dict(options or {})
     reject_unknown(options, _keywords(plan_mission, "mission"), "plan options (-p)")
+    aidings = _aidings(options.pop("aiding", None))
     flown = None
     if flight is not None:
         imu, gnss = read_log(flight)
         flown = (flight, assess_flight(imu, gnss, preset=options.get("sensors_preset")))
 
-    def row(mission: str) -> tuple[dict, str | None]:
+    def row(mission: str, aiding: str | None) -> tuple[dict, str | None]:
+        label = mission if len(aidings) == 1 else f"{mission} (aiding {aiding})"
+
         def build(warning_texts):
-            plan = plan_mission(mission, **options)
-            return plan, plan_page(mission, plan, warning_texts(), flown)
+            plan = plan_mission(mission, **options, aiding=aiding)
+            return plan, plan_page(label, plan, warning_texts(), flown)
 
-        return summary_row(mission, build)
+        return summary_row(label, build)
 
-    rows = [row(m) for m in missions]
+    rows = [row(m, a) for m in missions for a in aidings]
     return _table([r for r, _ in rows]), [p for _, p in rows]
 
 
@@ -194,6 +201,19 @@ def _table(rows: list[dict]) -> pd.DataFrame:
     table.attrs["states"] = (pd.concat(states, ignore_index=True) if states else
                              pd.DataFrame(columns=list(STATES_COLUMNS)))
     return table
+
+
+def _aidings(value) -> list:
+    """The ``aiding`` option of :func:`plan_missions`: None (each mission's own), one name, or
+    several (a list, or names joined by commas: ``-p aiding gnss,baro``), each planned."""
+    if value is None:
+        return [None]
+    names = value.split(",") if isinstance(value, str) else value
+    if not isinstance(names, list | tuple) or not names or not all(
+            isinstance(n, str) and n.strip() for n in names):
+        raise NavlibInputError(f"aiding: expected gnss, baro, gnss+baro or several of them "
+                               f"(gnss,baro), got {value!r}")
+    return [n.strip() for n in names]
 
 
 def _page_name(index: int, log: str) -> str:

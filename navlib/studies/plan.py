@@ -31,6 +31,7 @@ from navlib import sensors
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.metrics import E_THRESHOLD, MIN_FRACTION, S_THRESHOLD, check_thresholds
+from navlib.models.baro import aided_model, sigma_note
 from navlib.models.ecef import ecef21_at_epochs
 from navlib.segmentation import SEGMENT_DEFAULTS, segment_flight
 from navlib.studies.assess import (
@@ -179,7 +180,8 @@ def plan_mission(mission, sensors_preset: str | None = None, *, changes: Mapping
                  nu: float = 0.985, e_threshold: float = E_THRESHOLD,
                  s_threshold: float = S_THRESHOLD, min_fraction: float = MIN_FRACTION,
                  segment_options: Mapping | None = None, model_options: Mapping | None = None,
-                 model_step_s: float | None = MODEL_STEP_S) -> MissionPlan:
+                 model_step_s: float | None = MODEL_STEP_S,
+                 aiding: str | None = None) -> MissionPlan:
     """Which states a mission lets the filter estimate, segment by segment and over time.
 
     Parameters
@@ -201,6 +203,10 @@ def plan_mission(mission, sensors_preset: str | None = None, *, changes: Mapping
     segments, eta, nu, e_threshold, s_threshold, min_fraction, segment_options, \
 model_options, model_step_s
         As in :func:`navlib.studies.assess.assess_flight`.
+    aiding : {"gnss", "baro", "gnss+baro"}, optional
+        What aids the IMU (:func:`navlib.models.baro.aided_model`: GNSS position; the
+        barometer and the pad's zero velocity; GNSS north/east with the barometer). None:
+        the mission's ``[gnss] aiding``, else ``gnss``. Outages remove the GNSS rows only.
 
     Returns
     -------
@@ -240,10 +246,15 @@ model_options, model_step_s
                              float(trajectory.t[-1]), mission.where)
     model = ecef21_at_epochs(trajectory, rate, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s, **model_options)
+    aiding = aiding if aiding is not None else mission.table.get("gnss", {}).get("aiding",
+                                                                                 "gnss")
+    model = aided_model(model, trajectory, aiding, gnss_sigma_m=sigma)
     H = np.array(model.H)
     t_model = np.asarray(model.t)
+    gnss_rows = [i for i, name in enumerate(model.measurement_names)
+                 if name.startswith("gnss")]
     for a, b in windows:
-        H[(t_model >= a) & (t_model <= b)] = 0.0
+        H[np.ix_(np.flatnonzero((t_model >= a) & (t_model <= b)), gnss_rows)] = 0.0
     if not np.any(H != 0.0):
         raise NavlibInputError("outages: cover every GNSS epoch of the mission; nothing "
                                "would be measured")
@@ -264,7 +275,9 @@ model_options, model_step_s
     notes += [f"GNSS outage {a:g}-{b:g} s: no GNSS measurement at the model epochs inside"
               for a, b in windows]
     notes += merged
-    options = {"preset": preset, "gnss_rate_hz": rate, "gnss_sigma_m": sigma,
+    if aiding != "gnss":
+        notes.append(sigma_note(model, trajectory, aiding))
+    options = {"preset": preset, "gnss_rate_hz": rate, "gnss_sigma_m": sigma, "aiding": aiding,
                "outages": windows, "vehicle": mission.vehicle, "mission": mission.name,
                "segment_options": seg_opts, "model_options": model_options,
                "model_step_s": model_step_s, "imu_rate_hz": trajectory.rate_hz,

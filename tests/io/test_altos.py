@@ -107,8 +107,6 @@ def test_fix_with_too_few_satellites_is_dropped(tmp_path):
 @pytest.mark.parametrize("board, match", [
     ("telemetrum", r"missing IMU column\(s\) \['accel_x', .*'gyro_yaw'\] \(no gyro: a "
                    r"TeleMetrum"),
-    ("easymega", r"missing GPS column\(s\) \['latitude', 'longitude', 'altitude \(GPS.*"
-                 r"EasyMega"),
 ])
 @pytest.mark.parametrize("generation", ["version", "legacy"])
 def test_boards_without_gyro_or_gps_are_refused(rows, tmp_path, board, match, generation):
@@ -117,6 +115,16 @@ def test_boards_without_gyro_or_gps_are_refused(rows, tmp_path, board, match, ge
     assert looks_like_altos(path)
     with pytest.raises(NavlibInputError, match=match):
         io.read_altos(path)
+
+
+@pytest.mark.parametrize("generation", ["version", "legacy"])
+def test_easymega_without_gps_reads_imu_and_barometer(rows, tmp_path, generation):
+    path = tmp_path / "easymega.csv"
+    write_altos(path, rows, generation=generation, board="easymega")
+    imu, gnss = io.read_log(str(path))
+    assert gnss is None and len(imu) > 100
+    baro = imu.attrs["baro"]
+    np.testing.assert_allclose(baro.alt_m.iloc[0], rows.baro_altitude.iloc[0])
 
 
 def test_repeated_time_with_new_values_names_the_line(rows, tmp_path):

@@ -42,7 +42,7 @@ def test_altos_export_is_one_log_by_its_header(tmp_path, generation, name):
     assert imu.attrs["autopilot"] == "altos" and len(gnss) > 5
     other = tmp_path / "imu.csv"
     other.write_text("t,f_x,f_y,f_z,w_x,w_y,w_z\n0,0,0,9.8,0,0,0\n")
-    with pytest.raises(NavlibInputError, match=r"AltOS \.csv export"):
+    with pytest.raises(NavlibInputError, match=r"AltOS, FIRM, CATS"):
         io.parse_log(str(other))
 
 
@@ -59,6 +59,7 @@ def test_fleet_reports_bad_logs_and_keeps_going(tmp_path, capsys):
     assert status == 1
     table = pd.read_csv(out / "summary.csv", keep_default_na=False)
     assert list(table.columns) == list(fleet.SUMMARY_COLUMNS)
+    assert table.aiding.tolist() == ["gnss", "", "", "", ""]
     assert table["log"].tolist() == logs
     assert table["status"].tolist() == ["ok", "failed", "failed", "failed", "failed"]
     ok = table.iloc[0]
@@ -70,7 +71,7 @@ def test_fleet_reports_bad_logs_and_keeps_going(tmp_path, capsys):
     assert page.is_file() and "data:image/png;base64," in page.read_text()
     assert "not found" in table.error.iloc[1]
     assert table.error.iloc[2].startswith("NavlibInputError")
-    assert "unknown kind" in table.error.iloc[3]
+    assert "not found or unreadable" in table.error.iloc[3]
     assert table.error.iloc[4].startswith("NavlibInputError")  # 64 zero bytes: no DataFlash
     assert all(table.page.iloc[1:] == "")
     assert "1 of 5 flight(s) assessed" in capsys.readouterr().err

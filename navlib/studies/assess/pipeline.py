@@ -20,6 +20,7 @@ from navlib.metrics import (
     S_THRESHOLD,
     check_thresholds,
 )
+from navlib.models.baro import aided_model, sigma_note
 from navlib.models.ecef import ecef21_at_epochs, epoch_samples
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
@@ -30,6 +31,7 @@ from navlib.segmentation import (
 )
 from navlib.studies.assess import clock
 from navlib.studies.assess.agreement import fit_bounds
+from navlib.studies.assess.aiding import aiding_records
 from navlib.studies.assess.fit import fit_notes, fit_records, fit_report, fit_residuals
 from navlib.studies.assess.inputs import (
     GNSS_KEYS,
@@ -66,11 +68,11 @@ def _gnss_sigma(gnss: pd.DataFrame, spec) -> float:
 DEFAULT_PRESET = "motionpak_tactical"
 """Sensor preset of records that do not say what their hardware is (CSV files)."""
 AUTOPILOT_PRESETS = {"px4": "pixhawk_mems", "ardupilot": "pixhawk_mems",
-                     "altos": "altus_telemega"}
+                     "altos": "altus_telemega", "firm": "pixhawk_mems", "cats": "pixhawk_mems"}
 """Preset chosen by default for logs whose reader found the autopilot or flight computer
 (``attrs["autopilot"]``): the consumer MEMS class of the Pixhawk family
-(``data/sensors/pixhawk_mems.toml``), the MPU-6000 class of the Altus Metrum TeleMega
-(``data/sensors/altus_telemega.toml``)."""
+(``data/sensors/pixhawk_mems.toml``, also for the FIRM and CATS flight computers' MEMS
+IMUs), the MPU-6000 class of the Altus Metrum TeleMega (``data/sensors/altus_telemega.toml``)."""
 MODEL_STEP_S = 0.02
 """Longest model step of the assessment (``ecef21_at_epochs(max_step_s=...)``), s: IMU steps
 are grouped to 50 Hz, which keeps long flights fast while the 1 s transitions move by less
@@ -134,7 +136,11 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         separately; shorter holes are bridged by the fit, with a stated bound
         (``notes``); GNSS gaps (and a GNSS ``segment`` column) are bridged by the IMU. An
         autopilot attitude in ``imu.attrs["attitude"]`` (ULog, DataFlash) is the initial
-        attitude unless ``fit_options`` say otherwise.
+        attitude unless ``fit_options`` say otherwise. ``gnss`` None (a flight without
+        GNSS) or a record whose height is barometric (``attrs["height_source"]``) is aided
+        by the barometer ``imu.attrs["baro"]`` and the pad
+        (:func:`navlib.studies.assess.aiding.aiding_records`,
+        :func:`navlib.models.baro.aided_model`); ``options["aiding"]`` names it.
     preset : str, optional
         Sensor preset (``data/sensors/*.toml``) giving the IMU noise densities and the
         turn-on sigmas of ``P0`` (:func:`navlib.models.ecef.parameter_sigmas`). None:
@@ -200,6 +206,7 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     """
     thresholds = check_thresholds(eta, nu, e_threshold, s_threshold, min_fraction)
     check_frame(imu, "imu", IMU_KEYS)
+    gnss, aiding, aiding_notes = aiding_records(imu, gnss)
     check_frame(gnss, "gnss", GNSS_KEYS)
     gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
     preset, preset_reason = choose_preset(imu, preset)
@@ -238,7 +245,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
               "vehicle": vehicle, "vehicle_reason": vehicle_reason,
               "findings": checked.findings, "t_record": float(imu["t"].iloc[0]),
               "outage_report_s": checked.thresholds["gnss"]["outage_report_s"],
-              "bounds": fit_bounds(quality_thresholds)}
+              "bounds": fit_bounds(quality_thresholds),
+              "aiding": aiding, "aiding_notes": aiding_notes}
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
         return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
@@ -270,7 +278,8 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
 def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
                  gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
                  segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings, t_record, outage_report_s, bounds) -> FlightAssessment:
+                 findings, t_record, outage_report_s, bounds, aiding,
+                 aiding_notes) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
@@ -284,8 +293,8 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
 
     trajectory, notes = fit_records(imu, gnss, fit_options, heading_fallback_deg)
     gnss_rate_hz = min(gnss_rate_hz, trajectory.rate_hz)
-    notes = [f"sensor preset {preset!r}: {preset_reason}", *notes, *fit_notes(trajectory),
-             *_outlier_notes(imu)]
+    notes = [f"sensor preset {preset!r}: {preset_reason}", *aiding_notes, *notes,
+             *fit_notes(trajectory), *_outlier_notes(imu)]
     fit = fit_report(trajectory, preset, sigma)
     gnss_res, imu_res = fit_residuals(trajectory, imu, gnss, bounds)
 
@@ -301,7 +310,11 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
                              max_step_s=model_step_s,
                              epochs=epoch_samples(trajectory.t, gnss_rate_hz), **model_options)
-    model, outages = _as_recorded(model, gnss, trajectory.t, outage_report_s)
+    model = aided_model(model, trajectory, aiding, gnss_sigma_m=sigma)
+    if aiding != "gnss":
+        notes.append(sigma_note(model, trajectory, aiding))
+    model, outages = _as_recorded(model, None if aiding == "baro" else gnss, trajectory.t,
+                                  outage_report_s)
     t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, t_record)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
                            inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res,
@@ -329,7 +342,7 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
                "attitude_source": residuals.get("heading_source"), "vehicle": vehicle,
                "vehicle_reason": vehicle_reason, "t_zero": t_zero, "time_zero": zero,
-               "phase_source": automatic.source, "fit_bounds": bounds}
+               "phase_source": automatic.source, "fit_bounds": bounds, "aiding": aiding}
     settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
                 "preset": preset, "gnss_sigma_m": sigma}
     return FlightAssessment.build(
@@ -339,16 +352,22 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
         gnss_outages=outages, logged=logged_channels)
 
 
-def _as_recorded(model, gnss: pd.DataFrame, t_flight, outage_report_s: float):
-    """The model with a zero measurement matrix at the epochs no kept fix aids
-    (:func:`~navlib.studies.assess.outages.measured_epochs`, assumption Q5) and the GNSS
-    outages longer than ``outage_report_s`` over the flight ``t_flight``."""
+def _as_recorded(model, gnss: pd.DataFrame | None, t_flight, outage_report_s: float):
+    """The model with zero GNSS measurement rows at the epochs no kept fix aids
+    (:func:`~navlib.studies.assess.outages.measured_epochs`, assumption Q5; every row for a
+    GNSS-only model, the ``gnss_*`` rows beside a barometer, assumptions B1-B3) and the GNSS
+    outages longer than ``outage_report_s`` over the flight ``t_flight``. ``gnss`` None (a
+    flight aided by its barometer alone): the model as it is and no outages."""
+    if gnss is None:
+        return model, gnss_outages(np.empty(0), 0.0, 0.0, outage_report_s)
     xyz = gnss[["x", "y", "z"]].to_numpy(dtype=float)
     t_fix = gnss["t"].to_numpy(dtype=float)[np.all(np.isfinite(xyz), axis=1)]
     measured = measured_epochs(model.t, t_fix)
     if not measured.all():
+        names = tuple(getattr(model, "measurement_names", ()))
+        rows = [k for k, name in enumerate(names) if name.startswith("gnss_")] or slice(None)
         H = np.array(model.H)
-        H[~measured] = 0.0
+        H[np.ix_(~measured, rows) if isinstance(rows, list) else ~measured] = 0.0
         model = replace(model, H=H)
     outages = gnss_outages(t_fix, float(t_flight[0]), float(t_flight[-1]), outage_report_s)
     return model, outages

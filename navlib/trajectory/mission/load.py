@@ -24,7 +24,7 @@ from navlib.vehicles import VEHICLES
 _TOP_KEYS = {"name", "description", "vehicle", "rate_hz", "sensors", "site", "gnss",
              "rocket", "phase", "limits", "waypoint"}
 _SITE_KEYS = {"lat_deg", "lon_deg", "alt_m"}
-_GNSS_KEYS = {"rate_hz", "sigma_m", "outages"}
+_GNSS_KEYS = {"rate_hz", "sigma_m", "outages", "aiding"}
 
 
 def load_mission(path_or_mapping) -> Mission:

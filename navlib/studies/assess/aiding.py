@@ -1,0 +1,183 @@
+"""What aided a recorded flight, and the reference rows of a flight without GNSS
+(assumptions.md B1-B5).
+
+:func:`aiding_records` turns the records a reader returned (``gnss`` None or a GNSS record
+whose height came from the barometer, ``imu.attrs["baro"]``) into the position rows the
+flight fit takes (:func:`navlib.trajectory.fit_flight_data`) and names the aiding
+(:data:`navlib.models.baro.AIDINGS`). Without GNSS the rows are :func:`baro_reference_rows`:
+height from the barometer, horizontal position dead-reckoned from the IMU levelled on the pad
+(B5). They only seed the fit, whose IMU rows are exact; the model's measurements are the
+barometer and the pad (:func:`navlib.models.baro.aided_model`), never these rows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy.integrate import cumulative_trapezoid
+
+from navlib import earth, strapdown, units
+from navlib.errors import NavlibInputError
+from navlib.io.baro import baro_height
+from navlib.models.baro import BARO_SCALE, BARO_SIGMA_M, baro_sigma
+from navlib.trajectory.fit import FIT_DEFAULTS
+from navlib.trajectory.initial_attitude import level_attitude
+
+SITE_DEG = (45.0, 0.0)
+"""Latitude and longitude assumed for a flight without GNSS, deg (B5): normal gravity
+differs by at most 0.27 % between it and any site, and the Earth rate's components by the
+cosine of the latitude difference."""
+ROW_RATE_HZ = 10.0
+"""Rate of the reference rows of a flight without GNSS, Hz (by construction: the position
+spline's knots are 0.1 s apart)."""
+LAUNCH_ACCEL_M_S2 = 3.0
+"""Specific-force change from the pad's mean that ends the levelling window, m/s^2 (by
+construction: above a rail's vibration, well below any motor's thrust)."""
+MIN_LEVEL_S = 0.5
+"""Shortest rest before launch to level the IMU on, s."""
+SPEED_WINDOW_S = 1.0
+"""Smoothing window of the barometric climb speed, s (by construction: above the sensor's
+noise, below a boost's length)."""
+GAP_S = FIT_DEFAULTS["max_bridge_s"]
+"""IMU holes longer than this (the fit's longest bridged hole, s) start a new piece whose
+reference rows are built on their own: a pre-launch buffer logged long before the flight."""
+
+
+def aiding_of(imu: pd.DataFrame, gnss: pd.DataFrame | None) -> str:
+    """``gnss``, ``baro`` (no GNSS record) or ``gnss+baro`` (a GNSS record whose height is
+    the barometer's, ``gnss.attrs["height_source"] == "baro"``)."""
+    if gnss is None:
+        if _baro(imu) is None:
+            raise NavlibInputError("gnss: no GNSS record and no barometer "
+                                   "(imu.attrs['baro']): nothing aids the IMU; give a GNSS "
+                                   "and/or a barometer record")
+        return "baro"
+    return "gnss+baro" if gnss.attrs.get("height_source") == "baro" else "gnss"
+
+
+def _baro(imu) -> pd.DataFrame | None:
+    baro = getattr(imu, "attrs", {}).get("baro")
+    return baro if isinstance(baro, pd.DataFrame) and len(baro) >= 2 else None
+
+
+def aiding_records(imu: pd.DataFrame, gnss: pd.DataFrame | None
+                   ) -> tuple[pd.DataFrame, str, list[str]]:
+    """The position rows for the fit, the aiding (:func:`aiding_of`) and notes in words."""
+    aiding = aiding_of(imu, gnss)
+    if aiding == "gnss":
+        return gnss, aiding, []
+    if aiding == "gnss+baro":
+        held = gnss.attrs.get("held_fixes_dropped", 0)
+        return gnss, aiding, [
+            "aiding gnss+baro: the GNSS record has no height, so its height is the "
+            "barometric altitude (assumptions B1); the model measures GNSS north/east and "
+            "the barometer (B2)" + (f"; {held} held fix(es) repeating the previous position "
+                                    "were dropped" if held else "")]
+    rows, notes = _rows_per_piece(imu, _baro(imu))
+    return rows, aiding, notes
+
+
+def _rows_per_piece(imu: pd.DataFrame, baro: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """:func:`baro_reference_rows` of each IMU piece between holes longer than
+    :data:`GAP_S` (a pre-launch buffer logged long before the flight is levelled on its own,
+    or skipped with a note when it cannot be)."""
+    t = imu["t"].to_numpy(dtype=float)
+    after = np.flatnonzero(np.diff(t) > GAP_S) + 1
+    bounds = list(zip(np.r_[0, after], np.r_[after, t.size], strict=True))
+    rows, notes, errors = [], [], []
+    for a, b in bounds:
+        piece = imu.iloc[a:b]
+        try:
+            r, note = baro_reference_rows(piece, baro)
+        except NavlibInputError as exc:
+            errors.append(f"{t[a]:.6g}..{t[b - 1]:.6g} s: {exc}")
+            continue
+        rows.append(r)
+        notes.append(note)
+    if not rows:
+        raise NavlibInputError("; ".join(errors))
+    if errors:
+        notes.append(f"the IMU record has holes longer than {GAP_S:g} s; no reference rows for "
+                     f"the piece(s) {'; '.join(errors)}")
+    out = pd.concat(rows, ignore_index=True)
+    out.attrs = dict(rows[0].attrs)
+    return out, notes
+
+
+def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
+                        site_deg=SITE_DEG) -> tuple[pd.DataFrame, str]:
+    """Position rows (``t, x, y, z, sigma``, ECEF) of a flight without GNSS (B5).
+
+    The IMU is levelled on the rest before launch (:data:`LAUNCH_ACCEL_M_S2`,
+    :data:`MIN_LEVEL_S`; heading north by construction), its attitude integrated with the
+    gyros and its specific force twice with the pad's gravity (no Coriolis: these rows only
+    seed the fit); the horizontal part of that position, at ``site_deg``, gets the
+    barometric height change above the pad. ``sigma`` is :func:`navlib.models.baro.baro_sigma`.
+    """
+    t = imu["t"].to_numpy(dtype=float)
+    f_b = imu[["f_x", "f_y", "f_z"]].to_numpy(dtype=float)
+    w_b = imu[["w_x", "w_y", "w_z"]].to_numpy(dtype=float)
+    t_b = baro["t"].to_numpy(dtype=float)
+    t0, t1 = max(t[0], t_b[0]), min(t[-1], t_b[-1])
+    if t1 - t0 < 2.0:
+        raise NavlibInputError(f"imu, baro: the IMU ({t[0]:.6g}..{t[-1]:.6g} s) and the "
+                               f"barometer ({t_b[0]:.6g}..{t_b[-1]:.6g} s) overlap for "
+                               f"{max(t1 - t0, 0.0):.3g} s; need at least 2 s")
+    keep = (t >= t0) & (t <= t1)
+    t, f_b, w_b = t[keep], f_b[keep], w_b[keep]
+    launch = _launch_index(t, f_b)
+    if t[launch] - t[0] < MIN_LEVEL_S:
+        raise NavlibInputError(
+            f"imu: only {t[launch] - t[0]:.3g} s at rest before the specific force changes "
+            f"by {LAUNCH_ACCEL_M_S2:g} m/s^2 (t = {t[launch]:.6g} s); a flight without GNSS "
+            f"is levelled on at least {MIN_LEVEL_S:g} s on the pad")
+    lat0, lon0 = (v * units.DEG for v in site_deg)
+    h_b = baro_height(baro, t)
+    pad = slice(0, launch)
+    h_pad = float(np.median(h_b[pad]))
+    P0 = earth.geodetic_to_ecef(lat0, lon0, h_pad)
+    C_n_e = earth.ned_to_ecef_matrix(lat0, lon0)
+    gamma = earth.normal_gravity_ecef(P0)
+    att0 = level_attitude(f_b[pad].mean(axis=0), gamma, C_n_e)
+    C_b_e = att0 * strapdown.body_attitude(t, w_b)
+    a_e = C_b_e.apply(f_b) + gamma
+    a_e[pad] = 0.0                                       # on the pad by construction
+    v_e = cumulative_trapezoid(a_e, t, axis=0, initial=0.0)
+    dP = cumulative_trapezoid(v_e, t, axis=0, initial=0.0)
+    up = -C_n_e[:, 2]
+    dP_h = dP - np.outer(dP @ up, up)
+    grid = np.arange(t[0], t[-1], 1.0 / ROW_RATE_HZ)
+    P_h = P0 + np.column_stack([np.interp(grid, t, dP_h[:, i]) for i in range(3)])
+    lat, lon, _ = earth.ecef_to_geodetic(P_h)
+    dh = baro_height(baro, grid) - h_pad
+    r_e = earth.geodetic_to_ecef(lat, lon, h_pad + dh)
+    speed = _climb_speed(grid, dh)
+    rows = pd.DataFrame({"t": grid, "x": r_e[:, 0], "y": r_e[:, 1], "z": r_e[:, 2],
+                         "sigma": baro_sigma(dh, BARO_SIGMA_M, BARO_SCALE, speed)})
+    rows.attrs.update(source="barometer + IMU dead reckoning", height_source="baro")
+    note = (f"aiding baro: no GNSS; the reference motion is fitted to {len(rows)} rows at "
+            f"{ROW_RATE_HZ:g} Hz whose height is the barometer's ({dh.max():.0f} m above the "
+            f"pad at most) and whose horizontal position is dead-reckoned from the IMU "
+            f"levelled on {t[launch] - t[0]:.1f} s of pad, heading north and site "
+            f"{site_deg[0]:g} N {site_deg[1]:g} E assumed (assumptions B5): horizontal "
+            f"position and velocity are not measured, only carried by the IMU")
+    return rows, note
+
+
+def _climb_speed(t, dh) -> np.ndarray:
+    """|dh/dt| of the barometric height, smoothed over :data:`SPEED_WINDOW_S` (the airspeed
+    of the barometer sigma's dynamic-pressure term, B2: a rocket's speed is mostly vertical
+    while it is large)."""
+    n = max(round(SPEED_WINDOW_S * ROW_RATE_HZ), 1)
+    smooth = np.convolve(dh, np.ones(n) / n, mode="same")
+    return np.abs(np.gradient(smooth, t)) if t.size > 1 else np.zeros_like(dh)
+
+
+def _launch_index(t, f_b) -> int:
+    """First sample whose specific force differs from the mean of the samples before it by
+    more than :data:`LAUNCH_ACCEL_M_S2` (after the first 0.1 s)."""
+    mean = np.cumsum(f_b, axis=0) / np.arange(1, t.size + 1)[:, None]
+    jump = np.linalg.norm(f_b[1:] - mean[:-1], axis=1) > LAUNCH_ACCEL_M_S2
+    jump &= t[1:] - t[0] > 0.1
+    hits = np.flatnonzero(jump)
+    return int(hits[0]) + 1 if hits.size else t.size - 1

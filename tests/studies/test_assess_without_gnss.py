@@ -1,0 +1,75 @@
+"""Flights without GNSS through ``python -m navlib assess``: a simulated high-power
+rocket's IMU with a barometer made from its heights, and the shared FIRM and CATS Vega flights
+(assumptions B1-B5)."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+from flights import records
+from locations import REPO
+
+from navlib.__main__ import main
+from navlib.earth import ecef_to_geodetic
+from navlib.io import write_imu_csv
+from navlib.io.baro import ISA_EXPONENT, ISA_LAPSE_K_M, ISA_P0_PA, ISA_T0_K
+from navlib.trajectory.mission import from_mission
+
+ROCKETS = next((p for p in (REPO.parent / "shared", REPO.parents[1] / "shared")
+                if p.is_dir()), REPO.parent / "shared") / "data" / "rockets"
+FIRM_LOG = ROCKETS / "firm_jackpot3" / "jackpot_launch_3.csv"
+CATS_LOG = ROCKETS / "hedy_cats_vega" / "imu.csv"
+
+
+def _hpr_records(folder):
+    """``imu.csv`` and ``baro.csv`` of the simulated high-power rocket (2 s on the pad, apogee
+    near 940 m): the barometer is the standard-atmosphere pressure of the GNSS heights."""
+    imu, gnss = records(from_mission("hpr_rocket"), seed=3)
+    imu_path = write_imu_csv(imu, folder / "imu.csv")
+    _, _, h = ecef_to_geodetic(gnss[["x", "y", "z"]].to_numpy())
+    p = ISA_P0_PA * (1.0 - h * ISA_LAPSE_K_M / ISA_T0_K) ** (1.0 / ISA_EXPONENT)
+    baro_path = folder / "baro.csv"
+    pd.DataFrame({"time": gnss.t, "pressure [hPa]": p / 100.0}).to_csv(baro_path, index=False)
+    return imu_path, baro_path
+
+
+def _row(tmp_path, logs):
+    out = tmp_path / "fleet"
+    status = main(["assess", *logs, "--output", str(out), "--scheduler", "synchronous"])
+    table = pd.read_csv(out / "summary.csv", keep_default_na=False)
+    return status, table, out
+
+
+def test_imu_and_barometer_pair_is_assessed_with_baro_aiding(tmp_path):
+    imu, baro = _hpr_records(tmp_path)
+    status, table, out = _row(tmp_path, [f"{imu},{baro}"])
+    row = table.iloc[0]
+    assert status == 0 and row.status == "ok" and row.aiding == "baro"
+    page = (out / row.page).read_text(encoding="utf-8")
+    assert "horizontal position and velocity are unobservable" in page
+
+
+@pytest.mark.skipif(not (FIRM_LOG.is_file() and CATS_LOG.is_file()),
+                    reason=f"shared rocket logs absent ({ROCKETS})")
+def test_shared_firm_and_cats_flights_are_assessed(tmp_path):
+    status, table, _ = _row(tmp_path, [str(FIRM_LOG), str(CATS_LOG)])
+    assert status == 0 and table.status.tolist() == ["ok", "ok"]
+    assert table.aiding.tolist() == ["baro", "gnss+baro"]
+    assert table.vehicle.tolist() == ["rocket", "rocket"]
+    assert "powered" in table.phases.iloc[0] and "descent" in table.phases.iloc[1]
+
+
+def test_pre_launch_buffer_before_a_long_gap_is_split_off_with_a_note(tmp_path):
+    imu_path, baro_path = _hpr_records(tmp_path)
+    imu, baro = pd.read_csv(imu_path), pd.read_csv(baro_path)
+    buffer = imu.iloc[:150].copy()               # 1.5 s on the pad ...
+    imu.iloc[:, 0] += 1068.0                     # ... 1068 s before the flight's record
+    baro_buffer = baro.iloc[:8].copy()
+    baro.iloc[:, 0] += 1068.0
+    pd.concat([buffer, imu]).to_csv(imu_path, index=False)
+    pd.concat([baro_buffer, baro]).to_csv(baro_path, index=False)
+    status, table, _ = _row(tmp_path, [f"{imu_path},{baro_path}"])
+    row = table.iloc[0]
+    assert status == 0 and row.aiding == "baro"
+    assert "split it into 2 spans" in row.warnings or "split into 2 spans" in row.warnings
+    assert row.phases.startswith("rest 1068")
