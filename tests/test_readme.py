@@ -124,7 +124,8 @@ def test_readme_plan_example_runs(command, tmp_path):
 def test_assess_help_lists_every_log_form():
     """Every kind navlib.io.parse_log tells apart is in ``assess --help`` (a new kind fails
     here until the help names it), and so is the default output folder."""
-    forms = {"ulog": ".ulg", "dataflash": ".bin", "altos": "AltOS", "csv": "imu.csv,gnss.csv"}
+    forms = {"ulog": ".ulg", "dataflash": ".bin", "altos": "AltOS", "csv": "imu.csv,gnss.csv",
+             "firm": "FIRM", "cats": "CATS"}
     assert set(LOG_KINDS) == set(forms)
     done = subprocess.run([sys.executable, "-m", "navlib", "assess", "--help"],
                           capture_output=True, text=True, check=True, timeout=120)

@@ -38,15 +38,23 @@ def test_an_imu_csv_of_two_rows_names_the_imu_and_the_samples_needed(tmp_path, g
 def test_an_accelerometer_reading_zeros_is_named_before_the_gnss_checks(tmp_path, gnss):
     """Was refused blaming the GNSS fixes (or the levelling of the fit), never the
     accelerometer."""
-    imu = pd.read_csv(SAMPLE / "imu.csv")
-    imu[[c for c in imu.columns if c.startswith("f_")]] = 0.0
-    path = tmp_path / "imu.csv"
-    imu.to_csv(path, index=False)
+    imu = io.read_imu_csv(SAMPLE / "imu.csv")
+    imu[["f_x", "f_y", "f_z"]] = 0.0
     with pytest.raises(NavlibInputError) as caught:
-        assess_flight(io.read_imu_csv(path), gnss)
+        assess_flight(imu, gnss)
     text = str(caught.value)
     assert text.startswith("imu f_x, f_y, f_z: the accelerometer never reads 0.5 g")
     assert "f_x reads 0 in every sample" in text and "at most 0 m/s^2" in text
+    assert "gnss" not in text.lower()
+    # the same record as a file is refused by its reader, naming the dead accelerometer
+    frame = pd.read_csv(SAMPLE / "imu.csv")
+    frame[[c for c in frame.columns if c.startswith("f_")]] = 0.0
+    path = tmp_path / "imu.csv"
+    frame.to_csv(path, index=False)
+    with pytest.raises(NavlibInputError) as caught:
+        io.read_imu_csv(path)
+    text = str(caught.value)
+    assert "(f_x)" in text and "gravity alone reads 9.8 m/s^2 at rest" in text
     assert "gnss" not in text.lower()
 
 
