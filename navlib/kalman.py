@@ -28,6 +28,8 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.kernel_copy import copy_matrix, copy_vector
 
+_FAST = {"nsz", "arcp", "contract", "reassoc"}   # fastmath without the finite-math flags
+
 PINV_RTOL = 1e-12
 """Relative cut-off of the innovation-covariance pseudo-inverse; the value
 :func:`navlib.covariance.kalman_covariance` uses by default, so that the gains here
@@ -313,12 +315,61 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     return cur
 
 
+@numba.njit(cache=True, fastmath=_FAST)
+def predict_sparse(P, F, Q, out, FP, dense):
+    """``out = sym(F P F' + Q)`` of one step over the rows of ``F`` with off-diagonal
+    entries (flagged in ``dense`` (n,) here; ``FP`` (n, n) scratch): ``(F P)_i`` is
+    ``F_ii P_i`` on a diagonal row, a pair of rows with a diagonal row ``j`` is
+    ``(F P)_ij F_jj`` and only pairs of full rows take a dot product (the EKF's error
+    models: 9 full rows of 21 in the ECEF model). Compiled with reassociation (``fastmath``
+    without the finite-math flags), so equal to :func:`predict_kernel` to rounding. ``out``
+    may be ``P``."""
+    n = P.shape[0]
+    for i in range(n):
+        full = False
+        for j in range(n):
+            if j != i and F[i, j] != 0.0:
+                full = True
+                break
+        dense[i] = full
+        row = FP[i]
+        if full:
+            for j in range(n):
+                row[j] = 0.0
+            for l in range(n):
+                f = F[i, l]
+                if f != 0.0:
+                    p_row = P[l]
+                    for j in range(n):
+                        row[j] += f * p_row[j]
+        else:
+            f = F[i, i]
+            p_row = P[i]
+            for j in range(n):
+                row[j] = f * p_row[j]
+    for i in range(n):
+        fp_row = FP[i]
+        for j in range(i, n):
+            if not dense[j]:
+                m = fp_row[j] * F[j, j]
+            elif not dense[i]:
+                m = FP[j, i] * F[i, i]
+            else:
+                f_row = F[j]
+                m = 0.0
+                for l in range(n):
+                    m += fp_row[l] * f_row[l]
+            s = m + 0.5 * (Q[i, j] + Q[j, i])
+            out[i, j] = s
+            out[j, i] = s
+
+
 @numba.njit(cache=True, inline="always")
 def propagate_kernel(x, P, F, Q, kept, j0, j1):
     """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
     from sample ``j0`` to ``j1`` of a window (``F[j]``,
     ``Q[j]`` the step from sample j to j+1): ``x <- F x`` and ``P <- sym(F P F' + Q)``
-    (:func:`predict_kernel`), compiled (docs/assumptions.md
+    (:func:`predict_sparse`), compiled (docs/assumptions.md
     "Compiled kernels").
 
     The closed loop drives the ``kept`` (RT) states with the error of the corrected
@@ -326,17 +377,28 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
     estimate of the reset states, so their rows take the ``kept`` columns only.
     Returns new arrays (the inputs are not written). Inlined into
     :func:`fixed_updates_kernel` like :func:`update_kernel`."""
+    n = P.shape[0]
     x, P = x.copy(), P.copy()
-    spare = np.empty_like(P)
+    spare, FP = np.empty_like(P), np.empty_like(P)
+    dense = np.empty(n, dtype=np.bool_)
+    x_next = np.empty(n)
     for j in range(j0, j1):
-        x_next = np.dot(F[j], x)
-        for a in kept:
-            drive = 0.0
-            for b in kept:
-                drive += F[j, a, b] * x[b]
-            x_next[a] = drive
-        x = x_next
-        predict_kernel(P, F[j], Q[j], spare)
+        moving = False
+        for i in range(n):
+            moving = moving or x[i] != 0.0
+        if moving:                             # F x (zero when the mean is: after a reset)
+            for i in range(n):
+                s = 0.0
+                for b in range(n):
+                    s += F[j, i, b] * x[b]
+                x_next[i] = s
+            for a in kept:
+                drive = 0.0
+                for b in kept:
+                    drive += F[j, a, b] * x[b]
+                x_next[a] = drive
+            x, x_next = x_next, x
+        predict_sparse(P, F[j], Q[j], spare, FP, dense)
         P, spare = spare, P
     return x, P
 
