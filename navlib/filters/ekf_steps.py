@@ -1,28 +1,26 @@
-"""Per-step discretisation and covariance prediction of the EKF, compiled and sparse
-(:func:`navlib.filters.ekf.ekf`; docs/assumptions.md "Compiled kernels", "EKF step kernels").
+"""Per-step discretisation of the EKF's error model, compiled and sparse
+(:func:`navlib.filters.ekf.ekf`; docs/assumptions.md "Compiled kernels").
 
 The error models of the EKF are sparse and block triangular: in the 21-state ECEF model 58
-of the 441 entries of ``A`` are ever non-zero and only the nine navigation rows have
-off-diagonal terms (the twelve IMU parameters are random walks); the launcher models add
-diagonal Markov decays. :func:`discretize_kernel` computes what
+of the 441 entries of ``A`` are non-zero in the rocket's windows and only the nine
+navigation rows have any (the twelve IMU parameters are random walks); the launcher models
+add diagonal Markov decays. :func:`discretize_kernel` computes what
 :func:`navlib.discretize.discretize_steps` does (``"series"``: ``F = expm(A dt)`` and Van
 Loan's integral by its order-4 Taylor series; ``"euler"``: ``F = I + A dt``, ``Q = W dt``,
-``W = G Qc G'``) one step at a time with products that skip the zero entries of ``A``,
-``G`` and of the Taylor terms; the covariance prediction
-(:func:`navlib.kalman.predict_sparse`) multiplies only the rows of ``F`` that are not
-diagonal.
+``W = G Qc G'``) one step at a time, with products over the non-zero entries of ``A``,
+``G`` and ``Qc`` only; the covariance prediction (:func:`navlib.kalman.predict_sparse`)
+multiplies only the rows of ``F`` that are not diagonal.
 
 The exponential is the Taylor series ``sum_k (A dt)^k / k!`` summed until a term is below
-``2^-53`` of the sum, without scaling while ``|A dt|_1 <=`` :data:`TAYLOR_THETA` (the rocket's
-steps reach 1.6, dominated by the nilpotent specific-force couplings: the sixth term is
-below ``1e-22``), with one shared scaling by ``2^-s`` and ``s`` squarings above. The result
-differs from :func:`~navlib.discretize.expm_taylor` (degree 12 after scaling to 0.5) by
-rounding, not truncation (``tests/filters/test_ekf_steps.py`` compares both with the NumPy
-code at a tolerance that holds across BLAS kernels).
+``2^-53`` (infinity norm), without scaling while ``|A dt| <=`` :data:`TAYLOR_THETA` (the
+rocket's steps reach 1.6, dominated by nilpotent specific-force couplings: the sixth term
+is below ``1e-22``), after one scaling by ``2^-s`` and ``s`` squarings above. It differs
+from :func:`~navlib.discretize.expm_taylor` (degree 12 after scaling to 0.5) by rounding,
+not truncation (``tests/filters/test_ekf_steps.py``: within 1e-12 of the largest entry per
+step, and the whole rocket EKF within the golden tolerances measured across BLAS kernels).
 
-Kernels use ``fastmath`` without the finite-math flags (the EKF's divergence check reads
-non-finite states), element loops and :func:`numpy.empty` only, which compile in about a
-second (``benchmarks/bench_ekf.py`` prints the first-compile time).
+Helpers are inlined into the one cached kernel and the sparsity patterns are found with
+NumPy (:func:`_pattern`), which keeps its first compile to about 3 CPU-s.
 """
 
 from __future__ import annotations
@@ -31,46 +29,21 @@ import numba
 import numpy as np
 
 TAYLOR_THETA = 4.0
-"""Largest ``|A dt|_1`` summed without scaling: rounding then stays within
+"""Largest ``|A dt|`` (infinity norm) summed without scaling: rounding then stays within
 ``e^theta u ~ 1e-14`` of the exponential's norm."""
 _MAX_TERMS = 40
 _SERIES_ORDER = 4              # as navlib.discretize (Van Loan's series, "series")
-_FAST = {"nsz", "arcp", "contract", "reassoc"}
 _EPS = 2.0**-53
 
 
-@numba.njit(cache=True, fastmath=_FAST, inline="always")
+@numba.njit(inline="always")
 def _axpy(a, x, y):
     """``y += a x`` (vectors)."""
     for j in range(y.size):
         y[j] += a * x[j]
 
 
-@numba.njit(cache=True)
-def _pattern(M, transpose):
-    """Compressed rows ``(start, index)`` of the entries of ``M`` (K, r, c) that are non-zero
-    in any of its K matrices (of ``M``'s transposes with ``transpose``: its columns)."""
-    steps, r, c = M.shape
-    used = np.zeros((r, c), dtype=np.bool_)
-    for s in range(steps):
-        for i in range(r):
-            for j in range(c):
-                if M[s, i, j] != 0.0:
-                    used[i, j] = True
-    outer, inner = (c, r) if transpose else (r, c)
-    start = np.zeros(outer + 1, dtype=np.int64)
-    index = np.empty(r * c, dtype=np.int64)
-    count = 0
-    for a in range(outer):
-        for b in range(inner):
-            if used[b, a] if transpose else used[a, b]:
-                index[count] = b
-                count += 1
-        start[a + 1] = count
-    return start, index[:count]
-
-
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(inline="always")
 def _noise(G, pairs, weights, g_start, g_rows, W):
     """``W = G Qc G'`` (n, n) as ``sum Qc[a, b] G[:, a] G[:, b]'`` over the non-zero
     ``Qc[a, b]`` (``pairs`` (p, 2), ``weights`` (p,)) and the non-zero rows of those
@@ -88,7 +61,7 @@ def _noise(G, pairs, weights, g_start, g_rows, W):
                 W[i, g_rows[v]] += ci * G[g_rows[v], b]
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(inline="always")
 def _expm(A, h, a_start, a_cols, live, E, T, T2):
     """``E = expm(A h)`` (module docstring) over the non-zero entries of ``A`` (``a_start``,
     ``a_cols``: its rows by :func:`_pattern`; ``live``: the rows with any). The Taylor terms
@@ -150,7 +123,7 @@ def _expm(A, h, a_start, a_cols, live, E, T, T2):
                 E[i, j] = s
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(inline="always")
 def _van_loan(A, W, h, a_start, a_cols, live, Q, L, AL):
     """``Q = sum_(k=0..4) L_k h^(k+1) / (k+1)!`` with ``L_0 = W``,
     ``L_k = A L_(k-1) + (A L_(k-1))'`` (:func:`navlib.discretize.discretize_steps`,
@@ -195,35 +168,17 @@ def _van_loan(A, W, h, a_start, a_cols, live, Q, L, AL):
                 Q[i, live[v]] += w * factor
 
 
-@numba.njit(cache=True, fastmath=_FAST)
-def discretize_kernel(A, G, Qc, dt, series, F, Q):
+@numba.njit(cache=True)
+def discretize_kernel(A, G, dt, series, pattern, F, Q):
     """``F[j]``, ``Q[j]`` (K, n, n) of the steps ``A[j]``, ``G[j]``, ``dt[j]`` (K, ...):
     :func:`navlib.discretize.discretize_steps` with ``method="series"`` (``series``) or
-    ``"euler"``, over the non-zero entries (module docstring)."""
+    ``"euler"``, over the non-zero entries of ``A``, ``G`` and ``Qc`` (``pattern`` of
+    :func:`_pattern`; module docstring)."""
+    a_start, a_cols, live, g_start, g_rows, pairs, weights = pattern
     steps, n = A.shape[0], A.shape[1]
-    q = Qc.shape[0]
-    a_start, a_cols = _pattern(A, False)
-    g_start, g_rows = _pattern(G, True)
-    pairs, weights = np.empty((q * q, 2), dtype=np.int64), np.empty(q * q)
-    count = 0
-    for a in range(q):
-        for b in range(q):
-            if Qc[a, b] != 0.0:
-                pairs[count, 0], pairs[count, 1], weights[count] = a, b, Qc[a, b]
-                count += 1
-    pairs, weights = pairs[:count], weights[:count]
-    live = np.empty(n, dtype=np.int64)        # live rows first (_van_loan)
-    flags = np.empty(n, dtype=np.bool_)
-    count = 0
+    flags = np.zeros(n, dtype=np.bool_)
     for i in range(n):
         flags[i] = a_start[i + 1] > a_start[i]
-        if flags[i]:
-            live[count] = i
-            count += 1
-    for i in range(n):
-        if not flags[i]:
-            live[count] = i
-            count += 1
     W, T, T2 = np.empty((n, n)), np.empty((n, n)), np.zeros((n, n))
     for s in range(steps):
         h = dt[s]
@@ -243,13 +198,31 @@ def discretize_kernel(A, G, Qc, dt, series, F, Q):
         _van_loan(A[s], W, h, a_start, a_cols, live, Q[s], T, T2)
 
 
-def discretize_window(A, G, Qc, dt, method: str):
+def _pattern(A, G, Qc):
+    """The non-zero entries of a window's ``A`` (K, n, n) (in any step; rows: ``start``,
+    ``columns``, and the row order with the rows that have any first), of ``G`` (K, n, q)
+    (by column: ``start``, ``rows``) and of ``Qc`` (``pairs`` (p, 2), ``weights`` (p,))."""
+    used = (A != 0.0).any(axis=0)
+    a_start = np.concatenate([[0], np.cumsum(used.sum(axis=1))]).astype(np.int64)
+    live = np.argsort(~used.any(axis=1), kind="stable").astype(np.int64)
+    g_used = (G != 0.0).any(axis=0).T
+    g_start = np.concatenate([[0], np.cumsum(g_used.sum(axis=1))]).astype(np.int64)
+    pairs = np.argwhere(Qc != 0.0).astype(np.int64)
+    return (a_start, np.nonzero(used)[1].astype(np.int64), live, g_start,
+            np.nonzero(g_used)[1].astype(np.int64), pairs, Qc[pairs[:, 0], pairs[:, 1]])
+
+
+def discretize_window(A, G, Qc, dt, method: str, out=None):
     """``F``, ``Q`` (K, n, n) of :func:`discretize_kernel` for ``A`` (K, n, n), ``G``
     (K, n, q), ``Qc`` (q, q), ``dt`` (K,) and ``method`` ``"series"`` or ``"euler"`` (the
-    EKF's own arrays: no input checks)."""
+    EKF's own arrays: no input checks), written into the first K steps of ``out``
+    ``(F, Q)`` when given (the EKF reuses one pair of buffers over its windows)."""
+    A, G = np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(G, dtype=float)
     steps, n = A.shape[0], A.shape[1]
-    F, Q = np.empty((steps, n, n)), np.empty((steps, n, n))
-    discretize_kernel(np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(G, dtype=float),
-                      np.ascontiguousarray(Qc, dtype=float), np.ascontiguousarray(dt, dtype=float),
-                      method == "series", F, Q)
+    if out is None:
+        F, Q = np.empty((steps, n, n)), np.empty((steps, n, n))
+    else:
+        F, Q = out[0][:steps], out[1][:steps]
+    discretize_kernel(A, G, np.ascontiguousarray(dt, dtype=float), method == "series",
+                      _pattern(A, G, np.asarray(Qc, dtype=float)), F, Q)
     return F, Q
