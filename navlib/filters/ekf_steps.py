@@ -5,10 +5,11 @@ The error models of the EKF are sparse and block triangular: in the 21-state ECE
 of the 441 entries of ``A`` are non-zero in the rocket's windows and only the nine
 navigation rows have any (the twelve IMU parameters are random walks); the launcher models
 add diagonal Markov decays. :func:`discretize_kernel` computes what
-:func:`navlib.discretize.discretize_steps` does (``"series"``: ``F = expm(A dt)`` and Van
-Loan's integral by its order-4 Taylor series; ``"euler"``: ``F = I + A dt``, ``Q = W dt``,
-``W = G Qc G'``) one step at a time, with products over the non-zero entries of ``A``,
-``G`` and ``Qc`` only; the covariance prediction (:func:`navlib.kalman.predict_sparse`)
+:func:`navlib.discretize.discretize_steps` does with ``method="series"`` (``F = expm(A dt)``
+and Van Loan's integral of ``W = G Qc G'`` by its order-4 Taylor series) one step at a
+time, with products over the non-zero entries of ``A``, ``G`` and ``Qc`` only (the Euler
+steps of the launcher models stay NumPy's: two batched operations, and no compile in the
+notebooks that run only those); the covariance prediction (:func:`navlib.kalman.predict_sparse`)
 multiplies only the rows of ``F`` that are not diagonal.
 
 The exponential is the Taylor series ``sum_k (A dt)^k / k!`` summed until a term is below
@@ -27,6 +28,8 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+
+from navlib.discretize import discretize_steps
 
 TAYLOR_THETA = 4.0
 """Largest ``|A dt|`` (infinity norm) summed without scaling: rounding then stays within
@@ -169,11 +172,11 @@ def _van_loan(A, W, h, a_start, a_cols, live, Q, L, AL):
 
 
 @numba.njit(cache=True)
-def discretize_kernel(A, G, dt, series, pattern, F, Q):
+def discretize_kernel(A, G, dt, pattern, F, Q):
     """``F[j]``, ``Q[j]`` (K, n, n) of the steps ``A[j]``, ``G[j]``, ``dt[j]`` (K, ...):
-    :func:`navlib.discretize.discretize_steps` with ``method="series"`` (``series``) or
-    ``"euler"``, over the non-zero entries of ``A``, ``G`` and ``Qc`` (``pattern`` of
-    :func:`_pattern`; module docstring)."""
+    :func:`navlib.discretize.discretize_steps` with ``method="series"``, over the non-zero
+    entries of ``A``, ``G`` and ``Qc`` (``pattern`` of :func:`_pattern`; module
+    docstring)."""
     a_start, a_cols, live, g_start, g_rows, pairs, weights = pattern
     steps, n = A.shape[0], A.shape[1]
     flags = np.zeros(n, dtype=np.bool_)
@@ -183,13 +186,6 @@ def discretize_kernel(A, G, dt, series, pattern, F, Q):
     for s in range(steps):
         h = dt[s]
         _noise(G[s], pairs, weights, g_start, g_rows, W)
-        if not series:
-            for i in range(n):
-                for j in range(n):
-                    F[s, i, j] = A[s, i, j] * h
-                    Q[s, i, j] = W[i, j] * h
-                F[s, i, i] += 1.0
-            continue
         _expm(A[s], h, a_start, a_cols, flags, F[s], T, T2)
         for i in range(n):
             if not flags[i]:
@@ -213,16 +209,20 @@ def _pattern(A, G, Qc):
 
 
 def discretize_window(A, G, Qc, dt, method: str, out=None):
-    """``F``, ``Q`` (K, n, n) of :func:`discretize_kernel` for ``A`` (K, n, n), ``G``
-    (K, n, q), ``Qc`` (q, q), ``dt`` (K,) and ``method`` ``"series"`` or ``"euler"`` (the
-    EKF's own arrays: no input checks), written into the first K steps of ``out``
-    ``(F, Q)`` when given (the EKF reuses one pair of buffers over its windows)."""
+    """``F``, ``Q`` (K, n, n) of the steps ``A`` (K, n, n), ``G`` (K, n, q), ``dt`` (K,)
+    with ``Qc`` (q, q) (the EKF's own arrays: no input checks): :func:`discretize_kernel`
+    for ``method="series"``, written into the first K steps of ``out`` ``(F, Q)`` when given
+    (the EKF reuses one pair of buffers over its windows); ``"euler"`` (``I + A dt``,
+    ``G Qc G' dt``: a few batched NumPy operations) is
+    :func:`navlib.discretize.discretize_steps`'s."""
+    if method != "series":
+        return discretize_steps(A, G, Qc, dt, method=method)
     A, G = np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(G, dtype=float)
     steps, n = A.shape[0], A.shape[1]
     if out is None:
         F, Q = np.empty((steps, n, n)), np.empty((steps, n, n))
     else:
         F, Q = out[0][:steps], out[1][:steps]
-    discretize_kernel(A, G, np.ascontiguousarray(dt, dtype=float), method == "series",
+    discretize_kernel(A, G, np.ascontiguousarray(dt, dtype=float),
                       _pattern(A, G, np.asarray(Qc, dtype=float)), F, Q)
     return F, Q

@@ -57,14 +57,13 @@ def _block_model(rng, steps, n=12, live=5, decay=True):
     return A, G, M @ M.T, rng.uniform(0.005, 0.02, steps)
 
 
-@pytest.mark.parametrize("method", ["series", "euler"])
-def test_rocket_steps_equal_discretize_steps(rocket, method):
+def test_rocket_steps_equal_discretize_steps(rocket):
     """The whole rocket flight (``|A dt|_1`` up to 1.6 in the boost): ``F`` and ``Q`` of the
     sparse kernel equal the batched NumPy discretisation (degree-12 Taylor after scaling)."""
     A, G, Qc, dt = _rocket_model(rocket)
     assert np.abs(A * dt[:, None, None]).sum(axis=1).max() > 1.0
-    F, Q = discretize_window(A, G, Qc, dt, method)
-    F_ref, Q_ref = discretize_steps(A, G, Qc, dt, method=method)
+    F, Q = discretize_window(A, G, Qc, dt, "series")
+    F_ref, Q_ref = discretize_steps(A, G, Qc, dt, method="series")
     assert rel(F, F_ref) < STEP_RTOL
     assert rel(Q, Q_ref) < STEP_RTOL
 
