@@ -8,7 +8,8 @@ The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
 :func:`_joseph_kernel` (one epoch), :func:`predict_kernel`, :func:`riccati_kernel` (the
 covariance recursion of :func:`covariance_recursion`), :func:`propagate_kernel`
-(the EKF between updates) and :func:`update_kernel` (the EKF's updates), both inlined into
+(the EKF between updates, with the sparse prediction :func:`predict_sparse`) and
+:func:`update_kernel` (the EKF's updates, inlined), both called by
 :func:`fixed_updates_kernel` (the EKF's runs of updates with one design, and its
 propagation to a window's end).
 :func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
@@ -313,30 +314,90 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     return cur
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
+def predict_sparse(P, F, Q, out, FP, dense):
+    """``out = sym(F P F' + Q)`` of one step over the rows of ``F`` with off-diagonal
+    entries (flagged in ``dense`` (n,) here; ``FP`` (n, n) scratch): ``(F P)_i`` is
+    ``F_ii P_i`` on a diagonal row, a pair of rows with a diagonal row ``j`` is
+    ``(F P)_ij F_jj`` and only pairs of full rows take a dot product (the EKF's error
+    models: 9 full rows of 21 in the ECEF model), so equal to :func:`predict_kernel` to
+    rounding. ``out`` may be ``P``."""
+    n = P.shape[0]
+    for i in range(n):
+        full = False
+        for j in range(n):
+            if j != i and F[i, j] != 0.0:
+                full = True
+                break
+        dense[i] = full
+        row = FP[i]
+        if full:
+            for j in range(n):
+                row[j] = 0.0
+            for l in range(n):
+                f = F[i, l]
+                if f != 0.0:
+                    p_row = P[l]
+                    for j in range(n):
+                        row[j] += f * p_row[j]
+        else:
+            f = F[i, i]
+            p_row = P[i]
+            for j in range(n):
+                row[j] = f * p_row[j]
+    for i in range(n):
+        fp_row = FP[i]
+        for j in range(i, n):
+            if not dense[j]:
+                m = fp_row[j] * F[j, j]
+            elif not dense[i]:
+                m = FP[j, i] * F[i, i]
+            else:
+                f_row = F[j]
+                m = 0.0
+                for l in range(n):
+                    m += fp_row[l] * f_row[l]
+            s = m + 0.5 * (Q[i, j] + Q[j, i])
+            out[i, j] = s
+            out[j, i] = s
+
+
+@numba.njit(cache=True)
 def propagate_kernel(x, P, F, Q, kept, j0, j1):
     """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
     from sample ``j0`` to ``j1`` of a window (``F[j]``,
     ``Q[j]`` the step from sample j to j+1): ``x <- F x`` and ``P <- sym(F P F' + Q)``
-    (:func:`predict_kernel`), compiled (docs/assumptions.md
+    (:func:`predict_sparse`), compiled (docs/assumptions.md
     "Compiled kernels").
 
     The closed loop drives the ``kept`` (RT) states with the error of the corrected
     navigation, ``x[reset] - x_hat[reset]``: no mean drive from the not-yet-fed-back
     estimate of the reset states, so their rows take the ``kept`` columns only.
-    Returns new arrays (the inputs are not written). Inlined into
-    :func:`fixed_updates_kernel` like :func:`update_kernel`."""
+    Returns new arrays (the inputs are not written). A kernel of its own called by
+    :func:`fixed_updates_kernel` (inlined twice there, its loops doubled the first
+    compile)."""
+    n = P.shape[0]
     x, P = x.copy(), P.copy()
-    spare = np.empty_like(P)
+    spare, FP = np.empty_like(P), np.empty_like(P)
+    dense = np.empty(n, dtype=np.bool_)
+    x_next = np.empty(n)
     for j in range(j0, j1):
-        x_next = np.dot(F[j], x)
-        for a in kept:
-            drive = 0.0
-            for b in kept:
-                drive += F[j, a, b] * x[b]
-            x_next[a] = drive
-        x = x_next
-        predict_kernel(P, F[j], Q[j], spare)
+        moving = False
+        for i in range(n):
+            moving = moving or x[i] != 0.0
+        if moving:                             # F x (zero when the mean is: after a reset)
+            for i in range(n):
+                s = 0.0
+                for b in range(n):
+                    s += F[j, i, b] * x[b]
+                x_next[i] = s
+            for a in kept:
+                drive = 0.0
+                for b in kept:
+                    drive += F[j, a, b] * x[b]
+                x_next[a] = drive
+            x, x_next = x_next, x
+        predict_sparse(P, F[j], Q[j], spare, FP, dense)
         P, spare = spare, P
     return x, P
 
@@ -433,7 +494,7 @@ def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_
     to sample ``j_end`` (no step when it is the last update's sample; with no updates,
     the propagation alone). The same compiled steps as one call per update, without
     Python between them (docs/assumptions.md "Compiled kernels"); the EKF's one compiled
-    entry point (its propagation and update are inlined: each compiled once, here).
+    entry point (its update is inlined: compiled once, here).
     Returns ``(x, P)`` at ``j_end``."""
     n, m = P.shape[0], H.shape[0]
     K, S_pinv = np.empty((n, m)), np.empty((m, m))

@@ -70,3 +70,23 @@ def propagate(x, P, F, Q, kept):
         x = x_next
         P = predict(P, Fj, Qj)
     return x, P
+
+
+def _update(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
+    innov = z - H @ x
+    P_post[:], K[:], S_pinv[:], dof = joseph(P, H, R, definite, pinv_rtol)
+    return x + K @ innov, innov, innov @ S_pinv @ innov, dof
+
+
+def fixed_updates(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
+                  innovations, nis, dofs, j_end):
+    """:func:`navlib.kalman.fixed_updates_kernel` written with the NumPy steps above (same
+    arguments and outputs), to run the EKF with them."""
+    K, S_pinv = np.empty((H.shape[1], H.shape[0])), np.empty((H.shape[0], H.shape[0]))
+    for u, j in enumerate(samples):
+        x, P = propagate(x, P, F[j0:j], Q[j0:j], kept)
+        j0 = j
+        x, innovations[u], nis[u], dofs[u] = _update(x, P, z[u], H, R, definite, pinv_rtol,
+                                                     Ps[u], K, S_pinv)
+        xs[u], P = x, Ps[u]
+    return propagate(x, P, F[j0:j_end], Q[j0:j_end], kept)

@@ -170,28 +170,6 @@ def test_paper_recursion_30001_epochs_equals_numpy(launcher_steps):
     np.testing.assert_array_equal(gains.dof[0], want_dof)
 
 
-def _numpy_propagate(x, P, F, Q, kept, j0, j1):
-    return ref.propagate(x, P, F[j0:j1], Q[j0:j1], kept)
-
-
-def _numpy_update(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
-    innov = z - H @ x
-    P_post[:], K[:], S_pinv[:], dof = ref.joseph(P, H, R, definite, pinv_rtol)
-    return x + K @ innov, innov, innov @ S_pinv @ innov, dof
-
-
-def _numpy_fixed_updates(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_rtol, xs, Ps,
-                         innovations, nis, dofs, j_end):
-    K, S_pinv = np.empty((H.shape[1], H.shape[0])), np.empty((H.shape[0], H.shape[0]))
-    for u, j in enumerate(samples):
-        x, P = _numpy_propagate(x, P, F, Q, kept, j0, j)
-        j0 = j
-        x, innovations[u], nis[u], dofs[u] = _numpy_update(x, P, z[u], H, R, definite,
-                                                           pinv_rtol, Ps[u], K, S_pinv)
-        xs[u], P = x, Ps[u]
-    return _numpy_propagate(x, P, F, Q, kept, j0, j_end)
-
-
 def test_fixed_updates_kernel_equals_one_call_per_update():
     """A run of updates with one design in one kernel call, and the propagation after it,
     equal the propagation and update called once per update, to the bit (the same
@@ -242,7 +220,7 @@ def test_rocket_ekf_86_s_equals_numpy_loop(monkeypatch):
                    model="ecef21", model_options={"sensors": "motionpak_tactical"})
 
     compiled = run()
-    monkeypatch.setattr(ekf_updates, "fixed_updates_kernel", _numpy_fixed_updates)
+    monkeypatch.setattr(ekf_updates, "fixed_updates_kernel", ref.fixed_updates)
     numpy_run = run()
     assert np.abs(compiled.position - numpy_run.position).max() < 1e-3
     assert np.max(np.abs(compiled.sigma - numpy_run.sigma) / numpy_run.sigma) < 1e-9

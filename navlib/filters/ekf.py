@@ -24,8 +24,8 @@ from scipy.spatial.transform import Rotation
 from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import symmetrize
-from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
+from navlib.filters.ekf_steps import discretize_window
 from navlib.filters.ekf_updates import Epochs, WindowUpdates, update_records
 from navlib.filters.linear_preparation import METHODS
 from navlib.filters.measurements import Measurement, ekf_measurements, epoch_index, imu_arrays
@@ -402,6 +402,8 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         first = resume.window
     loop = WindowUpdates(es, kept, observers, Epochs(events, rows, len(names)))
     clocks = strapdown._block_clocks(t, bounds)
+    n, longest = len(es.state_names), int(np.max(np.diff(bounds)))
+    buffers = (np.empty((longest, n, n)), np.empty((longest, n, n)))  # F, Q of a window
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
         if i < first:
             continue
@@ -413,7 +415,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         nominal = _window_nominal(es, t[w0:w1 + 1], f_meas[w0:w1 + 1], w_meas[w0:w1 + 1],
                                   (r, v, C), params, clocks[i])
         A, G = es.jacobians(nominal)
-        F, Q = discretize_steps(A[:-1], G[:-1], Qc, np.diff(nominal.t), method=method)
+        F, Q = discretize_window(A[:-1], G[:-1], Qc, np.diff(nominal.t), method, buffers)
         x, P, rec = loop.window(x, P, F, Q, w0, nominal)
         end = None
         if rec:                                # corrected estimates at this window's updates
