@@ -120,4 +120,8 @@ engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", base
                              "P0 x attitude scale factorial (stacked recursions per state "
                              "count); convergence reading, rank tolerance, gyro-noise unit, ZVU "
                              "noise, x0 and IMU orientation one at a time from the baseline",
-                             baseline_point=BASELINE_POINT))
+                             baseline_point=BASELINE_POINT,
+                             kinds={"P0": "unstated", "attitude_scale": "unstated",
+                                    "convergence": "ours", "rank_rtol": "ours",
+                                    "arw_reading": "ours", "noise_scale": "unstated",
+                                    "x0": "unstated", "imu_orientation": "unstated"}))
