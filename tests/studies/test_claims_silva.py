@@ -190,3 +190,24 @@ def test_eq44_explanation_predicts_where_the_verdict_flips():
     below, above = ({c.claim_id: c for c in r}["SSAC-eq44"] for r in (below, above))
     assert "at least 2.06 times" in below.explanation
     assert below.verdict == "not reproduced" and above.verdict == "reproduced"
+
+
+def test_eq44_moves_through_the_declared_heading_prior():
+    """SSAC-eq44 declares the initial heading sigma it hinges on (A-SSAC-eq44-prior): the
+    matched prior gives 1/sqrt(2) of the classic limit, x3 the limit within 10 %."""
+    from navlib.studies.ssac.assumptions import BASELINE_POINT, HEADING_PRIORS
+    from navlib.studies.ssac.robustness import grid_claims
+
+    assert BASELINE_POINT["heading_prior"] == 1.0 and 3.0 in HEADING_PRIORS
+    eq44 = {p.get("heading_prior", 1.0): r for p, rs in grid_claims(True) for r in rs
+            if r.claim_id == "SSAC-eq44" and set(p) <= {"heading_prior", "P0",
+                                                          "attitude_scale"}}
+    assert "heading_prior" in eq44[1.0].depends_on
+    assert eq44[1.0].headline_values()[0] == pytest.approx(1.0 / np.sqrt(2.0), rel=1e-3)
+    assert eq44[1.0].verdict == eq44[2.0].verdict == "not reproduced"
+    assert eq44[3.0].verdict == "reproduced"
+    assert eq44[3.0].headline_values()[0] == pytest.approx(3.0 / np.sqrt(10.0), rel=1e-3)
+    rob = engine.study_robustness(engine.studies()["ssac"], quick=True)["SSAC-eq44"]
+    assert "heading_prior" in rob.varied
+    frame = engine.study_frame(engine.studies()["ssac"], quick=True)
+    assert frame.set_index("claim_id").at["SSAC-eq44", "cause"] == "unstated"

@@ -273,8 +273,9 @@ def eq44_claim(study: SSACStudy) -> ClaimResult:
         [check("filter psiD sigma / (b_gE / (Omega cos L))",
                float(psid["filter_end"] / psid["classic"]), "in", (0.9, 1.1), True)],
         assumption="(44) read as Jekeli's classic azimuth limit (the Bayesian form is an "
-                   "identity of the filter, ssac.md §3.5); 'matches' = within 10 %",
-        depends_on=RUN_DEPS,
+                   "identity of the filter, ssac.md §3.5); 'matches' = within 10 %; the "
+                   "initial heading sigma (not given) sets the ratio (A-SSAC-eq44-prior)",
+        depends_on=(*RUN_DEPS, "heading_prior"),
         explanation=_eq44_explanation(psid))
 
 
