@@ -56,7 +56,7 @@ MOVES = [
     ("SSAC-pairs", "generic P0", 0, True),
     ("SSAC-poseig", "ARW deg/sqrt(s)", 0, True),
     ("SSAC-nine", "generic P0", 1, True),
-    ("SSAC-X", "generic P0", 0, True),
+    ("SSAC-X", "attitude x3", 2, True),          # the exchange nearest 50 min: 54.0 -> 31.4
     ("SSAC-bgDeig", "ARW deg/sqrt(s)", 0, True),
     ("SSAC-12state", "ZVU noise x2", 1, False),
     ("SSAC-10state", "ZVU noise x2", 0, False),
@@ -211,3 +211,13 @@ def test_eq44_moves_through_the_declared_heading_prior():
     assert "heading_prior" in rob.varied
     frame = engine.study_frame(engine.studies()["ssac"], quick=True)
     assert frame.set_index("claim_id").at["SSAC-eq44", "cause"] == "unstated"
+
+
+def test_x_shape_checks_the_exchange_the_paper_describes(runs):
+    """SSAC-X reads the exchange nearest the paper's ~50 min (54.0 min here), not the first
+    one (26 min), and says which."""
+    x = runs["base"][1]["SSAC-X"]
+    assert x.checks[2].name.startswith("exchange nearest")
+    assert x.checks[2].value == pytest.approx(54.0, abs=0.5)
+    assert "the exchange at 54.0 min" in x.ours and "exchange 3 of 3" in x.ours
+    assert x.verdict == "reproduced"
