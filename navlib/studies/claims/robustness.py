@@ -122,10 +122,12 @@ def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
 
 CAUSES = ("paper", "ours", "unstated")
 """Whose a partly / not reproduced claim is (:func:`cause_of`)."""
-KINDS = ("ours", "unstated")
+KINDS = ("ours", "unstated", "fitted")
 """Kinds of a declared assumption: ``ours`` = a reading or a model of ours (a rank
 tolerance, the sign of A1, the surrogate ascent), ``unstated`` = a quantity the paper does
-not give (an initial sigma, a threshold eta, a time constant)."""
+not give (an initial sigma, a threshold eta, a time constant), ``fitted`` = a setup chosen to
+make claims hold that contradicts the paper's own (the near-vertical ascent without a pitch
+programme, A-F2-pitch): a point changing it never counts as where a claim holds."""
 
 
 def cause_of(verdict: str, holds_at: Sequence[Mapping], kinds: Mapping) -> str:
@@ -141,7 +143,7 @@ def cause_of(verdict: str, holds_at: Sequence[Mapping], kinds: Mapping) -> str:
         search, a cause experiment).
     kinds : mapping
         Assumption name -> one of :data:`KINDS` (an undeclared name counts as
-        ``unstated``).
+        ``unstated``; a point changing a ``fitted`` one is left out).
 
     Returns
     -------
@@ -154,7 +156,8 @@ def cause_of(verdict: str, holds_at: Sequence[Mapping], kinds: Mapping) -> str:
     """
     if verdict not in ("partly", "not reproduced"):
         return ""
-    points = [p for p in holds_at if p]
+    points = [p for p in holds_at
+              if p and not any(kinds.get(k) == "fitted" for k in p)]
     if not points:
         return "paper"
     if any(all(kinds.get(k, "unstated") == "ours" for k in p) for p in points):

@@ -24,6 +24,7 @@ from navlib.studies.launcher.assumptions import (
     LATERAL_BASELINE,
     LATERAL_LEVELS,
     LEVEL_STRIDE,
+    SURVEYED_PAD_M,
     TABLE2_BASELINE,
     TABLE2_GRID,
     TABLE2_RANK_RTOLS,
@@ -33,17 +34,22 @@ from navlib.studies.launcher.assumptions import (
 )
 from navlib.studies.launcher.causes import cp_mission_sigmas, evolution_causes
 from navlib.studies.launcher.claims import conclusion_claims, f1_cp_mission_claim, fig1_claims
-from navlib.studies.launcher.covariance_claims import evolution_claims
+from navlib.studies.launcher.covariance_claims import (
+    evolution_claims,
+    f3_bp_claim,
+    f5_model_claim,
+)
 from navlib.studies.launcher.evolution import evolution_grid
 from navlib.studies.launcher.table2 import Table2Result, table2
 from navlib.trajectory import launcher_ascent
 
 COVARIANCE_KINDS = {"sigma0_att_deg": "unstated", "sigma0_pos_m": "unstated", "c_g": "unstated",
-                    "c_p": "ours", "kick_deg": "ours", "gust_mps": "ours"}
+                    "c_p": "ours", "kick_deg": "fitted", "gust_mps": "ours"}
 """Kinds of the covariance claims' assumptions (their set, cause experiments and joint
 search, A-launcher-search): the initial sigmas and the gyro-bias constant are not given; the
-GPS-bias constant other than the printed 100 s, the pitch programme and the lateral level
-are readings and models of ours."""
+GPS-bias constant other than the printed 100 s and the lateral level are readings and models
+of ours; the ascent without a pitch programme is a fitted setup (A-F2-pitch: an orbital
+ascent must pitch over), so no claim counts as holding there."""
 
 
 def baseline_fig1_claims(quick: bool = False) -> list[ClaimResult]:
@@ -132,10 +138,14 @@ def baseline_evolution_claims(quick: bool = False) -> list[ClaimResult]:
 
 
 def evolution_robustness(quick: bool = False) -> list:
-    """``(point, claims)`` over :data:`~navlib.studies.launcher.EVOLUTION_GRID`."""
+    """``(point, claims)`` over :data:`~navlib.studies.launcher.EVOLUTION_GRID`: each initial
+    attitude sigma's table, and F3-bp and F5-model on the surveyed-pad runs of the cause
+    experiment (the :data:`~navlib.studies.launcher.assumptions.PAD_CASES` they read)."""
     base = EVOLUTION_BASELINE["sigma0_att_deg"]
-    return [({"sigma0_att_deg": base if np.isclose(k, base) else k}, v)
-            for k, v in evolution_variants(quick).items()]
+    pad = evolution_causes(quick)["surveyed_pad"]
+    return [*(({"sigma0_att_deg": base if np.isclose(k, base) else k}, v)
+              for k, v in evolution_variants(quick).items()),
+            ({"sigma0_pos_m": SURVEYED_PAD_M}, [f3_bp_claim(pad), f5_model_claim(pad)])]
 
 
 engine.register(engine.Study("fig1", "Beaudoin et al. (2018)", baseline_fig1_claims,
