@@ -24,9 +24,9 @@ singularity; roll is held at ``roll_deg``.
 
 **Lateral motion** (docs/assumptions.md, A-launcher-lateral). The paper's simulator
 "considers, among other things, the launcher flexion, the wind, and the aerodynamic
-coefficient", and its lateral acceleration is "almost null" but not zero: a flight with
-exactly zero lateral specific force leaves roll unobservable from GPS. Three declared
-sources, each a keyword:
+coefficient", and its lateral acceleration is "almost null" but not zero: with exactly zero
+lateral specific force a roll error reaches the velocity error only through the turning of
+the body axes. Three declared sources, each a keyword:
 
 * **wind gusts**: a train of discrete 1-cosine gusts of peak ``gust_mps`` (default 9 m/s,
   the discrete design gust of NASA's terrestrial-environment guidelines for launch
