@@ -443,6 +443,7 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
 
 
 
+@cache.memoized(maxsize=4)
 def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
     """Actual error sigmas of a reduced filter run on the 15-state truth (ssac.md §2.4, the
     conclusions' "the 12-state filter is as good"): a covariance analysis of the suboptimal
@@ -457,7 +458,9 @@ def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
     ``P <- M_k P M_k^T + [0; K_k] R [0; K_k]^T``, ``M_k = [[I, 0], [K_k H, I - K_k H_r]]``
     (update), ``P <- blkdiag(F, F_r) P blkdiag(F, F_r)^T + blkdiag(Q, 0)`` (propagation),
 
-    from ``blkdiag(P0, 0)``; the error of the kept states is ``S x - x_hat``.
+    from ``blkdiag(P0, 0)``; the error of the kept states is ``S x - x_hat``. Kept in the
+    process for the last few run pairs (the robustness points that re-judge one run's claims
+    ask for the same pair again).
 
     Returns
     -------
