@@ -4,7 +4,7 @@ verdict rule (:func:`verdict_of`) and the :class:`ClaimResult` a study returns p
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -169,11 +169,6 @@ class ClaimResult:
         A measured cause of a ``partly`` / ``not reproduced`` verdict, quoting the number a
         study experiment produced (empty: the engine derives one from the assumption set,
         :func:`explain`).
-    holds_at : tuple of mapping
-        Points (assumption name -> value, only what differs from the baseline) where a
-        cause experiment of the study measured the claim reproduced; read with the
-        robustness points by the ``cause`` column
-        (:func:`~navlib.studies.claims.robustness.cause_of`).
     """
 
     claim_id: str
@@ -186,11 +181,9 @@ class ClaimResult:
     note: str = ""
     depends_on: tuple = ()
     explanation: str = ""
-    holds_at: tuple = ()
 
     def __post_init__(self):
         object.__setattr__(self, "checks", tuple(self.checks))
-        object.__setattr__(self, "holds_at", tuple(self.holds_at))
         if isinstance(self.depends_on, str):
             raise NavlibInputError("depends_on: expected a sequence of assumption names, "
                                    f"got the string {self.depends_on!r}")
@@ -235,10 +228,10 @@ class ClaimResult:
 
 def claim(claim_id: str, statement: str, paper: str, ours: str, checks: Iterable[Check],
           *, basis: str = "measured", assumption: str = "", depends_on: Sequence[str] = (),
-          explanation: str = "", holds_at: Sequence[Mapping] = ()) -> ClaimResult:
+          explanation: str = "") -> ClaimResult:
     """Build a :class:`ClaimResult` (the verdict follows from ``checks``)."""
     return ClaimResult(claim_id, statement, paper, ours, tuple(checks), basis, assumption,
-                       depends_on=depends_on, explanation=explanation, holds_at=holds_at)
+                       depends_on=depends_on, explanation=explanation)
 
 
 def not_evaluated(claim_id: str, statement: str, paper: str, why: str, *,

@@ -129,8 +129,7 @@ def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> p
     rows = []
     for r in results:
         res = rob.get(r.claim_id)
-        holds_at = changed_points(res, study.baseline_at(quick)) + [dict(p) for p in
-                                                                     r.holds_at]
+        holds_at = changed_points(res, study.baseline_at(quick))
         if r.basis == "by construction":
             frac, note = float("nan"), "by construction"
         elif res is None:
@@ -169,8 +168,8 @@ def all_claims(quick: bool = False, only: Sequence[str] | None = None,
         cause, checks, assumption, depends_on, explanation, robustness_note``; ``claim_id``
         unique. ``cause`` (partly / not reproduced claims): ``paper``, ``ours`` or
         ``unstated`` (:func:`~navlib.studies.claims.robustness.cause_of`) from the claim's
-        robustness points, the cause experiments it quotes (``holds_at``) and the stored
-        joint searches that judge it (:func:`searched_causes`).
+        robustness points and the stored joint searches that judge it
+        (:func:`searched_causes`).
     """
     registry = studies()
     names = list(registry) if only is None else list(only)

@@ -140,7 +140,7 @@ def cause_of(verdict: str, holds_at: Sequence[Mapping], kinds: Mapping) -> str:
     holds_at : sequence of mapping
         The points where a measurement found the claim reproduced, each restricted to the
         assumptions it changes from the baseline (its robustness points, a stored joint
-        search, a cause experiment).
+        search).
     kinds : mapping
         Assumption name -> one of :data:`KINDS` (an undeclared name counts as
         ``unstated``; a point changing a ``fitted`` one is left out).
