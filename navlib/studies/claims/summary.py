@@ -100,3 +100,12 @@ def reading_markdown(results: Iterable[ClaimResult], lines: Sequence[str] = (),
     if lines:
         out += [f"* {line}" for line in lines]
     return "\n".join(out).strip()
+
+
+def full_text(frame: pd.DataFrame):
+    """``frame`` styled for a notebook page: every text in full (no truncation), wrapped,
+    left- and top-aligned, numbers at 2 decimals, NaN blank, no index (notebook 00's claims
+    tables, whose explanations run to several sentences)."""
+    return (frame.style.hide(axis="index").format(precision=2, na_rep="")
+            .set_properties(**{"white-space": "pre-wrap", "text-align": "left",
+                               "vertical-align": "top"}))
