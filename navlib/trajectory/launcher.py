@@ -8,13 +8,12 @@ and the rest is a documented surrogate:
   jettison causes brief rapid changes; fuel-optimal trajectory "mostly aimed in one
   direction" with near-zero lateral acceleration; everything at 200 Hz;
 * **assumed** (keywords of :func:`launcher_ascent`): site coordinates, vehicle masses and
-  thrusts, drag, the separation timing, and the pitch programme.
+  thrusts, drag, the separation timing, the pitch programme and the lateral motion.
 
 The pitch programme is the classic one for a gravity-turn ascent: vertical rise, a small
 programmed pitch-over ("kick") towards the launch azimuth, then a smooth hand-over to
 zero angle of attack (thrust along the velocity), after which gravity turns the
-trajectory and the lateral specific force is zero up to the spline approximation. The
-launch azimuth follows from the target inclination, ``sin(Az) = cos(i) / cos(lat)``
+trajectory. The launch azimuth follows from the target inclination, ``sin(Az) = cos(i) / cos(lat)``
 (non-rotating Earth), northerly branch.
 
 The flight is integrated as a point-mass ODE in ECEF and represented by a quintic spline
@@ -22,6 +21,28 @@ The flight is integrated as a point-mass ODE in ECEF and represented by a quinti
 and pitch are taken in a fixed frame pitched 45 deg up along the launch azimuth, so a
 vertical body axis (45 deg off that frame's x axis) is nowhere near the Euler
 singularity; roll is held at ``roll_deg``.
+
+**Lateral motion** (docs/assumptions.md, A-launcher-lateral). The paper's simulator
+"considers, among other things, the launcher flexion, the wind, and the aerodynamic
+coefficient", and its lateral acceleration is "almost null" but not zero: with exactly zero
+lateral specific force a roll error reaches the velocity error only through the turning of
+the body axes. Three declared sources, each a keyword:
+
+* **wind gusts**: a train of discrete 1-cosine gusts of peak ``gust_mps`` (default 9 m/s,
+  the discrete design gust of NASA's terrestrial-environment guidelines for launch
+  vehicles, NASA/TM-2008-215633) and wavelength ``2 gust_gradient_m`` (gradient distance
+  107 m, the longest of the 1-cosine gust of CS/FAR 25.341), met along the altitude, each
+  from a direction turned by the golden angle from the previous one. A crosswind ``w``
+  seen at airspeed ``V`` is an angle of attack ``w / V`` and a normal force
+  ``q C_Nalpha S w / V`` (``normal_force_slope_m2`` = C_Nalpha S = 2 /rad x 2 m^2, the
+  slender-body normal-force slope of a nose, Barrowman 1967, on a 1.6 m body): a lateral
+  specific force ``0.5 rho V C_Nalpha S w / m`` perpendicular to the velocity;
+* **attitude-control activity**: the control keeps the body axis on the programme and then
+  on the velocity, so the body turns with every gust-driven turn of the velocity (body
+  rates, and the gust's lateral force seen in body axes);
+* **first bending mode**: the IMU oscillates laterally at ``bending_hz`` with an
+  acceleration amplitude ``bending_mps2`` (default 0: no published level at hand; a
+  keyword for experiments).
 """
 
 from __future__ import annotations
@@ -74,8 +95,23 @@ LAUNCHER_DEFAULTS = {
     "kick_duration_s": 8.0,
     "turn_blend_s": 10.0,          # hand-over from the programme to zero angle of attack
     "roll_deg": 0.0,
+    "gust_mps": 9.0,               # NASA/TM-2008-215633 discrete design gust (A-launcher-lateral)
+    "gust_gradient_m": 107.0,      # CS/FAR 25.341 1-cosine gust, longest gradient distance
+    "normal_force_slope_m2": 4.0,  # C_Nalpha S: 2 /rad (slender body, Barrowman) x 2 m^2
+    "bending_mps2": 0.0,           # first bending mode, lateral IMU acceleration amplitude
+    "bending_hz": 6.0,
     "grid_step_s": 0.05,
 }
+
+LATERAL_SOURCES = {
+    "gust_mps": "NASA/TM-2008-215633 (Johnson 2008): 9 m/s discrete design gust",
+    "gust_gradient_m": "CS/FAR 25.341(a): 1-cosine gust, gradient distance 9-107 m",
+    "normal_force_slope_m2": "Barrowman (1967): nose normal-force slope 2 /rad, on 2 m^2",
+}
+"""The published source of each default of the lateral motion (docs/assumptions.md,
+A-launcher-lateral; a test pins the defaults to these values)."""
+
+_GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
 
 _MARGIN_S = 2.0
 _FRAME_ELEVATION = 45.0 * DEG
@@ -100,6 +136,10 @@ def _check(p):
     finite_scalar(out["alt_m"], "alt_m", -500.0, 10_000.0)
     finite_scalar(out["inclination_deg"], "inclination_deg", 0.0, 180.0)
     finite_scalar(out["kick_deg"], "kick_deg", 0.0, 30.0, low_open=True)
+    for key in ("gust_mps", "normal_force_slope_m2", "bending_mps2"):
+        finite_scalar(out[key], key, 0.0)
+    for key in ("gust_gradient_m", "bending_hz"):
+        finite_scalar(out[key], key, 0.0, low_open=True)
     for key in ("duration_s", "rate_hz", "stage1_burnout_s", "stage1_tailoff_s",
                 "separation_duration_s", "stage2_ramp_s", "mass_liftoff_kg",
                 "stage1_propellant_kg", "stage1_dry_kg", "stage1_thrust_n",
@@ -145,6 +185,48 @@ def _check(p):
     return out
 
 
+def _gust_field(peak, gradient, downrange, crossrange):
+    """Horizontal wind (ECEF, m/s) of the gust train as a function of altitude ``h`` (m):
+    consecutive 1-cosine gusts ``peak (1 - cos(2 pi h / L)) / 2`` of wavelength
+    ``L = 2 gradient``, gust ``k`` blowing from ``k`` golden angles off downrange (every
+    direction visited, none repeated). None when ``peak`` is 0. Each gust starts and ends
+    with zero speed and slope, so the field is continuous with a continuous derivative."""
+    if peak == 0.0:
+        return None
+    wavelength = 2.0 * gradient
+
+    def wind(h):
+        x = max(h, 0.0) / wavelength
+        k = math.floor(x)
+        speed = 0.5 * peak * (1.0 - math.cos(2.0 * math.pi * (x - k)))
+        angle = k * _GOLDEN_ANGLE
+        return speed * (math.cos(angle) * downrange + math.sin(angle) * crossrange)
+
+    return wind
+
+
+class _Bending:
+    """A displacement plus the first bending mode at the IMU: a lateral oscillation along
+    ``direction`` of acceleration amplitude ``amplitude`` (m/s^2) at ``hz``, faded in over the
+    first second (C^3 smoothstep) so the vehicle still starts from rest."""
+
+    _FADE_S = 1.0
+
+    def __init__(self, rigid, amplitude, hz, direction):
+        self.rigid, self.direction = rigid, np.asarray(direction, dtype=float)
+        self.omega = 2.0 * math.pi * hz
+        self.scale = amplitude / self.omega**2
+
+    def __call__(self, t, nu=0):
+        t = np.asarray(t, dtype=float)
+        e, de, d2e = smoothstep(t / self._FADE_S)
+        de, d2e = de / self._FADE_S, d2e / self._FADE_S**2
+        w = self.omega
+        s, ds, d2s = np.sin(w * t), w * np.cos(w * t), -w * w * np.sin(w * t)
+        value = [e * s, de * s + e * ds, d2e * s + 2.0 * de * ds + e * d2s][nu]
+        return self.rigid(t, nu) + (self.scale * value)[:, None] * self.direction
+
+
 @cache.cached
 def launcher_ascent(**overrides) -> Trajectory:
     """Churchill launcher, endo-atmospheric ascent, exact 200 Hz IMU (spec launcher.md §4).
@@ -167,6 +249,10 @@ def launcher_ascent(**overrides) -> Trajectory:
           ``drag_area_m2=1.5``, ``scale_height_m=7200``, ``density_sea_level=1.225``;
         * pitch programme: ``pitchover_s=6``, ``kick_deg=2.5``, ``kick_duration_s=8``,
           ``turn_blend_s=10``; ``roll_deg=0``;
+        * lateral motion (module docstring, :data:`LATERAL_SOURCES`): ``gust_mps=9``
+          (0 = no wind: zero lateral specific force after the pitch programme),
+          ``gust_gradient_m=107``, ``normal_force_slope_m2=4``, ``bending_mps2=0``,
+          ``bending_hz=6``;
         * numerics: ``grid_step_s=0.05``.
 
     Returns
@@ -231,13 +317,20 @@ def launcher_ascent(**overrides) -> Trajectory:
         return u / math.sqrt(u @ u)
 
     cd_a, scale_h, rho0 = p["drag_area_m2"], p["scale_height_m"], p["density_sea_level"]
+    crossrange = np.cross(up, downrange)
+    gust = _gust_field(p["gust_mps"], p["gust_gradient_m"], downrange, crossrange)
+    cn_a = p["normal_force_slope_m2"]
 
     def accel(t, P, V, m):
         thrust1, thrust2 = thrusts(t)
         speed = math.sqrt(V @ V)
         h = math.sqrt(P @ P) - r_surface
-        drag = 0.5 * rho0 * math.exp(-max(h, 0.0) / scale_h) * speed * cd_a
-        acc = ((thrust1 + thrust2) * thrust_direction(t, V) - drag * V) / m
+        half_rho = 0.5 * rho0 * math.exp(-max(h, 0.0) / scale_h)
+        acc = ((thrust1 + thrust2) * thrust_direction(t, V) - half_rho * speed * cd_a * V) / m
+        if speed > 0.0 and gust is not None:
+            w = gust(h)
+            w_perp = w - V * ((V @ w) / (speed * speed))
+            acc = acc + (half_rho * speed * cn_a / m) * w_perp   # q C_Na S (w / V) / m
         acc = acc + earth.normal_gravity_ecef(P)
         acc[0] += 2.0 * w_e * V[1]     # - 2 Omega x V, Omega = [0, 0, w_e]
         acc[1] -= 2.0 * w_e * V[0]
@@ -264,6 +357,8 @@ def launcher_ascent(**overrides) -> Trajectory:
             f"stage1_thrust_n: {T1} N does not lift {p['mass_liftoff_kg']} kg off the pad")
     acc_end = accel(grid[-1], P_grid[-1], V_grid[-1], y_grid[-1, 6])[0]
     displacement = RestStartSpline(grid, P_grid - P0, V_grid[-1], acc_end, d2y_start=acc0)
+    if p["bending_mps2"] > 0.0:
+        displacement = _Bending(displacement, p["bending_mps2"], p["bending_hz"], crossrange)
 
     def pointing(t, V, a):
         k, dk = programme(t)

@@ -104,6 +104,45 @@ def test_explanation_quotes_the_set_experiment():
     assert engine.explain(result(0.5), None) == ""                # nothing measured: none
 
 
+def test_cause_follows_where_the_claim_holds():
+    """paper: it holds nowhere measured; ours: once only readings or models of ours change;
+    unstated: only where a quantity the paper does not give changes."""
+    kinds = {"tol": "ours", "sigma": "unstated"}
+    assert engine.cause_of("not reproduced", [], kinds) == "paper"
+    assert engine.cause_of("partly", [{}], kinds) == "paper"
+    assert engine.cause_of("not reproduced", [{"tol": 1.0}], kinds) == "ours"
+    assert engine.cause_of("partly", [{"sigma": 2.0}], kinds) == "unstated"
+    assert engine.cause_of("partly", [{"sigma": 2.0, "tol": 1.0}], kinds) == "unstated"
+    assert engine.cause_of("partly", [{"sigma": 2.0}, {"tol": 1.0}], kinds) == "ours"
+    assert engine.cause_of("not reproduced", [{"other": 1}], kinds) == "unstated"
+    assert engine.cause_of("reproduced", [], kinds) == ""
+    assert engine.cause_of(engine.NOT_EVALUATED, [], kinds) == ""
+    with pytest.raises(NavlibInputError, match="kinds"):
+        engine.Study("bad", "p", lambda quick: [], kinds={"a": "theirs"})
+
+
+def test_cause_column_reads_the_robustness_points(monkeypatch):
+    from navlib.studies.claims import registry
+
+    def result(value):
+        return claim("CAUSE-1", "s", "p", "o", [check("h", value, ">=", 1.0)],
+                     depends_on=("a",))
+
+    def study(kind, values):
+        return engine.Study("cause_t", "P", lambda quick: [result(0.5)], {"a": (1, 2)},
+                            lambda quick: [({"a": 1}, [result(0.5)]),
+                                           ({"a": 2}, [result(values)])],
+                            baseline_point={"a": 1}, kinds={"a": kind})
+
+    for kind, value, cause in (("ours", 2.0, "ours"), ("unstated", 2.0, "unstated"),
+                               ("ours", 0.7, "paper")):
+        monkeypatch.setitem(registry._REGISTRY, "cause_t", study(kind, value))
+        table = engine.all_claims(only=["cause_t"])
+        assert table.cause.tolist() == [cause]
+        summary = engine.paper_summary(table)
+        assert summary.loc["P", f"cause {cause}"] == 1
+
+
 # ---------------------------------------------------------------- the registry and the table
 def test_registry_and_table_contract():
     studies = engine.studies()
@@ -116,7 +155,9 @@ def test_registry_and_table_contract():
     assert (table[table.study == "rocket_profile"].basis == "by construction").all()
     assert table[table.study == "rocket_profile"].robustness.isna().all()  # no set declared
     summary = engine.paper_summary(table)
-    assert {"reproduced", "explained", "unexplained"} <= set(summary.columns)
+    assert {"reproduced", "explained", "unexplained", "cause paper", "cause ours",
+            "cause unstated"} <= set(summary.columns)
+    assert set(table.cause) <= {"", *engine.CAUSES}
     text = engine.summary_markdown(table)
     assert "claims" in text and "by construction" in text
     assert engine.counts(table).to_numpy().sum() == len(table)

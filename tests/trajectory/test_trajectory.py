@@ -238,10 +238,36 @@ def test_launcher_liftoff_vertical_thrust_over_mass(launcher):
     assert np.degrees(lat) == pytest.approx(58.73) and np.degrees(lon) == pytest.approx(-93.82)
 
 
-def test_launcher_near_zero_lateral_specific_force(launcher):
+def test_launcher_lateral_specific_force_small_but_not_zero(launcher):
+    """Gusts (A-launcher-lateral): the paper's "almost null" lateral acceleration, not zero."""
     f = launcher.specific_force
-    assert np.abs(f[:, 1:]).max() < 0.05
+    lateral = np.hypot(f[:, 1], f[:, 2])
+    assert 0.01 < np.sqrt(np.mean(lateral**2)) < 0.2
+    assert lateral.max() < 0.5
     assert np.all(np.abs(f[:, 0]) > 0.0)
+    calm = launcher_ascent(gust_mps=0.0).specific_force
+    assert np.abs(calm[:, 1:]).max() < 0.05                 # programme and spline only
+    assert np.sqrt(np.mean(calm[launcher.t > 30.0, 1:] ** 2)) < 1e-4
+
+
+def test_launcher_lateral_defaults_pinned_to_their_sources():
+    from navlib.trajectory.launcher import LATERAL_SOURCES, LAUNCHER_DEFAULTS
+    assert LAUNCHER_DEFAULTS["gust_mps"] == 9.0                # NASA/TM-2008-215633
+    assert LAUNCHER_DEFAULTS["gust_gradient_m"] == 107.0       # CS/FAR 25.341: 350 ft
+    assert LAUNCHER_DEFAULTS["normal_force_slope_m2"] == 2.0 * 2.0  # Barrowman: 2 /rad
+    assert LAUNCHER_DEFAULTS["bending_mps2"] == 0.0            # no published level at hand
+    assert set(LATERAL_SOURCES) == {"gust_mps", "gust_gradient_m", "normal_force_slope_m2"}
+
+
+def test_launcher_bending_mode_oscillates_laterally_from_rest():
+    traj = launcher_ascent(duration_s=20.0, gust_mps=0.0, bending_mps2=0.2, bending_hz=6.0)
+    calm = launcher_ascent(duration_s=20.0, gust_mps=0.0)
+    assert np.abs(traj.velocity[0]).max() < 1e-12
+    extra = traj.attitude.inv().apply(traj.attitude.apply(traj.specific_force)
+                                      - calm.attitude.apply(calm.specific_force))
+    late = traj.t > 2.0
+    assert np.abs(extra[late]).max() == pytest.approx(0.2, rel=0.02)
+    assert np.abs(extra[late, 0]).max() < 0.01                 # lateral to the body
 
 
 def test_launcher_staging(launcher):
@@ -289,6 +315,8 @@ def test_launcher_consistency_and_override():
     ({"stage1_thrust_n": 1e5}, "stage1_thrust_n"),
     ({"azimuth_deg": "north"}, "azimuth_deg"),
     ({"spin_hz": 1.0}, "spin_hz"),
+    ({"gust_mps": -1.0}, "gust_mps"),
+    ({"bending_hz": 0.0}, "bending_hz"),
 ])
 def test_launcher_bad_input(kwargs, name):
     with pytest.raises(NavlibInputError, match=name):

@@ -65,8 +65,11 @@ from navlib.studies.claims.registry import (
     study_robustness,
 )
 from navlib.studies.claims.robustness import (
+    CAUSES,
+    KINDS,
     JointSearch,
     Robustness,
+    cause_of,
     explain,
     joint_search,
     robustness_over,
@@ -82,13 +85,21 @@ from navlib.studies.claims.search import (
     search_space,
     stored_search,
 )
-from navlib.studies.claims.summary import counts, paper_summary, reading_markdown, summary_markdown
+from navlib.studies.claims.summary import (
+    counts,
+    full_text,
+    paper_summary,
+    reading_markdown,
+    summary_markdown,
+)
 
 __all__ = [
-    "BASES", "COLUMNS", "NOT_EVALUATED", "OPS", "SEARCH_SPACES", "STATUSES", "STUDY_MODULES",
+    "BASES", "CAUSES", "COLUMNS", "KINDS", "NOT_EVALUATED", "OPS", "SEARCH_SPACES", "STATUSES",
+    "STUDY_MODULES",
     "VERDICTS", "Check", "ClaimResult", "JointSearch", "Robustness", "SearchSpace", "SearchTable",
-    "Study", "all_claims", "check", "claim", "claims_frame", "counts", "explain",
-    "factorial_search", "joint_search", "joint_searches", "not_evaluated", "paper_joint_summary",
+    "Study", "all_claims", "cause_of", "check", "claim", "claims_frame", "counts", "explain",
+    "factorial_search", "full_text", "joint_search", "joint_searches", "not_evaluated",
+    "paper_joint_summary",
     "paper_summary", "reading_markdown", "register", "register_search", "robustness_over",
     "run_search", "search_space", "stored_search", "studies", "study_frame", "study_robustness",
     "summary_markdown", "verdict_of", "with_failed_headline",

@@ -10,7 +10,14 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from navlib.errors import NavlibInputError
-from navlib.studies.claims.robustness import Robustness, explain, robustness_over
+from navlib.studies.claims.robustness import (
+    KINDS,
+    Robustness,
+    cause_of,
+    changed_points,
+    explain,
+    robustness_over,
+)
 
 
 @dataclass(frozen=True)
@@ -38,6 +45,11 @@ class Study:
     baseline_point : mapping or callable
         The baseline value of every assumption of :attr:`grid` (a callable:
         ``baseline_point(quick)``, for studies whose quick mode has another baseline).
+    kinds : mapping
+        Per assumption the study declares (its grid, its cause experiments and searches),
+        whether it is a reading or model of ours (``"ours"``) or a quantity the paper does not
+        give (``"unstated"``): :data:`~navlib.studies.claims.robustness.KINDS`, read by the
+        ``cause`` column (:func:`~navlib.studies.claims.robustness.cause_of`).
     """
 
     name: str
@@ -48,8 +60,12 @@ class Study:
     grid_note: str = ""
     order: int = 0
     baseline_point: Mapping = field(default_factory=dict)
+    kinds: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
+        bad = {k: v for k, v in self.kinds.items() if v not in KINDS}
+        if bad:
+            raise NavlibInputError(f"kinds: expected values in {KINDS}, got {bad}")
         if self.robustness is not None:
             for quick in (False, True):
                 missing = [k for k in self.grid if k not in self.baseline_at(quick)]
@@ -95,7 +111,7 @@ def studies() -> dict[str, Study]:
 
 
 COLUMNS = ["study", "paper_ref", "claim_id", "statement", "paper", "ours", "verdict", "basis",
-           "robustness", "checks", "assumption", "depends_on", "explanation",
+           "robustness", "cause", "checks", "assumption", "depends_on", "explanation",
            "robustness_note"]
 
 
@@ -113,6 +129,7 @@ def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> p
     rows = []
     for r in results:
         res = rob.get(r.claim_id)
+        holds_at = changed_points(res, study.baseline_at(quick))
         if r.basis == "by construction":
             frac, note = float("nan"), "by construction"
         elif res is None:
@@ -123,6 +140,7 @@ def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> p
         rows.append({"study": study.name, "paper_ref": study.paper, "claim_id": r.claim_id,
                      "statement": r.claim, "paper": r.paper, "ours": r.ours,
                      "verdict": r.verdict, "basis": r.basis, "robustness": frac,
+                     "cause": cause_of(r.verdict, holds_at, study.kinds),
                      "checks": r.checks_text(), "assumption": r.assumption,
                      "depends_on": "; ".join(r.depends_on), "explanation": explain(r, res),
                      "robustness_note": note})
@@ -147,8 +165,11 @@ def all_claims(quick: bool = False, only: Sequence[str] | None = None,
     -------
     DataFrame
         ``study, paper_ref, claim_id, statement, paper, ours, verdict, basis, robustness,
-        checks, assumption, depends_on, explanation, robustness_note``; ``claim_id``
-        unique.
+        cause, checks, assumption, depends_on, explanation, robustness_note``; ``claim_id``
+        unique. ``cause`` (partly / not reproduced claims): ``paper``, ``ours`` or
+        ``unstated`` (:func:`~navlib.studies.claims.robustness.cause_of`) from the claim's
+        robustness points and the stored joint searches that judge it
+        (:func:`searched_causes`).
     """
     registry = studies()
     names = list(registry) if only is None else list(only)
@@ -161,6 +182,38 @@ def all_claims(quick: bool = False, only: Sequence[str] | None = None,
     dup = frame["claim_id"][frame["claim_id"].duplicated()].tolist()
     if dup:  # pragma: no cover - registry integrity
         raise NavlibInputError(f"claims: duplicate claim ids {dup}")
+    return searched_causes(frame, registry)
+
+
+def searched_causes(frame: pd.DataFrame, registry: Mapping[str, Study]) -> pd.DataFrame:
+    """``frame`` with the ``cause`` of each ``paper`` row re-read from the stored joint
+    searches (:data:`~navlib.studies.claims.search.SEARCH_SPACES`) that judge the claim: the
+    points where it holds there, restricted to what they change from the search's baseline.
+    A missing stored file leaves the row as it is."""
+    from navlib.studies.claims.search import SEARCH_SPACES, stored_search
+
+    kinds = {k: v for study in registry.values() for k, v in study.kinds.items()}
+    frame = frame.copy()
+    for name, space in SEARCH_SPACES.items():
+        rows = frame.index[(frame.cause == "paper") & frame.claim_id.isin(space.claim_ids)]
+        if not len(rows):
+            continue
+        try:
+            stored, _ = stored_search(name)
+        except NavlibInputError:
+            continue
+        base = space.points({}).iloc[0]
+        params = list(space.parameters)
+        if not set(params) <= set(stored.columns):  # a file older than its space: not read
+            continue
+        for i in rows:
+            cid = frame.at[i, "claim_id"]
+            if cid not in stored.columns:
+                continue
+            held = stored[stored[cid].astype(bool)]
+            points = [{k: v for k, v in row.items() if repr(v) != repr(base[k])}
+                      for row in held[params].to_dict("records")]
+            frame.at[i, "cause"] = cause_of(frame.at[i, "verdict"], points, kinds)
     return frame
 
 

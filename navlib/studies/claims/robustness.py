@@ -120,6 +120,60 @@ def robustness_over(variants: Sequence[tuple[Mapping, Sequence[ClaimResult]]],
     return out
 
 
+CAUSES = ("paper", "ours", "unstated")
+"""Whose a partly / not reproduced claim is (:func:`cause_of`)."""
+KINDS = ("ours", "unstated", "fitted")
+"""Kinds of a declared assumption: ``ours`` = a reading or a model of ours (a rank
+tolerance, the sign of A1, the surrogate ascent), ``unstated`` = a quantity the paper does
+not give (an initial sigma, a threshold eta, a time constant), ``fitted`` = a setup chosen to
+make claims hold that contradicts the paper's own (the near-vertical ascent without a pitch
+programme, A-F2-pitch): a point changing it never counts as where a claim holds."""
+
+
+def cause_of(verdict: str, holds_at: Sequence[Mapping], kinds: Mapping) -> str:
+    """Whose a ``partly`` / ``not reproduced`` claim is, from measurements.
+
+    Parameters
+    ----------
+    verdict : str
+        The claim's verdict at the baseline.
+    holds_at : sequence of mapping
+        The points where a measurement found the claim reproduced, each restricted to the
+        assumptions it changes from the baseline (its robustness points, a stored joint
+        search).
+    kinds : mapping
+        Assumption name -> one of :data:`KINDS` (an undeclared name counts as
+        ``unstated``; a point changing a ``fitted`` one is left out).
+
+    Returns
+    -------
+    str
+        ``""`` for a reproduced or not evaluated claim; ``"paper"`` when it holds nowhere the
+        measurements looked (the paper's own setup fails it, as far as the declared sets
+        reach); ``"ours"`` when it holds once only readings or models of ours change;
+        ``"unstated"`` when every point where it holds changes a quantity the paper does not
+        give.
+    """
+    if verdict not in ("partly", "not reproduced"):
+        return ""
+    points = [p for p in holds_at
+              if p and not any(kinds.get(k) == "fitted" for k in p)]
+    if not points:
+        return "paper"
+    if any(all(kinds.get(k, "unstated") == "ours" for k in p) for p in points):
+        return "ours"
+    return "unstated"
+
+
+def changed_points(robustness: Robustness | None, baseline: Mapping) -> list[dict]:
+    """The points of ``robustness`` where its claim is reproduced, each restricted to the
+    assumptions that differ from ``baseline`` (for :func:`cause_of`)."""
+    if robustness is None:
+        return []
+    return [{k: v for k, v in point.items() if repr(v) != repr(baseline.get(k))}
+            for point, r in robustness.points if r.verdict == "reproduced"]
+
+
 def _margin(c: Check) -> float:
     """How far a numeric check's value is inside (+) or outside (-) its tolerance."""
     v, t = c.value, c.target

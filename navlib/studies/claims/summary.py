@@ -9,6 +9,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import pandas as pd
 
 from navlib.studies.claims.records import NOT_EVALUATED, STATUSES, ClaimResult
+from navlib.studies.claims.robustness import CAUSES
 
 
 def counts(table: pd.DataFrame) -> pd.DataFrame:
@@ -19,8 +20,10 @@ def counts(table: pd.DataFrame) -> pd.DataFrame:
 
 def paper_summary(table: pd.DataFrame) -> pd.DataFrame:
     """Per paper: measured claims reproduced, explained (partly / not reproduced with a
-    measured ``explanation``) and unexplained, and the claims by construction, fitted and not
-    evaluated (the summary notebook's first table)."""
+    measured ``explanation``) and unexplained, the partly / not reproduced ones by ``cause``
+    (``cause paper``, ``cause ours``, ``cause unstated``: whose they are,
+    :func:`~navlib.studies.claims.robustness.cause_of`), and the claims by construction,
+    fitted and not evaluated (the summary notebook's first table)."""
     rows = []
     for paper, group in table.groupby("paper_ref", sort=False):
         measured = group[group.basis == "measured"]
@@ -30,6 +33,7 @@ def paper_summary(table: pd.DataFrame) -> pd.DataFrame:
                      "reproduced": int((measured.verdict == "reproduced").sum()),
                      "explained": int(explained.sum()),
                      "unexplained": int((~explained).sum()),
+                     **{f"cause {c}": int((failing.cause == c).sum()) for c in CAUSES},
                      "by construction": int((group.basis == "by construction").sum()),
                      "fitted": int((group.basis == "fitted").sum()),
                      "not evaluated": int((group.verdict == NOT_EVALUATED).sum())})
@@ -96,3 +100,12 @@ def reading_markdown(results: Iterable[ClaimResult], lines: Sequence[str] = (),
     if lines:
         out += [f"* {line}" for line in lines]
     return "\n".join(out).strip()
+
+
+def full_text(frame: pd.DataFrame):
+    """``frame`` styled for a notebook page: every text in full (no truncation), wrapped,
+    left- and top-aligned, numbers at 2 decimals, NaN blank, no index (notebook 00's claims
+    tables, whose explanations run to several sentences)."""
+    return (frame.style.hide(axis="index").format(precision=2, na_rep="")
+            .set_properties(**{"white-space": "pre-wrap", "text-align": "left",
+                               "vertical-align": "top"}))

@@ -33,6 +33,7 @@ from navlib.studies.launcher.assumptions import (
     EVOLUTION_GRID,
     HIGH_LOG10,
     IDENTICAL,
+    LATERAL_LEVELS,
     LOW_LOG10,
     RESOLVED_LOG10,
     SINGULAR_LOG10,
@@ -60,7 +61,11 @@ from navlib.studies.launcher.evolution import (
 )
 from navlib.studies.launcher.fig1 import fig1_data
 from navlib.studies.launcher.reading import reading_markdown
-from navlib.studies.launcher.robustness import evolution_variants, table2_result
+from navlib.studies.launcher.robustness import (
+    evolution_variants,
+    lateral_match_counts,
+    table2_result,
+)
 from navlib.studies.launcher.search import SEARCH, SEARCH_GRID, search_points
 from navlib.studies.launcher.table2 import (
     DATA_DIR,
@@ -85,6 +90,7 @@ __all__ = [
     "EVOLUTION_GRID",
     "HIGH_LOG10",
     "IDENTICAL",
+    "LATERAL_LEVELS",
     "LOW_LOG10",
     "RESOLVED_LOG10",
     "SEARCH",
@@ -112,6 +118,7 @@ __all__ = [
     "fig1_claims",
     "fig1_data",
     "inspect_step",
+    "lateral_match_counts",
     "log10_cond_text",
     "match_counts",
     "mission_observability",

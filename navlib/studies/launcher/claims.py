@@ -122,7 +122,7 @@ def t2_table_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResul
          check(f"share with log10 cond within {cond_tol:g} of the paper's",
                _share(cond_ok, frame), ">=", 1.0)],
         assumption=how + "; numerically singular pairs (both >= 1e16) count as equal",
-        depends_on=("rank_rtol", "cond_tol"), explanation=_cond_miss_explanation(
+        depends_on=("rank_rtol", "cond_tol", "gust_mps"), explanation=_cond_miss_explanation(
             frame[~frame.index.isin(cond_ok.index)], len(frame), cond_tol))
 
 
@@ -149,7 +149,7 @@ def t2_rw_p_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
         assumption=how + "; 'cond >= 1e17' read as numerically singular, cond >= 1/eps = "
                          f"10^{RESOLVED_LOG10:.2f}: above it the digits are round-off "
                          "(A-T2-1e17)",
-        depends_on=("rank_rtol",), explanation=_singular_explanation(rw_p))
+        depends_on=("rank_rtol", "gust_mps"), explanation=_singular_explanation(rw_p))
 
 
 def t2_bp_dr_claim(frame: pd.DataFrame) -> ClaimResult:
@@ -165,7 +165,8 @@ def t2_bp_dr_claim(frame: pd.DataFrame) -> ClaimResult:
         f"b_p in the null space in {len(has)}/{len(rw_p)}",
         [check("share of RW+P rows whose null space is exactly the {dr_i, bp_i} pairs",
                _share(exact, rw_p), ">=", 1.0, True)],
-        assumption="null space of O(k) at the mid-mission step", depends_on=("rank_rtol",))
+        assumption="null space of O(k) at the mid-mission step",
+        depends_on=("rank_rtol", "gust_mps"))
 
 
 def t2_markov_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
@@ -176,7 +177,7 @@ def t2_markov_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
         "T2-Markov", "Markov biases: every solution observable (0 unobservable)",
         "0 in all 28 Markov rows", f"{len(ok)}/{len(markov)} rows full rank",
         [check("share of Markov rows with full rank", _share(ok, markov), ">=", 1.0, True)],
-        assumption=how, depends_on=("rank_rtol",))
+        assumption=how, depends_on=("rank_rtol", "gust_mps"))
 
 
 def t2_rank_constant_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
@@ -186,7 +187,7 @@ def t2_rank_constant_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
         "T2-rank-constant", "The rank does not change during the mission",
         "constant for every configuration", f"{len(ok)}/{len(frame)} configurations",
         [check("share of configurations with a constant rank", _share(ok, frame), ">=", 1.0,
-               True)], assumption=how, depends_on=("rank_rtol",))
+               True)], assumption=how, depends_on=("rank_rtol", "gust_mps"))
 
 
 def t2_att_no_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResult:
@@ -206,7 +207,7 @@ def t2_att_no_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimR
                          "1 at every rank tolerance, rounding, reading of eq. (6), Euler or "
                          "exact discretisation and pitch kick tried "
                          "(A-by-construction-beaudoin)",
-        depends_on=("rank_rtol", "cond_tol"))
+        depends_on=("rank_rtol", "cond_tol", "gust_mps"))
 
 
 def t2_att_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResult:
@@ -223,7 +224,7 @@ def t2_att_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResu
         f"within {cond_tol:g} decade in {len(same)}/{len(pair)} full-rank rows ({detail})",
         [check(f"share of full-rank RT rows with |delta log10 cond| <= {cond_tol:g}",
                _share(same, pair), ">=", 1.0, True)], assumption=how,
-        depends_on=("rank_rtol", "cond_tol"),
+        depends_on=("rank_rtol", "cond_tol", "gust_mps"),
         explanation="" if len(same) == len(pair) else (
             f"the attitude sensors lower log10 cond by {delta.min():.1f} to {delta.max():.1f} "
             f"decades in the RT rows (median {np.median(delta):.1f}): they observe the "
@@ -251,7 +252,7 @@ def t2_threshold_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimR
         assumption=how + f"; the paper's printed order 5 with {cond_tol:g} decade of "
                          "rounding, its 'at least 1e17' as numerically singular (cond >= "
                          f"1/eps = 10^{RESOLVED_LOG10:.2f}, A-T2-1e17)",
-        depends_on=("rank_rtol", "cond_tol"),
+        depends_on=("rank_rtol", "cond_tol", "gust_mps"),
         explanation="; ".join(filter(None, (_full_rank_explanation(full, full_tol),
                                             _singular_explanation(deficient)))))
 
@@ -275,7 +276,7 @@ def t2_ins_gps_claim(frame: pd.DataFrame, cond_tol: float) -> ClaimResult:
         assumption="depends on the trajectory and the method: the least observable direction "
         f"is the body-roll attitude error ({weakest}), seen only through lateral specific force "
         "and attitude change within n steps of 5 ms (spec §3.8, §10c); see variant_comparison",
-        depends_on=("rank_rtol", "cond_tol"),
+        depends_on=("rank_rtol", "cond_tol", "gust_mps"),
         explanation="" if len(ok) == len(ins) else (
             f"our INS/GPS-only rows have log10 cond {ins.log10_cond.min():.1f}-"
             f"{ins.log10_cond.max():.1f} against the paper's 3 / 5, all full rank as printed; "
@@ -315,7 +316,7 @@ def c1_bp_claim(frame: pd.DataFrame) -> ClaimResult:
         assumption="Table 2 random-walk b_p rows; by construction: b_p enters only the GPS "
                    "position, as a sum with dr, and a random walk has no dynamics to separate "
                    "them, so b_p is in the null space at any rank tolerance; conclusion 1 is "
-                   "measured by C1-bp-outlier", depends_on=("rank_rtol",))
+                   "measured by C1-bp-outlier", depends_on=("rank_rtol", "gust_mps"))
 
 
 def c3_rt_claim(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> ClaimResult:
@@ -345,7 +346,7 @@ def c3_rt_claim(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> ClaimResult:
             "with and without it, so the difference is our weakly conditioned no-RT rows"),
         assumption=f"'more observable' = fewer unobservable states, or the same count and "
                    f"log10 cond lower by more than {cond_tol:g}",
-        depends_on=("rank_rtol", "cond_tol"))
+        depends_on=("rank_rtol", "cond_tol", "gust_mps"))
 
 
 def conclusion_claims(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> list[ClaimResult]:

@@ -58,10 +58,13 @@ def _no_pitch_text(causes: Mapping | None, case: str, value: float) -> str:
         return ""
     r = causes["no_pitch"].ratio(case, "ins-only/none", "roll")
     return (f"GPS cuts the roll sigma to {value:.3g} of INS-only on our ascent, which pitches "
-            f"over by 2.5 deg; on the same ascent without the pitch programme (kick "
-            f"{NO_PITCH_KICK_DEG:g} deg, body axes fixed: the paper's 'no manoeuvres') the "
-            f"ratio is {r:.3g}: the turning body axes rotate roll into pitch and yaw, which "
-            "GPS observes (A-F2-pitch)")
+            f"over into a gravity turn: any turn of the thrust axis rotates a roll error into "
+            f"pitch and yaw, which GPS observes, and an orbital ascent must turn (the paper's "
+            f"'no manoeuvres' rules out extra observability manoeuvres, not the pitch-over), "
+            f"so the claim genuinely fails; §3.8's argument (roll reaches the velocity error "
+            f"only through the lateral specific force) leaves out the rotation of the body "
+            f"frame. Fitted counterfactual, not the paper's setup: a near-vertical ascent "
+            f"(kick {NO_PITCH_KICK_DEG:g} deg) gives {r:.3g} (A-F2-pitch)")
 
 
 def f2_roll_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:

@@ -13,7 +13,11 @@ import pandas as pd
 
 from navlib.cache import memoized
 from navlib.studies.claims.search import SearchSpace, factorial_points, register_search
-from navlib.studies.launcher.assumptions import NO_PITCH_KICK_DEG, SURVEYED_PAD_M
+from navlib.studies.launcher.assumptions import (
+    LATERAL_BASELINE,
+    NO_PITCH_KICK_DEG,
+    SURVEYED_PAD_M,
+)
 from navlib.studies.launcher.causes import cp_mission_sigmas
 from navlib.studies.launcher.claims import f1_cp_mission_claim
 from navlib.studies.launcher.covariance_claims import evolution_claims
@@ -22,18 +26,21 @@ from navlib.sweep import Evaluation, register
 from navlib.trajectory import launcher_ascent
 
 SEARCH_GRID = {
+    "gust_mps": (0.0, LATERAL_BASELINE),
     "kick_deg": (NO_PITCH_KICK_DEG, 2.5),
     "c_p": (100.0, 1000.0),
     "c_g": (100.0, 1000.0),
     "sigma0_att_deg": (0.1, 0.3),
     "sigma0_pos_m": (SURVEYED_PAD_M, 3.0),
 }
-"""The declared space (full factorial, 32 points), each value one a reader of the paper could
-pick (A-launcher-search): the pitch kick of the surrogate ascent (the paper's "no manoeuvres"
+"""The declared space (full factorial, 64 points), each value one a reader of the paper could
+pick (A-launcher-search): the lateral motion of the ascent (no wind, or the cited 9 m/s gusts,
+A-launcher-lateral), the pitch kick of the surrogate ascent (the paper's "no manoeuvres"
 read literally, or our 2.5 deg gravity turn), the GPS-bias and gyro-bias time constants (the
 inferred 100 s, or the longer constants the paper's references allow), the initial attitude
 sigma (not given) and the initial position sigma (a surveyed pad, or our 3 m)."""
-SEARCH_BASELINE = {"kick_deg": 2.5, "c_p": 100.0, "c_g": 100.0, "sigma0_att_deg": 0.1,
+SEARCH_BASELINE = {"gust_mps": LATERAL_BASELINE, "kick_deg": 2.5, "c_p": 100.0, "c_g": 100.0,
+                   "sigma0_att_deg": 0.1,
                    "sigma0_pos_m": 3.0}
 """The study's baseline point of :data:`SEARCH_GRID`."""
 SEARCH_PARAMETERS = tuple(SEARCH_GRID)
@@ -49,19 +56,19 @@ def search_points(grid: dict | None = None) -> pd.DataFrame:
 
 
 @memoized(maxsize=1)
-def _tables(kick_deg: float, c_p: float, c_g: float) -> dict:
+def _tables(gust_mps: float, kick_deg: float, c_p: float, c_g: float) -> dict:
     """The covariance-evolution tables at every initial sigma pair of :data:`SEARCH_GRID` for
     one ascent and pair of time constants, from one stacked recursion per case (kept per
     process: the points sharing them reuse it)."""
     pairs = list(itertools.product(SEARCH_GRID["sigma0_att_deg"], SEARCH_GRID["sigma0_pos_m"]))
     kws = [{"c_p": c_p, "c_g": c_g, "sigma0_att": np.radians(a), "sigma0_pos": p}
            for a, p in pairs]
-    tables = evolution_tables(launcher_ascent(kick_deg=kick_deg), kws)
+    tables = evolution_tables(launcher_ascent(gust_mps=gust_mps, kick_deg=kick_deg), kws)
     return dict(zip(pairs, tables, strict=True))
 
 
-def _claims_run(_, *, kick_deg, c_p, c_g, sigma0_att_deg, sigma0_pos_m) -> dict:
-    table = _tables(float(kick_deg), float(c_p), float(c_g))[
+def _claims_run(_, *, gust_mps, kick_deg, c_p, c_g, sigma0_att_deg, sigma0_pos_m) -> dict:
+    table = _tables(float(gust_mps), float(kick_deg), float(c_p), float(c_g))[
         (float(sigma0_att_deg), float(sigma0_pos_m))]
     cp_claim = f1_cp_mission_claim(cp_mission_sigmas(float(c_p)), float(c_p))
     claims = [*evolution_claims(table), cp_claim]

@@ -87,4 +87,5 @@ def _robustness(quick: bool = False) -> list:
 engine.register(engine.Study("outliers", "Beaudoin et al. (2018)", _baseline_claims,
                              ROBUSTNESS_GRID, _robustness,
                              "full factorial; windows re-score, -1 re-prepares the RT filters",
-                             baseline_point=_baseline_point))
+                             baseline_point=_baseline_point,
+                             kinds={"window": "ours", "a1_sign": "ours"}))

@@ -103,7 +103,9 @@ engine.register(engine.Study(
     "rocket", "España, Carrizo & Giribet (2019)", _baseline_claims, ROBUSTNESS_GRID,
     _robustness, "full factorial; eta/nu reuse the stored SVDs and eigen-decompositions; "
     "each claim judged on the points varying its depends_on",
-    order=1, baseline_point=ROBUSTNESS_BASELINE))
+    order=1, baseline_point=ROBUSTNESS_BASELINE,
+    kinds={"eta": "unstated", "nu": "unstated", "p0": "unstated", "sigma_sg_ppm": "unstated",
+           "spin_hz": "unstated"}))
 
 SEARCH = register_search(SearchSpace(
     "rocket", "España, Carrizo & Giribet (2019)", SEARCH_PARAMETERS, CLAIM_IDS, "claims",

@@ -37,8 +37,15 @@ experiment's, two other arbitrary ones, and a level IMU turned in heading only (
 IMU too, though not a tilted one; A-SSAC-set)."""
 X0_BASELINE = "biases at 1 sigma"
 """The baseline truth x0 of SSAC-actual (A-SSAC-actual)."""
+HEADING_PRIORS = (1.0, 2.0, 3.0)
+"""Initial psiD sigma of SSAC-eq44's heading-prior points, in multiples of the matched P0's
+(which is the classic limit b_gE / (Omega cos L) itself, ssac.md §4.4): the paper gives no
+P0, and with the Bayesian (44) the filter follows, the final psiD sigma is
+``classic / sqrt(1 + (classic / prior)^2)``, 1/sqrt(2) of the classic limit at the matched
+prior; "matches within 10 %" needs a prior of at least 2.06 times it (A-SSAC-eq44-prior)."""
 ROBUSTNESS_GRID = {
     "P0": ("matched", "generic"), "attitude_scale": (0.5, 1.0, 2.0),
+    "heading_prior": HEADING_PRIORS,
     "convergence": tuple(CONVERGENCE), "rank_rtol": (1e-12, 1e-10, 1e-8, 1e-6),
     "arw_reading": tuple(ARW_READINGS), "noise_scale": NOISE_SCALES,
     "x0": (X0_BASELINE, *(f"N(0, P0) draw {i + 1}" for i in range(X0_DRAWS))),
@@ -47,6 +54,7 @@ ROBUSTNESS_GRID = {
 """The declared assumption set (docs/assumptions.md, A-SSAC-set): the paper's P0 is lost,
 so the matched P0 of ssac.md §4.4 and the generic 1° one, each with its attitude sigmas
 halved, kept and doubled (full factorial, 6 runs); one at a time from the baseline: the
+initial heading (psiD) sigma of the matched P0 (:data:`HEADING_PRIORS`, SSAC-eq44), the
 reading of "converged" (:data:`~navlib.studies.ssac.CONVERGENCE`), the relative rank
 tolerance of O (1e-12 to 1e-6: the ninth singular value is 7e-5 of the largest, the
 round-off floor ~1e-14), the unit of the gyro random walk (:data:`ARW_READINGS`), the ZVU
@@ -54,7 +62,8 @@ measurement noise (:data:`NOISE_SCALES`), the truth x0 of SSAC-actual
 (:func:`~navlib.studies.ssac.x0_draws`) and the IMU orientation of SSAC-orientation
 (:data:`ORIENTATIONS`). Each claim is judged on the points varying its
 ``depends_on``."""
-BASELINE_POINT = {"P0": "matched", "attitude_scale": 1.0, "convergence": CONVERGENCE_DEFAULT,
+BASELINE_POINT = {"P0": "matched", "attitude_scale": 1.0, "heading_prior": 1.0,
+                  "convergence": CONVERGENCE_DEFAULT,
                   "rank_rtol": RANK_RTOL, "arw_reading": "deg/sqrt(h)", "noise_scale": 1.0,
                   "x0": X0_BASELINE, "imu_orientation": ORIENTATION_DEG}
 """The baseline point of :data:`ROBUSTNESS_GRID`."""

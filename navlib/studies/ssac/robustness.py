@@ -9,8 +9,10 @@ robustness.
 
 from __future__ import annotations
 
+import numpy as np
+
 from navlib import cache
-from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG
+from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, ssac
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
 from navlib.studies.ssac.assumptions import (
@@ -20,7 +22,7 @@ from navlib.studies.ssac.assumptions import (
     ROBUSTNESS_GRID,
     sigma_nu,
 )
-from navlib.studies.ssac.claims import actual_claim, ssac_claims, static_tables
+from navlib.studies.ssac.claims import actual_claim, eq44_claim, ssac_claims, static_tables
 from navlib.studies.ssac.eigen_claims import orientation_claim
 from navlib.studies.ssac.experiment import (
     CONVERGENCE_DEFAULT,
@@ -32,6 +34,16 @@ from navlib.studies.ssac.experiment import (
     x0_draws,
 )
 from navlib.studies.ssac.observability import RANK_RTOL
+
+
+def heading_prior_p0(factor: float) -> np.ndarray:
+    """The matched P0 of the 15-state model with its initial psiD sigma times ``factor``
+    (:data:`~navlib.studies.ssac.assumptions.HEADING_PRIORS`)."""
+    model = ssac(15, SITE_LAT_DEG, SITE_ALT_M, P0="matched")
+    P0 = np.array(model.P0, dtype=float)
+    i = model.state_names.index("psiD")
+    P0[i, i] *= factor**2
+    return P0
 
 
 def _depending(results: list[ClaimResult], name: str) -> list[ClaimResult]:
@@ -57,15 +69,19 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
     points differ in P0 alone, so the 15-, 12- and 10-state runs (with the P0-sensitivity
     rerun, the same for every point: :func:`~navlib.studies.ssac.modified_run`) are three
     stacked recursions (:func:`~navlib.studies.ssac.p0_runs`); the convergence,
-    rank-tolerance and x0 points re-judge the baseline run, an IMU orientation point
-    reruns the orientation table. Kept in the process for the last mode asked."""
+    rank-tolerance and x0 points re-judge the baseline run, a heading-prior point is one more
+    stacked 15-state recursion judged by SSAC-eq44, an IMU orientation point reruns the
+    orientation table. Kept in the process for the last mode asked."""
     duration = QUICK_DURATION_S if quick else 3600.0
     tables = static_tables(SITE_LAT_DEG, SITE_ALT_M, duration)
     points = [(p0, scale) for p0 in ROBUSTNESS_GRID["P0"]
               for scale in ROBUSTNESS_GRID["attitude_scale"]
               if not quick or (p0, scale) == ("matched", 1.0)]
-    *full, modified = p0_runs([*points, ("matched", P0_MODIFIED_ATTITUDE_SCALE)], duration,
-                              track=False)
+    priors = [k for k in ROBUSTNESS_GRID["heading_prior"]
+              if k != BASELINE_POINT["heading_prior"]]
+    runs = p0_runs([*points, ("matched", P0_MODIFIED_ATTITUDE_SCALE),
+                    *((heading_prior_p0(k), 1.0) for k in priors)], duration, track=False)
+    full, modified, headings = runs[:len(points)], runs[len(points)], runs[len(points) + 1:]
     reduced = p0_runs(points, duration, n_states=12, track=False)
     reduced10 = p0_runs(points, duration, n_states=10, track=False)
     out, base = [], None
@@ -77,6 +93,8 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
         if (p0, scale) == ("matched", 1.0):
             base = (study, kw)
     study, kw = base
+    for k, run in zip(priors, headings, strict=True):
+        out.append(({"heading_prior": k}, [eq44_claim(run)]))
     for reading in ROBUSTNESS_GRID["convergence"]:
         if reading != CONVERGENCE_DEFAULT:
             out.append(({"convergence": reading}, _depending(
@@ -120,4 +138,9 @@ engine.register(engine.Study("ssac", "Silva, Hemerly & Leite Filho (2017)", base
                              "P0 x attitude scale factorial (stacked recursions per state "
                              "count); convergence reading, rank tolerance, gyro-noise unit, ZVU "
                              "noise, x0 and IMU orientation one at a time from the baseline",
-                             baseline_point=BASELINE_POINT))
+                             baseline_point=BASELINE_POINT,
+                             kinds={"P0": "unstated", "attitude_scale": "unstated",
+                                    "heading_prior": "unstated",
+                                    "convergence": "ours", "rank_rtol": "ours",
+                                    "arw_reading": "ours", "noise_scale": "unstated",
+                                    "x0": "unstated", "imu_orientation": "unstated"}))
