@@ -4,28 +4,21 @@ gravity on the pad and thrust in boost along +x; the gyro triad against the magn
 
 import itertools
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from locations import shared_file
 from scipy.spatial.transform import Rotation
 
 from navlib import io
 
-ALTOS_DIR = REPO.parent / "shared" / "data" / "altos"
-if not ALTOS_DIR.is_dir():
-    ALTOS_DIR = Path("/work/shared/data/altos")
 SHARED = ("2018-04-08-serial-1257-flight-0014.csv", "2019-05-04-serial-1257-flight-0017.csv",
           "2019-05-26-serial-1257-flight-0018.csv")
 
 
 def _shared(name):
-    path = ALTOS_DIR / name
-    if not path.is_file():
-        pytest.skip(f"AltOS sample export not found: {path}")
-    return path
+    return shared_file("altos", name)
 
 
 def _columns(path, names):

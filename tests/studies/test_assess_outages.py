@@ -4,17 +4,15 @@ them, long ones are named; and the flight figure that shows them."""
 
 from __future__ import annotations
 
-import os
 import warnings
 from dataclasses import replace
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
 from flights import multicopter, records
-from locations import REPO
+from locations import shared_file
 
 from navlib import earth, io
 from navlib.errors import NavlibInputError
@@ -29,9 +27,6 @@ OUTAGE = (30.0, 56.0)
 """The generated outage: no fix strictly between these times (26 s, in the survey)."""
 FROZEN = (70.0, 76.0)
 """A held position: the fixes in this window repeat the one at its start."""
-ALTOS_DIR = Path(os.environ.get("NAVLIB_ALTOS_DIR") or REPO.parent / "shared" / "data" / "altos")
-"""The public AltOS exports: ``../shared/data/altos`` beside the checkout, or
-NAVLIB_ALTOS_DIR."""
 
 
 @pytest.fixture(scope="module")
@@ -166,9 +161,7 @@ def test_flight_figure_shows_the_records_and_marks(with_outage):
 
 
 def test_altos_descent_at_10_hz_keeps_one_epoch_a_second():
-    path = ALTOS_DIR / "2019-05-26-serial-1257-flight-0018.csv"
-    if not path.is_file():
-        pytest.skip(f"AltOS export not found: {path} (set NAVLIB_ALTOS_DIR)")
+    path = shared_file("altos", "2019-05-26-serial-1257-flight-0018.csv")
     imu, gnss = io.read_altos(path)
     result = _assess(imu, gnss)
     t = np.asarray(result.model.t)

@@ -5,12 +5,11 @@ and the clock since ignition, read back from ``states.csv`` and ``summary.csv`` 
 from __future__ import annotations
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from locations import shared_file
 
 from navlib import sensors, units
 from navlib.__main__ import main
@@ -27,9 +26,6 @@ from navlib.studies.assess.states import (
 )
 from navlib.trajectory import stationary
 
-ALTOS_DIR = REPO.parent / "shared" / "data" / "altos"
-if not ALTOS_DIR.is_dir():
-    ALTOS_DIR = Path("/work/shared/data/altos")
 ALTOS = ("2019-05-04-serial-1257-flight-0017.csv", "2019-05-26-serial-1257-flight-0018.csv",
          "2018-04-08-serial-1257-flight-0014.csv")
 PRESET = "motionpak_tactical"
@@ -154,10 +150,7 @@ def test_states_table_reads_the_model_states_when_nothing_turns():
 
 
 def _altos(name):
-    path = ALTOS_DIR / name
-    if not path.is_file():
-        pytest.skip(f"AltOS sample export not found: {path}")
-    return path
+    return shared_file("altos", name)
 
 
 @pytest.fixture(scope="module")
