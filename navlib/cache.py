@@ -56,6 +56,9 @@ from scipy.spatial.transform import Rotation
 from navlib import __version__
 from navlib.resources import data_dir
 
+__all__ = ["DEFAULT_MAX_MB", "Scope", "cache_dir", "cached", "clear_memos", "enabled", "key",
+           "max_bytes", "memoized", "salt", "source_closure", "stats"]
+
 DEFAULT_MAX_MB = 1024.0
 """Default size bound of the cache folder, MB."""
 

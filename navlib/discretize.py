@@ -24,6 +24,8 @@ import numpy as np
 
 from navlib.errors import NavlibInputError
 
+__all__ = ["METHODS", "chain", "discretize_steps", "expm_taylor"]
+
 METHODS = ("expm", "series", "euler")
 """Discretisation methods of :func:`discretize_steps`."""
 

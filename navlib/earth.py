@@ -13,6 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["E2", "EARTH_RATE_ECEF", "FLATTENING", "GM", "J2", "OMEGA_E", "A", "B",
+           "ecef_to_geodetic", "geodetic_to_ecef", "gravitation_ecef", "gravity_jacobian_ecef",
+           "gravity_magnitude", "ned_to_ecef_matrix", "normal_gravity_ecef", "radii_of_curvature"]
+
 A = 6378137.0
 """WGS-84 semi-major axis, m."""
 FLATTENING = 1.0 / 298.257223563

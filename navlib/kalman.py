@@ -28,6 +28,12 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.kernel_copy import copy_matrix, copy_vector
 
+__all__ = ["PINV_RTOL", "FactoredNoise", "Gains", "chi2_bounds", "compile_kernels",
+           "covariance_recursion", "definite_noise", "fixed_updates_kernel", "joseph_update",
+           "kalman_gain", "kalman_gains", "kernel_array", "nees_basis", "nees_values",
+           "predict_kernel", "propagate_kernel", "psd_sqrt", "riccati_kernel", "symmetrize",
+           "update_kernel"]
+
 PINV_RTOL = 1e-12
 """Relative cut-off of the innovation-covariance pseudo-inverse; the value
 :func:`navlib.covariance.kalman_covariance` uses by default, so that the gains here

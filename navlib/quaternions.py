@@ -15,6 +15,9 @@ from scipy.spatial.transform import Rotation
 from navlib import earth
 from navlib.rotations import cross
 
+__all__ = ["earth_quat", "prefix_products", "quat_from_matrix", "quat_from_rotvec", "quat_mul",
+           "quat_rotate"]
+
 
 def quat_mul(p, q):
     """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``)."""

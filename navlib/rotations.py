@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["bortz_coefficient", "bortz_rate", "cross", "exp_so3", "log_so3", "skew", "unskew"]
+
 
 def skew(v):
     """Cross-product matrix S(v) with ``S(v) @ u == cross(v, u)``; ``v`` (..., 3) -> (..., 3, 3)."""

@@ -18,6 +18,8 @@ from navlib.covariance.recursion import CovarianceResult, state_labels
 from navlib.errors import NavlibInputError
 from navlib.kalman import symmetrize
 
+__all__ = ["NormalizedEigenResult", "normalized_eigen"]
+
 
 @dataclass(frozen=True, eq=False)
 class NormalizedEigenResult:

@@ -13,6 +13,9 @@ from navlib.covariance.recursion import CovarianceResult, stack_steps
 from navlib.errors import NavlibInputError
 from navlib.kalman import symmetrize
 
+__all__ = ["as_covariances", "block_in_frame", "convergence_time", "correlation",
+           "covariance_ratio", "group_correlation", "sigma_in_frame"]
+
 
 def as_covariances(P) -> np.ndarray:
     if isinstance(P, CovarianceResult):

@@ -18,6 +18,9 @@ from navlib.errors import NavlibInputError
 from navlib.kalman import covariance_recursion, symmetrize
 from navlib.models.base import DiscreteModel, state_indices
 
+__all__ = ["CovarianceResult", "ins_only_covariance", "kalman_covariance", "kalman_covariances",
+           "stack_steps", "state_labels"]
+
 
 def state_labels(state_names, n: int) -> tuple[str, ...]:
     if state_names is None:

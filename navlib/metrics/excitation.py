@@ -27,6 +27,8 @@ from navlib.metrics._arrays import (
 )
 from navlib.observability import observability_matrix
 
+__all__ = ["ExcitabilityResult", "excitability"]
+
 
 @dataclass(frozen=True, eq=False)
 class ExcitabilityResult:

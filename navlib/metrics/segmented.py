@@ -31,6 +31,8 @@ from navlib.metrics.segments import (
 )
 from navlib.metrics.sensing import SensabilityResult, physical_bands
 
+__all__ = ["SegmentedAnalysis"]
+
 
 @dataclass(frozen=True, eq=False)
 class SegmentedAnalysis:

@@ -19,6 +19,10 @@ from navlib.metrics._arrays import check_d0, check_eta, check_nu
 from navlib.metrics.excitation import ExcitabilityResult, excitability
 from navlib.metrics.sensing import SensabilityResult, sensability
 
+__all__ = ["E_THRESHOLD", "LOW", "MIN_FRACTION", "S_THRESHOLD", "THRESHOLD_KEYS",
+           "check_discrete_model", "check_segments", "check_thresholds", "excitability_segment",
+           "excitability_segments", "in_segment", "sensability_model"]
+
 
 def _model_P0(model, P0) -> np.ndarray:
     if P0 is not None:

@@ -33,6 +33,8 @@ from navlib.metrics._arrays import (
     whiten,
 )
 
+__all__ = ["SensabilityResult", "nu_for", "nu_range", "physical_bands", "sensability"]
+
 
 @dataclass(frozen=True, eq=False)
 class SensabilityResult:

@@ -27,6 +27,8 @@ from navlib.observability.matrix import condition_number
 from navlib.observability.sliding import sliding_singular_values
 from navlib.resolution import relative_resolution
 
+__all__ = ["VARIANTS", "LocalObservability", "local_matrix", "local_observability"]
+
 VARIANTS = ("time_varying", "frozen")
 
 

@@ -22,6 +22,8 @@ from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.resolution import relative_resolution
 
+__all__ = ["ObservabilityResult", "analyze", "condition_number", "observability_matrix"]
+
 
 # --------------------------------------------------------------------------------------------
 # observability matrix

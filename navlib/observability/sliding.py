@@ -36,6 +36,9 @@ from numba.extending import get_cython_function_address
 from navlib.errors import NavlibInputError
 from navlib.kernel_copy import copy_matrix
 
+__all__ = ["block_data", "compile_kernel", "fold", "householder", "singular_values",
+           "sliding_kernel", "sliding_singular_values", "triangularize"]
+
 _DLASQ1 = "navlib_dlasq1"
 binding.add_symbol(_DLASQ1, get_cython_function_address("scipy.linalg.cython_lapack", "dlasq1"))
 _dlasq1 = types.ExternalFunction(_DLASQ1, types.void(*[types.voidptr] * 5))

@@ -15,6 +15,8 @@ from navlib.errors import NavlibInputError
 from navlib.outliers import as_outliers, channel_profile, inject
 from navlib.rotations import exp_so3, log_so3
 
+__all__ = ["ReferenceTrajectory", "simulate_attitude_sensor"]
+
 
 class ReferenceTrajectory:
     """Reference-trajectory attitudes for the RT pseudo-measurement in EKF simulations.

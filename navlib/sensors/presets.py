@@ -21,6 +21,9 @@ from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir, toml_names, toml_path
 
+__all__ = ["DEFAULT_IMU_PRESET", "PRESET_DIR", "GnssSpec", "ImuSpec", "SensorSpec", "TriadSpec",
+           "list_presets", "load_preset"]
+
 PRESET_DIR = data_dir() / "sensors"
 """Folder holding the ``*.toml`` sensor presets."""
 

@@ -18,6 +18,9 @@ from navlib._validation import finite_array, finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.sensors.presets import GnssSpec, ImuSpec, SensorSpec, TriadSpec
 
+__all__ = ["ImuSimulation", "TriadErrors", "first_order_recursion", "gauss_markov", "random_walk",
+           "simulate_gnss", "simulate_imu", "white_noise"]
+
 
 def _generators(seed, rng, n: int) -> list[np.random.Generator]:
     """``n`` independent child generators from ``seed`` or ``rng`` (one per error source,
