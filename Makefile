@@ -17,6 +17,7 @@ report: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m ruff check navlib tests benchmarks
+	$(PY) tests/docstring_coverage.py
 	$(PY) -m pytest -n 2 -q --durations=10
 
 # Browser tests: JupyterLab + Debian's chromium (installed with apt-get when missing: CI runs
