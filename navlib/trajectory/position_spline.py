@@ -194,10 +194,10 @@ class AttitudeCorrection:
     ``C <- exp(S(eps)) C`` absorbs the initial tilt/heading error and the gyro drift that
     the recorded specific force and GNSS reveal; ``f <- f - b_a`` the accelerometer bias,
     which would otherwise be taken for motion (a parked vehicle drifting at a few m/s).
-    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and neighbouring
+    Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg ** 2``) and neighbouring
     coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2), so
     stretches without attitude information (free fall) keep the gyro attitude; each bias
-    component ~ N(0, ``sigma_ba``^2), the preset's turn-on accelerometer bias.
+    component ~ N(0, ``sigma_ba ** 2``), the preset's turn-on accelerometer bias.
     """
 
     def __init__(self, t, p, sigma_ba):
