@@ -30,7 +30,8 @@ extensions = [
     "myst_parser",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-templates_path = [str(Path(__file__).resolve().parent / "_templates")]  # autosummary needs it absolute
+# absolute: autosummary reads templates relative to the source folder, not this one
+templates_path = [str(Path(__file__).resolve().parent / "_templates")]
 exclude_patterns = ["api/_templates"]
 
 autosummary_generate = True
