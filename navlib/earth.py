@@ -36,9 +36,19 @@ EARTH_RATE_ECEF = np.array([0.0, 0.0, OMEGA_E])
 
 
 def geodetic_to_ecef(lat, lon, alt):
-    """Geodetic latitude, longitude (rad) and ellipsoidal height (m) to ECEF position (m).
+    """Geodetic latitude, longitude and ellipsoidal height to ECEF position (WGS-84).
 
-    Returns an array of shape ``broadcast(lat, lon, alt).shape + (3,)``.
+    Parameters
+    ----------
+    lat, lon : array_like
+        Geodetic latitude and longitude (rad).
+    alt : array_like
+        Height above the ellipsoid (m); the three inputs broadcast.
+
+    Returns
+    -------
+    numpy.ndarray, shape ``broadcast(lat, lon, alt).shape + (3,)``
+        ECEF position (m).
     """
     lat, lon, alt = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (lat, lon, alt)))
     sin_lat = np.sin(lat)
@@ -76,7 +86,18 @@ def ecef_to_geodetic(r_e):
 
 
 def ned_to_ecef_matrix(lat, lon):
-    """Rotation matrix ``C_n_e`` (..., 3, 3) whose columns are North, East, Down in ECEF."""
+    """Rotation matrix ``C_n_e`` whose columns are North, East, Down in ECEF.
+
+    Parameters
+    ----------
+    lat, lon : array_like
+        Geodetic latitude and longitude (rad); they broadcast.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3, 3)
+        ``C_n_e``: NED vectors to ECEF, ``v_e = C_n_e v_n``.
+    """
     lat, lon = np.broadcast_arrays(np.asarray(lat, dtype=float), np.asarray(lon, dtype=float))
     sl, cl = np.sin(lat), np.cos(lat)
     so, co = np.sin(lon), np.cos(lon)
@@ -149,6 +170,19 @@ def gravity_jacobian_ecef(r_e):
 
 
 def gravity_magnitude(lat, alt):
-    """Magnitude of normal gravity (m/s^2) at geodetic latitude (rad) and height (m)."""
+    """Magnitude of normal gravity at a geodetic latitude and height.
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude (rad).
+    alt : array_like
+        Height above the ellipsoid (m), broadcast against ``lat``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``|g|`` (m/s^2) of :func:`normal_gravity_ecef` at those points.
+    """
     r_e = geodetic_to_ecef(lat, np.zeros_like(np.asarray(lat, dtype=float)), alt)
     return np.linalg.norm(normal_gravity_ecef(r_e), axis=-1)

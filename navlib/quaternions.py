@@ -20,7 +20,18 @@ __all__ = ["earth_quat", "prefix_products", "quat_from_matrix", "quat_from_rotve
 
 
 def quat_mul(p, q):
-    """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``)."""
+    """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``).
+
+    Parameters
+    ----------
+    p, q : numpy.ndarray, shape (..., 4)
+        Quaternions, scalar last ``(x, y, z, w)``; leading axes broadcast.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        The product, scalar last.
+    """
     px, py, pz, pw = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
     qx, qy, qz, qw = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     out = np.empty(p.shape if p.shape == q.shape else np.broadcast_shapes(p.shape, q.shape))
@@ -43,7 +54,20 @@ def quat_from_rotvec(phi):
 
 
 def quat_rotate(q, v):
-    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4): ``C(q) v``."""
+    """Rotate vectors by unit quaternions: ``C(q) v``.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (..., 4)
+        Unit quaternions, scalar last ``(x, y, z, w)``.
+    v : numpy.ndarray, shape (..., 3)
+        Vectors, broadcast against ``q``'s leading axes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The rotated vectors.
+    """
     u = q[..., :3]
     w = q[..., 3:]
     uv = cross(u, v)

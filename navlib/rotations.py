@@ -36,7 +36,18 @@ def unskew(m):
 
 def cross(a, b):
     """Cross product of (..., 3) arrays (broadcasting), several times faster than
-    ``np.cross`` on small inputs, which matters inside per-sample loops."""
+    ``np.cross`` on small inputs, which matters inside per-sample loops.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., 3)
+        The two vectors; leading axes broadcast against each other.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        ``a x b`` over the broadcast leading axes.
+    """
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     out = np.empty(a.shape if a.shape == b.shape else np.broadcast_shapes(a.shape, b.shape))
@@ -73,7 +84,19 @@ def bortz_rate(theta, w_b):
 
     ``dtheta/dt = w + 1/2 theta x w + c(|theta|) theta x (theta x w)``, the body-rate form
     that the spec note A2 verified numerically (España et al. 2019, Eq. 1 with the frame
-    of omega corrected). ``theta`` and ``w_b`` are (..., 3).
+    of omega corrected).
+
+    Parameters
+    ----------
+    theta : array_like, shape (..., 3)
+        Rotation vector of ``C = exp(S(theta))`` (rad).
+    w_b : array_like, shape (..., 3)
+        Body angular rate (rad/s), broadcast against ``theta``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        ``dtheta/dt`` (rad/s).
     """
     theta = np.asarray(theta, dtype=float)
     w_b = np.asarray(w_b, dtype=float)

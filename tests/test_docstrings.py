@@ -11,8 +11,8 @@
 
 from docstring_coverage import parameters_share, public_functions
 
-PARAMETERS_FLOOR = 0.20
-"""Measured 87 of 420 (20.7 %) when the check was added."""
+PARAMETERS_FLOOR = 0.24
+"""Measured 87 of 420 (20.7 %) when the check was added, 101 of 420 (24.0 %) after h38."""
 
 CHECKED = ("navlib.earth", "navlib.rotations", "navlib.units", "navlib.quaternions",
            "navlib.discretize", "navlib.observability", "navlib.metrics", "navlib.covariance",

@@ -93,11 +93,31 @@ def simulate_attitude_sensor(trajectory, sigma: float, rate_hz: float | None = N
     Generic attitude reference sensor of Beaudoin et al. §2.2 (white noise only, Table 1:
     1 deg per axis); ``att`` outliers (:mod:`navlib.outliers`) are added to ``n``.
 
+    Parameters
+    ----------
+    trajectory : navlib.trajectory.Trajectory
+        The true motion; its attitudes are measured.
+    sigma : float
+        Noise standard deviation per ECEF axis (rad), >= 0.
+    rate_hz : float, optional
+        Fix rate (Hz); None measures at every trajectory sample.
+    seed : int, optional
+        Seed of a new generator, when ``rng`` is not given.
+    rng : numpy.random.Generator, optional
+        Source of the noise (overrides ``seed``).
+    outliers : optional
+        Outlier specification read by :func:`navlib.outliers.as_outliers` (channel ``att``).
+
     Returns
     -------
     t : ndarray (K,)
     C_att : ndarray (K, 3, 3)
         Measured body -> ECEF attitudes.
+
+    Raises
+    ------
+    NavlibInputError
+        When ``sigma`` is negative or not finite, or ``rate_hz`` is not positive.
     """
     sigma = finite_scalar(sigma, "sigma", 0.0)
     rng = rng if rng is not None else np.random.default_rng(seed)
