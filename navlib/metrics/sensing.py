@@ -224,6 +224,22 @@ def nu_for(n: int, eps: float) -> float:
     """The paper's proposed ``nu = sqrt(1 - 1/n + eps)``, valid for ``0 < eps < 1/n`` (A11).
 
     For n = 21 the paper's ``nu = 0.985`` corresponds to ``eps = 0.0178``.
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+    eps : float
+        Margin, in ``(0, 1/n)``.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    NavlibInputError
+        When ``eps`` lies outside ``(0, 1/n)``.
     """
     n = n_states(n)
     eps = finite_scalar(eps, "eps", 0.0, low_open=True)
@@ -235,8 +251,18 @@ def nu_for(n: int, eps: float) -> float:
 def physical_bands(result: SensabilityResult, k: float = 2.0) -> pd.DataFrame:
     """Tidy frame of the physical ``±k sigma`` bands beside the sensability (Figs. 3-5).
 
-    Columns ``t``, ``state``, ``s``, ``sigma``, ``nr``, ``lower`` (= -k sigma), ``upper``
-    (= +k sigma).
+    Parameters
+    ----------
+    result : SensabilityResult
+        Sensability of a model (its covariances give ``sigma``).
+    k : float, optional
+        Band half-width in standard deviations (default 2).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``t``, ``state``, ``s``, ``sigma``, ``nr``, ``lower`` (= -k sigma),
+        ``upper`` (= +k sigma).
     """
     if not isinstance(result, SensabilityResult):
         raise NavlibInputError(f"result: expected a SensabilityResult, got "
