@@ -340,6 +340,23 @@ def local_matrix(model, step: int, window: int | None = None,
     """The local observability matrix ``O(step)`` of :func:`local_observability`.
 
     Feed it to :func:`analyze` to see the null space and unobservable groups at one step.
+
+    Parameters
+    ----------
+    model : DiscreteModel, LinearModel or step source
+        As in :func:`local_observability`.
+    step : int
+        The model step whose window starts the matrix.
+    window : int, optional
+        Block rows (default ``n``).
+    variant : {"time_varying", "frozen"}
+        As in :func:`local_observability`.
+    method : {"euler", "expm"}
+        Discretisation of a LinearModel.
+
+    Returns
+    -------
+    ndarray (window * m, n)
     """
     if variant not in VARIANTS:
         raise NavlibInputError(f"variant: expected one of {VARIANTS}, got {variant!r}")

@@ -96,8 +96,19 @@ def observability_matrix(F, H, n_rows: int | None = None) -> np.ndarray:
 def condition_number(s: np.ndarray, n: int) -> np.ndarray:
     """2-norm condition number sigma_max / sigma_min over the last axis (inf when singular).
 
-    ``s`` holds the singular values (descending). A matrix with fewer than ``n`` singular
-    values (fewer rows than columns) or a zero smallest value is singular.
+    A matrix with fewer than ``n`` singular values (fewer rows than columns) or a zero
+    smallest value is singular.
+
+    Parameters
+    ----------
+    s : ndarray (..., k)
+        Singular values, descending along the last axis.
+    n : int
+        Number of columns of the matrix.
+
+    Returns
+    -------
+    ndarray (...)
     """
     if s.shape[-1] < n:
         return np.full(s.shape[:-1], np.inf)
