@@ -262,11 +262,21 @@ def _each(P, H, R, definite, pinv_rtol: float, update: bool):
 
 def joseph_update(P_prior, H, R, *, pinv_rtol: float = PINV_RTOL, definite=None):
     """Joseph-form measurement update ``P+ = (I - K H) P- (I - K H)' + K R K'`` with the
-    gain of :func:`kalman_gain` (one epoch or a batch); returns ``(P_post, Gains)``.
+    gain of :func:`kalman_gain` (one epoch or a batch).
 
     The Joseph form holds for any gain, so ``P+`` stays symmetric positive semi-definite
     with a singular or zero ``R`` (spec launcher.md §6.2). Compiled
     (:func:`_joseph_kernel`, docs/assumptions.md "Compiled kernels").
+
+    Parameters
+    ----------
+    P_prior, H, R, pinv_rtol, definite
+        As in :func:`kalman_gain`.
+
+    Returns
+    -------
+    P_post : ndarray (..., n, n)
+    gains : Gains
     """
     P, H, R, definite, batch = _batched(P_prior, H, R, definite)
     P_post, K, S_pinv, dof = _each(P, H, R, definite, float(pinv_rtol), True)
@@ -476,10 +486,22 @@ def compile_kernels() -> None:
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains:
-    """Batched gains of :func:`kalman_gain` at all epochs at once (P_prior (N, n, n)).
+    """Batched gains of :func:`kalman_gain` at all epochs at once.
 
     The rule of :func:`navlib.covariance.kalman_covariance`, so the Joseph update with these
-    gains reproduces its posteriors. Epochs with ``measured`` False get zero gain and dof.
+    gains reproduces its posteriors.
+
+    Parameters
+    ----------
+    P_prior : ndarray (N, n, n)
+    H, R, pinv_rtol
+        As in :func:`kalman_gain`.
+    measured : ndarray (N,) of bool
+        Epochs with an update; the others get zero gain and dof.
+
+    Returns
+    -------
+    Gains
     """
     gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol)
     measured = np.asarray(measured, dtype=bool)
@@ -492,12 +514,26 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
 
     The average over ``runs`` independent runs of a chi-square statistic with ``dof``
     degrees of freedom is ``chi2(runs dof) / runs`` (Bar-Shalom, Li & Kirubarajan 2001,
-    §5.4); returns ``(lower, upper)`` (arrays when ``dof`` is one).
+    §5.4).
 
     The chi-square quantile is ``2 gammaincinv(k / 2, q)``, what ``scipy.stats.chi2.ppf``
     evaluates (the same numbers), without importing ``scipy.stats`` (about 0.3-0.7 s in a
     process that needs nothing else of it), and once per distinct ``dof`` (a NEES history
     has one per epoch but a few distinct values; each quantile is an iterative inversion).
+
+    Parameters
+    ----------
+    dof : int or array_like of int
+        Degrees of freedom of one run.
+    runs : int
+        Independent runs averaged.
+    alpha : float
+        Two-sided significance level.
+
+    Returns
+    -------
+    lower, upper : float or ndarray
+        Shaped like ``dof``.
     """
     dof = np.asarray(dof, dtype=float)
     runs = int(runs)
@@ -535,14 +571,23 @@ def nees_basis(P, rtol: float = 1e-10):
 
 
 def nees_values(err, P, rtol: float = 1e-10, basis=None):
-    """NEES ``e' P^+ e`` of errors (K, R, n) against covariances (K, n, n); returns the
-    NEES (K, R) and its degrees of freedom (K,).
+    """NEES ``e' P^+ e``, scaled to a correlation matrix first (states of very different
+    units); directions with (relative) zero variance are left out, and the degrees of
+    freedom are the kept rank. Intermediates are formed in place where they can be.
 
-    Scaled to a correlation matrix first (states of very different units); directions with
-    (relative) zero variance are left out, and the degrees of freedom are the kept rank.
-    ``basis``: :func:`nees_basis` of ``P`` when already computed (``P`` and ``rtol`` are
-    then not used). The (K, R, n) intermediates are formed in place where they can be
-    (a 100-run history is 60 MB each, and fresh memory costs its page faults).
+    Parameters
+    ----------
+    err : ndarray (K, R, n)
+        Errors of R runs at K epochs.
+    P, rtol
+        Covariances (K, n, n) and cut-off as in :func:`nees_basis` (unused with ``basis``).
+    basis : tuple, optional
+        :func:`nees_basis` of ``P`` when already computed.
+
+    Returns
+    -------
+    nees : ndarray (K, R)
+    dof : ndarray (K,)
     """
     safe, active, V, inv_w, dof = basis if basis is not None else nees_basis(P, rtol)
     en = np.divide(err, safe[:, None, :])
