@@ -11,8 +11,8 @@
 
 from docstring_coverage import parameters_share, public_functions
 
-PARAMETERS_FLOOR = 0.24
-"""Measured 87 of 420 (20.7 %) when the check was added, 101 of 420 (24.0 %) after h38."""
+PARAMETERS_FLOOR = 0.33
+"""Measured 87 of 420 (20.7 %) when the check was added, 140 of 420 (33.3 %) after h38."""
 
 CHECKED = ("navlib.earth", "navlib.rotations", "navlib.units", "navlib.quaternions",
            "navlib.discretize", "navlib.observability", "navlib.metrics", "navlib.covariance",
@@ -20,8 +20,9 @@ CHECKED = ("navlib.earth", "navlib.rotations", "navlib.units", "navlib.quaternio
            "navlib.estimability", "navlib.allan", "navlib.resolution")
 """Modules whose Parameters sections must name exactly the signature's arguments."""
 
-COMPLETE = ()
-"""Modules where every public function with two or more arguments has Parameters."""
+COMPLETE = tuple(name for name in CHECKED if name != "navlib.kalman")
+"""Modules (and packages) where every public function with two or more arguments has
+Parameters; navlib.kalman's compiled kernels lack them (the module is at 597 lines)."""
 
 
 def test_parameters_share_does_not_fall():
@@ -46,6 +47,6 @@ def test_parameters_sections_name_the_signature():
 
 def test_complete_modules_document_every_parameter():
     missing = [f"{f.module}.{f.name}" for f in public_functions()
-               if f.module in COMPLETE and len(f.arguments) >= 2
+               if f.module.startswith(COMPLETE) and len(f.arguments) >= 2
                and not f.documented_parameters()]
     assert not missing, missing
