@@ -55,7 +55,7 @@ def stack_steps(value, count: int, shape: tuple, name: str) -> np.ndarray:
     Parameters
     ----------
     value : array_like
-        A ``shape`` matrix or a ``(count, *shape)`` stack; finite.
+        A ``shape`` matrix or a stack of ``count`` of them; finite.
     count : int
         Number of steps.
     shape : tuple of int
@@ -65,7 +65,7 @@ def stack_steps(value, count: int, shape: tuple, name: str) -> np.ndarray:
 
     Returns
     -------
-    ndarray (count, *shape)
+    ndarray (count, shape[0], shape[1])
         A read-only broadcast view for a single matrix.
 
     Raises
