@@ -2,7 +2,7 @@
 
 Normal gravity here is gravitation (central term plus J2) **plus the centrifugal term**
 ``-Omega x (Omega x r)``, because the ECEF navigation equation of España et al. (2019,
-Eq. 1) has no separate centrifugal term (spec note A5). Its Jacobian with respect to the
+Eq. 1) has no separate centrifugal term (docs/assumptions.md A5). Its Jacobian with respect to the
 ECEF position is given in closed form (:func:`gravity_jacobian_ecef`).
 
 All angles in radians except where a name ends in ``_deg``. Arrays of points are stacked
@@ -136,7 +136,7 @@ def gravitation_ecef(r_e):
 def normal_gravity_ecef(r_e):
     """Normal gravity gamma^e = gravitation + centrifugal, at ECEF positions (..., 3), m/s^2.
 
-    This is what a stationary accelerometer senses the negative of (spec note A5).
+    This is what a stationary accelerometer senses the negative of (docs/assumptions.md A5).
     """
     r_e = np.asarray(r_e, dtype=float)
     centrifugal = OMEGA_E**2 * r_e * np.array([1.0, 1.0, 0.0])
@@ -147,7 +147,7 @@ def gravity_jacobian_ecef(r_e):
     """Jacobian d(gamma^e)/d(r^e) (..., 3, 3) of :func:`normal_gravity_ecef`.
 
     Central term ``-GM/r^3 (I - 3 r r^T / r^2)``, the J2 term differentiated in closed form,
-    and the centrifugal term ``-S(Omega)^2 = Omega^2 diag(1, 1, 0)`` (spec note A5).
+    and the centrifugal term ``-S(Omega)^2 = Omega^2 diag(1, 1, 0)`` (docs/assumptions.md A5).
     """
     r_e, r, s = _j2_terms(r_e)
     eye = np.eye(3)

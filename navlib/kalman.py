@@ -136,7 +136,7 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
 
     ``S = sym(H P H' + R)``; ``S^-1`` when ``definite`` (:func:`_inverse`), else (or when
     ``S`` is singular in floating point) ``V diag(1/w) V'`` over the eigenvalues
-    ``w > pinv_rtol max(w)`` of ``S`` (spec launcher.md §6.2)."""
+    ``w > pinv_rtol max(w)`` of ``S`` (docs/assumptions.md, launcher.md §6.2)."""
     m = H.shape[0]
     PHt = np.dot(P, H.T)
     S = np.empty((m, m))
@@ -265,7 +265,7 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = PINV_RTOL, definite=None)
     gain of :func:`kalman_gain` (one epoch or a batch).
 
     The Joseph form holds for any gain, so ``P+`` stays symmetric positive semi-definite
-    with a singular or zero ``R`` (spec launcher.md §6.2). Compiled
+    with a singular or zero ``R`` (docs/assumptions.md, launcher.md §6.2). Compiled
     (:func:`_joseph_kernel`, docs/assumptions.md "Compiled kernels").
 
     Parameters
@@ -304,7 +304,7 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     (when it has rows), the posteriors to ``P_post[slot[i]]`` where ``slot[i] >= 0`` and the
     gains to ``K[i], S_pinv[i], dof[i]`` (when ``K`` has rows). Returns the last posterior.
 
-    The recursion of :func:`covariance_recursion` (spec launcher.md §6.2), compiled
+    The recursion of :func:`covariance_recursion` (docs/assumptions.md, launcher.md §6.2), compiled
     (docs/assumptions.md "Compiled kernels")."""
     n = P.shape[0]
     m = H.shape[1]
@@ -384,8 +384,8 @@ def _definite_steps(R, count: int) -> np.ndarray:
 
 def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
                          gains: bool = False, block: int = 2048, keep=None):
-    """The Joseph-form covariance recursion (spec launcher.md §6.2) for a stack of initial
-    covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: the one recursion of
+    """The Joseph-form covariance recursion (docs/assumptions.md, launcher.md §6.2) for a stack of
+    initial covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: the one recursion of
     :func:`navlib.covariance.kalman_covariance`, :func:`navlib.filters.prepare_linear` and
     the studies.
 

@@ -1,6 +1,6 @@
 """Quaternion arithmetic on ``(..., 4)`` scalar-last arrays (``(x, y, z, w)``, the order of
 :mod:`scipy.spatial.transform`), vectorised over leading axes, for the strapdown
-mechanisation (:mod:`navlib.strapdown`, spec excitability.md A2) and the SO(3) spline fit
+mechanisation (:mod:`navlib.strapdown`, docs/assumptions.md A2) and the SO(3) spline fit
 (:mod:`navlib.trajectory`). ``q`` rotates body vectors into ECEF when it is an attitude.
 """
 

@@ -58,7 +58,8 @@ def cross(a, b):
 
 
 def bortz_coefficient(angle):
-    """Scalar ``(1 - a sin a / (2 (1 - cos a))) / a^2`` of the Bortz equation (spec A2, A3).
+    """Scalar ``(1 - a sin a / (2 (1 - cos a))) / a^2`` of the Bortz equation (docs/assumptions.md
+    A2, A3).
 
     Evaluated as ``(1 - (a/2) cot(a/2)) / a^2``, which avoids the cancellation in
     ``1 - cos a``; below 0.2 rad the series ``1/12 + a^2/720 + a^4/30240 + a^6/1209600 +
@@ -83,7 +84,7 @@ def bortz_rate(theta, w_b):
     """Rotation-vector derivative for ``C = exp(S(theta))`` driven by the body rate ``w_b``.
 
     ``dtheta/dt = w + 1/2 theta x w + c(|theta|) theta x (theta x w)``, the body-rate form
-    that the spec note A2 verified numerically (España et al. 2019, Eq. 1 with the frame
+    that the docs/assumptions.md A2 verified numerically (España et al. 2019, Eq. 1 with the frame
     of omega corrected).
 
     Parameters

@@ -64,7 +64,7 @@ def block_in_frame(P, states, C=None) -> np.ndarray:
 
     ``P_b = C P_block C'`` with ``C`` the rotation from the states' frame to the wanted
     one, e.g. ``C = T_E^B`` turns the ECEF attitude-error block into body axes
-    (spec launcher.md §6.2 item 6: ``P_body = T_E^B P_psipsi T_B^E``).
+    (docs/assumptions.md, launcher.md §6.2 item 6: ``P_body = T_E^B P_psipsi T_B^E``).
 
     Parameters
     ----------
@@ -90,7 +90,7 @@ def sigma_in_frame(P, states, C=None) -> np.ndarray:
     """Standard deviations of a rotated group, (N, k): ``sqrt(diag(C P_block C'))``.
 
     E.g. roll/pitch/yaw error sigma in body axes from an ECEF attitude-error block with
-    ``C = T_E^B`` per epoch (spec launcher.md §6.2 item 6).
+    ``C = T_E^B`` per epoch (docs/assumptions.md, launcher.md §6.2 item 6).
 
     Parameters
     ----------

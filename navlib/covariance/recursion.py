@@ -1,7 +1,7 @@
-"""The Kalman covariance of a linear filter along a model (spec launcher.md §6.2, ssac.md §8
-item 6): :func:`kalman_covariance` (Joseph form, pseudo-inverse of the innovation
-covariance for singular ``R``), :func:`kalman_covariances` for several initial
-covariances at once and the unaided :func:`ins_only_covariance`, all through
+"""The Kalman covariance of a linear filter along a model (docs/assumptions.md, launcher.md §6.2,
+ssac.md §8 item 6): :func:`kalman_covariance` (Joseph form, pseudo-inverse of the innovation
+covariance for singular ``R``), :func:`kalman_covariances` for several initial covariances at once
+and the unaided :func:`ins_only_covariance`, all through
 :func:`navlib.kalman.covariance_recursion`.
 """
 

@@ -1,8 +1,8 @@
 """The metrics of a discretised model over time segments, and the thresholds that read them.
 
 :func:`sensability_model`, :func:`excitability_segment` and :func:`excitability_segments`
-feed a :class:`~navlib.models.DiscreteModel` to the metrics (segments of spec A12, the D0
-choice of A19); :func:`check_segments` and :func:`in_segment` define which epochs a segment
+feed a :class:`~navlib.models.DiscreteModel` to the metrics (segments of docs/assumptions.md A12,
+the D0 choice of A19); :func:`check_segments` and :func:`in_segment` define which epochs a segment
 stacks; :func:`check_thresholds` and the defaults :data:`E_THRESHOLD`, :data:`S_THRESHOLD`,
 :data:`MIN_FRACTION` read the results.
 """
@@ -53,9 +53,9 @@ def sensability_model(model, P0=None, nu: float = 0.985, prior_update: bool = Fa
     P0 : ndarray (n, n), optional
         Covariance at the first epoch used (default ``model.P0``).
     nu : float in (0, 1]
-        Threshold of Def. 1 (spec A11).
+        Threshold of Def. 1 (docs/assumptions.md A11).
     prior_update : bool
-        Whether ``P0`` is a prior updated at the first epoch (spec A9; see
+        Whether ``P0`` is a prior updated at the first epoch (docs/assumptions.md A9; see
         :func:`sensability`).
     t_start, t_end : float, optional
         Keep the epochs in ``[t_start, t_end]`` (s); ``P0`` applies at the first of them.
@@ -73,7 +73,8 @@ def sensability_model(model, P0=None, nu: float = 0.985, prior_update: bool = Fa
 
 
 def _filter_variances(P_filter, model, P0, k: int, t_a: float) -> np.ndarray:
-    """Variances at model epoch ``k`` (time ``t_a``) from a filter covariance (spec A19)."""
+    """Variances at model epoch ``k`` (time ``t_a``) from a filter covariance (docs/assumptions.md
+    A19)."""
     n = len(model.state_names)
     if P_filter is None:
         return sensability_model(model, P0).sigma[k] ** 2
@@ -107,7 +108,7 @@ def excitability_segment(model, t_a: float, t_b: float, P0=None, R0=None, eta: f
     ----------
     model : DiscreteModel
         Discretised at its measurement epochs; all epochs in the closed interval are stacked
-        (spec A12).
+        (docs/assumptions.md A12).
     t_a, t_b : float
         Segment limits, s.
     P0 : array (n, n), optional
@@ -159,9 +160,10 @@ def excitability_segments(model, segments, eta: float = 1e-3, d0: str = "global"
     segments : sequence of (float, float)
         ``(t_start, t_end)`` pairs (s).
     eta : float in (0, 1)
-        Energy threshold of the excited subspace (spec A14).
+        Energy threshold of the excited subspace (docs/assumptions.md A14).
     d0 : {"global", "filter"}
-        D0 from ``P0`` or from the filter covariance at each segment start (spec A19).
+        D0 from ``P0`` or from the filter covariance at each segment start (docs/assumptions.md
+        A19).
     sensability : SensabilityResult, optional
         Of the same model, reused for ``d0="filter"``.
     span : (float, float), optional

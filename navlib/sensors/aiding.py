@@ -25,14 +25,14 @@ class ReferenceTrajectory:
     differs from it by the divergence ``d`` (body axes): ``C_ref = C exp(S(d))``, so that
     ``rotvec(C_hat' C_ref) = T_E^B psi + d`` is Beaudoin's eq. (8). ``d`` is the
     ``psi_ref`` block of the closed-loop attitude dynamics of the RT augmentation
-    (spec launcher.md §3.4), ``x_a' = M x_a + a1_sign [T_E^B psi; 0] + [0; omega_wind]``
-    with ``M`` = ``dynamics`` (10 x 10, :func:`navlib.models.launcher.rt_dynamics_matrix`),
-    integrated with the
-    paper's Euler steps. It is driven by white wind rates of ``sigma_wind`` rad/s per
-    sample and by the **actual** navigation attitude error ``psi`` of the filter that calls
-    it (``C = (I + S(psi)) C_nav``: the control steers with the navigation attitude), so
-    truth and filter model agree. Outliers on the ``rt`` channels are added to the emitted
-    ``d`` only (the stored reference is wrong, the vehicle is not).
+    (docs/assumptions.md, launcher.md §3.4), ``x_a' = M x_a + a1_sign [T_E^B psi; 0] + [0;
+    omega_wind]`` with ``M`` = ``dynamics`` (10 x 10,
+    :func:`navlib.models.launcher.rt_dynamics_matrix`), integrated with the paper's Euler steps. It
+    is driven by white wind rates of ``sigma_wind`` rad/s per sample and by the **actual**
+    navigation attitude error ``psi`` of the filter that calls it (``C = (I + S(psi)) C_nav``: the
+    control steers with the navigation attitude), so truth and filter model agree. Outliers on the
+    ``rt`` channels are added to the emitted ``d`` only (the stored reference is wrong, the vehicle
+    is not).
 
     Call it as ``reference(k, t_k, C_nav_prev)`` at increasing IMU samples, with the
     navigation attitude the control used since the previous call (the posterior after that

@@ -1,4 +1,4 @@
-"""IMU and GNSS errors simulated along a trajectory (spec excitability.md A1, A7).
+"""IMU and GNSS errors simulated along a trajectory (docs/assumptions.md A1, A7).
 
 The measurement model is that of :mod:`navlib.sensors`; discretisation is exact:
 Gauss–Markov ``b_{k+1} = e^{-dt/tau} b_k + sigma sqrt(1 - e^{-2 dt/tau}) w_k``, random
@@ -264,7 +264,7 @@ def simulate_imu(trajectory, spec, seed=None, *, rng=None, **overrides) -> ImuSi
 
     Notes
     -----
-    Model and discretisation in the module docstring (spec excitability.md A1, A7). Each
+    Model and discretisation in the module docstring (docs/assumptions.md A1, A7). Each
     error source draws from its own child generator, so a run is reproducible by seed and
     changing one level (say the ARW) leaves the other realisations unchanged.
     """
