@@ -31,6 +31,7 @@ $(DOCS_STAMP): $(STAMP)
 docs: $(DOCS_STAMP)
 	rm -rf docs/api/generated build/docs
 	$(PY) -m sphinx -W --keep-going -q -c docs/api docs build/docs
+	printf '<meta http-equiv="refresh" content="0; url=api/index.html">\n' > build/docs/index.html
 
 # Browser tests: JupyterLab + Debian's chromium (installed with apt-get when missing: CI runs
 # as root), Playwright from the [browser] extra. Not part of `make test`.

@@ -85,5 +85,27 @@ def _escape_bars(app, what, name, obj, options, lines):
             block_indent = indent
 
 
+_MD_LINK = re.compile(r"\]\((?!\w+:|#)([^)\s#]+)(#[^)\s]*)?\)")
+
+
+def _link_outside_files(app, docname, source):
+    """Narrative pages link repository files outside ``docs/`` (``../README.md``), which
+    are no pages of this site: link those as plain files (myst's ``path:`` scheme copies
+    them beside the pages) instead of failing as missing cross-references."""
+    if not app.env.doc2path(docname).suffix == ".md":
+        return
+    folder = app.env.doc2path(docname).parent
+    srcdir = Path(app.srcdir).resolve()
+
+    def plain(match):
+        target = (folder / match.group(1)).resolve()
+        if target.is_file() and not target.is_relative_to(srcdir):
+            return f"](path:{match.group(1)})"
+        return match.group(0)
+
+    source[0] = _MD_LINK.sub(plain, source[0])
+
+
 def setup(app):
     app.connect("autodoc-process-docstring", _escape_bars)
+    app.connect("source-read", _link_outside_files)
