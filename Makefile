@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.navlib-installed
 
-.PHONY: report test test-browser lint bench clean
+.PHONY: report test test-browser docs lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -17,7 +17,21 @@ report: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m ruff check navlib tests benchmarks
+	$(PY) tests/docstring_coverage.py
 	$(PY) -m pytest -n 2 -q --durations=10
+
+# API reference (Sphinx + numpydoc + myst-parser from the [docs] extra): docs/api/conf.py,
+# pages generated afresh from the docstrings, warnings are errors. Output: build/docs/.
+DOCS_STAMP := $(VENV)/.navlib-docs-installed
+
+$(DOCS_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e ".[dev,docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	rm -rf docs/api/generated build/docs
+	$(PY) -m sphinx -W --keep-going -q -c docs/api docs build/docs
+	printf '<meta http-equiv="refresh" content="0; url=api/index.html">\n' > build/docs/index.html
 
 # Browser tests: JupyterLab + Debian's chromium (installed with apt-get when missing: CI runs
 # as root), Playwright from the [browser] extra. Not part of `make test`.
@@ -36,4 +50,4 @@ bench: $(STAMP)
 	$(PY) benchmarks/run.py
 
 clean:
-	rm -rf $(VENV) reports/*.html reports/*.ipynb
+	rm -rf $(VENV) reports/*.html reports/*.ipynb build/docs docs/api/generated

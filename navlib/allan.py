@@ -137,7 +137,24 @@ def allan_deviation(imu: pd.DataFrame, rate_hz: float | None = None,
 
 
 def allan_model(tau_s, random_walk=0.0, bias_instability=0.0, rate_random_walk=0.0):
-    """Allan deviation of the three noise terms at ``tau_s`` (NaN terms count as zero)."""
+    """Allan deviation of the three noise terms at ``tau_s`` (NaN terms count as zero):
+    ``sqrt(N^2 / tau + (0.664 B)^2 + K^2 tau / 3)``.
+
+    Parameters
+    ----------
+    tau_s : array_like
+        Averaging times (s).
+    random_walk : float
+        ``N``, angle or velocity random walk (per sqrt(s)).
+    bias_instability : float
+        ``B``, the bias instability.
+    rate_random_walk : float
+        ``K``, the rate random walk (per s^1.5).
+
+    Returns
+    -------
+    ndarray, shaped like ``tau_s``
+    """
     tau_s = np.asarray(tau_s, dtype=float)
     n, b, k = (0.0 if not np.isfinite(x) else float(x)
                for x in (random_walk, bias_instability, rate_random_walk))
@@ -285,8 +302,31 @@ def write_allan_preset(fit: pd.DataFrame, path, *, name: str, source: str,
     random walk) and the bias instability as a Gauss-Markov drift of that sigma with the
     time constant of the deviation's floor (assumption M5). Unresolved terms are left out.
     ``base`` (a preset name or file) supplies every other key (turn-on biases, scale
-    factors, GNSS); its own noise keys are replaced. Returns the path written; load it with
-    :func:`navlib.sensors.load_preset`.
+    factors, GNSS); its own noise keys are replaced.
+
+    Parameters
+    ----------
+    fit : pandas.DataFrame
+        The table :func:`fit_allan` returned.
+    path : str or Path
+        TOML file to write.
+    name : str
+        Preset name written in the file.
+    source : str
+        Where the recording came from (the preset's ``source``).
+    base : str, optional
+        Preset name or file supplying the other keys.
+
+    Returns
+    -------
+    Path
+        The file written; load it with :func:`navlib.sensors.load_preset`.
+
+    Raises
+    ------
+    NavlibInputError
+        For a ``fit`` not from :func:`fit_allan`, an empty ``name`` or ``source``, or an
+        unknown ``base``.
     """
     if not isinstance(fit, pd.DataFrame) or not set(TERMS) <= set(fit.columns):
         raise NavlibInputError("fit: expected the DataFrame fit_allan returned")

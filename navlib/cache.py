@@ -56,6 +56,9 @@ from scipy.spatial.transform import Rotation
 from navlib import __version__
 from navlib.resources import data_dir
 
+__all__ = ["DEFAULT_MAX_MB", "Scope", "cache_dir", "cached", "clear_memos", "enabled", "key",
+           "max_bytes", "memoized", "salt", "source_closure", "stats"]
+
 DEFAULT_MAX_MB = 1024.0
 """Default size bound of the cache folder, MB."""
 
@@ -237,7 +240,27 @@ def _digest(parts: list) -> str:
 
 def key(fn: Callable, args: tuple, kwargs: dict) -> str:
     """Content hash of a call of ``fn``: its qualified name, its bound arguments and
-    :func:`salt` of its module. Raises TypeError for an argument it cannot encode."""
+    :func:`salt` of its module.
+
+    Parameters
+    ----------
+    fn : callable
+        The builder.
+    args : tuple
+        Positional arguments of the call.
+    kwargs : dict
+        Keyword arguments of the call.
+
+    Returns
+    -------
+    str
+        Hex digest.
+
+    Raises
+    ------
+    TypeError
+        For an argument it cannot encode.
+    """
     bound = inspect.signature(fn).bind(*args, **kwargs)
     bound.apply_defaults()
     parts = [f"{fn.__module__}.{fn.__qualname__};{salt(fn.__module__)};".encode()]
@@ -405,7 +428,15 @@ class Scope:
         return found, value
 
     def put(self, item, value) -> None:
-        """Keep ``value`` for ``item`` (atomic write, as a builder's result)."""
+        """Keep ``value`` for ``item`` (atomic write, as a builder's result).
+
+        Parameters
+        ----------
+        item : object
+            Encodable key within the scope.
+        value : object
+            Picklable result.
+        """
         entry = self._entry(item)
         if entry is not None:
             _store(entry[1].parent, entry[1], entry[0], value)

@@ -5,7 +5,7 @@ For ``dx/dt = A x + G w`` with white ``w`` of power spectral density ``Qc`` and
 
 * ``method="expm"``: ``F = expm(A dt)`` and, by Van Loan (1978),
   ``Q = int_0^dt expm(A s) W expm(A s)' ds`` from one exponential of the block matrix
-  ``[[-A, W], [0, A']] dt`` (spec excitability.md A8);
+  ``[[-A, W], [0, A']] dt`` (docs/assumptions.md A8);
 * ``method="series"``: the same ``F``, and Van Loan's integral by its Taylor series
   ``Q = sum_k L_k dt^(k+1)/(k+1)!`` with ``L_0 = W``, ``L_k = A L_(k-1) + L_(k-1) A'``:
   no ``2n x 2n`` exponential, accurate to ``~|A dt|^5/6!`` relative over short IMU steps;
@@ -15,7 +15,7 @@ For ``dx/dt = A x + G w`` with white ``w`` of power spectral density ``Qc`` and
 Matrix exponentials of stacks use :func:`expm_taylor` (one shared scaling, batched
 products), because :func:`scipy.linalg.expm` treats each matrix of a stack separately.
 :func:`chain` multiplies per-step transitions between measurement epochs and accumulates
-``Q <- Phi Q Phi' + Q_j`` (spec A8: 100 IMU steps per 1 Hz GNSS epoch).
+``Q <- Phi Q Phi' + Q_j`` (docs/assumptions.md A8: 100 IMU steps per 1 Hz GNSS epoch).
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from navlib.errors import NavlibInputError
+
+__all__ = ["METHODS", "chain", "discretize_steps", "expm_taylor"]
 
 METHODS = ("expm", "series", "euler")
 """Discretisation methods of :func:`discretize_steps`."""

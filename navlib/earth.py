@@ -2,7 +2,7 @@
 
 Normal gravity here is gravitation (central term plus J2) **plus the centrifugal term**
 ``-Omega x (Omega x r)``, because the ECEF navigation equation of España et al. (2019,
-Eq. 1) has no separate centrifugal term (spec note A5). Its Jacobian with respect to the
+Eq. 1) has no separate centrifugal term (docs/assumptions.md A5). Its Jacobian with respect to the
 ECEF position is given in closed form (:func:`gravity_jacobian_ecef`).
 
 All angles in radians except where a name ends in ``_deg``. Arrays of points are stacked
@@ -12,6 +12,10 @@ on the first axis, ``(..., 3)``.
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["E2", "EARTH_RATE_ECEF", "FLATTENING", "GM", "J2", "OMEGA_E", "A", "B",
+           "ecef_to_geodetic", "geodetic_to_ecef", "gravitation_ecef", "gravity_jacobian_ecef",
+           "gravity_magnitude", "ned_to_ecef_matrix", "normal_gravity_ecef", "radii_of_curvature"]
 
 A = 6378137.0
 """WGS-84 semi-major axis, m."""
@@ -32,9 +36,19 @@ EARTH_RATE_ECEF = np.array([0.0, 0.0, OMEGA_E])
 
 
 def geodetic_to_ecef(lat, lon, alt):
-    """Geodetic latitude, longitude (rad) and ellipsoidal height (m) to ECEF position (m).
+    """Geodetic latitude, longitude and ellipsoidal height to ECEF position (WGS-84).
 
-    Returns an array of shape ``broadcast(lat, lon, alt).shape + (3,)``.
+    Parameters
+    ----------
+    lat, lon : array_like
+        Geodetic latitude and longitude (rad).
+    alt : array_like
+        Height above the ellipsoid (m); the three inputs broadcast.
+
+    Returns
+    -------
+    numpy.ndarray, shape ``broadcast(lat, lon, alt).shape + (3,)``
+        ECEF position (m).
     """
     lat, lon, alt = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (lat, lon, alt)))
     sin_lat = np.sin(lat)
@@ -72,7 +86,18 @@ def ecef_to_geodetic(r_e):
 
 
 def ned_to_ecef_matrix(lat, lon):
-    """Rotation matrix ``C_n_e`` (..., 3, 3) whose columns are North, East, Down in ECEF."""
+    """Rotation matrix ``C_n_e`` whose columns are North, East, Down in ECEF.
+
+    Parameters
+    ----------
+    lat, lon : array_like
+        Geodetic latitude and longitude (rad); they broadcast.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3, 3)
+        ``C_n_e``: NED vectors to ECEF, ``v_e = C_n_e v_n``.
+    """
     lat, lon = np.broadcast_arrays(np.asarray(lat, dtype=float), np.asarray(lon, dtype=float))
     sl, cl = np.sin(lat), np.cos(lat)
     so, co = np.sin(lon), np.cos(lon)
@@ -111,7 +136,7 @@ def gravitation_ecef(r_e):
 def normal_gravity_ecef(r_e):
     """Normal gravity gamma^e = gravitation + centrifugal, at ECEF positions (..., 3), m/s^2.
 
-    This is what a stationary accelerometer senses the negative of (spec note A5).
+    This is what a stationary accelerometer senses the negative of (docs/assumptions.md A5).
     """
     r_e = np.asarray(r_e, dtype=float)
     centrifugal = OMEGA_E**2 * r_e * np.array([1.0, 1.0, 0.0])
@@ -122,7 +147,7 @@ def gravity_jacobian_ecef(r_e):
     """Jacobian d(gamma^e)/d(r^e) (..., 3, 3) of :func:`normal_gravity_ecef`.
 
     Central term ``-GM/r^3 (I - 3 r r^T / r^2)``, the J2 term differentiated in closed form,
-    and the centrifugal term ``-S(Omega)^2 = Omega^2 diag(1, 1, 0)`` (spec note A5).
+    and the centrifugal term ``-S(Omega)^2 = Omega^2 diag(1, 1, 0)`` (docs/assumptions.md A5).
     """
     r_e, r, s = _j2_terms(r_e)
     eye = np.eye(3)
@@ -145,6 +170,19 @@ def gravity_jacobian_ecef(r_e):
 
 
 def gravity_magnitude(lat, alt):
-    """Magnitude of normal gravity (m/s^2) at geodetic latitude (rad) and height (m)."""
+    """Magnitude of normal gravity at a geodetic latitude and height.
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude (rad).
+    alt : array_like
+        Height above the ellipsoid (m), broadcast against ``lat``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``|g|`` (m/s^2) of :func:`normal_gravity_ecef` at those points.
+    """
     r_e = geodetic_to_ecef(lat, np.zeros_like(np.asarray(lat, dtype=float)), alt)
     return np.linalg.norm(normal_gravity_ecef(r_e), axis=-1)

@@ -40,9 +40,21 @@ def split_modes(V: np.ndarray, index, n_large: int) -> tuple[np.ndarray, np.ndar
     """Split the ``n_large`` first (largest) modes of ``V`` (n, n) by their weight on the
     states ``index``.
 
-    Returns ``(others, along)``: sorted 0-based columns of the ``n_large - len(index)``
-    modes with the least weight on those states, and of the ``len(index)`` modes with the
-    most (e.g. the position modes among the six largest, ssac.md §3.6).
+    Parameters
+    ----------
+    V : ndarray (n, n)
+        Eigenvectors as columns, largest mode first.
+    index : sequence of int
+        0-based states (e.g. the positions).
+    n_large : int
+        How many leading modes to split.
+
+    Returns
+    -------
+    others, along : ndarray of int
+        Sorted 0-based columns of the ``n_large - len(index)`` modes with the least weight
+        on those states, and of the ``len(index)`` modes with the most (e.g. the position
+        modes among the six largest, ssac.md §3.6).
     """
     index = list(index)
     head = V[:, :n_large]
@@ -57,6 +69,19 @@ def projector_drift(eigenvectors: np.ndarray, columns, start: int) -> float:
 
     Small when modes exchanging directions rotate inside a fixed subspace (the "vector sum"
     of the exchanging eigenvectors stays put, Silva et al. §3, Figs. 9–10).
+
+    Parameters
+    ----------
+    eigenvectors : ndarray (N, n, n)
+        Sorted eigenvectors per epoch (columns).
+    columns : sequence of int
+        0-based modes spanning the subspace.
+    start : int
+        First epoch compared.
+
+    Returns
+    -------
+    float
     """
     V = eigenvectors[start:, :, columns]
     P = V @ np.swapaxes(V, 1, 2)
@@ -95,8 +120,22 @@ def dominant_changes(eigenvectors: np.ndarray, groups, columns, start: int):
 def settling_time(t: np.ndarray, sigma: np.ndarray, factor: float = 1.05) -> np.ndarray:
     """Time after which each state's sigma stays within ``factor`` of its final value.
 
-    ``sigma`` (N, n) over ``t`` (N,); NaN for states without net reduction (the reading
-    ``t_1.05_final`` of "reaches steady state", docs/assumptions.md A-SSAC-convergence).
+    The reading ``t_1.05_final`` of "reaches steady state" (docs/assumptions.md
+    A-SSAC-convergence).
+
+    Parameters
+    ----------
+    t : ndarray (N,)
+        Epoch times (s).
+    sigma : ndarray (N, n)
+        Standard deviations per state.
+    factor : float, optional
+        Band above the final value (default 1.05).
+
+    Returns
+    -------
+    ndarray (n,)
+        Times (s); NaN for states without net reduction.
     """
     above = sigma > factor * sigma[-1]
     last = np.where(above.any(axis=0), t.size - 1 - np.argmax(above[::-1], axis=0), -1)
@@ -131,16 +170,45 @@ def noise_free_error(F: np.ndarray, H: np.ndarray, R: np.ndarray, P_prior: np.nd
 
 
 def update_factors(H: np.ndarray, R: np.ndarray, P_prior: np.ndarray) -> np.ndarray:
-    """``I - K_k H`` (N, n, n) of a Kalman filter updated at every epoch, with the gains
-    :func:`navlib.kalman.kalman_gain` of ``P_prior`` (N, n, n): what :func:`noise_free_error`
-    applies at each update."""
+    """``I - K_k H`` of a Kalman filter updated at every epoch, with the gains
+    :func:`navlib.kalman.kalman_gain` of ``P_prior``: what :func:`noise_free_error` applies
+    at each update.
+
+    Parameters
+    ----------
+    H : ndarray (m, n) or (N, m, n)
+        Measurement matrices.
+    R : ndarray (m, m) or (N, m, m)
+        Measurement-noise covariances.
+    P_prior : ndarray (N, n, n)
+        Prior covariances.
+
+    Returns
+    -------
+    ndarray (N, n, n)
+    """
     n = P_prior.shape[-1]
     return np.eye(n) - kalman_gain(P_prior, H, R).K @ H
 
 
 def closed_loop_error(F: np.ndarray, I_KH: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """:func:`noise_free_error` from the filter's :func:`update_factors` ``I_KH`` (N, n, n):
-    ``e_0 = I_KH[0] x0``, ``e_{k+1} = I_KH[k+1] F_k e_k``; (N, n)."""
+    """:func:`noise_free_error` from the filter's :func:`update_factors`:
+    ``e_0 = I_KH[0] x0``, ``e_{k+1} = I_KH[k+1] F_k e_k``.
+
+    Parameters
+    ----------
+    F : ndarray (N-1, n, n)
+        Transition matrices.
+    I_KH : ndarray (N, n, n)
+        Update factors ``I - K_k H``.
+    x0 : ndarray (n,)
+        Initial error.
+
+    Returns
+    -------
+    ndarray (N, n)
+        Posterior error per epoch.
+    """
     N, n = I_KH.shape[0], I_KH.shape[-1]
     F = np.broadcast_to(F, (N - 1, n, n))
     e = np.empty((N, n))

@@ -29,6 +29,12 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.kernel_copy import copy_matrix, copy_vector
 
+__all__ = ["PINV_RTOL", "FactoredNoise", "Gains", "chi2_bounds", "compile_kernels",
+           "covariance_recursion", "definite_noise", "fixed_updates_kernel", "joseph_update",
+           "kalman_gain", "kalman_gains", "kernel_array", "nees_basis", "nees_values",
+           "predict_kernel", "propagate_kernel", "psd_sqrt", "riccati_kernel", "symmetrize",
+           "update_kernel"]
+
 PINV_RTOL = 1e-12
 """Relative cut-off of the innovation-covariance pseudo-inverse; the value
 :func:`navlib.covariance.kalman_covariance` uses by default, so that the gains here
@@ -131,7 +137,7 @@ def _gain_kernel(P, H, R, definite, pinv_rtol, K, S_pinv):
 
     ``S = sym(H P H' + R)``; ``S^-1`` when ``definite`` (:func:`_inverse`), else (or when
     ``S`` is singular in floating point) ``V diag(1/w) V'`` over the eigenvalues
-    ``w > pinv_rtol max(w)`` of ``S`` (spec launcher.md §6.2)."""
+    ``w > pinv_rtol max(w)`` of ``S`` (docs/assumptions.md, launcher.md §6.2)."""
     m = H.shape[0]
     PHt = np.dot(P, H.T)
     S = np.empty((m, m))
@@ -257,11 +263,21 @@ def _each(P, H, R, definite, pinv_rtol: float, update: bool):
 
 def joseph_update(P_prior, H, R, *, pinv_rtol: float = PINV_RTOL, definite=None):
     """Joseph-form measurement update ``P+ = (I - K H) P- (I - K H)' + K R K'`` with the
-    gain of :func:`kalman_gain` (one epoch or a batch); returns ``(P_post, Gains)``.
+    gain of :func:`kalman_gain` (one epoch or a batch).
 
     The Joseph form holds for any gain, so ``P+`` stays symmetric positive semi-definite
-    with a singular or zero ``R`` (spec launcher.md §6.2). Compiled
+    with a singular or zero ``R`` (docs/assumptions.md, launcher.md §6.2). Compiled
     (:func:`_joseph_kernel`, docs/assumptions.md "Compiled kernels").
+
+    Parameters
+    ----------
+    P_prior, H, R, pinv_rtol, definite
+        As in :func:`kalman_gain`.
+
+    Returns
+    -------
+    P_post : ndarray (..., n, n)
+    gains : Gains
     """
     P, H, R, definite, batch = _batched(P_prior, H, R, definite)
     P_post, K, S_pinv, dof = _each(P, H, R, definite, float(pinv_rtol), True)
@@ -289,7 +305,7 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     (when it has rows), the posteriors to ``P_post[slot[i]]`` where ``slot[i] >= 0`` and the
     gains to ``K[i], S_pinv[i], dof[i]`` (when ``K`` has rows). Returns the last posterior.
 
-    The recursion of :func:`covariance_recursion` (spec launcher.md §6.2), compiled
+    The recursion of :func:`covariance_recursion` (docs/assumptions.md, launcher.md §6.2), compiled
     (docs/assumptions.md "Compiled kernels")."""
     n = P.shape[0]
     m = H.shape[1]
@@ -429,8 +445,8 @@ def _definite_steps(R, count: int) -> np.ndarray:
 
 def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: bool = True,
                          gains: bool = False, block: int = 2048, keep=None):
-    """The Joseph-form covariance recursion (spec launcher.md §6.2) for a stack of initial
-    covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: the one recursion of
+    """The Joseph-form covariance recursion (docs/assumptions.md, launcher.md §6.2) for a stack of
+    initial covariances ``P0`` (B, n, n) sharing ``F, Q, H, R``: the one recursion of
     :func:`navlib.covariance.kalman_covariance`, :func:`navlib.filters.prepare_linear` and
     the studies.
 
@@ -531,10 +547,22 @@ def compile_kernels() -> None:
 
 
 def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains:
-    """Batched gains of :func:`kalman_gain` at all epochs at once (P_prior (N, n, n)).
+    """Batched gains of :func:`kalman_gain` at all epochs at once.
 
     The rule of :func:`navlib.covariance.kalman_covariance`, so the Joseph update with these
-    gains reproduces its posteriors. Epochs with ``measured`` False get zero gain and dof.
+    gains reproduces its posteriors.
+
+    Parameters
+    ----------
+    P_prior : ndarray (N, n, n)
+    H, R, pinv_rtol
+        As in :func:`kalman_gain`.
+    measured : ndarray (N,) of bool
+        Epochs with an update; the others get zero gain and dof.
+
+    Returns
+    -------
+    Gains
     """
     gains = kalman_gain(P_prior, H, R, pinv_rtol=pinv_rtol)
     measured = np.asarray(measured, dtype=bool)
@@ -547,12 +575,26 @@ def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
 
     The average over ``runs`` independent runs of a chi-square statistic with ``dof``
     degrees of freedom is ``chi2(runs dof) / runs`` (Bar-Shalom, Li & Kirubarajan 2001,
-    §5.4); returns ``(lower, upper)`` (arrays when ``dof`` is one).
+    §5.4).
 
     The chi-square quantile is ``2 gammaincinv(k / 2, q)``, what ``scipy.stats.chi2.ppf``
     evaluates (the same numbers), without importing ``scipy.stats`` (about 0.3-0.7 s in a
     process that needs nothing else of it), and once per distinct ``dof`` (a NEES history
     has one per epoch but a few distinct values; each quantile is an iterative inversion).
+
+    Parameters
+    ----------
+    dof : int or array_like of int
+        Degrees of freedom of one run.
+    runs : int
+        Independent runs averaged.
+    alpha : float
+        Two-sided significance level.
+
+    Returns
+    -------
+    lower, upper : float or ndarray
+        Shaped like ``dof``.
     """
     dof = np.asarray(dof, dtype=float)
     runs = int(runs)
@@ -590,14 +632,23 @@ def nees_basis(P, rtol: float = 1e-10):
 
 
 def nees_values(err, P, rtol: float = 1e-10, basis=None):
-    """NEES ``e' P^+ e`` of errors (K, R, n) against covariances (K, n, n); returns the
-    NEES (K, R) and its degrees of freedom (K,).
+    """NEES ``e' P^+ e``, scaled to a correlation matrix first (states of very different
+    units); directions with (relative) zero variance are left out, and the degrees of
+    freedom are the kept rank. Intermediates are formed in place where they can be.
 
-    Scaled to a correlation matrix first (states of very different units); directions with
-    (relative) zero variance are left out, and the degrees of freedom are the kept rank.
-    ``basis``: :func:`nees_basis` of ``P`` when already computed (``P`` and ``rtol`` are
-    then not used). The (K, R, n) intermediates are formed in place where they can be
-    (a 100-run history is 60 MB each, and fresh memory costs its page faults).
+    Parameters
+    ----------
+    err : ndarray (K, R, n)
+        Errors of R runs at K epochs.
+    P, rtol
+        Covariances (K, n, n) and cut-off as in :func:`nees_basis` (unused with ``basis``).
+    basis : tuple, optional
+        :func:`nees_basis` of ``P`` when already computed.
+
+    Returns
+    -------
+    nees : ndarray (K, R)
+    dof : ndarray (K,)
     """
     safe, active, V, inv_w, dof = basis if basis is not None else nees_basis(P, rtol)
     en = np.divide(err, safe[:, None, :])

@@ -125,6 +125,26 @@ def map_tasks(func: Callable, items: Sequence, scheduler=None, *, shared: Mappin
     picklable (a module-level function or a ``functools.partial`` of one); ``shared``
     values are scattered once to every worker (``Client.scatter(broadcast=True)``), not
     pickled per task. BLAS is limited to one thread inside each task.
+
+    Parameters
+    ----------
+    func : callable
+        Called as ``func(item, **shared)``; picklable.
+    items : sequence
+        One task per item.
+    scheduler : None, str or distributed.Client, optional
+        Where the tasks run (see :func:`executor`).
+    shared : mapping, optional
+        Keyword arguments common to every task, sent to each worker once.
+    progress : bool, optional
+        Show a progress bar.
+    desc : str, optional
+        Label of the progress bar.
+
+    Returns
+    -------
+    list
+        The results in the order of ``items``.
     """
     items = list(items)
     shared = dict(shared or {})

@@ -1,6 +1,6 @@
 """Quaternion arithmetic on ``(..., 4)`` scalar-last arrays (``(x, y, z, w)``, the order of
 :mod:`scipy.spatial.transform`), vectorised over leading axes, for the strapdown
-mechanisation (:mod:`navlib.strapdown`, spec excitability.md A2) and the SO(3) spline fit
+mechanisation (:mod:`navlib.strapdown`, docs/assumptions.md A2) and the SO(3) spline fit
 (:mod:`navlib.trajectory`). ``q`` rotates body vectors into ECEF when it is an attitude.
 """
 
@@ -15,9 +15,23 @@ from scipy.spatial.transform import Rotation
 from navlib import earth
 from navlib.rotations import cross
 
+__all__ = ["earth_quat", "prefix_products", "quat_from_matrix", "quat_from_rotvec", "quat_mul",
+           "quat_rotate"]
+
 
 def quat_mul(p, q):
-    """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``)."""
+    """Hamilton product ``p ⊗ q`` (matrix order: ``C(p ⊗ q) = C(p) C(q)``).
+
+    Parameters
+    ----------
+    p, q : numpy.ndarray, shape (..., 4)
+        Quaternions, scalar last ``(x, y, z, w)``; leading axes broadcast.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        The product, scalar last.
+    """
     px, py, pz, pw = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
     qx, qy, qz, qw = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     out = np.empty(p.shape if p.shape == q.shape else np.broadcast_shapes(p.shape, q.shape))
@@ -40,7 +54,20 @@ def quat_from_rotvec(phi):
 
 
 def quat_rotate(q, v):
-    """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4): ``C(q) v``."""
+    """Rotate vectors by unit quaternions: ``C(q) v``.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (..., 4)
+        Unit quaternions, scalar last ``(x, y, z, w)``.
+    v : numpy.ndarray, shape (..., 3)
+        Vectors, broadcast against ``q``'s leading axes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        The rotated vectors.
+    """
     u = q[..., :3]
     w = q[..., 3:]
     uv = cross(u, v)

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+__all__ = ["format_resolved", "relative_resolution"]
+
 
 def relative_resolution(shape) -> float:
     """``max(shape) * eps``: the resolution of singular values relative to the largest."""

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["bortz_coefficient", "bortz_rate", "cross", "exp_so3", "log_so3", "skew", "unskew"]
+
 
 def skew(v):
     """Cross-product matrix S(v) with ``S(v) @ u == cross(v, u)``; ``v`` (..., 3) -> (..., 3, 3)."""
@@ -34,7 +36,18 @@ def unskew(m):
 
 def cross(a, b):
     """Cross product of (..., 3) arrays (broadcasting), several times faster than
-    ``np.cross`` on small inputs, which matters inside per-sample loops."""
+    ``np.cross`` on small inputs, which matters inside per-sample loops.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (..., 3)
+        The two vectors; leading axes broadcast against each other.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        ``a x b`` over the broadcast leading axes.
+    """
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     out = np.empty(a.shape if a.shape == b.shape else np.broadcast_shapes(a.shape, b.shape))
@@ -45,7 +58,8 @@ def cross(a, b):
 
 
 def bortz_coefficient(angle):
-    """Scalar ``(1 - a sin a / (2 (1 - cos a))) / a^2`` of the Bortz equation (spec A2, A3).
+    """Scalar ``(1 - a sin a / (2 (1 - cos a))) / a^2`` of the Bortz equation (docs/assumptions.md
+    A2, A3).
 
     Evaluated as ``(1 - (a/2) cot(a/2)) / a^2``, which avoids the cancellation in
     ``1 - cos a``; below 0.2 rad the series ``1/12 + a^2/720 + a^4/30240 + a^6/1209600 +
@@ -70,8 +84,20 @@ def bortz_rate(theta, w_b):
     """Rotation-vector derivative for ``C = exp(S(theta))`` driven by the body rate ``w_b``.
 
     ``dtheta/dt = w + 1/2 theta x w + c(|theta|) theta x (theta x w)``, the body-rate form
-    that the spec note A2 verified numerically (España et al. 2019, Eq. 1 with the frame
-    of omega corrected). ``theta`` and ``w_b`` are (..., 3).
+    that the docs/assumptions.md A2 verified numerically (España et al. 2019, Eq. 1 with the frame
+    of omega corrected).
+
+    Parameters
+    ----------
+    theta : array_like, shape (..., 3)
+        Rotation vector of ``C = exp(S(theta))`` (rad).
+    w_b : array_like, shape (..., 3)
+        Body angular rate (rad/s), broadcast against ``theta``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        ``dtheta/dt`` (rad/s).
     """
     theta = np.asarray(theta, dtype=float)
     w_b = np.asarray(w_b, dtype=float)

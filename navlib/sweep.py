@@ -1,32 +1,14 @@
 """Design trade studies: a grid of parameters mapped over an evaluation as parallel tasks.
 
-Public contract (spec ``api.md``, "Scale")::
-
-    df = navlib.sweep.sweep(grid, evaluate, scheduler=None, output=None)
-
-``grid`` declares the points (a dict of value lists, whose product is swept, or a DataFrame
-of points); ``evaluate`` is a named evaluation of :data:`EVALUATIONS` or any picklable
-callable ``evaluate(**point) -> mapping``. The result is one row per point, parameter
-columns first. ``output`` (a ``.parquet`` file) makes the sweep resumable: each finished
-task is written at once to ``<output>.parts/``, a rerun skips the points already there, and
-the complete table replaces ``output`` atomically at the end.
-
-Where it runs (``scheduler``) is the parallel engine's choice (:func:`navlib.parallel.executor`:
-``$NAVLIB_SCHEDULER`` or a local Dask cluster, a Client, an address, ``"processes"``,
-``"threads"`` or ``"synchronous"``). Every task runs with BLAS limited to one thread, so
-serial and cluster sweeps agree exactly (``tests/test_sweep.py``).
-
-Named evaluations are registered from above (the sweep knows no study): the studies call
-:func:`register` when imported (``import navlib.studies`` imports them all).
-
-Heavy shared inputs. A named evaluation declares which of its parameters define its heavy
-input (:attr:`Evaluation.shared`: the trajectory, the sensor noise, the GNSS rate); that input
-is built once per distinct value as its own task (``Evaluation.prepare``) and the cheap
-per-point tasks depend on it, so Dask runs them where it lives instead of pickling it per
-task. Evaluations whose inputs are too big to move (the launcher's 200 Hz filters) keep a
-per-process cache instead, and the points are batched by shared input so that each batch
-builds it at most once. Callables keep their own caches (``functools.cache`` in the worker
-process); points reach them in grid order, batched.
+Contract (docs/assumptions.md, api.md "Scale"):
+``df = sweep(grid, evaluate, scheduler=None, output=None)``. ``grid`` is a dict of value
+lists (their product is swept) or a DataFrame of points; ``evaluate`` is a named evaluation
+of :data:`EVALUATIONS` (studies :func:`register` them when imported) or any picklable
+``evaluate(**point) -> mapping``. One row per point, parameter columns first; ``output`` (a
+``.parquet`` file) makes the sweep resumable. ``scheduler`` is resolved by
+:func:`navlib.parallel.executor`; BLAS runs one thread per task, so serial and cluster
+sweeps agree exactly. An evaluation's heavy input (:attr:`Evaluation.shared`) is built once
+per distinct value and the points are batched by it.
 """
 
 from __future__ import annotations
@@ -388,9 +370,8 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
         picklable callable ``evaluate(**point)`` returning a mapping of result columns
         (numbers, booleans or strings).
     scheduler : None, str or distributed.Client
-        Where to run (module docstring): None = ``$NAVLIB_SCHEDULER`` or a local cluster
-        sized to the machine; a Client; ``"tcp://host:port"``; ``"processes"``,
-        ``"threads"`` or ``"synchronous"``.
+        Where to run (:func:`navlib.parallel.executor`): None = ``$NAVLIB_SCHEDULER`` or a
+        local cluster; a Client; ``"tcp://host:port"``; ``"processes"``, ``"threads"``...
     output : str or Path, optional
         Parquet file for the results. Finished tasks are saved as they complete (in
         ``<output>.parts/``); a rerun with the same grid and evaluation skips the points
@@ -406,11 +387,10 @@ def sweep(grid, evaluate, scheduler=None, output=None, *, progress: bool | None 
     DataFrame
         The parameter columns (grid order) then the result columns, one row per point in
         grid order. ``attrs["sweep"]`` holds ``parameters`` (the parameter columns),
-        ``n_points``, ``n_computed`` (points not taken
-        from ``output``), ``n_tasks``, ``n_workers``, ``wall_s`` (from submission to the last
-        result), ``compute_s`` (wall time spent inside the evaluations), ``compute_cpu_s``
-        (their CPU time: below ``compute_s`` when the cores are shared) and ``prepare_s``
-        (building the shared inputs).
+        ``n_points``, ``n_computed`` (points not taken from ``output``), ``n_tasks``,
+        ``n_workers``, ``wall_s`` (submission to last result), ``compute_s`` (wall time in
+        the evaluations), ``compute_cpu_s`` (their CPU time) and ``prepare_s`` (building
+        the shared inputs).
 
     Raises
     ------
@@ -562,8 +542,29 @@ def pivot(frame: pd.DataFrame, x: str, y: str, value: str, fixed: Mapping | None
           agg: str = "mean") -> pd.DataFrame:
     """A heat-map table of a sweep result: ``value`` by ``y`` (rows) and ``x`` (columns).
 
-    ``fixed`` selects rows (``{column: value}``); the points left in a cell (other
-    parameters) are combined with ``agg`` (:data:`AGGREGATES`).
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        A sweep result (one row per grid point).
+    x, y : str
+        Columns spread along the table's columns and rows.
+    value : str
+        Numeric column shown in the cells.
+    fixed : mapping, optional
+        ``{column: value}`` rows to keep before pivoting.
+    agg : str, optional
+        How the points in one cell (other parameters) combine: one of :data:`AGGREGATES`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``value`` with ``y`` as index and ``x`` as columns.
+
+    Raises
+    ------
+    NavlibInputError
+        A frame that is no DataFrame, an unknown or non-numeric column, ``x == y``, an
+        unknown ``agg`` or no row matching ``fixed``.
     """
     if not isinstance(frame, pd.DataFrame):
         raise NavlibInputError(f"frame: expected a sweep DataFrame, got {type(frame).__name__}")
@@ -591,8 +592,7 @@ def pivot(frame: pd.DataFrame, x: str, y: str, value: str, fixed: Mapping | None
 
 
 def evaluations_frame() -> pd.DataFrame:
-    """The named evaluations: ``name``, ``description``, ``parameters`` (with defaults),
-    ``shared`` (the parameters defining the heavy input)."""
+    """The named evaluations: name, description, parameters (with defaults), shared."""
     return pd.DataFrame([{"name": ev.name, "description": ev.description,
                           "parameters": ", ".join(f"{k}={v!r}" for k, v in ev.parameters.items()),
                           "shared": ", ".join(ev.shared)} for ev in EVALUATIONS.values()])

@@ -6,6 +6,11 @@ Inside navlib everything is SI with angles in radians. Names at the edges carry 
 
 import numpy as np
 
+__all__ = ["DEG", "DEG_E7", "DEG_PER_HOUR", "DEG_PER_HOUR_PER_SQRT_HZ", "DEG_PER_SQRT_HOUR", "G0",
+           "HOUR", "KILOMETRE", "MG", "MG_PER_SQRT_HZ", "MICROSECOND", "MILLIMETRE", "MILLIRADIAN",
+           "MILLISECOND", "MINUTE", "M_S_PER_SQRT_HOUR", "NANOSECOND", "PPM", "UG",
+           "UG_PER_SQRT_HZ", "deg2rad", "rad2deg"]
+
 G0 = 9.80665
 """Standard gravity, m/s^2 (used only to convert g, mg and ug)."""
 

@@ -2,10 +2,10 @@
 
 * :func:`kalman_covariance` — the covariance recursion of a linear Kalman filter
   ``P-_{k+1} = F_k P+_k F_k' + Q_k`` and the Joseph-form update
-  ``P+ = (I - K H) P- (I - K H)' + K R K'`` with ``K = P- H' S^+`` (spec launcher.md §6.2,
-  ssac.md §8 item 6). ``S^+`` is the inverse of the innovation covariance when ``R`` is
-  positive definite, else its pseudo-inverse, so ideal (noise-free) measurements ``R = 0``
-  are handled exactly (the "ideal-GPS variant", launcher.md §6.2 item 5).
+  ``P+ = (I - K H) P- (I - K H)' + K R K'`` with ``K = P- H' S^+`` (docs/assumptions.md, launcher.md
+  §6.2, ssac.md §8 item 6). ``S^+`` is the inverse of the innovation covariance when ``R`` is
+  positive definite, else its pseudo-inverse, so ideal (noise-free) measurements ``R = 0`` are
+  handled exactly (the "ideal-GPS variant", launcher.md §6.2 item 5).
 * :func:`ins_only_covariance` — the unaided baseline (launcher.md §6.2 item 1).
 * :func:`block_in_frame`, :func:`sigma_in_frame` — a 3x3 block rotated per step, e.g. the
   attitude error in body axes ``P_body = T_E^B P_psipsi T_B^E`` (launcher.md §6.2 item 6).

@@ -18,6 +18,8 @@ from navlib.covariance.recursion import CovarianceResult, state_labels
 from navlib.errors import NavlibInputError
 from navlib.kalman import symmetrize
 
+__all__ = ["NormalizedEigenResult", "normalized_eigen"]
+
 
 @dataclass(frozen=True, eq=False)
 class NormalizedEigenResult:
@@ -76,7 +78,19 @@ class NormalizedEigenResult:
 
     def components_frame(self, modes: Sequence[int] | None = None,
                          tracked: bool = False) -> pd.DataFrame:
-        """Tidy eigenvector components: ``t, mode, state, component`` (modes 1-based)."""
+        """Tidy eigenvector components: ``t, mode, state, component`` (modes 1-based).
+
+        Parameters
+        ----------
+        modes : sequence of int, optional
+            1-based modes to keep (default all).
+        tracked : bool, optional
+            Use the tracked vectors instead of the sorted eigenvectors.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
         modes = np.arange(1, self.n + 1) if modes is None else np.asarray(modes, dtype=int)
         if modes.size == 0 or modes.min() < 1 or modes.max() > self.n:
             raise NavlibInputError(f"modes: expected 1-based mode numbers in 1..{self.n}")
@@ -94,8 +108,19 @@ class NormalizedEigenResult:
               tracked: bool = False) -> pd.DataFrame:
         """Eigenvalues and eigenvector components at one epoch (Silva et al. Tables 1–2).
 
-        Rows are states plus a first row ``eigenvalue``; columns ``lambda_1 ...``.
-        ``time_s`` (s) defaults to the last epoch.
+        Parameters
+        ----------
+        time_s : float, optional
+            Time (s); the nearest epoch is shown, default the last.
+        modes : sequence of int, optional
+            1-based modes to show (default all).
+        tracked : bool, optional
+            Use the tracked vectors and values instead of the sorted ones.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Rows: ``eigenvalue`` then the states; columns ``lambda_1 ...``.
         """
         k = self._epoch(time_s)
         modes = np.arange(1, self.n + 1) if modes is None else np.asarray(modes, dtype=int)
@@ -113,7 +138,17 @@ class NormalizedEigenResult:
         ``share[j] = ||V_S[j, :]||`` is invariant to rotations inside the subspace, so it is
         the meaningful quantity for a near-degenerate group (ssac.md §3.6 step 6: compare
         summed or projected subspaces). 1 means state j lies wholly inside the subspace.
-        Returns (N, n) over time, or (n,) when ``time_s`` (s) is given.
+
+        Parameters
+        ----------
+        modes : sequence of int
+            1-based modes spanning the subspace.
+        time_s : float, optional
+            One epoch (s); default every epoch.
+
+        Returns
+        -------
+        ndarray (N, n), or (n,) when ``time_s`` is given
         """
         modes = np.asarray(modes, dtype=int)
         if modes.size == 0 or modes.min() < 1 or modes.max() > self.n:

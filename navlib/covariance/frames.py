@@ -13,6 +13,9 @@ from navlib.covariance.recursion import CovarianceResult, stack_steps
 from navlib.errors import NavlibInputError
 from navlib.kalman import symmetrize
 
+__all__ = ["as_covariances", "block_in_frame", "convergence_time", "correlation",
+           "covariance_ratio", "group_correlation", "sigma_in_frame"]
+
 
 def as_covariances(P) -> np.ndarray:
     if isinstance(P, CovarianceResult):
@@ -61,7 +64,7 @@ def block_in_frame(P, states, C=None) -> np.ndarray:
 
     ``P_b = C P_block C'`` with ``C`` the rotation from the states' frame to the wanted
     one, e.g. ``C = T_E^B`` turns the ECEF attitude-error block into body axes
-    (spec launcher.md §6.2 item 6: ``P_body = T_E^B P_psipsi T_B^E``).
+    (docs/assumptions.md, launcher.md §6.2 item 6: ``P_body = T_E^B P_psipsi T_B^E``).
 
     Parameters
     ----------
@@ -87,7 +90,21 @@ def sigma_in_frame(P, states, C=None) -> np.ndarray:
     """Standard deviations of a rotated group, (N, k): ``sqrt(diag(C P_block C'))``.
 
     E.g. roll/pitch/yaw error sigma in body axes from an ECEF attitude-error block with
-    ``C = T_E^B`` per epoch (spec launcher.md §6.2 item 6).
+    ``C = T_E^B`` per epoch (docs/assumptions.md, launcher.md §6.2 item 6).
+
+    Parameters
+    ----------
+    P : CovarianceResult or ndarray (N, n, n)
+        Covariance history (the posterior of a result).
+    states : sequence of str or int
+        The group of k states (names need a CovarianceResult).
+    C : ndarray (k, k) or (N, k, k) or scipy Rotation, optional
+        Rotation to the wanted frame; None keeps the frame.
+
+    Returns
+    -------
+    ndarray (N, k)
+        Standard deviations in the units of the states.
     """
     block = block_in_frame(P, states, C)
     return np.sqrt(np.clip(np.diagonal(block, axis1=1, axis2=2), 0.0, None))
@@ -129,9 +146,19 @@ def group_correlation(P, states_a, states_b, C_a=None, C_b=None) -> np.ndarray:
     error and ``C_b = I`` for a body-axis one), returns
     ``rho_k = cov(a_k, b_k) / sqrt(var a_k var b_k)`` for each axis k.
 
+    Parameters
+    ----------
+    P : CovarianceResult or ndarray (N, n, n)
+        Covariance history (the posterior of a result).
+    states_a, states_b : sequence of str or int
+        The two groups of k states (names need a CovarianceResult).
+    C_a, C_b : ndarray (k, k) or (N, k, k) or scipy Rotation, optional
+        Rotations applied to each group; None keeps its frame.
+
     Returns
     -------
     ndarray (N, k)
+        Correlation coefficients in [-1, 1].
     """
     ia = _resolve(P, states_a, "states_a")
     ib = _resolve(P, states_b, "states_b")

@@ -1,7 +1,7 @@
-"""The Kalman covariance of a linear filter along a model (spec launcher.md §6.2, ssac.md §8
-item 6): :func:`kalman_covariance` (Joseph form, pseudo-inverse of the innovation
-covariance for singular ``R``), :func:`kalman_covariances` for several initial
-covariances at once and the unaided :func:`ins_only_covariance`, all through
+"""The Kalman covariance of a linear filter along a model (docs/assumptions.md, launcher.md §6.2,
+ssac.md §8 item 6): :func:`kalman_covariance` (Joseph form, pseudo-inverse of the innovation
+covariance for singular ``R``), :func:`kalman_covariances` for several initial covariances at once
+and the unaided :func:`ins_only_covariance`, all through
 :func:`navlib.kalman.covariance_recursion`.
 """
 
@@ -18,8 +18,29 @@ from navlib.errors import NavlibInputError
 from navlib.kalman import covariance_recursion, symmetrize
 from navlib.models.base import DiscreteModel, state_indices
 
+__all__ = ["CovarianceResult", "ins_only_covariance", "kalman_covariance", "kalman_covariances",
+           "stack_steps", "state_labels"]
+
 
 def state_labels(state_names, n: int) -> tuple[str, ...]:
+    """The ``n`` state names as strings, ``x0, x1, ...`` when none are given.
+
+    Parameters
+    ----------
+    state_names : sequence or None
+        One name per state.
+    n : int
+        Number of states.
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    NavlibInputError
+        When ``state_names`` does not hold ``n`` names.
+    """
     if state_names is None:
         return tuple(f"x{i}" for i in range(n))
     names = tuple(str(s) for s in state_names)
@@ -29,7 +50,29 @@ def state_labels(state_names, n: int) -> tuple[str, ...]:
 
 
 def stack_steps(value, count: int, shape: tuple, name: str) -> np.ndarray:
-    """One matrix broadcast to ``count`` copies, or a stack of ``count`` matrices."""
+    """One matrix broadcast to ``count`` copies, or a stack of ``count`` matrices.
+
+    Parameters
+    ----------
+    value : array_like
+        A ``shape`` matrix or a stack of ``count`` of them; finite.
+    count : int
+        Number of steps.
+    shape : tuple of int
+        Shape of one matrix.
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    ndarray (count, shape[0], shape[1])
+        A read-only broadcast view for a single matrix.
+
+    Raises
+    ------
+    NavlibInputError
+        For another shape or a non-finite entry.
+    """
     arr = finite_array(value, name)
     if arr.ndim == 2 and arr.shape == shape:
         return np.broadcast_to(arr, (count, *shape))
@@ -257,8 +300,26 @@ def ins_only_covariance(F, Q=None, P0=None, *, t=None, n_epochs: int | None = No
                         state_names=None) -> CovarianceResult:
     """Unaided covariance propagation ``P_{k+1} = F_k P_k F_k' + Q_k`` (launcher.md §6.2.1).
 
-    Same arguments as :func:`kalman_covariance` without the measurement ones; ``P0`` is the
-    covariance at epoch 0 and ``P_prior == P_post`` at every epoch.
+    ``P_prior == P_post`` at every epoch.
+
+    Parameters
+    ----------
+    F : ndarray (N-1, n, n) or (n, n), or DiscreteModel
+        Transition matrices; a DiscreteModel supplies ``F, Q, P0, t, state_names``.
+    Q : ndarray (N-1, n, n) or (n, n)
+        Process noise added over each step.
+    P0 : ndarray (n, n)
+        Covariance at epoch 0.
+    t : ndarray (N,), optional
+        Epoch times (default ``0, 1, ...``); with a single ``F`` it fixes ``N``.
+    n_epochs : int, optional
+        ``N`` when ``F`` is a single matrix and ``t`` is not given.
+    state_names : sequence of str, optional
+        Labels of the states.
+
+    Returns
+    -------
+    CovarianceResult
     """
     F, Q, _, _, P0, t, names = _inputs(F, Q, None, None, P0, t, n_epochs, state_names,
                                       measurements=False)

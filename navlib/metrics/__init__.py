@@ -1,8 +1,8 @@
 """Excitability and sensability of navigation states (España, Carrizo & Giribet 2019).
 
-Both metrics take plain arrays in physical units (spec api.md "Metrics"), so any model can
-feed them, and both work in the normalised coordinates of the corrected Eq. 11
-(spec excitability.md A10)::
+Both metrics take plain arrays in physical units (docs/assumptions.md, api.md "Metrics"), so any
+model can feed them, and both work in the normalised coordinates of the corrected Eq. 11
+(docs/assumptions.md A10)::
 
     D0 = diag(diag(P0)),   F~ = D0^-1/2 F D0^1/2,   H~ = R0^-1/2 H D0^1/2,
     P~ = D0^-1/2 P D0^-1/2,   Q~ = D0^-1/2 Q D0^-1/2,   I~ = P~^-1 = D0^1/2 I D0^1/2.
@@ -15,7 +15,7 @@ feed them, and both work in the normalised coordinates of the corrected Eq. 11
   eigen-decomposition of ``I~_k`` at every epoch, ``r^i_k`` (Eq. 15), ``nr_k`` from ``nu``
   and ``s^j_k`` = norm of the projection of ``e_j`` on the practically sensible subspace.
 
-Helpers: :func:`nu_for` / :func:`nu_range` (spec A11), model wrappers
+Helpers: :func:`nu_for` / :func:`nu_range` (docs/assumptions.md A11), model wrappers
 :func:`excitability_segment` / :func:`excitability_segments` (segments, D0 choice of A19) and
 :func:`sensability_model`, and :func:`physical_bands` (the k-sigma bands of Figs. 3-5).
 

@@ -1,6 +1,6 @@
 """Checks and normalisation shared by the excitability and sensability metrics.
 
-Shapes follow spec api.md "Metrics"; the normalisation is the corrected Eq. 11 (spec
+Shapes follow docs/assumptions.md, api.md "Metrics"; the normalisation is the corrected Eq. 11 (spec
 excitability.md A10): ``D0 = diag(diag(P0))``, ``H~ = R0^-1/2 H D0^1/2``.
 """
 
@@ -140,7 +140,7 @@ def whiten(H: np.ndarray, R: np.ndarray, sqrt_d: np.ndarray) -> np.ndarray:
 
     Cholesky whitening differs from the symmetric ``R^-1/2`` by an orthogonal factor on the
     left, which changes neither ``H~' H~`` nor the right singular vectors and singular values
-    of the stacked ``O~`` (spec excitability.md A10).
+    of the stacked ``O~`` (docs/assumptions.md A10).
     """
     L = np.linalg.cholesky(R)
     return np.linalg.solve(L, H * sqrt_d)

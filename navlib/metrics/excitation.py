@@ -1,7 +1,7 @@
 """Excitability of navigation states (España, Carrizo & Giribet 2019, Eqs. 17-22, Defs. 3-4).
 
 :func:`excitability` takes the SVD of the normalised extended observability matrix
-``O~ = [H~0; H~1 F~0; ...]`` (corrected Eq. 11, spec excitability.md A10); the energy
+``O~ = [H~0; H~1 F~0; ...]`` (corrected Eq. 11, docs/assumptions.md A10); the energy
 spectrum ``S(u^i) = n sigma^i / tr M``; ``ne`` from ``eta`` (A14); ``e^j`` = norm of the
 projection of the canonical vector ``e_j`` on the excited subspace ``span{u^i : i < ne}``.
 """
@@ -27,6 +27,8 @@ from navlib.metrics._arrays import (
 )
 from navlib.observability import observability_matrix
 
+__all__ = ["ExcitabilityResult", "excitability"]
+
 
 @dataclass(frozen=True, eq=False)
 class ExcitabilityResult:
@@ -41,8 +43,8 @@ class ExcitabilityResult:
     U : ndarray (n, n)
         Columns ``u^i``: right singular vectors of ``O~`` (eigenvectors of the Gramian).
     ne : int
-        First 1-based index with ``S[i] <= eta`` (``n + 1`` when none, spec A14); the excited
-        subspace is ``span{u^i : i < ne}``.
+        First 1-based index with ``S[i] <= eta`` (``n + 1`` when none, docs/assumptions.md A14); the
+        excited subspace is ``span{u^i : i < ne}``.
     sigma : ndarray (n,)
         Squared singular values of ``O~`` (eigenvalues of ``M = O~' O~``), descending.
     eta : float
@@ -102,7 +104,7 @@ class ExcitabilityResult:
 
 
 def _excited(S: np.ndarray, U: np.ndarray, eta: float) -> tuple[int, np.ndarray]:
-    """``ne`` (spec A14) and ``e^j = sqrt(sum_{i<ne} U[j, i]^2)`` (Def. 4)."""
+    """``ne`` (docs/assumptions.md A14) and ``e^j = sqrt(sum_{i<ne} U[j, i]^2)`` (Def. 4)."""
     below = np.flatnonzero(S <= eta)
     ne = int(below[0]) + 1 if below.size else S.size + 1
     return ne, np.linalg.norm(U[:, : ne - 1], axis=1)
@@ -117,7 +119,7 @@ def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | N
     F : array (N-1, n, n)
         Transitions between the measurement epochs of the segment, physical units.
     H : array (N, m, n) or (m, n)
-        Measurement matrices at the N epochs (all are stacked, spec A12).
+        Measurement matrices at the N epochs (all are stacked, docs/assumptions.md A12).
     P0 : array (n, n)
         Symmetric positive-definite covariance whose diagonal gives ``D0`` (Eq. 11).
     R0 : array (m, m)
@@ -127,7 +129,7 @@ def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | N
     state_names : sequence of str, optional
     d0 : array (n,) or (n, n), optional
         Variances (or a covariance whose diagonal is used) for ``D0`` instead of ``diag(P0)``,
-        e.g. the filter covariance at the segment start (spec A19, option B).
+        e.g. the filter covariance at the segment start (docs/assumptions.md A19, option B).
 
     Returns
     -------
@@ -135,12 +137,12 @@ def excitability(F, H, P0, R0, eta: float = 1e-3, state_names: Sequence[str] | N
 
     Notes
     -----
-    Normalisation per the corrected Eq. 11 (spec A10): ``F~ = D0^-1/2 F D0^1/2``,
+    Normalisation per the corrected Eq. 11 (docs/assumptions.md A10): ``F~ = D0^-1/2 F D0^1/2``,
     ``H~ = R0^-1/2 H D0^1/2``. ``O~ = [H~0; H~1 F~0; H~2 F~1 F~0; ...]`` is stacked by
     :func:`navlib.observability.observability_matrix`, reduced by QR and decomposed by SVD
     (full right basis also when ``N m < n``), never by eigenvalues of
-    ``O~' O~`` whose spectrum spans tens of decades (spec A12). ``sigma^i`` are the squared
-    singular values (zero-padded when ``N m < n``), ``S = n sigma / sum(sigma)`` (Eq. 19).
+    ``O~' O~`` whose spectrum spans tens of decades (docs/assumptions.md A12). ``sigma^i`` are the
+    squared singular values (zero-padded when ``N m < n``), ``S = n sigma / sum(sigma)`` (Eq. 19).
     """
     F, H = check_system(F, H)
     n, m = F.shape[-1], H.shape[1]

@@ -31,6 +31,8 @@ from navlib.metrics.segments import (
 )
 from navlib.metrics.sensing import SensabilityResult, physical_bands
 
+__all__ = ["SegmentedAnalysis"]
+
 
 @dataclass(frozen=True, eq=False)
 class SegmentedAnalysis:
@@ -127,7 +129,19 @@ class SegmentedAnalysis:
         return {"state": list(self.state_names)}
 
     def epochs(self, t_a: float, t_b: float, open_start: bool = False) -> np.ndarray:
-        """Indices of the model epochs in ``[t_a, t_b]`` (``(t_a, t_b]`` with ``open_start``)."""
+        """Indices of the model epochs in ``[t_a, t_b]`` (``(t_a, t_b]`` with ``open_start``).
+
+        Parameters
+        ----------
+        t_a, t_b : float
+            Interval bounds (s, the model's clock).
+        open_start : bool, optional
+            Leave out an epoch at ``t_a``.
+
+        Returns
+        -------
+        ndarray of int
+        """
         return np.flatnonzero(in_segment(self.model.t, t_a, t_b, open_start))
 
     def at(self, t_s: float) -> int:
@@ -240,6 +254,19 @@ class SegmentedAnalysis:
         New segments or a new ``d0`` redo the small per-segment SVDs; a new ``eta`` only
         re-thresholds them (:meth:`ExcitabilityResult.with_eta`), a new ``nu`` the stored
         eigen-decompositions (:meth:`SensabilityResult.with_nu`).
+
+        Parameters
+        ----------
+        segments : sequence of (float, float), optional
+            New ``(t_start, t_end)`` segments (s).
+        eta, nu, d0, e_threshold, s_threshold, min_fraction : optional
+            New thresholds and D0 choice, as in :meth:`build` (checked by
+            :func:`check_thresholds`).
+
+        Returns
+        -------
+        SegmentedAnalysis
+            Of the same class as ``self``, sharing the model.
         """
         given = {"eta": eta, "nu": nu, "e_threshold": e_threshold, "s_threshold": s_threshold,
                  "min_fraction": min_fraction}

@@ -1,8 +1,8 @@
 """The metrics of a discretised model over time segments, and the thresholds that read them.
 
 :func:`sensability_model`, :func:`excitability_segment` and :func:`excitability_segments`
-feed a :class:`~navlib.models.DiscreteModel` to the metrics (segments of spec A12, the D0
-choice of A19); :func:`check_segments` and :func:`in_segment` define which epochs a segment
+feed a :class:`~navlib.models.DiscreteModel` to the metrics (segments of docs/assumptions.md A12,
+the D0 choice of A19); :func:`check_segments` and :func:`in_segment` define which epochs a segment
 stacks; :func:`check_thresholds` and the defaults :data:`E_THRESHOLD`, :data:`S_THRESHOLD`,
 :data:`MIN_FRACTION` read the results.
 """
@@ -18,6 +18,10 @@ from navlib.errors import NavlibInputError
 from navlib.metrics._arrays import check_d0, check_eta, check_nu
 from navlib.metrics.excitation import ExcitabilityResult, excitability
 from navlib.metrics.sensing import SensabilityResult, sensability
+
+__all__ = ["E_THRESHOLD", "LOW", "MIN_FRACTION", "S_THRESHOLD", "THRESHOLD_KEYS",
+           "check_discrete_model", "check_segments", "check_thresholds", "excitability_segment",
+           "excitability_segments", "in_segment", "sensability_model"]
 
 
 def _model_P0(model, P0) -> np.ndarray:
@@ -42,8 +46,23 @@ def sensability_model(model, P0=None, nu: float = 0.985, prior_update: bool = Fa
     """:func:`sensability` of a :class:`~navlib.models.DiscreteModel` (its ``t``, ``F``,
     ``Q``, ``H``, ``R`` and ``state_names``; ``P0`` defaults to ``model.P0``).
 
-    ``t_start``/``t_end`` restrict it to the epochs in that closed interval; ``P0`` then
-    applies at the first of them.
+    Parameters
+    ----------
+    model : DiscreteModel
+        Supplies ``t``, ``F``, ``Q``, ``H``, ``R`` and ``state_names``.
+    P0 : ndarray (n, n), optional
+        Covariance at the first epoch used (default ``model.P0``).
+    nu : float in (0, 1]
+        Threshold of Def. 1 (docs/assumptions.md A11).
+    prior_update : bool
+        Whether ``P0`` is a prior updated at the first epoch (docs/assumptions.md A9; see
+        :func:`sensability`).
+    t_start, t_end : float, optional
+        Keep the epochs in ``[t_start, t_end]`` (s); ``P0`` applies at the first of them.
+
+    Returns
+    -------
+    SensabilityResult
     """
     check_discrete_model(model)
     if t_start is not None or t_end is not None:
@@ -54,7 +73,8 @@ def sensability_model(model, P0=None, nu: float = 0.985, prior_update: bool = Fa
 
 
 def _filter_variances(P_filter, model, P0, k: int, t_a: float) -> np.ndarray:
-    """Variances at model epoch ``k`` (time ``t_a``) from a filter covariance (spec A19)."""
+    """Variances at model epoch ``k`` (time ``t_a``) from a filter covariance (docs/assumptions.md
+    A19)."""
     n = len(model.state_names)
     if P_filter is None:
         return sensability_model(model, P0).sigma[k] ** 2
@@ -88,7 +108,7 @@ def excitability_segment(model, t_a: float, t_b: float, P0=None, R0=None, eta: f
     ----------
     model : DiscreteModel
         Discretised at its measurement epochs; all epochs in the closed interval are stacked
-        (spec A12).
+        (docs/assumptions.md A12).
     t_a, t_b : float
         Segment limits, s.
     P0 : array (n, n), optional
@@ -132,6 +152,27 @@ def excitability_segments(model, segments, eta: float = 1e-3, d0: str = "global"
     ``segments`` are checked by :func:`check_segments` (inside ``span``, default the model
     epochs). ``d0="filter"`` takes D0 from the filter covariance at each segment start; pass
     the ``sensability`` result of the same model to reuse its covariance recursion.
+
+    Parameters
+    ----------
+    model : DiscreteModel
+        The discretised model.
+    segments : sequence of (float, float)
+        ``(t_start, t_end)`` pairs (s).
+    eta : float in (0, 1)
+        Energy threshold of the excited subspace (docs/assumptions.md A14).
+    d0 : {"global", "filter"}
+        D0 from ``P0`` or from the filter covariance at each segment start (docs/assumptions.md
+        A19).
+    sensability : SensabilityResult, optional
+        Of the same model, reused for ``d0="filter"``.
+    span : (float, float), optional
+        Interval the segments must lie in (default the model epochs).
+
+    Returns
+    -------
+    tuple of ExcitabilityResult
+        One per segment.
     """
     check_discrete_model(model)
     segs = check_segments(segments, model.t, span)
@@ -163,8 +204,25 @@ def check_thresholds(eta: float = 1e-3, nu: float = 0.985, e_threshold: float = 
     """The thresholds of a :class:`SegmentedAnalysis` as a dict of floats (keys
     :data:`THRESHOLD_KEYS`), or a NavlibInputError naming the bad one.
 
-    ``eta`` in (0, 1) (A14), ``nu`` in (0, 1] (Def. 1, A11), the reading shares
-    ``e_threshold``, ``s_threshold`` and ``min_fraction`` in [0, 1].
+    Parameters
+    ----------
+    eta : float in (0, 1)
+        Excitability energy threshold (A14).
+    nu : float in (0, 1]
+        Sensability threshold (Def. 1, A11).
+    e_threshold, s_threshold, min_fraction : float in [0, 1]
+        The reading shares (:data:`E_THRESHOLD`, :data:`S_THRESHOLD`,
+        :data:`MIN_FRACTION`).
+
+    Returns
+    -------
+    dict
+        ``{key: float}`` for the keys of :data:`THRESHOLD_KEYS`.
+
+    Raises
+    ------
+    NavlibInputError
+        Naming the first value that is not finite or lies outside its range.
     """
     return {"eta": check_eta(eta), "nu": check_nu(nu),
             "e_threshold": finite_scalar(e_threshold, "e_threshold", 0.0, 1.0),
@@ -174,7 +232,21 @@ def check_thresholds(eta: float = 1e-3, nu: float = 0.985, e_threshold: float = 
 
 def in_segment(t, t_start: float, t_end: float, open_start: bool = False) -> np.ndarray:
     """Boolean mask of the times ``t`` in the closed segment ``[t_start, t_end]`` (1 ns
-    tolerance; ``(t_start, t_end]`` with ``open_start``), the epochs a segment stacks (A12)."""
+    tolerance; ``(t_start, t_end]`` with ``open_start``), the epochs a segment stacks (A12).
+
+    Parameters
+    ----------
+    t : array_like
+        Times (s).
+    t_start, t_end : float
+        Segment bounds (s).
+    open_start : bool, optional
+        Leave out a time at ``t_start``.
+
+    Returns
+    -------
+    ndarray of bool, shaped like ``t``
+    """
     t = np.asarray(t, dtype=float)
     low = t > t_start + _TOL if open_start else t >= t_start - _TOL
     return low & (t <= t_end + _TOL)
@@ -182,8 +254,27 @@ def in_segment(t, t_start: float, t_end: float, open_start: bool = False) -> np.
 
 def check_segments(segments, t, span=None) -> tuple[tuple[float, float], ...]:
     """``segments`` as ``(t_start, t_end)`` float pairs, each inside ``span`` (default the
-    first and last of the epochs ``t``) and holding at least two epochs of ``t``; else a
-    NavlibInputError naming the segment."""
+    first and last of the epochs ``t``) and holding at least two epochs of ``t``.
+
+    Parameters
+    ----------
+    segments : sequence of (float, float)
+        ``(t_start, t_end)`` pairs (s).
+    t : array_like
+        The model epochs (s).
+    span : (float, float), optional
+        Interval the segments must lie in.
+
+    Returns
+    -------
+    tuple of (float, float)
+
+    Raises
+    ------
+    NavlibInputError
+        For no segments, a malformed pair, or a segment outside ``span`` or holding fewer
+        than two epochs (naming it).
+    """
     t = np.asarray(t, dtype=float)
     first, last = (t[0], t[-1]) if span is None else (float(span[0]), float(span[1]))
     try:

@@ -4,8 +4,8 @@
 information ``I~_k = D0^1/2 I_k D0^1/2`` at every epoch (corrected Eq. 11, spec
 excitability.md A10), takes ``r^i_k`` (Eq. 15), ``nr_k`` from ``nu`` and ``s^j_k`` = norm of
 the projection of ``e_j`` on the practically sensible subspace. :func:`nu_for` /
-:func:`nu_range` give admissible ``nu`` (spec A11); :func:`physical_bands` the k-sigma
-bands of Figs. 3-5.
+:func:`nu_range` give admissible ``nu`` (docs/assumptions.md A11); :func:`physical_bands` the
+k-sigma bands of Figs. 3-5.
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ from navlib.metrics._arrays import (
     square_stack,
     whiten,
 )
+
+__all__ = ["SensabilityResult", "nu_for", "nu_range", "physical_bands", "sensability"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,7 +64,7 @@ class SensabilityResult:
         Diagonal of ``D0``.
     nu : float
     prior_update : bool
-        False: ``P0`` is the posterior at the first epoch (spec A9, literal reading);
+        False: ``P0`` is the posterior at the first epoch (docs/assumptions.md A9, literal reading);
         True: ``P0`` is a prior updated with the first measurement.
     state_names : tuple of str or None
     """
@@ -143,10 +145,11 @@ def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
     P0 : array (n, n)
         Symmetric positive-definite covariance at the first epoch; ``D0 = diag(diag(P0))``.
     nu : float in (0, 1]
-        Threshold for ``nr`` (Def. 1); see :func:`nu_for` for the proposed value (spec A11).
+        Threshold for ``nr`` (Def. 1); see :func:`nu_for` for the proposed value
+        (docs/assumptions.md A11).
     prior_update : bool
-        False (default, literal reading of spec A9): ``P0`` is the posterior at epoch 0, so
-        ``I_0 = P0^-1`` and, with a diagonal ``P0`` and an admissible ``nu``, every
+        False (default, literal reading of docs/assumptions.md A9): ``P0`` is the posterior at epoch
+        0, so ``I_0 = P0^-1`` and, with a diagonal ``P0`` and an admissible ``nu``, every
         sensability is 1 at epoch 0. True: ``P0`` is a prior updated with ``H_0, R_0``.
     state_names : sequence of str, optional
     t : array (N,), optional
@@ -159,14 +162,14 @@ def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
     Notes
     -----
     Recursion (Eq. 10): ``P-_{k+1} = F_k P_k F_k' + Q_k``, ``I_{k+1} = (P-_{k+1})^-1 +
-    H' R^-1 H``, run in the normalised coordinates of the corrected Eq. 11 (spec A10), where it
-    is the transformed physical recursion: ``I~ = D0^1/2 I D0^1/2``. ``R0`` cancels from
-    ``H~' R~^-1 H~``, so sensability needs none. Numerically the measurements are whitened
-    (``W_k = L_k^-1 H_k D0^1/2`` with ``R_k = L_k L_k'``), the covariance form with the
-    Joseph update (:func:`navlib.covariance.kalman_covariance`) gives ``P~_k`` without
-    inverting ``P-``, and ``I~_k = P~_k^-1`` follows by batched Cholesky inversion
-    (algebraically equal to the information form of Eq. 10b). The ``I~_k`` are
-    eigen-decomposed in one batched ``eigh`` after the recursion.
+    H' R^-1 H``, run in the normalised coordinates of the corrected Eq. 11 (docs/assumptions.md
+    A10), where it is the transformed physical recursion: ``I~ = D0^1/2 I D0^1/2``. ``R0`` cancels
+    from ``H~' R~^-1 H~``, so sensability needs none. Numerically the measurements are whitened
+    (``W_k = L_k^-1 H_k D0^1/2`` with ``R_k = L_k L_k'``), the covariance form with the Joseph
+    update (:func:`navlib.covariance.kalman_covariance`) gives ``P~_k`` without inverting ``P-``,
+    and ``I~_k = P~_k^-1`` follows by batched Cholesky inversion (algebraically equal to the
+    information form of Eq. 10b). The ``I~_k`` are eigen-decomposed in one batched ``eigh`` after
+    the recursion.
     """
     F, H = check_system(F, H)
     n_epochs, m, n = H.shape
@@ -209,7 +212,8 @@ def sensability(F, H, Q, R, P0, nu: float = 0.985, prior_update: bool = False,
 
 
 def nu_range(n: int) -> tuple[float, float]:
-    """Open interval of admissible ``nu`` for n states: ``(sqrt(1 - 1/n), 1)`` (spec A11).
+    """Open interval of admissible ``nu`` for n states: ``(sqrt(1 - 1/n), 1)`` (docs/assumptions.md
+    A11).
 
     Below the lower bound, equal eigenvalues (``r^i = sqrt(i/n)``) would leave a component
     outside the sensible subspace.
@@ -222,6 +226,22 @@ def nu_for(n: int, eps: float) -> float:
     """The paper's proposed ``nu = sqrt(1 - 1/n + eps)``, valid for ``0 < eps < 1/n`` (A11).
 
     For n = 21 the paper's ``nu = 0.985`` corresponds to ``eps = 0.0178``.
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+    eps : float
+        Margin, in ``(0, 1/n)``.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    NavlibInputError
+        When ``eps`` lies outside ``(0, 1/n)``.
     """
     n = n_states(n)
     eps = finite_scalar(eps, "eps", 0.0, low_open=True)
@@ -233,8 +253,18 @@ def nu_for(n: int, eps: float) -> float:
 def physical_bands(result: SensabilityResult, k: float = 2.0) -> pd.DataFrame:
     """Tidy frame of the physical ``±k sigma`` bands beside the sensability (Figs. 3-5).
 
-    Columns ``t``, ``state``, ``s``, ``sigma``, ``nr``, ``lower`` (= -k sigma), ``upper``
-    (= +k sigma).
+    Parameters
+    ----------
+    result : SensabilityResult
+        Sensability of a model (its covariances give ``sigma``).
+    k : float, optional
+        Band half-width in standard deviations (default 2).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``t``, ``state``, ``s``, ``sigma``, ``nr``, ``lower`` (= -k sigma),
+        ``upper`` (= +k sigma).
     """
     if not isinstance(result, SensabilityResult):
         raise NavlibInputError(f"result: expected a SensabilityResult, got "

@@ -2,9 +2,9 @@
 
 :func:`local_observability` evaluates the local observability matrix at every step of a
 discrete model, either as printed in Beaudoin et al. (2018) eq. (6) (time-varying sequence
-``C(k); C(k+1)A(k); ...``) or with the step's matrices frozen (PWCS, spec launcher.md §6.1
-item 2). It is vectorised over steps and split across threads; at every step of eq. (6) it
-carries triangular factors from step to step (:mod:`navlib.observability.sliding`, compiled)
+``C(k); C(k+1)A(k); ...``) or with the step's matrices frozen (PWCS, docs/assumptions.md,
+launcher.md §6.1 item 2). It is vectorised over steps and split across threads; at every step of eq.
+(6) it carries triangular factors from step to step (:mod:`navlib.observability.sliding`, compiled)
 instead of factorising each stacked matrix.
 """
 
@@ -26,6 +26,8 @@ from navlib.models.base import DiscreteModel, LinearModel
 from navlib.observability.matrix import condition_number
 from navlib.observability.sliding import sliding_singular_values
 from navlib.resolution import relative_resolution
+
+__all__ = ["VARIANTS", "LocalObservability", "local_matrix", "local_observability"]
 
 VARIANTS = ("time_varying", "frozen")
 
@@ -243,11 +245,10 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
                         n_jobs: int | None = None, chunk: int = 1024) -> LocalObservability:
     """Local observability test at every (or every ``stride``-th) step of a mission.
 
-    Implements Beaudoin et al. (2018) §3.1 / spec launcher.md §6.1: at step ``k`` the local
-    matrix is eq. (6), ``O(k) = [H_k; H_{k+1} F_k; ...; H_{k+w-1} F_{k+w-2} ... F_k]``
-    (``variant="time_varying"``), or the model frozen at step ``k``,
-    ``[H_k; H_k F_k; ...; H_k F_k^(w-1)]`` (``variant="frozen"``, PWCS), with ``w = n`` block
-    rows by default.
+    Implements Beaudoin et al. (2018) §3.1 / docs/assumptions.md, launcher.md §6.1: at step ``k``
+    the local matrix is eq. (6), ``O(k) = [H_k; H_{k+1} F_k; ...; H_{k+w-1} F_{k+w-2} ... F_k]``
+    (``variant="time_varying"``), or the model frozen at step ``k``, ``[H_k; H_k F_k; ...; H_k
+    F_k^(w-1)]`` (``variant="frozen"``, PWCS), with ``w = n`` block rows by default.
 
     Time-varying at every step (``stride=1``, ``w m >= n``): the singular values come from
     the sliding-window factors of
@@ -338,6 +339,23 @@ def local_matrix(model, step: int, window: int | None = None,
     """The local observability matrix ``O(step)`` of :func:`local_observability`.
 
     Feed it to :func:`analyze` to see the null space and unobservable groups at one step.
+
+    Parameters
+    ----------
+    model : DiscreteModel, LinearModel or step source
+        As in :func:`local_observability`.
+    step : int
+        The model step whose window starts the matrix.
+    window : int, optional
+        Block rows (default ``n``).
+    variant : {"time_varying", "frozen"}
+        As in :func:`local_observability`.
+    method : {"euler", "expm"}
+        Discretisation of a LinearModel.
+
+    Returns
+    -------
+    ndarray (window * m, n)
     """
     if variant not in VARIANTS:
         raise NavlibInputError(f"variant: expected one of {VARIANTS}, got {variant!r}")

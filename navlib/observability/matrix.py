@@ -1,13 +1,14 @@
 """The observability matrix of a discrete pair and the analysis of one such matrix.
 
-Contract: spec api.md "Observability".
+Contract: docs/assumptions.md, api.md "Observability".
 
 * :func:`observability_matrix` stacks ``H0; H1 F0; H2 F1 F0; ...`` for a time-varying pair, or
   ``H; H F; ...; H F^(n-1)`` for a constant (piecewise-constant, PWCS) pair.
 * :func:`analyze` gives rank (tolerance relative to the largest singular value), the 2-norm
   condition number, the singular values, an orthonormal null-space basis and its split into
   groups of coupled states (with an optional state scaling and a coupling threshold, because an
-  exact null space can link physical groups through tiny Earth-rate terms, spec ssac.md §3.3).
+  exact null space can link physical groups through tiny Earth-rate terms, docs/assumptions.md,
+  ssac.md §3.3).
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ import pandas as pd
 from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.resolution import relative_resolution
+
+__all__ = ["ObservabilityResult", "analyze", "condition_number", "observability_matrix"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -36,7 +39,8 @@ def _matrix_or_stack(value, name: str) -> np.ndarray:
 
 
 def observability_matrix(F, H, n_rows: int | None = None) -> np.ndarray:
-    """Stack the observability matrix of a discrete pair (spec api.md; Beaudoin eq. (6)).
+    """Stack the observability matrix of a discrete pair (docs/assumptions.md, api.md; Beaudoin eq.
+    (6)).
 
     Parameters
     ----------
@@ -94,8 +98,19 @@ def observability_matrix(F, H, n_rows: int | None = None) -> np.ndarray:
 def condition_number(s: np.ndarray, n: int) -> np.ndarray:
     """2-norm condition number sigma_max / sigma_min over the last axis (inf when singular).
 
-    ``s`` holds the singular values (descending). A matrix with fewer than ``n`` singular
-    values (fewer rows than columns) or a zero smallest value is singular.
+    A matrix with fewer than ``n`` singular values (fewer rows than columns) or a zero
+    smallest value is singular.
+
+    Parameters
+    ----------
+    s : ndarray (..., k)
+        Singular values, descending along the last axis.
+    n : int
+        Number of columns of the matrix.
+
+    Returns
+    -------
+    ndarray (...)
     """
     if s.shape[-1] < n:
         return np.full(s.shape[:-1], np.inf)
@@ -255,8 +270,8 @@ def analyze(O, rtol: float | None = None, state_names: Sequence[str] | None = No
         Column labels; default ``x0, x1, ...``.
     scale : array (n,), optional
         Positive state scales for the grouping, e.g. ``sqrt(diag(P0))``: the null space is
-        judged in units of these scales (spec ssac.md §3.3). Rank, cond and ``null_space``
-        are always those of the unscaled ``O``.
+        judged in units of these scales (docs/assumptions.md, ssac.md §3.3). Rank, cond and
+        ``null_space`` are always those of the unscaled ``O``.
     coupling_threshold : float or "auto"
         Threshold on the scaled projector onto the unobservable subspace (see
         ``ObservabilityResult.unobservable_share``): a state takes part when its share exceeds

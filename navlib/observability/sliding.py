@@ -4,7 +4,7 @@ With blocks of ``w`` steps from ``k0``, the window of step ``k = b w + r`` is th
 block ``b`` from ``r`` (``w - r`` block rows) followed by the first ``r`` block rows of block
 ``b + 1`` times the suffix transition, so ``O(k)`` is orthogonally equivalent to
 ``[Y_r; P_{r-1} Phi_r]`` (2n x n) and has its singular values (docs/assumptions.md,
-"launcher.md §7.2"; spec launcher.md §6.1):
+"launcher.md §7.2"; docs/assumptions.md, launcher.md §6.1):
 
 * suffixes ``Y_r`` (n x n, upper triangular) by the backward recursion
   ``Y_r = R([H_r; Y_{r+1} F_r])`` with ``Phi_r = F_{w-1} ... F_r``;
@@ -36,6 +36,9 @@ from numba.extending import get_cython_function_address
 from navlib.errors import NavlibInputError
 from navlib.kernel_copy import copy_matrix
 
+__all__ = ["block_data", "compile_kernel", "fold", "householder", "singular_values",
+           "sliding_kernel", "sliding_singular_values", "triangularize"]
+
 _DLASQ1 = "navlib_dlasq1"
 binding.add_symbol(_DLASQ1, get_cython_function_address("scipy.linalg.cython_lapack", "dlasq1"))
 _dlasq1 = types.ExternalFunction(_DLASQ1, types.void(*[types.voidptr] * 5))
@@ -47,7 +50,25 @@ def block_data(transitions, H, k0: int, n_blocks: int, window: int):
     """``H`` (n_blocks + 1, w, m, n) and ``F`` (n_blocks + 1, w, n, n) of the steps from
     ``k0`` in blocks of ``w``; past the mission ``H = 0`` and ``F = I``, which only steps
     without a complete window read. Inside the mission both are the caller's steps as they
-    are (``H`` a view when it is contiguous, ``F`` the array ``transitions`` returns)."""
+    are (``H`` a view when it is contiguous, ``F`` the array ``transitions`` returns).
+
+    Parameters
+    ----------
+    transitions : callable
+        ``transitions(idx)`` returns the (len(idx), n, n) steps ``F_k`` at the indices.
+    H : ndarray (N, m, n)
+        Measurement matrices of the mission.
+    k0 : int
+        First step.
+    n_blocks : int
+        Blocks after the first.
+    window : int
+        Steps per block ``w``.
+
+    Returns
+    -------
+    Hb, Fb : ndarray
+    """
     m, n = H.shape[1:]
     size = (n_blocks + 1) * window
     shape = (n_blocks + 1, window)
@@ -71,7 +92,19 @@ def block_data(transitions, H, k0: int, n_blocks: int, window: int):
 def householder(alpha, x):
     """Reflector ``I - tau [1; v] [1; v]'`` mapping ``[alpha; x]`` to ``[beta; 0]``
     (LAPACK ``dlarfg``): returns ``(beta, tau)`` and overwrites ``x`` with ``v``; ``tau = 0``
-    (no reflection) when ``x`` is zero."""
+    (no reflection) when ``x`` is zero.
+
+    Parameters
+    ----------
+    alpha : float
+        First entry of the vector.
+    x : ndarray (p,)
+        The rest; overwritten with ``v``.
+
+    Returns
+    -------
+    beta, tau : float
+    """
     scale = 0.0
     for i in range(x.size):
         scale = max(scale, abs(x[i]))
@@ -131,7 +164,15 @@ def _reflect_rows(top, rows, column, v, tau, work):
 def fold(Rt, Xt):
     """``R`` becomes the triangular factor of ``[R; X]``, both given transposed: ``Rt``
     (n, n, lower triangular) is updated, ``Xt`` (n, p) overwritten. One reflector per
-    column over ``R``'s diagonal entry and ``X``'s column: ``2 (p + 1) n^2`` flops."""
+    column over ``R``'s diagonal entry and ``X``'s column: ``2 (p + 1) n^2`` flops.
+
+    Parameters
+    ----------
+    Rt : ndarray (n, n)
+        ``R'``, lower triangular; updated in place.
+    Xt : ndarray (n, p)
+        ``X'``; overwritten.
+    """
     for j in range(Rt.shape[0]):
         v = Xt[j]
         beta, tau = householder(Rt[j, j], v)
@@ -144,7 +185,15 @@ def fold(Rt, Xt):
 def triangularize(At, Rt):
     """``Rt`` (n, n) becomes the transposed upper triangular factor of ``A`` (p, n), given
     transposed as ``At`` (n, p), zero beyond column ``min(p, n)`` (Householder QR); ``At`` is
-    overwritten."""
+    overwritten.
+
+    Parameters
+    ----------
+    At : ndarray (n, p)
+        ``A'``; overwritten.
+    Rt : ndarray (n, n)
+        Receives ``R'``.
+    """
     n, p = At.shape
     for j in range(min(p - 1, n)):
         v = At[j, j + 1:]
@@ -165,7 +214,23 @@ def singular_values(A, s, work, lapack_ints):
     Golub-Kahan bidiagonalisation by reflectors from the left (columns) and the right (rows),
     then LAPACK ``dlasq1`` on the bidiagonal. ``work`` (at least ``6 n`` floats) and
     ``lapack_ints`` (two int32: ``dlasq1``'s ``n`` and ``info``) are scratch, allocated once
-    per kernel run. Returns ``dlasq1``'s ``info`` (0: converged).
+    per kernel run.
+
+    Parameters
+    ----------
+    A : ndarray (n, n)
+        Overwritten.
+    s : ndarray (n,)
+        Receives the singular values.
+    work : ndarray (>= 6 n,)
+        Float scratch.
+    lapack_ints : ndarray (2,) of int32
+        Integer scratch of ``dlasq1``.
+
+    Returns
+    -------
+    int
+        ``dlasq1``'s ``info`` (0: converged).
     """
     n = A.shape[0]
     e, v, lasq = work[:n], work[n:2 * n], work[2 * n:6 * n]  # e[:n - 1] all set below
@@ -194,7 +259,22 @@ def singular_values(A, s, work, lapack_ints):
 def sliding_kernel(Hb, Fb, K, out):
     """Singular values (``out``, K x n) of ``O(k)`` at the first ``K`` steps of the blocks
     ``Hb`` (nb + 1, w, m, n), ``Fb`` (nb + 1, w, n, n) of :func:`block_data` (module
-    docstring). Returns the number of steps whose ``dlasq1`` did not converge."""
+    docstring).
+
+    Parameters
+    ----------
+    Hb, Fb : ndarray
+        The blocks of :func:`block_data`.
+    K : int
+        Steps evaluated.
+    out : ndarray (K, n)
+        Receives the singular values.
+
+    Returns
+    -------
+    int
+        Steps whose ``dlasq1`` did not converge.
+    """
     w, m, n = Hb.shape[1], Hb.shape[2], Hb.shape[3]
     Yt, Phi = np.empty((w, n, n)), np.empty((w, n, n))    # Yt[r] = Y_r', Phi[r] = Phi_r (r > 0)
     Pt = np.empty((max(w - 1, 1), n, n))                    # Pt[j] = P_j'
@@ -240,7 +320,26 @@ def sliding_singular_values(transitions, H, k0: int, K: int, window: int) -> np.
     (``w - 1`` block products) and factorising it. Each reduction is backward stable and the
     transitions over a window are well scaled (Euler steps ``I + A dt``), so the singular
     values agree with the direct ones to a few rounding units of ``sigma_max``
-    (tests/observability/test_local_sliding.py)."""
+    (tests/observability/test_local_sliding.py).
+
+    Parameters
+    ----------
+    transitions : callable
+        ``transitions(idx)`` returns the (len(idx), n, n) steps ``F_k`` at the indices.
+    H : ndarray (N, m, n)
+        Measurement matrices of the mission.
+    k0 : int
+        First step.
+    K : int
+        Consecutive steps evaluated.
+    window : int
+        Block rows ``w`` of ``O(k)``.
+
+    Returns
+    -------
+    ndarray (K, n)
+        Descending singular values per step.
+    """
     n = H.shape[2]
     n_blocks = -(-K // window)
     Hb, Fb = block_data(transitions, H, k0, n_blocks, window)

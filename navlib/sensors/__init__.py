@@ -1,6 +1,6 @@
 """Sensor specifications (TOML presets in ``data/sensors/``) and IMU / GNSS error simulation.
 
-Measurement model (spec excitability.md A1, A7), per triad, body axes::
+Measurement model (docs/assumptions.md A1, A7), per triad, body axes::
 
     f_meas(t) = (I + diag(s_a(t)) + M_a) f(t) + b_a(t) + n_a(t)
     w_meas(t) = (I + diag(s_g(t)) + M_g) w(t) + b_g(t) + n_g(t)
@@ -16,7 +16,7 @@ Measurement model (spec excitability.md A1, A7), per triad, body axes::
   m/s^2/sqrt(Hz)); point samples at step ``dt`` have ``sigma = N / sqrt(dt)`` so that the
   integrated angle/velocity error grows as ``N sqrt(t)``.
 
-The inverse model used by the error-state filters (spec A7),
+The inverse model used by the error-state filters (docs/assumptions.md A7),
 ``f = (I + diag s_a)^-1 (f_meas - b_a)``, is this one to first order. Discretisation is
 exact: Gauss–Markov ``b_{k+1} = e^{-dt/tau} b_k + sigma sqrt(1 - e^{-2 dt/tau}) w_k``,
 random walk ``b_{k+1} = b_k + q sqrt(dt) w_k``.

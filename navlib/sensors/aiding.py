@@ -15,6 +15,8 @@ from navlib.errors import NavlibInputError
 from navlib.outliers import as_outliers, channel_profile, inject
 from navlib.rotations import exp_so3, log_so3
 
+__all__ = ["ReferenceTrajectory", "simulate_attitude_sensor"]
+
 
 class ReferenceTrajectory:
     """Reference-trajectory attitudes for the RT pseudo-measurement in EKF simulations.
@@ -23,14 +25,14 @@ class ReferenceTrajectory:
     differs from it by the divergence ``d`` (body axes): ``C_ref = C exp(S(d))``, so that
     ``rotvec(C_hat' C_ref) = T_E^B psi + d`` is Beaudoin's eq. (8). ``d`` is the
     ``psi_ref`` block of the closed-loop attitude dynamics of the RT augmentation
-    (spec launcher.md §3.4), ``x_a' = M x_a + a1_sign [T_E^B psi; 0] + [0; omega_wind]``
-    with ``M`` = ``dynamics`` (10 x 10, :func:`navlib.models.launcher.rt_dynamics_matrix`),
-    integrated with the
-    paper's Euler steps. It is driven by white wind rates of ``sigma_wind`` rad/s per
-    sample and by the **actual** navigation attitude error ``psi`` of the filter that calls
-    it (``C = (I + S(psi)) C_nav``: the control steers with the navigation attitude), so
-    truth and filter model agree. Outliers on the ``rt`` channels are added to the emitted
-    ``d`` only (the stored reference is wrong, the vehicle is not).
+    (docs/assumptions.md, launcher.md §3.4), ``x_a' = M x_a + a1_sign [T_E^B psi; 0] + [0;
+    omega_wind]`` with ``M`` = ``dynamics`` (10 x 10,
+    :func:`navlib.models.launcher.rt_dynamics_matrix`), integrated with the paper's Euler steps. It
+    is driven by white wind rates of ``sigma_wind`` rad/s per sample and by the **actual**
+    navigation attitude error ``psi`` of the filter that calls it (``C = (I + S(psi)) C_nav``: the
+    control steers with the navigation attitude), so truth and filter model agree. Outliers on the
+    ``rt`` channels are added to the emitted ``d`` only (the stored reference is wrong, the vehicle
+    is not).
 
     Call it as ``reference(k, t_k, C_nav_prev)`` at increasing IMU samples, with the
     navigation attitude the control used since the previous call (the posterior after that
@@ -91,11 +93,31 @@ def simulate_attitude_sensor(trajectory, sigma: float, rate_hz: float | None = N
     Generic attitude reference sensor of Beaudoin et al. §2.2 (white noise only, Table 1:
     1 deg per axis); ``att`` outliers (:mod:`navlib.outliers`) are added to ``n``.
 
+    Parameters
+    ----------
+    trajectory : navlib.trajectory.Trajectory
+        The true motion; its attitudes are measured.
+    sigma : float
+        Noise standard deviation per ECEF axis (rad), >= 0.
+    rate_hz : float, optional
+        Fix rate (Hz); None measures at every trajectory sample.
+    seed : int, optional
+        Seed of a new generator, when ``rng`` is not given.
+    rng : numpy.random.Generator, optional
+        Source of the noise (overrides ``seed``).
+    outliers : optional
+        Outlier specification read by :func:`navlib.outliers.as_outliers` (channel ``att``).
+
     Returns
     -------
     t : ndarray (K,)
     C_att : ndarray (K, 3, 3)
         Measured body -> ECEF attitudes.
+
+    Raises
+    ------
+    NavlibInputError
+        When ``sigma`` is negative or not finite, or ``rate_hz`` is not positive.
     """
     sigma = finite_scalar(sigma, "sigma", 0.0)
     rng = rng if rng is not None else np.random.default_rng(seed)

@@ -3,8 +3,8 @@
 Preset files carry unit-suffixed keys (``gyro_bias_deg_h``, ``accel_vrw_ug_sqrt_hz``...);
 :data:`_UNITS` lists every accepted spelling, all converted through :mod:`navlib.units`.
 Each preset records its ``source`` and the keys whose values are ``assumed``. The error
-terms are those of the measurement model of :mod:`navlib.sensors` (spec excitability.md
-A1, A7).
+terms are those of the measurement model of :mod:`navlib.sensors` (docs/assumptions.md,
+excitability.md A1, A7).
 """
 
 from __future__ import annotations
@@ -20,6 +20,9 @@ from navlib import units
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir, toml_names, toml_path
+
+__all__ = ["DEFAULT_IMU_PRESET", "PRESET_DIR", "GnssSpec", "ImuSpec", "SensorSpec", "TriadSpec",
+           "list_presets", "load_preset"]
 
 PRESET_DIR = data_dir() / "sensors"
 """Folder holding the ``*.toml`` sensor presets."""
@@ -256,8 +259,8 @@ def _triad(values: dict[str, float], prefix: str) -> TriadSpec:
 
 
 DEFAULT_IMU_PRESET = "motionpak_tactical"
-"""The preset of the España sounding rocket's IMU (spec excitability.md §5): the default of
-the 21-state model and of the flight fit."""
+"""The preset of the España sounding rocket's IMU (docs/assumptions.md, excitability.md §5): the
+default of the 21-state model and of the flight fit."""
 
 
 def load_preset(name_or_path) -> SensorSpec:

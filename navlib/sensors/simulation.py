@@ -1,4 +1,4 @@
-"""IMU and GNSS errors simulated along a trajectory (spec excitability.md A1, A7).
+"""IMU and GNSS errors simulated along a trajectory (docs/assumptions.md A1, A7).
 
 The measurement model is that of :mod:`navlib.sensors`; discretisation is exact:
 Gauss–Markov ``b_{k+1} = e^{-dt/tau} b_k + sigma sqrt(1 - e^{-2 dt/tau}) w_k``, random
@@ -17,6 +17,9 @@ import pandas as pd
 from navlib._validation import finite_array, finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.sensors.presets import GnssSpec, ImuSpec, SensorSpec, TriadSpec
+
+__all__ = ["ImuSimulation", "TriadErrors", "first_order_recursion", "gauss_markov", "random_walk",
+           "simulate_gnss", "simulate_imu", "white_noise"]
 
 
 def _generators(seed, rng, n: int) -> list[np.random.Generator]:
@@ -48,7 +51,17 @@ def first_order_recursion(a, drive, out):
     """``out[0] = drive[0]``, ``out[k] = a[k - 1] out[k - 1] + drive[k]`` per column of
     ``drive`` (N, n): the Gauss-Markov recursion, bitwise what ``scipy.signal.lfilter([1],
     [1, -a])`` gives for a constant ``a`` (tests/sensors), without importing scipy.signal
-    (about 1.2 CPU-s, with the scipy.stats it loads) or a Python loop per sample."""
+    (about 1.2 CPU-s, with the scipy.stats it loads) or a Python loop per sample.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (N - 1,)
+        Step factors ``a[k] = exp(-dt_k / tau)``.
+    drive : numpy.ndarray, shape (N, n)
+        Driving terms, one column per axis.
+    out : numpy.ndarray, shape (N, n)
+        Filled in place (may be ``drive`` itself).
+    """
     for j in range(drive.shape[1]):
         out[0, j] = drive[0, j]
     for k in range(1, drive.shape[0]):
@@ -60,7 +73,25 @@ def gauss_markov(t, sigma: float, tau_s: float, rng: np.random.Generator, n_axes
     """Stationary first-order Gauss–Markov samples at times ``t`` (exact discretisation).
 
     ``x_0 ~ N(0, sigma^2)``, ``x_{k+1} = a_k x_k + sigma sqrt(1 - a_k^2) w_k`` with
-    ``a_k = exp(-(t_{k+1} - t_k) / tau_s)``. Returns (N, n_axes).
+    ``a_k = exp(-(t_{k+1} - t_k) / tau_s)``.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times (s), increasing.
+    sigma : float
+        Steady-state standard deviation (units of the result).
+    tau_s : float
+        Correlation time (s).
+    rng : numpy.random.Generator
+        Source of the normal draws.
+    n_axes : int, optional
+        Independent columns (default 3).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, n_axes)
+        The process at ``t``.
     """
     t = np.asarray(t, dtype=float)
     w = rng.standard_normal((t.size, n_axes))
@@ -77,7 +108,24 @@ def gauss_markov(t, sigma: float, tau_s: float, rng: np.random.Generator, n_axes
 
 
 def random_walk(t, density: float, rng: np.random.Generator, n_axes: int = 3):
-    """Random walk from 0 at ``t[0]`` with density ``q``: increments ``q sqrt(dt) w``."""
+    """Random walk from 0 at ``t[0]`` with density ``q``: increments ``q sqrt(dt) w``.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times (s), increasing.
+    density : float
+        ``q``, units of the result per sqrt(s); 0 gives zeros.
+    rng : numpy.random.Generator
+        Source of the normal draws.
+    n_axes : int, optional
+        Independent columns (default 3).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, n_axes)
+        The walk, 0 in the first row.
+    """
     t = np.asarray(t, dtype=float)
     w = rng.standard_normal((t.size, n_axes))
     out = np.zeros_like(w)
@@ -90,6 +138,22 @@ def white_noise(t, density: float, rng: np.random.Generator, n_axes: int = 3):
     """Point samples of white noise of density ``N``: ``sigma_k = N / sqrt(dt_k)``.
 
     ``dt_k`` is the sample's step (the following one; the last sample reuses the last step).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times (s), increasing.
+    density : float
+        One-sided density ``N``, units of the result times sqrt(s).
+    rng : numpy.random.Generator
+        Source of the normal draws.
+    n_axes : int, optional
+        Independent columns (default 3).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, n_axes)
+        The noise samples.
     """
     t = np.asarray(t, dtype=float)
     w = rng.standard_normal((t.size, n_axes))
@@ -200,7 +264,7 @@ def simulate_imu(trajectory, spec, seed=None, *, rng=None, **overrides) -> ImuSi
 
     Notes
     -----
-    Model and discretisation in the module docstring (spec excitability.md A1, A7). Each
+    Model and discretisation in the module docstring (docs/assumptions.md A1, A7). Each
     error source draws from its own child generator, so a run is reproducible by seed and
     changing one level (say the ARW) leaves the other realisations unchanged.
     """

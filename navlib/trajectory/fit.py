@@ -91,7 +91,7 @@ the record. Give ``heading_deg`` (or ``launch_azimuth_deg``), ``initial_attitude
 ``initial_attitude_deg`` when they are known.
 
 Residuals (``trajectory.parameters["fit_residuals"]``)
------------------------------------------------------
+------------------------------------------------------
 * ``gnss_position_rms_m`` (x, y, z) and ``gnss_position_rms_3d_m``: GNSS minus fit;
 * ``gnss_velocity_rms_mps`` (x, y, z) when GNSS velocity was given;
 * ``specific_force_rms_mps2`` and ``angular_rate_rms_rad_s`` (x, y, z body axes): recorded

@@ -214,10 +214,10 @@ class AttitudeCorrection:
     the recorded specific force and GNSS reveal; ``f <- f - b_a - s_a f`` the accelerometer
     bias and scale error (the recorded ``(1 + s_a) f + b_a`` to first order), which would
     otherwise be taken for motion (a parked vehicle drifting at a few m/s, a boost bent by a
-    3 % scale). Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg``^2) and
+    3 % scale). Prior: each ``eps`` coefficient ~ N(0, ``attitude_prior_deg ** 2``) and
     neighbouring coefficients differ by ~ N(0, (``attitude_drift_deg_s`` x knot spacing)^2),
     so stretches without attitude information (free fall) keep the gyro attitude; each bias
-    component ~ N(0, ``sigma_ba``^2), each scale error ~ N(0, ``sigma_sa``^2) (the preset's
+    component ~ N(0, ``sigma_ba ** 2``), each scale error ~ N(0, ``sigma_sa ** 2``) (the preset's
     turn-on bias and scale factor); a zero sigma leaves that term out.
     """
 

@@ -1,6 +1,6 @@
 """Beaudoin et al. (2018) readings of the paper's words as numbers and the declared
 assumption sets of the Table 2 and covariance-evolution claims (docs/assumptions.md,
-"Thresholds" and A-T2-*)."""
+"Thresholds" and ``A-T2-*``)."""
 
 from __future__ import annotations
 
