@@ -12,7 +12,8 @@
 from docstring_coverage import parameters_share, public_functions
 
 PARAMETERS_FLOOR = 0.33
-"""Measured 87 of 420 (20.7 %) when the check was added, 140 of 420 (33.3 %) after h38."""
+"""Measured 87 of 420 (20.7 %) when the check was added, 140 of 420 (33.3 %) after h38, 151 of
+454 (33.3 %) once every branch of the session was merged."""
 
 CHECKED = ("navlib.earth", "navlib.rotations", "navlib.units", "navlib.quaternions",
            "navlib.discretize", "navlib.observability", "navlib.metrics", "navlib.covariance",

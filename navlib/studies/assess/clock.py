@@ -29,9 +29,29 @@ from navlib.segmentation.phases import clock_time
 
 def time_zero(automatic, model, t_flight, vehicle: str | None,
               t_record: float | None = None) -> tuple[float, str]:
-    """The zero of the assessment's clock on the log's clock (module docstring), and what
-    it is (``"ignition"`` or ``"first sample"``). ``t_record``: the first sample of the
-    whole record, when the span ``t_flight`` is one of several (None: ``t_flight[0]``)."""
+    """The zero of the assessment's clock on the log's clock (module docstring).
+
+    Parameters
+    ----------
+    automatic : Segmentation
+        The automatic segmentation of the span (its phases before any joining).
+    model : DiscreteModel
+        The span's model (unused by the rule; kept for the callers' one signature).
+    t_flight : array (N,)
+        The fitted flight's times on the log's clock.
+    vehicle : str or None
+        The vehicle class: a ``"rocket"`` counts from its first ``boost``.
+    t_record : float, optional
+        The first sample of the whole record, when ``t_flight`` is one of several spans
+        (None: ``t_flight[0]``).
+
+    Returns
+    -------
+    t_zero : float
+        The zero on the log's clock, s.
+    what : str
+        ``"ignition"`` or ``"first sample"``.
+    """
     if vehicle == "rocket":
         table = segments_table(automatic.segments, float(t_flight[0]), float(t_flight[-1]),
                                automatic)
@@ -57,7 +77,23 @@ def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residu
     ``events``), the model epochs, the segmentation, the input summary (``t_first``,
     ``t_last``), the residual frames, the GNSS outages (``t_start``, ``t_end``) and the
     logged channels beside the IMU (``t``; :func:`~navlib.segmentation.phases.clock_time`).
-    Returns them by name."""
+
+    Parameters
+    ----------
+    t_zero : float
+        The zero (:func:`time_zero`), s on the log's clock.
+    trajectory, model, automatic : Trajectory, DiscreteModel, Segmentation
+        The fitted motion, its model and its segmentation.
+    inputs, gnss_residuals, imu_residuals, gnss_outages : DataFrame or None
+        The input summary, the fit's residual frames and the GNSS outages.
+    logged : dict
+        The logged channels (name -> DataFrame with ``t``).
+
+    Returns
+    -------
+    dict
+        The same pieces by their keyword names, every time minus ``t_zero``.
+    """
     events = {k: float(clock_time(v, t_zero)) if isinstance(v, int | float) else v
               for k, v in trajectory.events.items()}
     return {"trajectory": replace(trajectory, t=clock_time(trajectory.t, t_zero),

@@ -61,6 +61,15 @@ def gnss_outages(t_fixes, t_start: float, t_end: float, min_duration_s: float
     after it (or ``t_end``); ``duration`` is the time without a fix, s. The threshold is
     ``[gnss] outage_report_s`` of ``data/quality.toml`` in the assessment (assumption Q5).
 
+    Parameters
+    ----------
+    t_fixes : array (K,)
+        Times of the kept fixes, s.
+    t_start, t_end : float
+        The flight's first and last time, s.
+    min_duration_s : float
+        Shortest outage reported, s.
+
     Returns
     -------
     DataFrame

@@ -194,7 +194,26 @@ class FlightAssessment(SegmentedAnalysis):
 
 def with_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
     """``table`` with the :data:`~navlib.studies.assess.agreement.AGREEMENT_COLUMNS` of
-    :func:`~navlib.studies.assess.agreement.segment_agreement`, and its messages."""
+    :func:`~navlib.studies.assess.agreement.segment_agreement`, and its messages.
+
+    Parameters
+    ----------
+    table : DataFrame
+        The segment table (:func:`automatic_segment_table`).
+    trajectory : Trajectory
+        The fitted reference motion.
+    imu_residuals, gnss_residuals : DataFrame
+        Recorded minus reference (:func:`~navlib.studies.assess.fit.fit_residuals`).
+    bounds : dict
+        The ``[fit]`` bounds (:func:`~navlib.studies.assess.agreement.fit_bounds`).
+
+    Returns
+    -------
+    table : DataFrame
+        ``table`` with the agreement columns (any old ones replaced).
+    messages : list of str
+        One warning per segment that is not represented.
+    """
     columns, messages = segment_agreement(table, trajectory, imu_residuals, gnss_residuals,
                                           bounds)
     table = table.drop(columns=[c for c in AGREEMENT_COLUMNS if c in table.columns])

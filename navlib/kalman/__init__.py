@@ -1,8 +1,10 @@
 """Kalman-filter algebra shared by the linear simulator, the EKF and
-:func:`navlib.covariance.kalman_covariance`: :func:`symmetrize`, gains with the
-pseudo-inverse rule, the Joseph-form update, NEES/NIS consistency statistics (spec
-launcher.md §6.2-6.4). Below both ``navlib.covariance`` and ``navlib.filters``, which import
-it.
+:func:`navlib.covariance.kalman_covariance`: gains with the pseudo-inverse rule and the
+Joseph-form update here; :func:`symmetrize` and the square roots in
+:mod:`navlib.kalman.algebra`, the NEES/NIS consistency statistics in
+:mod:`navlib.kalman.consistency` (docs/assumptions.md, launcher.md §6.2-6.4), the EKF's
+sparse prediction in :mod:`navlib.kalman.sparse`, all importable from here. Below both
+``navlib.covariance`` and ``navlib.filters``, which import it.
 
 The per-step algebra runs as compiled numba kernels (docs/assumptions.md
 "Compiled kernels"), one per algorithm and used by every caller: :func:`_gain_kernel` and
@@ -23,10 +25,10 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from scipy.special import gammaincinv
 
-from navlib._validation import finite_scalar
-from navlib.errors import NavlibInputError
+from navlib.kalman.algebra import definite_noise, psd_sqrt, symmetrize
+from navlib.kalman.consistency import chi2_bounds, nees_basis, nees_values
+from navlib.kalman.sparse import predict_sparse
 from navlib.kernel_copy import copy_matrix, copy_vector
 
 __all__ = ["PINV_RTOL", "FactoredNoise", "Gains", "chi2_bounds", "compile_kernels",
@@ -39,28 +41,6 @@ PINV_RTOL = 1e-12
 """Relative cut-off of the innovation-covariance pseudo-inverse; the value
 :func:`navlib.covariance.kalman_covariance` uses by default, so that the gains here
 reproduce its posterior covariances."""
-
-
-
-def symmetrize(P):
-    """The symmetric part ``(P + P') / 2`` of one matrix or a stack (..., n, n)."""
-    P = np.asarray(P)
-    return 0.5 * (P + P.swapaxes(-1, -2))
-
-def psd_sqrt(M) -> np.ndarray:
-    """Batched symmetric square root ``L`` with ``L L' = M`` for PSD ``M`` (..., n, n)."""
-    w, V = np.linalg.eigh(symmetrize(M))
-    return V * np.sqrt(np.clip(w, 0.0, None))[..., None, :]
-
-def definite_noise(R) -> np.ndarray:
-    """Whether each measurement-noise covariance ``R`` (..., m, m) is positive definite
-    (smallest eigenvalue above ``1e-12`` of its largest entry): the switch between the
-    inverse and the pseudo-inverse of the innovation covariance in :func:`kalman_gain`."""
-    R = np.asarray(R, dtype=float)
-    if R.shape[-1] == 0:
-        return np.zeros(R.shape[:-2], dtype=bool)
-    r_min = np.linalg.eigvalsh(R).min(axis=-1)
-    return r_min > 1e-12 * np.maximum(np.abs(R).max(axis=(-1, -2)), 1e-300)
 
 
 @dataclass(frozen=True, eq=False)
@@ -331,54 +311,6 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
 
 
 @numba.njit(cache=True)
-def predict_sparse(P, F, Q, out, FP, dense):
-    """``out = sym(F P F' + Q)`` of one step over the rows of ``F`` with off-diagonal
-    entries (flagged in ``dense`` (n,) here; ``FP`` (n, n) scratch): ``(F P)_i`` is
-    ``F_ii P_i`` on a diagonal row, a pair of rows with a diagonal row ``j`` is
-    ``(F P)_ij F_jj`` and only pairs of full rows take a dot product (the EKF's error
-    models: 9 full rows of 21 in the ECEF model), so equal to :func:`predict_kernel` to
-    rounding. ``out`` may be ``P``."""
-    n = P.shape[0]
-    for i in range(n):
-        full = False
-        for j in range(n):
-            if j != i and F[i, j] != 0.0:
-                full = True
-                break
-        dense[i] = full
-        row = FP[i]
-        if full:
-            for j in range(n):
-                row[j] = 0.0
-            for l in range(n):
-                f = F[i, l]
-                if f != 0.0:
-                    p_row = P[l]
-                    for j in range(n):
-                        row[j] += f * p_row[j]
-        else:
-            f = F[i, i]
-            p_row = P[i]
-            for j in range(n):
-                row[j] = f * p_row[j]
-    for i in range(n):
-        fp_row = FP[i]
-        for j in range(i, n):
-            if not dense[j]:
-                m = fp_row[j] * F[j, j]
-            elif not dense[i]:
-                m = FP[j, i] * F[i, i]
-            else:
-                f_row = F[j]
-                m = 0.0
-                for l in range(n):
-                    m += fp_row[l] * f_row[l]
-            s = m + 0.5 * (Q[i, j] + Q[j, i])
-            out[i, j] = s
-            out[j, i] = s
-
-
-@numba.njit(cache=True)
 def propagate_kernel(x, P, F, Q, kept, j0, j1):
     """The EKF's propagation (:mod:`navlib.filters.ekf`): error-state mean and covariance
     from sample ``j0`` to ``j1`` of a window (``F[j]``,
@@ -568,91 +500,3 @@ def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains
     measured = np.asarray(measured, dtype=bool)
     gains.K[~measured] = 0.0
     return Gains(gains.K, gains.S_pinv, np.where(measured, gains.dof, 0))
-
-
-def chi2_bounds(dof, runs: int = 1, alpha: float = 0.05):
-    """Two-sided ``1 - alpha`` bounds of a Monte-Carlo averaged NEES or NIS.
-
-    The average over ``runs`` independent runs of a chi-square statistic with ``dof``
-    degrees of freedom is ``chi2(runs dof) / runs`` (Bar-Shalom, Li & Kirubarajan 2001,
-    §5.4).
-
-    The chi-square quantile is ``2 gammaincinv(k / 2, q)``, what ``scipy.stats.chi2.ppf``
-    evaluates (the same numbers), without importing ``scipy.stats`` (about 0.3-0.7 s in a
-    process that needs nothing else of it), and once per distinct ``dof`` (a NEES history
-    has one per epoch but a few distinct values; each quantile is an iterative inversion).
-
-    Parameters
-    ----------
-    dof : int or array_like of int
-        Degrees of freedom of one run.
-    runs : int
-        Independent runs averaged.
-    alpha : float
-        Two-sided significance level.
-
-    Returns
-    -------
-    lower, upper : float or ndarray
-        Shaped like ``dof``.
-    """
-    dof = np.asarray(dof, dtype=float)
-    runs = int(runs)
-    if runs < 1:
-        raise NavlibInputError(f"runs: expected >= 1, got {runs}")
-    alpha = finite_scalar(alpha, "alpha", 0.0, 1.0, low_open=True)
-    total = runs * dof
-    k, where = np.unique(np.maximum(total, 1), return_inverse=True)
-    where = where.reshape(total.shape)
-
-    def bound(q: float) -> np.ndarray:
-        return np.where(total > 0, (2 * gammaincinv(k / 2, q) / runs)[where], 0.0)
-
-    return bound(alpha / 2), bound(1 - alpha / 2)
-
-
-def nees_basis(P, rtol: float = 1e-10):
-    """The data-independent part of :func:`nees_values` for covariances (K, n, n).
-
-    Returns ``(scale, active, V, inv_w, dof)``: the standard deviations used to scale ``P``
-    to a correlation matrix, the states with non-zero variance, the eigenvectors of that
-    matrix, the inverse of its kept eigenvalues (0 for dropped directions) and the kept
-    rank. Computed once per covariance history and reused for every error history
-    (:func:`simulate_linear` caches it on the :class:`LinearFilter`).
-    """
-    d = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0.0, None))
-    active = d > 0
-    safe = np.where(active, d, 1.0)
-    C = P / safe[:, :, None] / safe[:, None, :]
-    C = np.where(active[:, :, None] & active[:, None, :], C, 0.0)
-    w, V = np.linalg.eigh(symmetrize(C))
-    keep = w > rtol * np.maximum(w[:, -1:], 0.0)
-    inv_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
-    return safe, active, V, inv_w, keep.sum(axis=1)
-
-
-def nees_values(err, P, rtol: float = 1e-10, basis=None):
-    """NEES ``e' P^+ e``, scaled to a correlation matrix first (states of very different
-    units); directions with (relative) zero variance are left out, and the degrees of
-    freedom are the kept rank. Intermediates are formed in place where they can be.
-
-    Parameters
-    ----------
-    err : ndarray (K, R, n)
-        Errors of R runs at K epochs.
-    P, rtol
-        Covariances (K, n, n) and cut-off as in :func:`nees_basis` (unused with ``basis``).
-    basis : tuple, optional
-        :func:`nees_basis` of ``P`` when already computed.
-
-    Returns
-    -------
-    nees : ndarray (K, R)
-    dof : ndarray (K,)
-    """
-    safe, active, V, inv_w, dof = basis if basis is not None else nees_basis(P, rtol)
-    en = np.divide(err, safe[:, None, :])
-    np.copyto(en, 0.0, where=~active[:, None, :])
-    proj = en @ V
-    np.square(proj, out=proj)
-    return (proj @ inv_w[:, :, None])[..., 0], dof
