@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from navlib.errors import NavlibInputError
+from navlib.errors import FlightDataWarning, NavlibInputError
 from navlib.io import _units
 
 
@@ -199,8 +199,6 @@ def read_text_table(path, sep: str | None = None, *,
 
 def _warn_cut(label: str, line: int, fields: int, expected: int) -> None:
     """A last row cut mid-write (a logger that lost power) is dropped, with a warning."""
-    from navlib.io.checks import FlightDataWarning  # checks imports this module
-
     warnings.warn(f"{label}, line {line}: the last row was cut mid-write ({fields} of "
                   f"{expected} fields, or its last field empty); it is dropped",
                   FlightDataWarning, stacklevel=4)

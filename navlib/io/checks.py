@@ -19,7 +19,7 @@ import pandas as pd
 from navlib import units
 from navlib._validation import finite_scalar
 from navlib.earth import A
-from navlib.errors import NavlibInputError
+from navlib.errors import FlightDataWarning, NavlibInputError
 from navlib.io._table import Source
 
 ON_GAP = ("warn", "raise", "split")
@@ -45,10 +45,6 @@ IMU_DT_RANGE_S = (1e-5, 1.0)
 """Plausible median IMU sample interval, s (1 Hz .. 100 kHz)."""
 GNSS_DT_RANGE_S = (1e-3, 100.0)
 """Plausible median GNSS epoch interval, s (0.01 Hz .. 1 kHz)."""
-
-
-class FlightDataWarning(UserWarning):
-    """Flight data were accepted but something was found (gaps, fallbacks, corruption)."""
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from navlib import sensors
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.metrics import E_THRESHOLD, MIN_FRACTION, S_THRESHOLD, check_thresholds
-from navlib.models.baro import aided_model, sigma_note
+from navlib.models.baro import aided_model
 from navlib.models.ecef import ecef21_at_epochs
 from navlib.segmentation import SEGMENT_DEFAULTS, segment_flight
 from navlib.studies.assess import (
@@ -41,6 +41,7 @@ from navlib.studies.assess import (
     describe_inputs,
     segment_pairs,
 )
+from navlib.studies.assess.aiding import sigma_note
 from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
 
 __all__ = ["VEHICLE_PRESETS", "MissionPlan", "plan_beside_flight", "plan_mission",

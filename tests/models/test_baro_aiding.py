@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from navlib import NavlibInputError, earth
-from navlib.models.baro import aided_model, baro_sigma, ned_sigmas, pad_epochs
+from navlib.models.baro import aided_model, baro_sigma, pad_epochs
 from navlib.models.ecef import ecef21_at_epochs
+from navlib.studies.assess.aiding import ned_sigmas
 from navlib.trajectory import sounding_rocket
 
 

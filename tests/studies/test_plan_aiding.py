@@ -11,7 +11,7 @@ from locations import REPO
 
 from navlib import NavlibInputError
 from navlib.__main__ import main
-from navlib.models.baro import ned_sigmas
+from navlib.studies.assess.aiding import ned_sigmas
 from navlib.studies.plan import plan_mission
 
 

@@ -17,6 +17,7 @@ import pandas as pd
 from scipy.integrate import cumulative_trapezoid
 
 from navlib import earth, strapdown, units
+from navlib.covariance import kalman_covariance, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.io.baro import baro_height
 from navlib.models.baro import BARO_SCALE, BARO_SIGMA_M, baro_sigma
@@ -181,3 +182,37 @@ def _launch_index(t, f_b) -> int:
     jump &= t[1:] - t[0] > 0.1
     hits = np.flatnonzero(jump)
     return int(hits[0]) + 1 if hits.size else t.size - 1
+
+
+def ned_sigmas(model, trajectory) -> dict[str, np.ndarray]:
+    """Standard deviations of position and velocity in north/east/down at every epoch.
+
+    The Kalman covariance recursion of ``model``
+    (:func:`navlib.covariance.kalman_covariance`, updated at every epoch), its ECEF position
+    and velocity blocks turned into the local NED frame of the reference position. Returns
+    ``t`` and ``position_m``, ``velocity_m_s`` (N, 3: north, east, down).
+    """
+    result = kalman_covariance(model)
+    t = np.asarray(trajectory.t, dtype=float)
+    index = np.clip(np.searchsorted(t, model.t), 0, t.size - 1)
+    lat, lon, _ = earth.ecef_to_geodetic(np.asarray(trajectory.position, dtype=float)[index])
+    C_e_n = np.swapaxes(earth.ned_to_ecef_matrix(lat, lon), 1, 2)
+    return {"t": np.asarray(model.t, dtype=float),
+            "position_m": sigma_in_frame(result, (0, 1, 2), C_e_n),
+            "velocity_m_s": sigma_in_frame(result, (3, 4, 5), C_e_n)}
+
+
+def sigma_note(model, trajectory, aiding: str) -> str:
+    """The end-of-flight position and velocity sigma in north/east/down, in words."""
+    s = ned_sigmas(model, trajectory)
+    p, v = s["position_m"], s["velocity_m_s"]
+    text = (f"aiding {aiding}: at the end ({s['t'][-1]:.1f} s) the 21-state model's sigma is "
+            f"north/east/down position {p[-1, 0]:.3g}/{p[-1, 1]:.3g}/{p[-1, 2]:.3g} m, "
+            f"velocity {v[-1, 0]:.3g}/{v[-1, 1]:.3g}/{v[-1, 2]:.3g} m/s")
+    if aiding == "baro":
+        text += (f" (from {p[0, 0]:.3g}/{p[0, 1]:.3g}/{p[0, 2]:.3g} m at the start): only the "
+                 "vertical is measured; horizontal position and velocity are unobservable "
+                 "and their sigma grows with the IMU errors (the excitable/sensible lists "
+                 "name ECEF axes, each holding part of the measured vertical: read north, "
+                 "east and down from these sigmas)")
+    return text

@@ -20,7 +20,7 @@ from navlib.metrics import (
     S_THRESHOLD,
     check_thresholds,
 )
-from navlib.models.baro import aided_model, sigma_note
+from navlib.models.baro import aided_model
 from navlib.models.ecef import ecef21_at_epochs, epoch_samples
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
@@ -31,7 +31,7 @@ from navlib.segmentation import (
 )
 from navlib.studies.assess import clock
 from navlib.studies.assess.agreement import fit_bounds
-from navlib.studies.assess.aiding import aiding_records
+from navlib.studies.assess.aiding import aiding_records, sigma_note
 from navlib.studies.assess.fit import fit_notes, fit_records, fit_report, fit_residuals
 from navlib.studies.assess.inputs import (
     GNSS_KEYS,

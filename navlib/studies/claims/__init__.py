@@ -57,7 +57,6 @@ from navlib.studies.claims.registry import (
     COLUMNS,
     STUDY_MODULES,
     Study,
-    all_claims,
     factorial_search,
     register,
     studies,
@@ -92,6 +91,7 @@ from navlib.studies.claims.summary import (
     reading_markdown,
     summary_markdown,
 )
+from navlib.studies.claims.table import all_claims
 
 __all__ = [
     "BASES", "CAUSES", "COLUMNS", "KINDS", "NOT_EVALUATED", "OPS", "SEARCH_SPACES", "STATUSES",
