@@ -4,18 +4,18 @@ File format as :mod:`navlib.io.csv_files` (delimiter detected, ``#`` comments, h
 case-insensitive, units in brackets). Columns (normalised names; full lists in
 :data:`BARO_COLUMNS`):
 
-==============  ================================================  =========================
-column          accepted names                                    unit
-==============  ================================================  =========================
-``t``           t, ts, time, timestamp, time_s, time_ms, ...       ``time_unit`` (s)
-``pressure_pa`` pressure_pa, pressure, pressure_pascals, p, press,  ``pressure_unit``: ``Pa``
-                baro_pressure, static_pressure, pressure_hpa,       ``hPa`` ``mbar`` ``kPa``
-                pressure_mbar                                       (Pa)
-``altitude_m``  altitude_m, altitude, alt, baro_alt, baro_altitude, ``length_unit`` (m)
-                baro_alt_meter, pressure_altitude, height
-``temperature_c`` temperature_c, temperature, temp,                 deg C (kept, not used)
-                temperature_celsius
-==============  ================================================  =========================
+=================  ===================================================  =========================
+column             accepted names                                       unit
+=================  ===================================================  =========================
+``t``              t, ts, time, timestamp, time_s, time_ms, ...         ``time_unit`` (s)
+``pressure_pa``    pressure_pa, pressure, pressure_pascals, p, press,   ``pressure_unit``: ``Pa``
+                   baro_pressure, static_pressure, pressure_hpa,        ``hPa`` ``mbar`` ``kPa``
+                   pressure_mbar                                        (Pa)
+``altitude_m``     altitude_m, altitude, alt, baro_alt, baro_altitude,  ``length_unit`` (m)
+                   baro_alt_meter, pressure_altitude, height
+``temperature_c``  temperature_c, temperature, temp,                    deg C (kept, not used)
+                   temperature_celsius
+=================  ===================================================  =========================
 
 A file needs ``t`` and one of ``pressure_pa`` / ``altitude_m`` (with both, the pressure is
 used: ``altitude="given"`` keeps the file's altitude instead). Pressure becomes altitude
