@@ -218,10 +218,8 @@ def _mark_spans(axes, assessment) -> list:
             for row in bad.itertuples(index=False):
                 ax.axvspan(row.t_start, row.t_end, facecolor="none", edgecolor="tab:red",
                            hatch="////", linewidth=0.0, zorder=0)
-        for row in bad.itertuples(index=False):
-            reason = getattr(row, "fit_reason", "")
-            axes[0].annotate("not represented" + (f"\n{reason}" if reason else ""),
-                             ((row.t_start + row.t_end) / 2, 0.02),
+        for row in bad.itertuples(index=False):   # the reasons: the segment table, warnings
+            axes[0].annotate("not represented", ((row.t_start + row.t_end) / 2, 0.02),
                              xycoords=("data", "axes fraction"), ha="center", va="bottom",
                              fontsize=6, color="tab:red",
                              bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "none",
