@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 from scipy.interpolate import make_interp_spline
+from scipy.spatial.transform import Rotation
 
 from navlib import earth, sensors
 from navlib.trajectory._attitude import smoothstep, zyx_attitude
@@ -109,3 +110,23 @@ def exact_records(traj, *, sigma_f=0.0, sigma_w=0.0, sigma_p=0.0, gnss_hz=1.0,
     if velocity:
         gnss["vx"], gnss["vy"], gnss["vz"] = traj.velocity[g].T
     return imu, gnss
+
+
+def dataflash_flight():
+    """The multicopter flight the DataFlash tests write (tests/dataflash_writer.py): its
+    truth, IMU and GNSS records, the GNSS as geodetic fixes with NED velocity (``geo``) and
+    the attitude as the autopilot logs it (``att``, yaw/pitch/roll in degrees)."""
+    truth = multicopter(24.0, 50.0, pad_s=6.0)
+    imu, gnss = records(truth, seed=5)
+    lat, lon, alt = truth.geodetic
+    g = truth.at_rate(5.0)
+    v_n = np.einsum("kji,kj->ki", earth.ned_to_ecef_matrix(lat[g], lon[g]), truth.velocity[g])
+    geo = pd.DataFrame({"t": truth.t[g], "lat_deg": np.degrees(lat[g]),
+                        "lon_deg": np.degrees(lon[g]), "alt_m": alt[g], "vn": v_n[:, 0],
+                        "ve": v_n[:, 1], "vd": v_n[:, 2]})
+    C_n_e = earth.ned_to_ecef_matrix(lat[0], lon[0])
+    ypr = Rotation.from_matrix(C_n_e.T @ truth.C_b_e()[::5]).as_euler("ZYX", degrees=True)
+    att = pd.DataFrame({"t": truth.t[::5], "yaw_deg": ypr[:, 0], "pitch_deg": ypr[:, 1],
+                        "roll_deg": ypr[:, 2]})
+    return truth, imu, gnss, geo, att
+

@@ -54,6 +54,28 @@ def clock_time(t, t_zero: float) -> np.ndarray:
     return np.round(np.asarray(t, dtype=float) - float(t_zero), 9)
 
 
+def frame_on_clock(frame: pd.DataFrame | None, t_zero: float, columns) -> pd.DataFrame | None:
+    """A copy of ``frame`` with each of its ``columns`` of times moved to the clock whose zero
+    is ``t_zero`` (:func:`clock_time`; columns it lacks are skipped, None stays None).
+
+    Parameters
+    ----------
+    frame : DataFrame or None
+        A table with time columns (s).
+    t_zero : float
+        The new zero on the frame's clock, s.
+    columns : sequence of str
+        The time columns to move.
+    """
+    if frame is None:
+        return None
+    frame = frame.copy()
+    for column in columns:
+        if column in frame.columns:
+            frame[column] = clock_time(frame[column].to_numpy(dtype=float), t_zero)
+    return frame
+
+
 @dataclass(frozen=True, eq=False)
 class Segmentation:
     """Phases of a flight found by :func:`segment_flight`.
@@ -92,19 +114,11 @@ class Segmentation:
     def shifted(self, t_zero: float) -> Segmentation:
         """The same segmentation on a clock whose zero is ``t_zero`` of this one (every
         time minus ``t_zero``, :func:`clock_time`)."""
-        def moved(frame, columns):
-            if frame is None:
-                return None
-            frame = frame.copy()
-            for c in columns:
-                if c in frame.columns:
-                    frame[c] = clock_time(frame[c].to_numpy(dtype=float), t_zero)
-            return frame
-
         times = ("t", "t_start", "t_end", "t_logged", "t_detected")
-        return replace(self, segments=moved(self.segments, times),
-                       features=moved(self.features, times),
-                       detected=moved(self.detected, times), events=moved(self.events, times))
+        return replace(self, segments=frame_on_clock(self.segments, t_zero, times),
+                       features=frame_on_clock(self.features, t_zero, times),
+                       detected=frame_on_clock(self.detected, t_zero, times),
+                       events=frame_on_clock(self.events, t_zero, times))
 
     def to_frame(self) -> pd.DataFrame:
         """The editable segment table (a copy): ``phase, t_start, t_end, duration``."""

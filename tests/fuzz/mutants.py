@@ -31,11 +31,10 @@ import numpy as np
 import pandas as pd
 from altos_writer import rocket_rows, write_altos
 from dataflash_writer import write_flight
-from flights import multicopter, records
+from flights import dataflash_flight
 from locations import SHARED_DATA
-from scipy.spatial.transform import Rotation
 
-from navlib import NavlibInputError, earth, io
+from navlib import NavlibInputError, io
 from navlib.studies.assess import assess_flight
 
 OUTCOMES = ("assessed", "refused", "bare", "hung")
@@ -66,22 +65,6 @@ class Mutant:
 # --------------------------------------------------------------------------- originals
 
 
-def _multicopter_flight():
-    truth = multicopter(24.0, 50.0, pad_s=6.0)
-    imu, gnss = records(truth, seed=5)
-    lat, lon, alt = truth.geodetic
-    g = truth.at_rate(5.0)
-    v_n = np.einsum("kji,kj->ki", earth.ned_to_ecef_matrix(lat[g], lon[g]), truth.velocity[g])
-    geo = pd.DataFrame({"t": truth.t[g], "lat_deg": np.degrees(lat[g]),
-                        "lon_deg": np.degrees(lon[g]), "alt_m": alt[g], "vn": v_n[:, 0],
-                        "ve": v_n[:, 1], "vd": v_n[:, 2]})
-    C_n_e = earth.ned_to_ecef_matrix(lat[0], lon[0])
-    ypr = Rotation.from_matrix(C_n_e.T @ truth.C_b_e()[::5]).as_euler("ZYX", degrees=True)
-    att = pd.DataFrame({"t": truth.t[::5], "yaw_deg": ypr[:, 0], "pitch_deg": ypr[:, 1],
-                        "roll_deg": ypr[:, 2]})
-    return imu, gnss, geo, att
-
-
 def _cut_ulog(source: Path, path: Path, seconds: float) -> None:
     """The first ``seconds`` of a ULog, written with pyulog."""
     from pyulog import ULog
@@ -100,7 +83,7 @@ def generated_originals(folder: Path) -> list[Original]:
     """The small valid logs written here (and the ULog cut from a shared sample log, when
     present)."""
     folder.mkdir(parents=True, exist_ok=True)
-    imu, gnss, geo, att = _multicopter_flight()
+    _, imu, gnss, geo, att = dataflash_flight()
     io.write_imu_csv(imu, folder / "imu.csv")
     io.write_gnss_csv(gnss, folder / "gnss.csv")
     out = [Original("csv pair", "csv", (folder / "imu.csv", folder / "gnss.csv"))]

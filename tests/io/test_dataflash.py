@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from dataflash_writer import write_flight
-from flights import multicopter, records
+from flights import dataflash_flight
 from locations import REPO, shared_file
 from scipy.spatial.transform import Rotation
 
@@ -24,19 +24,7 @@ def _public(name):
 
 @pytest.fixture(scope="module")
 def flight():
-    truth = multicopter(24.0, 50.0, pad_s=6.0)
-    imu, gnss = records(truth, seed=5)
-    lat, lon, alt = truth.geodetic
-    g = truth.at_rate(5.0)
-    v_n = np.einsum("kji,kj->ki", earth.ned_to_ecef_matrix(lat[g], lon[g]), truth.velocity[g])
-    geo = pd.DataFrame({"t": truth.t[g], "lat_deg": np.degrees(lat[g]),
-                        "lon_deg": np.degrees(lon[g]), "alt_m": alt[g], "vn": v_n[:, 0],
-                        "ve": v_n[:, 1], "vd": v_n[:, 2]})
-    C_n_e = earth.ned_to_ecef_matrix(lat[0], lon[0])
-    ypr = Rotation.from_matrix(C_n_e.T @ truth.C_b_e()[::5]).as_euler("ZYX", degrees=True)
-    att = pd.DataFrame({"t": truth.t[::5], "yaw_deg": ypr[:, 0], "pitch_deg": ypr[:, 1],
-                        "roll_deg": ypr[:, 2]})
-    return truth, imu, gnss, geo, att
+    return dataflash_flight()
 
 
 @pytest.fixture(scope="module")

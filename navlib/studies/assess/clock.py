@@ -24,7 +24,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 from navlib.segmentation import segments_table
-from navlib.segmentation.phases import clock_time
+from navlib.segmentation.phases import clock_time, frame_on_clock
+
+_TIMES = ("t", "t_first", "t_last")
+"""Time columns of the input summary, the residual frames and the logged channels."""
 
 
 def time_zero(automatic, model, t_flight, vehicle: str | None,
@@ -61,16 +64,6 @@ def time_zero(automatic, model, t_flight, vehicle: str | None,
     return float(t_flight[0] if t_record is None else t_record), "first sample"
 
 
-def _frame(frame, t_zero: float, columns=("t", "t_first", "t_last")):
-    if frame is None:
-        return None
-    frame = frame.copy()
-    for column in columns:
-        if column in frame.columns:
-            frame[column] = clock_time(frame[column].to_numpy(dtype=float), t_zero)
-    return frame
-
-
 def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residuals,
              imu_residuals, gnss_outages, logged: dict) -> dict:
     """Every time of an assessment's pieces minus ``t_zero``: the trajectory (``t`` and its
@@ -99,8 +92,10 @@ def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residu
     return {"trajectory": replace(trajectory, t=clock_time(trajectory.t, t_zero),
                                   events=events),
             "model": replace(model, t=clock_time(model.t, t_zero)),
-            "automatic": automatic.shifted(t_zero), "inputs": _frame(inputs, t_zero),
-            "gnss_residuals": _frame(gnss_residuals, t_zero),
-            "imu_residuals": _frame(imu_residuals, t_zero),
-            "gnss_outages": _frame(gnss_outages, t_zero, ("t_start", "t_end")),
-            "logged": {name: _frame(frame, t_zero) for name, frame in logged.items()}}
+            "automatic": automatic.shifted(t_zero),
+            "inputs": frame_on_clock(inputs, t_zero, _TIMES),
+            "gnss_residuals": frame_on_clock(gnss_residuals, t_zero, _TIMES),
+            "imu_residuals": frame_on_clock(imu_residuals, t_zero, _TIMES),
+            "gnss_outages": frame_on_clock(gnss_outages, t_zero, ("t_start", "t_end")),
+            "logged": {name: frame_on_clock(frame, t_zero, _TIMES)
+                       for name, frame in logged.items()}}
