@@ -150,12 +150,7 @@ TIMING_TEXT = re.compile(r"update \d+ ms \(compute|\(first call; cached afterwar
 """Internal timings the notebooks and panels print (kept in the executed notebooks)."""
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param("00_claims", marks=pytest.mark.xfail(
-        reason="notebook 00 (h36's, issue 34) prints its run time ('N claims in X s') in "
-               "its first cell: tag that cell report-hide-output or drop the print",
-        strict=False)),
-    *[n for n in REPORTED if n != "00_claims"]])
+@pytest.mark.parametrize("name", REPORTED)
 def test_report_page_shows_no_internal_timing(report, browser, shots, name):
     page, _, _ = _open(browser, report / f"{name}.html", shots)
     try:
