@@ -143,3 +143,31 @@ def aided_model(model: DiscreteModel, trajectory, aiding: str, *,
     idx = np.arange(len(names))
     R[:, idx, idx] = np.column_stack(sigmas) ** 2
     return replace(model, H=H, R=R, measurement_names=tuple(names))
+
+
+def without_gnss(model: DiscreteModel, epochs) -> DiscreteModel:
+    """``model`` with its GNSS measurement rows (``measurement_names`` starting ``gnss``: the
+    ECEF position of :func:`navlib.models.ecef.ecef21_at_epochs`, the north/east rows of
+    :func:`aided_model`) zero at ``epochs``; the barometer and pad rows stay (an outage of
+    the receiver, assumptions M6, Q5, B1-B3).
+
+    Parameters
+    ----------
+    model : DiscreteModel
+        A GNSS-aided or barometer-aided model.
+    epochs : array of bool (N,)
+        The model epochs without a GNSS measurement.
+
+    Returns
+    -------
+    DiscreteModel
+        The same model with a new ``H`` (``model`` itself when ``epochs`` holds none).
+    """
+    epochs = np.asarray(epochs, dtype=bool)
+    if not epochs.any():
+        return model
+    rows = [k for k, name in enumerate(model.measurement_names) if name.startswith("gnss")]
+    H = np.array(model.H)
+    H[np.ix_(epochs, rows)] = 0.0
+    return replace(model, H=H)
+

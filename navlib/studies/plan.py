@@ -31,7 +31,7 @@ from navlib import sensors
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.metrics import E_THRESHOLD, MIN_FRACTION, S_THRESHOLD, check_thresholds
-from navlib.models.baro import aided_model
+from navlib.models.baro import aided_model, without_gnss
 from navlib.models.ecef import ecef21_at_epochs
 from navlib.segmentation import SEGMENT_DEFAULTS, segment_flight
 from navlib.studies.assess import (
@@ -250,16 +250,14 @@ model_options, model_step_s
     aiding = aiding if aiding is not None else mission.table.get("gnss", {}).get("aiding",
                                                                                  "gnss")
     model = aided_model(model, trajectory, aiding, gnss_sigma_m=sigma)
-    H = np.array(model.H)
     t_model = np.asarray(model.t)
-    gnss_rows = [i for i, name in enumerate(model.measurement_names)
-                 if name.startswith("gnss")]
+    inside = np.zeros(t_model.size, dtype=bool)
     for a, b in windows:
-        H[np.ix_(np.flatnonzero((t_model >= a) & (t_model <= b)), gnss_rows)] = 0.0
-    if not np.any(H != 0.0):
+        inside |= (t_model >= a) & (t_model <= b)
+    model = without_gnss(model, inside)
+    if not np.any(model.H != 0.0):
         raise NavlibInputError("outages: cover every GNSS epoch of the mission; nothing "
                                "would be measured")
-    model = replace(model, H=H)
 
     seg_opts = dict(segment_options)
     seg_opts["min_duration_s"] = max(seg_opts.get("min_duration_s", 2.0), 2.0 / rate)

@@ -20,7 +20,7 @@ from navlib.metrics import (
     S_THRESHOLD,
     check_thresholds,
 )
-from navlib.models.baro import aided_model
+from navlib.models.baro import aided_model, without_gnss
 from navlib.models.ecef import ecef21_at_epochs, epoch_samples
 from navlib.segmentation import (
     SEGMENT_DEFAULTS,
@@ -362,13 +362,7 @@ def _as_recorded(model, gnss: pd.DataFrame | None, t_flight, outage_report_s: fl
         return model, gnss_outages(np.empty(0), 0.0, 0.0, outage_report_s)
     xyz = gnss[["x", "y", "z"]].to_numpy(dtype=float)
     t_fix = gnss["t"].to_numpy(dtype=float)[np.all(np.isfinite(xyz), axis=1)]
-    measured = measured_epochs(model.t, t_fix)
-    if not measured.all():
-        names = tuple(getattr(model, "measurement_names", ()))
-        rows = [k for k, name in enumerate(names) if name.startswith("gnss_")] or slice(None)
-        H = np.array(model.H)
-        H[np.ix_(~measured, rows) if isinstance(rows, list) else ~measured] = 0.0
-        model = replace(model, H=H)
+    model = without_gnss(model, ~measured_epochs(model.t, t_fix))
     outages = gnss_outages(t_fix, float(t_flight[0]), float(t_flight[-1]), outage_report_s)
     return model, outages
 
