@@ -9,8 +9,8 @@ offers the same ``segments``, ``excitability``, ``sensability``, ``settings`` an
 ``state_names`` as the rocket analysis those builders were written for. Every builder here
 takes a ``FlightAssessment`` and returns a new Figure; nothing is computed beyond unit
 conversion, frame changes and thinning long records for display (and, in
-:func:`flight_figure`, the 1 s moving average of the IMU residuals and the barometer's
-offset to the reference, both named on the figure).
+:func:`flight_figure`, the barometer's offset to the reference, named on the figure; its IMU
+residuals are the averaged ones the segment verdicts read).
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Patch
-from scipy.ndimage import uniform_filter1d
 from scipy.spatial.transform import Rotation
 
 from navlib import earth
@@ -174,11 +173,6 @@ def estimable_figure(assessment):
     return fig
 
 
-MOVING_AVERAGE_S = 1.0
-"""Window of the moving average of the IMU residuals in :func:`flight_figure`, s (vibration
-is not motion; the window of the fit's ``fit_f_rms`` / ``fit_w_rms``)."""
-
-
 def _wrapped(angle_deg: np.ndarray) -> np.ndarray:
     """``angle_deg`` with NaN where it wraps by more than 180 deg (no vertical lines)."""
     out = np.asarray(angle_deg, dtype=float).copy()
@@ -241,10 +235,12 @@ def flight_figure(assessment):
     for rockets and logs with a tilt column (``logged["tilt"]``, AltOS), else roll, pitch
     and yaw against the local NED frame (with the logger's own estimate,
     ``logged["attitude"]``, dashed); GNSS minus reference in north, east, down; IMU minus
-    reference specific force and angular rate per body axis after a
-    :data:`MOVING_AVERAGE_S` moving average. Assessed segments are shaded by phase, GNSS
-    outages (``assessment.gnss_outages``) cross-hatched in grey and segments the fit does
-    not represent (``segment_table["represented"]``, when present) hatched in red.
+    reference specific force and angular rate per body axis after the fit's calibration and
+    a moving average (``imu_residuals["df_x_avg"]`` ...: the residuals ``fit_f_rms`` and
+    ``fit_w_rms`` are read from, :func:`navlib.studies.assess.agreement.smoothed_residuals`).
+    Assessed segments are shaded by phase, GNSS outages (``assessment.gnss_outages``)
+    cross-hatched in grey and segments the fit does not represent
+    (``segment_table["represented"]``, when present) hatched in red.
     """
     traj = assessment.trajectory
     sl = _thin(len(traj.t))
@@ -335,16 +331,15 @@ def flight_figure(assessment):
     imu = assessment.imu_residuals
     if imu is not None and len(imu) > 1:
         t_i = imu["t"].to_numpy(dtype=float)
-        width = max(round(MOVING_AVERAGE_S / float(np.median(np.diff(t_i)))), 1)
         sl_i = _thin(t_i.size)
+        window = assessment.options["fit_bounds"]["moving_average_s"]
         for ax, prefix, scale, unit in ((axes[4], "df", 1.0, "m/s²"),
                                         (axes[5], "dw", DEG, "deg/s")):
             for axis in "xyz":
-                smooth = uniform_filter1d(imu[f"{prefix}_{axis}"].to_numpy(dtype=float),
-                                          width, mode="nearest") / scale
+                smooth = imu[f"{prefix}_{axis}_avg"].to_numpy(dtype=float) / scale
                 ax.plot(t_i[sl_i], smooth[sl_i], linewidth=0.8, label=f"{prefix[1]}_{axis}")
             ax.axhline(0.0, color="0.6", linewidth=0.5)
-            ax.set_ylabel(f"IMU − ref [{unit}]\n{MOVING_AVERAGE_S:g} s mean")
+            ax.set_ylabel(f"IMU − ref [{unit}]\n{window:g} s mean, calibrated")
     axes[-1].set_xlabel("t [s]")
     for k, ax in enumerate(axes):
         shade_phases(ax, assessment.segment_table, label=k == 0, alpha=0.1)
