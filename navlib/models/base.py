@@ -66,6 +66,12 @@ class DiscreteModel:
     def n(self) -> int:
         return len(self.state_names)
 
+    @property
+    def measured(self) -> np.ndarray:
+        """Whether each epoch measures anything (a non-zero row of ``H``; an outage or an
+        epoch between fixes has none), bool (N,)."""
+        return np.any(np.asarray(self.H) != 0.0, axis=(1, 2))
+
     def window(self, t_start: float, t_end: float) -> DiscreteModel:
         """The epochs inside the closed interval ``[t_start, t_end]`` (spec A12)."""
         sel = np.flatnonzero((self.t >= t_start - 1e-9) & (self.t <= t_end + 1e-9))

@@ -169,8 +169,7 @@ def _planned_records(trajectory, model) -> tuple[pd.DataFrame, pd.DataFrame]:
     readers' frames (for :func:`navlib.studies.assess.describe_inputs`)."""
     frame = trajectory.to_frame()
     imu = frame[["t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z"]]
-    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
-    k = np.searchsorted(frame["t"].to_numpy(), np.asarray(model.t)[measured])
+    k = np.searchsorted(frame["t"].to_numpy(), np.asarray(model.t)[model.measured])
     gnss = frame.iloc[k][["t", "x", "y", "z"]].reset_index(drop=True)
     return imu, gnss
 
@@ -255,7 +254,7 @@ model_options, model_step_s
     for a, b in windows:
         inside |= (t_model >= a) & (t_model <= b)
     model = without_gnss(model, inside)
-    if not np.any(model.H != 0.0):
+    if not model.measured.any():
         raise NavlibInputError("outages: cover every GNSS epoch of the mission; nothing "
                                "would be measured")
 

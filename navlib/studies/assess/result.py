@@ -49,8 +49,8 @@ class FlightAssessment(SegmentedAnalysis):
     segment_table : DataFrame
         The segments assessed: ``segment`` (1-based), ``phase``, ``t_start``, ``t_end``,
         ``duration``, ``n_epochs`` (GNSS epochs of the model inside that a kept fix aids)
-        and the fit's agreement
-        with the records (:func:`~navlib.studies.assess.agreement.segment_agreement`):
+        and the fit's agreement with the records
+        (:func:`~navlib.studies.assess.agreement.segment_agreement`):
         ``fit_f_rms`` (m/s^2), ``fit_w_rms`` (rad/s), ``fit_gnss_rms`` (m), ``represented``
         and ``fit_reason`` (empty when represented). The excitability and sensability of a
         segment that is not represented describe a motion that was not flown: the long
@@ -230,8 +230,7 @@ def _segment_table(segments, model, automatic: Segmentation, t_flight) -> pd.Dat
     epochs with a measurement each holds (at least 2 needed; epochs inside a GNSS outage do
     not count, assumption Q5; the last epoch may precede the flight's end)."""
     table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
-    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
-    counts = _epoch_counts(table, np.asarray(model.t)[measured])
+    counts = _epoch_counts(table, np.asarray(model.t)[model.measured])
     for k, (count, row) in enumerate(zip(counts, table.itertuples(index=False), strict=True)):
         if count < 2:
             raise NavlibInputError(
@@ -266,7 +265,7 @@ def automatic_segment_table(segments, model, automatic: Segmentation, t_flight, 
     Segments the user gave (``automatic_segments=False``) are refused instead, naming the
     segment. Returns the table and the notes."""
     t = np.asarray(model.t)
-    measured = np.any(np.asarray(model.H) != 0.0, axis=(1, 2))
+    measured = model.measured
     table = segments_table(segments, float(t_flight[0]), float(t_flight[-1]), automatic)
     entries = [[r.phase, float(r.t_start), float(r.t_end)]
                for r in table.itertuples(index=False)]
