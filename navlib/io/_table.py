@@ -303,6 +303,15 @@ def check_finite(values: Mapping[str, np.ndarray], cols: Mapping[str, Column],
             raise source.error(col.label, k, what + more)
 
 
+def check_declared(declared: Mapping[str, tuple[str, str | None, str]]) -> None:
+    """Every unit a keyword declared (``declared`` as in :func:`column_factors`) is one
+    :mod:`navlib.io._units` knows, checked before the file is read (a NavlibInputError
+    names the keyword)."""
+    for kind, (keyword, value, _) in declared.items():
+        if value is not None:
+            _units.factor(kind, value, keyword)
+
+
 def column_factors(cols: Mapping[str, Column], kinds: Mapping[str, str],
                    declared: Mapping[str, tuple[str, str | None, str]]) -> dict[str, float]:
     """SI factor per column: the declared keyword unit, or the header's bracketed unit.

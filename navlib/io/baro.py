@@ -32,9 +32,9 @@ import numpy as np
 import pandas as pd
 
 from navlib.errors import NavlibInputError
-from navlib.io import _units
 from navlib.io._table import (
     ColumnSpec,
+    check_declared,
     check_finite,
     column_factors,
     parse_columns,
@@ -127,9 +127,7 @@ def read_baro_csv(path, *, time_unit: str | None = None, pressure_unit: str | No
     declared = {"time": ("time_unit", time_unit, "s"),
                 "pressure": ("pressure_unit", pressure_unit, "Pa"),
                 "length": ("length_unit", length_unit, "m")}
-    for kind, (keyword, value, _) in declared.items():
-        if value is not None:
-            _units.factor(kind, value, keyword)
+    check_declared(declared)
     table = read_text_table(path, sep)
     src = table.source
     cols = resolve_columns(table, BARO_SPECS, columns)

@@ -45,6 +45,7 @@ from navlib.io._table import (
     Column,
     ColumnSpec,
     TextTable,
+    check_declared,
     check_finite,
     column_factors,
     parse_columns,
@@ -218,9 +219,7 @@ def read_imu_csv(path, *, time_unit: str | None = None, accel_unit: str | None =
     declared = {"time": ("time_unit", time_unit, "s"),
                 "accel": ("accel_unit", accel_unit, "m/s^2"),
                 "gyro": ("gyro_unit", gyro_unit, "rad/s")}
-    for kind, (keyword, value, _) in declared.items():
-        if value is not None:
-            _units.factor(kind, value, keyword)
+    check_declared(declared)
     table = read_text_table(path, sep)
     cols = resolve_columns(table, IMU_SPECS, columns)
     _require(cols, IMU_KEYS, table, IMU_SPECS)
