@@ -311,10 +311,10 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
                              max_step_s=model_step_s,
                              epochs=epoch_samples(trajectory.t, gnss_rate_hz), **model_options)
     model = aided_model(model, trajectory, aiding, gnss_sigma_m=sigma)
-    if aiding != "gnss":
-        notes.append(sigma_note(model, trajectory, aiding))
     model, outages = _as_recorded(model, None if aiding == "baro" else gnss, trajectory.t,
                                   outage_report_s)
+    if aiding != "gnss":                     # the model as recorded: its outages included
+        notes.append(sigma_note(model, trajectory, aiding))
     t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, t_record)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
                            inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res,
