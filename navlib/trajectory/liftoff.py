@@ -34,11 +34,13 @@ LIFTOFF_KNOTS_S = 0.4
 ``LIFTOFF_HOLD_S``, time for the thrust to build up."""
 
 
-def _smoothed_norm(t, f_b, window_s):
-    c = np.r_[0.0, np.cumsum(np.linalg.norm(f_b, axis=1))]
+def moving_average(t, x, window_s):
+    """Centred moving average of ``x`` (N, k) over ``window_s`` of time (uneven sampling
+    allowed: the mean of the samples within +- ``window_s / 2`` of each)."""
+    c = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
     i0 = np.searchsorted(t, t - 0.5 * window_s, side="left")
     i1 = np.searchsorted(t, t + 0.5 * window_s, side="right")
-    return (c[i1] - c[i0]) / (i1 - i0)
+    return (c[i1] - c[i0]) / (i1 - i0)[:, None]
 
 
 def find_liftoff(t, f_b, w_b, g, tolerance):
@@ -52,7 +54,7 @@ def find_liftoff(t, f_b, w_b, g, tolerance):
     rate below ``PAD_RATE_DEG_S``. Returns ``(t_liftoff, index)``: the pad is
     ``t[:index + 1]``.
     """
-    a = _smoothed_norm(t, f_b, LIFTOFF_SMOOTH_S) - g
+    a = moving_average(t, np.linalg.norm(f_b, axis=1)[:, None], LIFTOFF_SMOOTH_S)[:, 0] - g
     high = a > LIFTOFF_ACCEL_MPS2
     # first sample from which `high` holds for LIFTOFF_HOLD_S
     run_end = np.searchsorted(t, t + LIFTOFF_HOLD_S, side="right")

@@ -17,6 +17,7 @@ import pandas as pd
 
 from navlib import quality
 from navlib.metrics import in_segment
+from navlib.trajectory.liftoff import moving_average
 from navlib.units import DEG
 
 AXES = "xyz"
@@ -31,15 +32,6 @@ def fit_bounds(overrides=None) -> dict:
     """The ``[fit]`` section of ``data/quality.toml`` (overrides as in
     :func:`navlib.quality.load_thresholds`, e.g. ``{"fit": {"gnss_m": 20}}``)."""
     return quality.load_thresholds(overrides)["fit"]
-
-
-def moving_average(t, x, window_s):
-    """Centred moving average of ``x`` (N, k) over ``window_s`` of time (uneven sampling
-    allowed: the mean of the samples within +- ``window_s / 2`` of each)."""
-    c = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
-    i0 = np.searchsorted(t, t - 0.5 * window_s, side="left")
-    i1 = np.searchsorted(t, t + 0.5 * window_s, side="right")
-    return (c[i1] - c[i0]) / (i1 - i0)[:, None]
 
 
 def fit_calibration(trajectory) -> dict:
