@@ -234,7 +234,9 @@ def flight_figure(assessment):
     else differenced consecutive fixes); attitude: the angle of body x from the vertical
     for rockets and logs with a tilt column (``logged["tilt"]``, AltOS), else roll, pitch
     and yaw against the local NED frame (with the logger's own estimate,
-    ``logged["attitude"]``, dashed); GNSS minus reference in north, east, down; IMU minus
+    ``logged["attitude"]``, dashed); GNSS minus reference in north, east, down (for a flight
+    without GNSS, ``options["aiding"] == "baro"``, the barometric rows its fit was seeded
+    with take the GNSS's place, named so); IMU minus
     reference specific force and angular rate per body axis after the fit's calibration and
     a moving average (``imu_residuals["df_x_avg"]`` ...: the residuals ``fit_f_rms`` and
     ``fit_w_rms`` are read from, :func:`navlib.studies.assess.agreement.smoothed_residuals`).
@@ -249,6 +251,9 @@ def flight_figure(assessment):
     C_n_e = earth.ned_to_ecef_matrix(lat, lon)
     C_b_n = np.swapaxes(C_n_e, 1, 2) @ traj.attitude[sl].as_matrix()
     logged = getattr(assessment, "logged", None) or {}
+    # the position rows the reference was fitted to: GNSS fixes, or for a flight without
+    # GNSS the barometric-height rows that seed its fit (docs/assumptions.md B5)
+    rows = "baro rows" if assessment.options.get("aiding") == "baro" else "GNSS"
     fig, axes = subplots(6, 1, figsize=(11, 12.5), sharex=True, layout="constrained",
                          gridspec_kw={"height_ratios": [3, 2.2, 2.2, 1.8, 1.8, 1.8]})
 
@@ -261,7 +266,7 @@ def flight_figure(assessment):
         d = gnss[["dx", "dy", "dz"]].to_numpy(dtype=float)
         p_g = np.column_stack([np.interp(t_g, traj.t, traj.position[:, i]) for i in range(3)])
         _, _, alt_g = earth.ecef_to_geodetic(p_g + d)
-        ax.plot(t_g, alt_g, ".", color="tab:green", markersize=3, label="GNSS (kept fixes)")
+        ax.plot(t_g, alt_g, ".", color="tab:green", markersize=3, label=f"{rows} (kept fixes)")
     baro = logged.get("baro")
     if baro is not None and len(baro):
         t_b = baro["t"].to_numpy(dtype=float)
@@ -287,7 +292,7 @@ def flight_figure(assessment):
             near = dt <= 1.5 * np.median(dt)
             speed = np.linalg.norm(np.diff(p_g + d, axis=0), axis=1)[near] / dt[near]
             ax.plot(0.5 * (t_g[1:] + t_g[:-1])[near], speed, ".", color="tab:green",
-                    markersize=3, label="GNSS (differenced fixes)")
+                    markersize=3, label=f"{rows} (differenced fixes)")
     ax.set_ylabel("speed [m/s]")
 
     # attitude
@@ -327,7 +332,7 @@ def flight_figure(assessment):
     sigma = assessment.options.get("gnss_sigma_m")
     if sigma:
         ax.axhspan(-sigma, sigma, color="0.88", zorder=0, label=f"±σ = {sigma:.3g} m")
-    ax.set_ylabel("GNSS − ref [m]")
+    ax.set_ylabel(f"{rows} − ref [m]")
     imu = assessment.imu_residuals
     if imu is not None and len(imu) > 1:
         t_i = imu["t"].to_numpy(dtype=float)

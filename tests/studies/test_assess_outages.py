@@ -162,6 +162,13 @@ def test_flight_figure_shows_the_records_and_marks(with_outage):
     fig = flight_figure(with_outage)
     assert not [p for p in fig.axes[0].patches if p.get_hatch() == "////"]
     plt.close(fig)
+    # a flight without GNSS: its position rows are the barometer's, and say so
+    options = {**with_outage.options, "aiding": "baro"}
+    fig = flight_figure(replace(with_outage, options=options))
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "baro rows (kept fixes)" in labels and "GNSS (kept fixes)" not in labels
+    assert fig.axes[3].get_ylabel() == "baro rows − ref [m]"
+    plt.close(fig)
 
 
 def test_altos_descent_at_10_hz_keeps_one_epoch_a_second():
