@@ -12,6 +12,7 @@ from navlib._validation import increasing_times
 from navlib.errors import NavlibInputError
 from navlib.io import check_overlap
 from navlib.io.checks import R_MAX_M, R_MIN_M
+from navlib.io.sensor_health import ALIVE_ACCEL_M_S2
 from navlib.trajectory.fit import MIN_IMU_RATE_HZ
 
 MIN_DURATION_S = 2.0
@@ -22,12 +23,14 @@ MIN_GNSS_EPOCHS = 4
 MIN_IMU_SAMPLES = int(np.ceil(MIN_DURATION_S * MIN_IMU_RATE_HZ)) + 1
 """Fewest IMU samples accepted: :data:`MIN_DURATION_S` of data at the fit's lowest IMU rate
 (:data:`navlib.trajectory.fit.MIN_IMU_RATE_HZ`), by construction."""
-MIN_PEAK_ACCEL_G = 0.5
+MIN_PEAK_ACCEL_G = ALIVE_ACCEL_M_S2 / units.G0
 """Specific-force norm, g, an IMU record must reach at least once (assumption Q6 of
-docs/assumptions.md): an accelerometer reads about 1 g whenever something holds gravity off
-(the ground at rest, thrust or rotors, lift, drag under a parachute); a record that never
-reads half of it fell freely from its first sample to its last, which cannot be told from a
-dead accelerometer."""
+docs/assumptions.md; the readers' live-accelerometer bound,
+:data:`navlib.io.sensor_health.ALIVE_ACCEL_M_S2`, here for records handed over as
+DataFrames): an accelerometer reads about 1 g whenever something holds gravity off (the
+ground at rest, thrust or rotors, lift, drag under a parachute); a record that never reads
+half of it fell freely from its first sample to its last, which cannot be told from a dead
+accelerometer."""
 
 IMU_KEYS = ("t", "f_x", "f_y", "f_z", "w_x", "w_y", "w_z")
 GNSS_KEYS = ("t", "x", "y", "z")
