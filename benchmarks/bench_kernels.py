@@ -16,7 +16,7 @@ replaced (``tests/kalman_reference.py``):
   (4 runs) per step, about a quarter of the NumPy block's time.
 * ``kernels.strapdown_window_21``: 100 EKF feedback windows of the strapdown mechanisation
   (0.1 s at 200 Hz, 21 samples each, along the launcher ascent), compiled
-  (:func:`navlib.strapdown_kernel.integrate_kernel` through ``strapdown._integrate``) and
+  (:func:`navlib.strapdown._kernel.integrate_kernel` through ``strapdown.propagate``) and
   NumPy (``numpy_strapdown_window_21``, ``tests/strapdown_reference.py``). No goal in the
   issue: 1 us per sample.
 * ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
@@ -195,7 +195,7 @@ def cases() -> list[Case]:
         Case("kernels.numpy_linear_block_28_4runs", "the same (NumPy reference)",
              lambda: _linear_numpy(4), 256 * 2e-6),
         Case("kernels.strapdown_window_21", "100 windows x 21 samples (0.1 s at 200 Hz)",
-             lambda: _strapdown(strapdown._integrate), 100 * 21 * 1e-6),
+             lambda: _strapdown(strapdown.propagate), 100 * 21 * 1e-6),
         Case("kernels.numpy_strapdown_window_21", "the same (NumPy reference)",
              lambda: _strapdown(strapdown_reference.integrate), 100 * 21 * 1e-6),
         *_compile_cases(),

@@ -5,7 +5,7 @@ it compiles them, afterwards it loads them from numba's disk cache (``cache=True
 notebook kernels a report starts at once only load (docs/performance.md, "Compiled
 kernels", gives the costs). The kernels live beside the NumPy code they replace: the Kalman algebra
 (:mod:`navlib.kalman`), the linear simulation (:mod:`navlib.filters.linear_recursion`), the
-strapdown mechanisation (:mod:`navlib.strapdown_kernel`) and the every-step observability
+strapdown mechanisation (:mod:`navlib.strapdown`) and the every-step observability
 test (:mod:`navlib.observability.sliding`).
 
 A report warms the kernels several notebooks share (:func:`compile_shared_kernels`) in a
@@ -17,7 +17,7 @@ first use.
 
 import numpy as np
 
-from navlib import kalman, strapdown_kernel
+from navlib import kalman, strapdown
 from navlib.filters import linear_recursion
 from navlib.observability import sliding
 from navlib.sensors import simulation
@@ -35,5 +35,5 @@ def compile_shared_kernels() -> None:
     mechanisation and the sensor errors' Gauss-Markov recursion."""
     kalman.compile_kernels()
     linear_recursion.compile_recursion_kernels()
-    strapdown_kernel.compile_kernel()
+    strapdown.compile_kernel()
     simulation.first_order_recursion(np.ones(1), np.ones((2, 1)), np.empty((2, 1)))

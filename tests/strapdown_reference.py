@@ -1,5 +1,5 @@
 """NumPy reference of the compiled strapdown kernel
-(:func:`navlib.strapdown_kernel.integrate_kernel`): the vectorised mechanisation
+(:func:`navlib.strapdown._kernel.integrate_kernel`): the vectorised mechanisation
 :func:`navlib.strapdown.integrate` ran before the kernel, kept here (not in the library) to
 compare against (tests/test_strapdown_kernel.py) and to time against
 (benchmarks/bench_kernels.py).
@@ -58,7 +58,7 @@ def _translation_window(h, r0, v0, f_e, f_e_mid):
 def integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
     """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): for
     loops that propagate many short blocks from states they computed themselves (the
-    EKF's windows, :func:`navlib.filters.ekf`, with their :func:`_block_clocks`)."""
+    EKF's windows, :func:`navlib.filters.ekf`, with their :func:`block_clocks`)."""
     n = t.size
     h = np.diff(t)
     lagrange, earth, earth_mid = _clock(t) if clock is None else clock

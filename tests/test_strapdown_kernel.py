@@ -1,4 +1,4 @@
-"""The compiled strapdown mechanisation (:func:`navlib.strapdown_kernel.integrate_kernel`)
+"""The compiled strapdown mechanisation (:func:`navlib.strapdown._kernel.integrate_kernel`)
 equals the vectorised NumPy code it replaced (tests/strapdown_reference.py): one EKF window
 and one interval within 1e-12 relative, the 86 s sounding-rocket flight within the drift
 rounding accumulates."""
@@ -40,7 +40,7 @@ def test_block_equals_numpy(rocket, first, count):
     f_b = rocket.specific_force[sl] + 0.1 * rng.standard_normal((count, 3))
     w_b = rocket.angular_rate[sl] + 0.01 * rng.standard_normal((count, 3))
     r, v, q = _start(rocket, first)
-    got = strapdown._integrate(t, f_b, w_b, r, v, q)
+    got = strapdown.propagate(t, f_b, w_b, r, v, q)
     want = ref.integrate(t, f_b, w_b, r, v, q)
     assert _rel(got.position - r, want.position - r) < STEP_RTOL
     assert _rel(got.velocity, want.velocity) < STEP_RTOL
@@ -51,7 +51,7 @@ def test_86_s_flight_equals_numpy(rocket):
     """The whole 86 s flight at 100 Hz (nine 10 s gravity windows): within 1e-9 m and
     1e-11 m/s of the NumPy mechanisation, far inside the closure error of the scheme."""
     args = (rocket.t, rocket.specific_force, rocket.angular_rate, *_start(rocket, 0))
-    got = strapdown._integrate(*args)
+    got = strapdown.propagate(*args)
     want = ref.integrate(*args)
     assert np.abs(got.position - want.position).max() < 1e-9
     assert np.abs(got.velocity - want.velocity).max() < 1e-11
@@ -74,7 +74,7 @@ def test_read_only_inputs_use_the_one_compiled_specialisation():
     writeable C arrays they are compiled for (``compile_kernel``), so a notebook never
     compiles a second specialisation."""
     from navlib.quaternions import _matrix_quat_kernel
-    from navlib.strapdown_kernel import integrate_kernel
+    from navlib.strapdown._kernel import integrate_kernel
     from navlib.trajectory import stationary
 
     still = stationary(duration_s=2.0)

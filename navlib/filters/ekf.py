@@ -401,7 +401,7 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
     loop = WindowUpdates(es, kept, observers, Epochs(events, rows, len(names)))
-    clocks = strapdown._block_clocks(t, bounds)
+    clocks = strapdown.block_clocks(t, bounds)
     n, longest = len(es.state_names), int(np.max(np.diff(bounds)))
     buffers = (np.empty((longest, n, n)), np.empty((longest, n, n)))  # F, Q of a window
     for i, (w0, w1) in enumerate(itertools.pairwise(bounds)):
@@ -452,7 +452,7 @@ def _window_nominal(es, t, f_meas, w_meas, state, params, clock) -> Nominal:
     """The nominal state over one window from ``state`` ``(r, v, C)`` at its start: the
     parameter estimates decayed along it, the IMU compensated with them and the strapdown
     mechanisation (the loop's own states, so without :func:`navlib.strapdown.integrate`'s
-    input checks; ``clock``: the window's in ``strapdown._block_clocks``)."""
+    input checks; ``clock``: the window's in ``strapdown.block_clocks``)."""
     r, v, C = state
     if not (np.isfinite(r).all() and np.isfinite(v).all() and np.isfinite(C).all()):
         raise NavlibInputError(f"ekf: the filter diverged: its navigation state is not finite "
@@ -461,5 +461,5 @@ def _window_nominal(es, t, f_meas, w_meas, state, params, clock) -> Nominal:
     dt = (t - t[0])[:, None]
     par = {g: p[None, :] * np.exp(es.decay[g][None, :] * dt) for g, p in params.items()}
     f_c, w_c = es.compensate(par, f_meas, w_meas)
-    nav = strapdown._integrate(t, f_c, w_c, r, v, quat_from_matrix(C), clock)
+    nav = strapdown.propagate(t, f_c, w_c, r, v, quat_from_matrix(C), clock)
     return Nominal(t, nav.position, nav.velocity, nav.attitude.as_matrix(), f_c, w_c, par)

@@ -31,16 +31,21 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
 The attitude recursion does not depend on position or velocity, so every step's rotation
 vector is computed first and the steps are chained with a log-depth parallel prefix product
 of quaternions. :func:`integrate` runs all of it as one compiled kernel
-(:func:`navlib.strapdown_kernel.integrate_kernel`); :func:`step` is the same mechanisation for
+(:func:`navlib.strapdown._kernel.integrate_kernel`); :func:`step` is the same mechanisation for
 one interval (gravity at predicted points instead of the iteration), for filters that
 propagate sample by sample; for blocks of samples between measurement updates,
-:func:`integrate` from the current state is much faster.
+:func:`integrate` from the current state is much faster, and loops over many such blocks
+call :func:`propagate` with their :func:`block_clocks`. The compiled kernel is the private
+module :mod:`navlib.strapdown._kernel`; :func:`compile_kernel` compiles or loads it.
 
 Quaternions are stored scalar-last ``(x, y, z, w)`` like :mod:`scipy.spatial.transform`,
 and ``q_b_e`` rotates body vectors into ECEF.
 """
 
 from __future__ import annotations
+
+__all__ = ["ClosureError", "StrapdownResult", "StrapdownState", "block_clocks", "body_attitude",
+           "closure_error", "compile_kernel", "integrate", "propagate", "step"]
 
 from dataclasses import dataclass
 
@@ -53,7 +58,7 @@ from navlib._validation import finite_array, finite_scalar, increasing_times
 from navlib.errors import NavlibInputError
 from navlib.quaternions import earth_quat, prefix_products, quat_from_rotvec, quat_mul, quat_rotate
 from navlib.rotations import bortz_rate, cross
-from navlib.strapdown_kernel import PICARD_MAX_ITER, integrate_kernel
+from navlib.strapdown._kernel import PICARD_MAX_ITER, compile_kernel, integrate_kernel
 
 _OMEGA = earth.OMEGA_E
 
@@ -91,7 +96,7 @@ def _lagrange(t, frac):
 
 
 def _clock(t):
-    """What :func:`_integrate` needs of the sample times (..., N) alone: the mid-step
+    """What :func:`propagate` needs of the sample times (..., N) alone: the mid-step
     :func:`_lagrange` weights and the Earth rotations since ``t[0]`` at the samples and
     mid-steps (several blocks of one length at once, the same numbers as one by one)."""
     t0 = t[..., :1]
@@ -99,9 +104,25 @@ def _clock(t):
             earth_quat(t[..., :-1] + 0.5 * np.diff(t, axis=-1) - t0))
 
 
-def _block_clocks(t, bounds) -> list:
-    """:func:`_clock` of each block ``t[b0:b1 + 1]`` of consecutive ``bounds``, computed
-    for all blocks of one length at once."""
+def block_clocks(t, bounds) -> list:
+    """What :func:`propagate` needs of the sample times of each block of a long run.
+
+    Parameters
+    ----------
+    t : ndarray (N,)
+        Sample times of the whole run, s (checked by the caller, strictly increasing).
+    bounds : sequence of int
+        Sample indices of the block boundaries, increasing; block ``i`` is
+        ``t[bounds[i]:bounds[i + 1] + 1]`` (consecutive blocks share their boundary sample).
+
+    Returns
+    -------
+    list
+        One clock per block, to pass as ``clock`` to :func:`propagate`: the mid-step cubic
+        Lagrange samples and weights and the Earth rotations since the block's first
+        sample. Blocks of one length are computed together, giving the same numbers as
+        one by one.
+    """
     b0 = np.asarray(bounds[:-1])
     sizes = np.diff(bounds) + 1
     clocks = [None] * b0.size
@@ -419,18 +440,43 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
     v = finite_array(velocity0, "velocity0", (3,))
     if np.linalg.norm(r) < 1e5:
         raise NavlibInputError("position0: expected an ECEF position in m (|r| >= 100 km)")
-    return _integrate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
+    return propagate(t, f_b, w_ib_b, r, v, _attitude_quat(attitude0))
 
-def _integrate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
-    """:func:`integrate` on checked inputs (``q0`` the initial attitude quaternion): the
-    compiled mechanisation (:func:`navlib.strapdown_kernel.integrate_kernel`), also for
-    loops that propagate many short blocks from states they computed themselves (the
-    EKF's windows, :func:`navlib.filters.ekf`, with their :func:`_block_clocks`)."""
+
+def propagate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
+    """:func:`integrate` without its input checks, for loops over many short blocks.
+
+    The same compiled mechanisation (module docstring; spec excitability.md Eq. 1, A2, A5)
+    for callers that propagate blocks from states they computed themselves, such as the
+    EKF's windows (:func:`navlib.filters.ekf`).
+
+    Parameters
+    ----------
+    t : ndarray (N,)
+        Sample times, s, strictly increasing (not checked).
+    f_b, w_ib_b : ndarray (N, 3)
+        Specific force (m/s^2) and inertial body rate (rad/s), finite (not checked).
+    r, v : ndarray (3,)
+        ECEF position (m) and velocity (m/s) at ``t[0]``.
+    q0 : ndarray (4,)
+        Body -> ECEF unit quaternion at ``t[0]``, scalar-last.
+    clock : tuple, optional
+        This block's entry of :func:`block_clocks` (computed here when not given).
+
+    Returns
+    -------
+    StrapdownResult
+
+    Raises
+    ------
+    NavlibInputError
+        When the gravity iteration does not converge (sample steps of many seconds).
+    """
     n = t.size
     (idx, weights), earth_q, earth_mid = _clock(t) if clock is None else clock
     position, velocity, q = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4))
     # C-contiguous and writeable: the one type the kernel is compiled for
-    # (:func:`navlib.strapdown_kernel.compile_kernel`); a read-only view (a broadcast
+    # (:func:`navlib.strapdown._kernel.compile_kernel`); a read-only view (a broadcast
     # trajectory row, a cached array) would be a second specialisation, compiled on first use
     inputs = (np.require(a, float, "CW")
               for a in (t, f_b, w_ib_b, r, v, q0, weights, earth_q, earth_mid))
