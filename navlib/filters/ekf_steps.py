@@ -194,18 +194,51 @@ def discretize_kernel(A, G, dt, pattern, F, Q):
         _van_loan(A[s], W, h, a_start, a_cols, live, Q[s], T, T2)
 
 
+@numba.njit(cache=True)
+def _used(A, G, a_used, g_used):
+    """Flags of the entries of ``A`` (K, n, n) and ``G`` (K, n, q) that are non-zero in any
+    step into ``a_used`` (n, n) and ``g_used`` (q, n) (``G`` by column)."""
+    for i in range(A.shape[1]):
+        for j in range(A.shape[2]):
+            a_used[i, j] = False
+        for j in range(G.shape[2]):
+            g_used[j, i] = False
+    for k in range(A.shape[0]):
+        for i in range(A.shape[1]):
+            for j in range(A.shape[2]):
+                if A[k, i, j] != 0.0:
+                    a_used[i, j] = True
+            for j in range(G.shape[2]):
+                if G[k, i, j] != 0.0:
+                    g_used[j, i] = True
+
+
+_PATTERNS: dict = {}
+""":func:`_pattern` by the non-zero flags and ``Qc`` it was found from (the EKF's windows
+repeat a handful)."""
+
+
 def _pattern(A, G, Qc):
     """The non-zero entries of a window's ``A`` (K, n, n) (in any step; rows: ``start``,
     ``columns``, and the row order with the rows that have any first), of ``G`` (K, n, q)
-    (by column: ``start``, ``rows``) and of ``Qc`` (``pairs`` (p, 2), ``weights`` (p,))."""
-    used = (A != 0.0).any(axis=0)
-    a_start = np.concatenate([[0], np.cumsum(used.sum(axis=1))]).astype(np.int64)
-    live = np.argsort(~used.any(axis=1), kind="stable").astype(np.int64)
-    g_used = (G != 0.0).any(axis=0).T
-    g_start = np.concatenate([[0], np.cumsum(g_used.sum(axis=1))]).astype(np.int64)
-    pairs = np.argwhere(Qc != 0.0).astype(np.int64)
-    return (a_start, np.nonzero(used)[1].astype(np.int64), live, g_start,
-            np.nonzero(g_used)[1].astype(np.int64), pairs, Qc[pairs[:, 0], pairs[:, 1]])
+    (by column: ``start``, ``rows``) and of ``Qc`` (``pairs`` (p, 2), ``weights`` (p,)),
+    kept in :data:`_PATTERNS`."""
+    used = np.empty(A.shape[1:], dtype=np.bool_)
+    g_used = np.empty((G.shape[2], G.shape[1]), dtype=np.bool_)
+    _used(A, G, used, g_used)
+    key = (used.tobytes(), g_used.tobytes(), used.shape, g_used.shape, Qc.tobytes())
+    found = _PATTERNS.get(key)
+    if found is None:
+        a_start = np.concatenate([[0], np.cumsum(used.sum(axis=1))]).astype(np.int64)
+        live = np.argsort(~used.any(axis=1), kind="stable").astype(np.int64)
+        g_start = np.concatenate([[0], np.cumsum(g_used.sum(axis=1))]).astype(np.int64)
+        pairs = np.argwhere(Qc != 0.0).astype(np.int64)
+        found = (a_start, np.nonzero(used)[1].astype(np.int64), live, g_start,
+                 np.nonzero(g_used)[1].astype(np.int64), pairs, Qc[pairs[:, 0], pairs[:, 1]])
+        if len(_PATTERNS) >= 64:
+            _PATTERNS.clear()
+        _PATTERNS[key] = found
+    return found
 
 
 def discretize_window(A, G, Qc, dt, method: str, out=None):

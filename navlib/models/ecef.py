@@ -37,6 +37,7 @@ from navlib import cache, earth, units
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
+from navlib.models._ecef21_kernel import jacobians_kernel
 from navlib.models.base import (
     HOLDS,
     DiscreteModel,
@@ -560,6 +561,12 @@ class Ecef21ErrorState(ErrorState):
         return cls.build(gnss_velocity_sigma=gnss_velocity_sigma, **options)
 
     def jacobians(self, nominal):
-        """:func:`ecef21_jacobians` along the nominal trajectory and compensated IMU."""
-        return ecef21_jacobians(nominal.position, nominal.C_b_e, nominal.f_b, nominal.w_ib_b,
-                                self.attitude_frame)
+        """:func:`ecef21_jacobians` along the nominal trajectory and compensated IMU, by the
+        compiled :func:`navlib.models._ecef21_kernel.jacobians_kernel` (the same entries to
+        rounding)."""
+        k = nominal.t.size
+        A, G = np.empty((k, 21, 21)), np.empty((k, 21, 18))
+        jacobians_kernel(*(np.require(a, float, "CW") for a in (
+            nominal.position, nominal.C_b_e, nominal.f_b, nominal.w_ib_b)),
+            self.attitude_frame == "body", A, G)
+        return A, G

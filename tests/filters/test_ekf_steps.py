@@ -1,5 +1,6 @@
 """The EKF's compiled sparse steps (navlib.filters.ekf_steps, navlib.kalman.predict_sparse)
-against the NumPy code: per step within 1e-12 of each matrix's largest entry (rounding only;
+and the 21-state model's compiled Jacobians (navlib.models._ecef21_kernel) against the NumPy
+code: per step within 1e-12 of each matrix's largest entry (rounding only;
 the NumPy products go through whichever BLAS kernel is loaded), and the whole 86 s rocket
 EKF against the same loop with NumPy steps within the golden tolerances of
 tests/regression/tolerances.toml ``[ekf.*]`` (measured across BLAS kernels)."""
@@ -15,8 +16,9 @@ import pytest
 from navlib import sensors, strapdown
 from navlib.discretize import discretize_steps
 from navlib.filters import ekf
-from navlib.filters.ekf_steps import TAYLOR_THETA, discretize_window
+from navlib.filters.ekf_steps import _PATTERNS, TAYLOR_THETA, _pattern, discretize_window
 from navlib.kalman import predict_sparse
+from navlib.models.base import Nominal
 from navlib.models.ecef import Ecef21ErrorState, ecef21_jacobians
 from navlib.trajectory import sounding_rocket
 
@@ -55,6 +57,37 @@ def _block_model(rng, steps, n=12, live=5, decay=True):
     G[:, 1:, :] = rng.standard_normal((steps, n - 1, n - 2)) * (rng.random((n - 1, n - 2)) < 0.3)
     M = rng.standard_normal((n - 2, n - 2))
     return A, G, M @ M.T, rng.uniform(0.005, 0.02, steps)
+
+
+@pytest.mark.parametrize("frame", ["ecef", "body"])
+def test_compiled_jacobians_equal_numpy(rocket, frame):
+    """``Ecef21ErrorState.jacobians`` (the compiled kernel the EKF calls) equals
+    :func:`ecef21_jacobians` along the rocket flight for both attitude errors, with the same
+    zero entries (rounding only: 1e-12 of each matrix's largest entry)."""
+    sl = slice(0, 8601, 7)
+    bias = np.linspace(0.0, 0.01, sl.stop // 7 + 1)[:, None]
+    nominal = Nominal(rocket.t[sl], rocket.position[sl], rocket.velocity[sl],
+                      rocket.C_b_e()[sl], rocket.specific_force[sl] + bias,
+                      rocket.angular_rate[sl] - bias, {})
+    A, G = Ecef21ErrorState.build("motionpak_tactical", attitude_error=frame).jacobians(nominal)
+    A_ref, G_ref = ecef21_jacobians(nominal.position, nominal.C_b_e, nominal.f_b,
+                                    nominal.w_ib_b, frame)
+    assert rel(A, A_ref) < STEP_RTOL
+    np.testing.assert_array_equal(G, G_ref)
+    np.testing.assert_array_equal(A != 0.0, A_ref != 0.0)
+
+
+def test_kept_patterns_are_those_of_their_window():
+    """A window whose non-zero entries differ from an earlier one's gets its own pattern
+    from :data:`_PATTERNS` (the cache is keyed by the entries, not by the shapes)."""
+    rng = np.random.default_rng(7)
+    A, G, Qc, _ = _block_model(rng, 5)
+    first = _pattern(A, G, Qc)
+    A2 = A.copy()
+    A2[:, 0, :] = 0.0
+    second = _pattern(A2, G, Qc)
+    assert not np.array_equal(first[0], second[0])
+    assert _pattern(A, G, Qc) is first and len(_PATTERNS) >= 2
 
 
 def test_rocket_steps_equal_discretize_steps(rocket):
