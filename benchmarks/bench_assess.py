@@ -17,8 +17,17 @@ starts from the 2 s on the pad. Goals: under 20 s and 1 GB.
 (``MODEL_STEP_S``) change in the discretised 21-state model of the sounding rocket at 1 Hz
 (largest relative difference of ``F`` and of each epoch's ``Q`` against every-IMU-step).
 
+``assess.altos_<flight>`` (issue 37, goal 3 s warm): each shared AltOS rocket flight
+(``../shared/data/altos``, found as ``tests/locations.py`` finds it; no rows when absent)
+assessed in this process after one warm-up, as the CLI does per flight
+(:func:`navlib.reports.fleet.assess_log`: read, :func:`~navlib.studies.assess.assess_flight`,
+the HTML page); ``time_s`` is the best of 3 of the whole, ``read_s``, ``assess_s`` and
+``page_s`` the best of each part, ``cli_s`` the command line's wall time for the flight in a
+new process (interpreter, imports, numba caches loaded; the second of two runs).
+
 Run alone (``python benchmarks/bench_assess.py [seconds ...]``) for the table with memory,
-``python benchmarks/bench_assess.py rocket`` for the rocket row.
+``python benchmarks/bench_assess.py rocket`` for the rocket row,
+``python benchmarks/bench_assess.py altos`` for the shared AltOS flights.
 """
 
 from __future__ import annotations
@@ -37,6 +46,7 @@ ROOT = HERE.parent
 GOAL_S = {1800: 60.0}
 GOAL_MB = 2048.0
 ROCKET_GOAL_S, ROCKET_GOAL_MB = 20.0, 1024.0
+ALTOS_GOAL_S = 3.0
 ROCKET_10MIN = {"phase.1.burn_time_s": 6.0, "phase.1.acceleration_m_s2": 90.0,
                 "phase.3.rate_m_s": 30.0, "phase.3.spin_hz": 1.0, "phase.3.swing_deg": 40.0,
                 "phase.3.swing_period_s": 4.0, "phase.4.height_m": 900.0,
@@ -153,15 +163,85 @@ def _rocket_case() -> Case:
                 notes="time_s includes generating the flight")
 
 
+def altos_logs() -> list[Path]:
+    """The shared AltOS flight logs (none when the shared folder is absent)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from locations import SHARED_DATA
+
+    return sorted((SHARED_DATA / "altos").glob("*.csv"))
+
+
+def _cli_seconds(log: Path) -> float:
+    """Wall time of ``python -m navlib assess LOG`` (one process, synchronous scheduler: a
+    fresh interpreter, its imports and the page written), the second of two runs."""
+    with tempfile.TemporaryDirectory() as out:
+        command = [sys.executable, "-m", "navlib", "assess", str(log), "--output", out,
+                   "--scheduler", "synchronous"]
+        for _ in range(2):
+            start = time.perf_counter()
+            subprocess.run(command, check=True, capture_output=True, timeout=600)
+            elapsed = time.perf_counter() - start
+    return elapsed
+
+
+def _altos_case(log: Path) -> Case:
+    import warnings
+
+    from navlib.io import read_log
+    from navlib.reports.pages import flight_page
+    from navlib.studies.assess import assess_flight
+
+    parts: dict[str, float] = {}
+
+    def timed(name, func, *args):
+        start = time.perf_counter()
+        out = func(*args)
+        parts[name] = min(parts.get(name, float("inf")), time.perf_counter() - start)
+        return out
+
+    def run():
+        # the steps of navlib.reports.fleet.assess_log (its summary row aside), each timed
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            imu, gnss = timed("read_s", read_log, str(log))
+            result = timed("assess_s", assess_flight, imu, gnss)
+            timed("page_s", flight_page, str(log), result, [])
+
+    def extra(_elapsed):
+        return {**parts, "cli_s": _cli_seconds(log)}
+
+    name = log.stem.split("-serial-")[-1]
+    return Case(f"assess.altos_{name}", f"AltOS {log.stem[:10]}, read + assess + page", run,
+                ALTOS_GOAL_S, extra=extra)
+
+
 def cases():
     return [_long_case(1800), _rocket_case(),
             Case("assess.model_step_error", "rocket, 1 Hz epochs", model_step_error, 5.0,
-                 repeat=1, warmup=False, extra=lambda _e: model_step_error())]
+                 repeat=1, warmup=False, extra=lambda _e: model_step_error()),
+            *(_altos_case(log) for log in altos_logs())]
+
+
+def _altos_table() -> int:
+    import pandas as pd
+    from _harness import time_case
+
+    rows = [time_case(_altos_case(log)) for log in altos_logs()]
+    if not rows:
+        print("no shared AltOS flights (../shared/data/altos or $NAVLIB_SHARED_DIR/data/altos)",
+              file=sys.stderr)
+        return 1
+    with pd.option_context("display.width", 200, "display.max_columns", 20,
+                           "display.float_format", "{:.3g}".format):
+        print(pd.DataFrame(rows).to_string(index=False))
+    return 0
 
 
 def main(argv: list[str]) -> int:
     import pandas as pd
 
+    if argv == ["altos"]:
+        return _altos_table()
     if argv == ["rocket"]:
         row = measure_rocket()
         print(f"10-minute rocket flight ({row['samples']} samples): assessed in "
