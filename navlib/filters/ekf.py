@@ -25,6 +25,7 @@ from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
 from navlib.covariance import symmetrize
 from navlib.errors import NavlibInputError
+from navlib.filters.ekf_loop import compiled_run
 from navlib.filters.ekf_steps import discretize_window
 from navlib.filters.ekf_updates import Epochs, WindowUpdates, update_records
 from navlib.filters.linear_preparation import METHODS
@@ -401,6 +402,12 @@ def _run(es, t, f_meas, w_meas, start, params, P, events, bounds, method, keep_c
         out = {key: list(value) for key, value in resume.results.items()}
         first = resume.window
     loop = WindowUpdates(es, kept, observers, Epochs(events, rows, len(names)))
+    compiled = compiled_run(es, t, f_meas, w_meas, start, params, P, loop.epochs, bounds,
+                            method, keep_covariance, rows, names, resume_point)
+    if compiled is not None:                   # the whole loop in one kernel (ekf_loop)
+        return EKFResult(**compiled, state_names=tuple(es.state_names),
+                         measurement_names=tuple(names),
+                         kept_names=tuple(es.state_names[i] for i in kept), model=es.name)
     clocks = strapdown.block_clocks(t, bounds)
     n, longest = len(es.state_names), int(np.max(np.diff(bounds)))
     buffers = (np.empty((longest, n, n)), np.empty((longest, n, n)))  # F, Q of a window

@@ -213,6 +213,43 @@ def _used(A, G, a_used, g_used):
                     g_used[j, i] = True
 
 
+@numba.njit(cache=True)
+def pattern_kernel(A, G, pairs, weights):
+    """:func:`_pattern` compiled, for loops that run in a kernel
+    (:mod:`navlib.filters.ekf_loop`): the same arrays, with ``Qc``'s ``pairs`` and
+    ``weights`` given."""
+    n, q = A.shape[1], G.shape[2]
+    used, g_used = np.empty((n, n), dtype=np.bool_), np.empty((q, n), dtype=np.bool_)
+    _used(A, G, used, g_used)
+    a_start, g_start = np.zeros(n + 1, dtype=np.int64), np.zeros(q + 1, dtype=np.int64)
+    for i in range(n):
+        a_start[i + 1] = a_start[i] + used[i].sum()
+    for j in range(q):
+        g_start[j + 1] = g_start[j] + g_used[j].sum()
+    a_cols, g_rows = np.empty(a_start[n], dtype=np.int64), np.empty(g_start[q], dtype=np.int64)
+    live = np.empty(n, dtype=np.int64)
+    u, front = 0, 0
+    for i in range(n):
+        for j in range(n):
+            if used[i, j]:
+                a_cols[u] = j
+                u += 1
+        if a_start[i + 1] > a_start[i]:
+            live[front] = i
+            front += 1
+    for i in range(n):
+        if a_start[i + 1] == a_start[i]:
+            live[front] = i
+            front += 1
+    u = 0
+    for j in range(q):
+        for i in range(n):
+            if g_used[j, i]:
+                g_rows[u] = i
+                u += 1
+    return a_start, a_cols, live, g_start, g_rows, pairs, weights
+
+
 _PATTERNS: dict = {}
 """:func:`_pattern` by the non-zero flags and ``Qc`` it was found from (the EKF's windows
 repeat a handful)."""

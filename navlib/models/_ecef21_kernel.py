@@ -1,7 +1,7 @@
 """The 21-state ECEF model's Jacobians along the EKF's windows as one compiled kernel
 (docs/assumptions.md "Compiled kernels").
 
-:func:`jacobians_kernel` writes what :func:`navlib.models.ecef.ecef21_jacobians` returns
+:func:`ecef21_jacobians_kernel` writes what :func:`navlib.models.ecef.ecef21_jacobians` returns
 (spec excitability.md A4-A7; the gravity Jacobian of :func:`navlib.earth.gravity_jacobian_ecef`,
 A5) into buffers the EKF reuses over its windows: the NumPy function builds about thirty
 (N, 21, 21) temporaries a window, which made it a sixth of the EKF's time per sample
@@ -24,7 +24,7 @@ _OMEGA = earth.OMEGA_E
 
 
 @numba.njit(cache=True)
-def jacobians_kernel(position, C_b_e, f_b, w_ib_b, body, A, G):
+def ecef21_jacobians_kernel(position, C_b_e, f_b, w_ib_b, body, A, G):
     """``A[k]`` (21, 21) and ``G[k]`` (21, 18) of every sample ``k`` of ``position`` (K, 3),
     ``C_b_e`` (K, 3, 3), ``f_b``, ``w_ib_b`` (K, 3), for the body attitude error when
     ``body`` else the ECEF one (:func:`navlib.models.ecef.ecef21_jacobians`); every entry

@@ -37,7 +37,7 @@ from navlib import cache, earth, units
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.models._ecef21_kernel import jacobians_kernel
+from navlib.models._ecef21_kernel import ecef21_jacobians_kernel
 from navlib.models.base import (
     HOLDS,
     DiscreteModel,
@@ -562,11 +562,11 @@ class Ecef21ErrorState(ErrorState):
 
     def jacobians(self, nominal):
         """:func:`ecef21_jacobians` along the nominal trajectory and compensated IMU, by the
-        compiled :func:`navlib.models._ecef21_kernel.jacobians_kernel` (the same entries to
+        compiled :func:`ecef21_jacobians_kernel` (the same entries to
         rounding)."""
         k = nominal.t.size
         A, G = np.empty((k, 21, 21)), np.empty((k, 21, 18))
-        jacobians_kernel(*(np.require(a, float, "CW") for a in (
+        ecef21_jacobians_kernel(*(np.require(a, float, "CW") for a in (
             nominal.position, nominal.C_b_e, nominal.f_b, nominal.w_ib_b)),
             self.attitude_frame == "body", A, G)
         return A, G

@@ -45,7 +45,8 @@ and ``q_b_e`` rotates body vectors into ECEF.
 from __future__ import annotations
 
 __all__ = ["ClosureError", "StrapdownResult", "StrapdownState", "block_clocks", "body_attitude",
-           "closure_error", "compile_kernel", "integrate", "propagate", "step"]
+           "closure_error", "compile_kernel", "integrate", "integrate_kernel", "propagate",
+           "step"]
 
 from dataclasses import dataclass
 
