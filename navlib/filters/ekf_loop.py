@@ -4,7 +4,7 @@
 :func:`ekf` runs its windows in Python, calling a compiled kernel for each piece (the
 strapdown mechanisation, the model's Jacobians, the discretisation, the propagation and the
 updates); between them a window of the rocket's 100 samples spent about 400 µs in NumPy
-calls, a third of the EKF's time per sample. :func:`loop_kernel` runs every window of
+calls, a third of the EKF's time per sample. :func:`_loop_kernel` runs every window of
 such a run in one call: the parameter estimates decayed along the window and the IMU
 compensated with them (:meth:`navlib.models.base.ErrorState.compensate`), the strapdown
 mechanisation (:func:`navlib.strapdown.propagate`), the attitude matrices of its
@@ -20,7 +20,8 @@ the quaternions and the exponential of the corrections are written out here inst
 scipy's and NumPy's; ``tests/filters/test_ekf_loop.py``).
 
 It serves the runs :func:`compiled_run` accepts: the
-:class:`~navlib.models.ecef.Ecef21ErrorState` model with the series discretisation, GNSS position and velocity updates only (fixed
+:class:`~navlib.models.ecef.Ecef21ErrorState` model with the series discretisation, GNSS
+position and velocity updates only (fixed
 designs), no snapshot or resume; every other run takes the Python loop.
 """
 
@@ -97,7 +98,36 @@ def _correct(r, v, C, params, dx, body, r_out, v_out, C_out, params_out):
 
 
 @numba.njit(cache=True)
-def loop_kernel(t, f_meas, w_meas, bounds, clock_idx, clock_weights, clock_earth,
+def _reset(P, x, half):
+    """``P <- sym(J P J')`` in place with the reset Jacobian ``J = I + half S(x_att)`` of the
+    attitude block (states 6-8; :meth:`~navlib.models.base.ErrorState.reset_jacobian`):
+    ``J`` is the identity outside rows 6-8, so only those rows and columns change."""
+    n = P.shape[0]
+    J = np.zeros((3, 3))
+    J[0, 1], J[0, 2], J[1, 0] = -half * x[8], half * x[7], half * x[8]
+    J[1, 2], J[2, 0], J[2, 1] = -half * x[6], -half * x[7], half * x[6]
+    for i in range(3):
+        J[i, i] = 1.0
+    JP = np.empty((3, n))                       # rows 6-8 of J P
+    for i in range(3):
+        for j in range(n):
+            JP[i, j] = J[i, 0] * P[6, j] + J[i, 1] * P[7, j] + J[i, 2] * P[8, j]
+    for i in range(3):
+        for j in range(n):
+            P[6 + i, j] = JP[i, j]
+    for i in range(n):                           # columns 6-8 of (J P) J'
+        a, b, c = P[i, 6], P[i, 7], P[i, 8]
+        for j in range(3):
+            P[i, 6 + j] = a * J[j, 0] + b * J[j, 1] + c * J[j, 2]
+    for i in range(n):
+        for j in range(i + 1, n):
+            s = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = s
+            P[j, i] = s
+
+
+@numba.njit(cache=True)
+def _loop_kernel(t, f_meas, w_meas, bounds, clock_idx, clock_weights, clock_earth,
                 clock_earth_mid, r0, v0, C0, params0, decay, body, P, pattern,
                 ev_window, ev_sample, ev_design, ev_values, ev_source, designs_H, designs_R,
                 designs_m, designs_definite, xs, Ps, innovations, nis, dofs, r_up, v_up, C_up,
@@ -212,16 +242,7 @@ def loop_kernel(t, f_meas, w_meas, bounds, clock_idx, clock_weights, clock_earth
                                                np.empty((4, 3)))
             _correct(pos[k], vel[k], Cs[k], par[k], x, body, r_new, v_new, C_new, params_new)
             r, v, C, params = r_new, v_new, C_new, params_new
-        J = np.eye(n)
-        half = -0.5 if body else 0.5
-        a0, a1, a2 = x[6], x[7], x[8]
-        J[6, 7], J[6, 8], J[7, 6] = J[6, 7] - half * a2, J[6, 8] + half * a1, J[7, 6] + half * a2
-        J[7, 8], J[8, 6], J[8, 7] = J[7, 8] - half * a0, J[8, 6] - half * a1, J[8, 7] + half * a0
-        JP = np.dot(np.dot(J, P), J.T)
-        P = np.empty((n, n))
-        for i in range(n):
-            for j in range(n):
-                P[i, j] = 0.5 * (JP[i, j] + JP[j, i])
+        _reset(P, x, -0.5 if body else 0.5)
         x = np.zeros(n)
     return 0
 
@@ -244,7 +265,7 @@ def _model_pattern(es):
 
 
 def _eligible(es, method, rows, resume_point) -> bool:
-    """Whether :func:`loop_kernel` serves this run (module docstring)."""
+    """Whether :func:`_loop_kernel` serves this run (module docstring)."""
     return (type(es) is Ecef21ErrorState and method == "series" and es.nav_sign == 1.0
             and tuple(es.parameters) == _GROUPS and bool(es.reset.all())
             and resume_point == (None, None)
@@ -253,13 +274,42 @@ def _eligible(es, method, rows, resume_point) -> bool:
 
 def compiled_run(es, t, f_meas, w_meas, start, params, P, epochs, bounds, method,
                  keep_covariance, rows, names, resume_point):
-    """The arrays of :func:`navlib.filters.ekf.ekf`'s results by :func:`loop_kernel`, or
+    """The fields of :func:`navlib.filters.ekf.ekf`'s result by :func:`_loop_kernel`, or
     None when the run is not one it serves (or its state stops being finite: the Python
     loop then runs it and reports where).
 
-    ``epochs`` is the run's :class:`~navlib.filters.ekf_updates.Epochs`. Returns a dict of
-    the result's fields ``t, position, velocity, C_b_e, parameters, kept, sigma, P,
-    innovation, nis, nis_dof``.
+    Parameters
+    ----------
+    es : ErrorStateModel
+        The run's error model (served: :class:`~navlib.models.ecef.Ecef21ErrorState`).
+    t, f_meas, w_meas : ndarray (N,), (N, 3), (N, 3)
+        IMU sample times (s) and measured specific force and rate.
+    start : tuple
+        Initial nominal ``(r, v, C)``.
+    params : dict
+        Initial parameter estimates (3,) by group.
+    P : ndarray (n, n)
+        Initial covariance.
+    epochs : Epochs
+        The run's :class:`~navlib.filters.ekf_updates.Epochs`.
+    bounds : list of int
+        Window boundaries (IMU samples).
+    method : str
+        Discretisation (served: ``"series"``).
+    keep_covariance : bool
+        Keep the posterior covariances.
+    rows : dict
+        Measurement -> its rows in the results (served: GNSS position and velocity).
+    names : list of str
+        Measurement row names.
+    resume_point : tuple
+        ``(window to snapshot, snapshot to resume)`` (served: neither).
+
+    Returns
+    -------
+    dict or None
+        The result's fields ``t, position, velocity, C_b_e, parameters, kept, sigma, P,
+        innovation, nis, nis_dof``.
     """
     if not _eligible(es, method, rows, resume_point):
         return None
@@ -302,7 +352,7 @@ def compiled_run(es, t, f_meas, w_meas, start, params, P, epochs, bounds, method
     out = (np.empty((count, n)), np.empty((count, n, n)), np.empty((count, m_max)),
            np.empty(count), np.empty(count, dtype=np.int64), np.empty((count, 3)),
            np.empty((count, 3)), np.empty((count, 3, 3)), np.empty((count, 4, 3)))
-    status = loop_kernel(
+    status = _loop_kernel(
         *(kernel_array(a) for a in (t, f_meas, w_meas)), np.asarray(bounds, dtype=np.int64),
         clock_idx, *(kernel_array(a) for a in (clock_weights, clock_earth, clock_earth_mid,
                                                r0, v0, C0)),

@@ -216,8 +216,20 @@ def _used(A, G, a_used, g_used):
 @numba.njit(cache=True)
 def pattern_kernel(A, G, pairs, weights):
     """:func:`_pattern` compiled, for loops that run in a kernel
-    (:mod:`navlib.filters.ekf_loop`): the same arrays, with ``Qc``'s ``pairs`` and
-    ``weights`` given."""
+    (:mod:`navlib.filters.ekf_loop`).
+
+    Parameters
+    ----------
+    A, G : ndarray (K, n, n), (K, n, q)
+        The steps' dynamics and noise input.
+    pairs, weights : ndarray (p, 2), (p,)
+        The non-zero entries of ``Qc`` and their values.
+
+    Returns
+    -------
+    tuple
+        The arrays of :func:`_pattern`, for :func:`discretize_kernel`.
+    """
     n, q = A.shape[1], G.shape[2]
     used, g_used = np.empty((n, n), dtype=np.bool_), np.empty((q, n), dtype=np.bool_)
     _used(A, G, used, g_used)
