@@ -12,8 +12,8 @@
   (strapdown, Kalman update and propagation, the sparse discretisation). The cold report
   budget of issue 37 must not grow, so its goal is the time measured before the sparse
   kernels (17.3 and 20.6 CPU-s in two runs on 2026-12-04 at load 7-8 on 2 cores). The
-  rocket's run is one compiled loop since (:mod:`navlib.filters.ekf_loop`), whose own
-  and callees compile adds about 14 CPU-s here (16.1 -> 30.4 CPU-s, load 1); no notebook of
+  rocket's run is one compiled loop since (:mod:`navlib.filters.ekf_loop`), whose compile
+  (with its callees) adds about 14 CPU-s here (16.1 -> 30.4 CPU-s, load 1); no notebook of
   the report runs a 21-state EKF, so the report does not compile it.
 
 Sensor simulation is outside the timing of the rocket row (the launcher row includes it, as

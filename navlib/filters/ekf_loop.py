@@ -27,7 +27,6 @@ designs), no snapshot or resume; every other run takes the Python loop.
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numba
@@ -324,22 +323,22 @@ def compiled_run(es, t, f_meas, w_meas, start, params, P, epochs, bounds, method
     # the updates in time order: window, window sample, design, values, rows measured
     design_of, designs = {}, []
     ev = {key: [] for key in ("window", "sample", "design", "values", "source", "cols")}
-    for w, (w0, w1) in enumerate(itertools.pairwise(bounds)):
-        for j in range(0 if w0 == 0 else 1, w1 - w0 + 1):
-            if w0 + j not in epochs.at:
-                continue
-            epoch, cols, fixed = epochs.at[w0 + j]
-            if fixed is None:
-                return None
-            if id(cols) not in design_of:
-                design_of[id(cols)] = len(designs)
-                designs.append(fixed)
-            values = np.concatenate([meas.values[i] for meas, i in epoch])
-            source = np.concatenate([np.arange(3) + (3 if type(meas) is GnssVelocity else 0)
-                                     for meas, _ in epoch])
-            for key, value in zip(ev, (w, j, design_of[id(cols)], values, source, cols),
-                                  strict=True):
-                ev[key].append(value)
+    starts = np.asarray(bounds[:-1])
+    for sample in sorted(epochs.at):           # a window holds its end (and sample 0)
+        w = max(int(np.searchsorted(starts, sample, side="left")) - 1, 0)
+        j = sample - int(starts[w])
+        epoch, cols, fixed = epochs.at[sample]
+        if fixed is None:
+            return None
+        if id(cols) not in design_of:
+            design_of[id(cols)] = len(designs)
+            designs.append(fixed)
+        values = np.concatenate([meas.values[i] for meas, i in epoch])
+        source = np.concatenate([np.arange(3) + (3 if type(meas) is GnssVelocity else 0)
+                                 for meas, _ in epoch])
+        for key, value in zip(ev, (w, j, design_of[id(cols)], values, source, cols),
+                              strict=True):
+            ev[key].append(value)
     count, n = len(ev["window"]), len(es.state_names)
     m_max = max(H.shape[0] for H, _, _ in designs)
     H_all, R_all = np.zeros((len(designs), m_max, n)), np.zeros((len(designs), m_max, m_max))

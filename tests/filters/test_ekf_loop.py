@@ -1,8 +1,9 @@
 """The EKF's compiled loop (navlib.filters.ekf_loop) against the Python loop of
 navlib.filters.ekf on the 86 s sounding rocket: the same results to rounding (the golden
 tolerances of tests/regression/tolerances.toml ``[ekf.*]`` on every estimate, far inside
-them in practice), for GNSS position and position + velocity, both attitude errors and the
-kept covariances; runs it does not serve take the Python loop."""
+them in practice), for GNSS position and position + velocity, both attitude errors, the kept
+covariances and windows with updates inside them; runs it does not serve take the Python
+loop."""
 
 import importlib
 import tomllib
@@ -63,7 +64,8 @@ def _close(got, want, rtol):
     {"model_options": {"sensors": "motionpak_tactical"}},
     {"model_options": {"sensors": "motionpak_tactical", "attitude_error": "body"},
      "gnss_velocity_sigma": 0.2, "keep_covariance": True},
-], ids=["position", "position+velocity, body, P"])
+    {"model_options": {"sensors": "motionpak_tactical"}, "window_s": 2.5},
+], ids=["position", "position+velocity, body, P", "updates inside windows"])
 def test_compiled_loop_equals_python_loop(flight, monkeypatch, keywords):
     want = _python_loop(flight, monkeypatch, **keywords)
     seen = _spy(monkeypatch)
