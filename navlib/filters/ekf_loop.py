@@ -181,7 +181,8 @@ def _loop_kernel(t, f_meas, w_meas, bounds, clock_idx, clock_weights, clock_eart
             tau = t[w0 + s] - t[w0]
             for g in range(4):
                 for i in range(3):
-                    par[s, g, i] = params[g, i] * math.exp(decay[g, i] * tau)
+                    rate = decay[g, i]         # exp(0 tau) = 1: random walks skip it
+                    par[s, g, i] = params[g, i] * math.exp(rate * tau) if rate else params[g, i]
             for i in range(3):
                 f_c[s, i] = (f_meas[w0 + s, i] - par[s, 1, i]) / (1.0 + par[s, 3, i])
                 w_c[s, i] = (w_meas[w0 + s, i] - par[s, 0, i]) / (1.0 + par[s, 2, i])
