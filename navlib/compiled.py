@@ -5,8 +5,9 @@ it compiles them, afterwards it loads them from numba's disk cache (``cache=True
 notebook kernels a report starts at once only load (docs/performance.md, "Compiled
 kernels", gives the costs). The kernels live beside the NumPy code they replace: the Kalman algebra
 (:mod:`navlib.kalman`), the linear simulation (:mod:`navlib.filters.linear_recursion`), the
-strapdown mechanisation (:mod:`navlib.strapdown`) and the every-step observability
-test (:mod:`navlib.observability.sliding`).
+strapdown mechanisation (:mod:`navlib.strapdown`), the every-step observability
+test (:mod:`navlib.observability.sliding`) and the 21-state EKF's compiled loop
+(:mod:`navlib.filters.ekf_loop`, which no notebook of the report runs).
 
 A report warms the kernels several notebooks share (:func:`compile_shared_kernels`) in a
 process of its own while its longest notebook starts: Table 2 at every step (notebook 02;
@@ -18,7 +19,7 @@ first use.
 import numpy as np
 
 from navlib import kalman, strapdown
-from navlib.filters import linear_recursion
+from navlib.filters import ekf_loop, linear_recursion
 from navlib.observability import sliding
 from navlib.sensors import simulation
 
@@ -27,6 +28,7 @@ def compile_kernels() -> None:
     """Compile (first run on a machine) or load (afterwards) every kernel of navlib."""
     compile_shared_kernels()
     sliding.compile_kernel()
+    ekf_loop.compile_kernel()
 
 
 def compile_shared_kernels() -> None:

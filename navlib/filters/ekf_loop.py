@@ -31,10 +31,12 @@ import math
 
 import numba
 import numpy as np
+import pandas as pd
 
-from navlib import strapdown
+from navlib import earth, strapdown, units
 from navlib.filters.ekf_steps import discretize_kernel, pattern_kernel
-from navlib.filters.measurements import GnssPosition, GnssVelocity
+from navlib.filters.ekf_updates import Epochs
+from navlib.filters.measurements import GnssPosition, GnssVelocity, ekf_measurements
 from navlib.kalman import PINV_RTOL, fixed_updates_kernel, kernel_array
 from navlib.models.ecef import Ecef21ErrorState, ecef21_jacobians_kernel
 from navlib.quaternions import _matrix_quat_kernel as matrix_quat_kernel
@@ -376,3 +378,21 @@ def compiled_run(es, t, f_meas, w_meas, start, params, P, epochs, bounds, method
                                                           None)),
             "P": Ps if keep_covariance else None, "innovation": full, "nis": nis,
             "nis_dof": dofs}
+
+
+def compile_kernel() -> None:
+    """Compile (first run on a machine) or load :func:`_loop_kernel` by running the
+    21-state EKF over one short window of a resting IMU with one GNSS update (the array
+    types of :func:`compiled_run`)."""
+    es = Ecef21ErrorState.build()
+    t = np.arange(4) * 0.01
+    up = earth.normal_gravity_ecef(np.array([earth.A, 0.0, 0.0]))
+    f_meas = np.tile(-up, (4, 1))
+    w_meas = np.tile([0.0, 0.0, units.DEG], (4, 1))
+    gnss = pd.DataFrame({"t": t[-1:], "x": [earth.A], "y": [0.0], "z": [0.0]})
+    rows = {meas: np.arange(3) for meas in ekf_measurements(es, t, gnss)}
+    events = {3: [(meas, 0) for meas in rows]}
+    compiled_run(es, t, f_meas, w_meas, (np.array([earth.A, 0.0, 0.0]), np.zeros(3),
+                                          np.eye(3)),
+                 {g: np.zeros(3) for g in _GROUPS}, np.array(es.P0, dtype=float),
+                 Epochs(events, rows, 3), [0, 3], "series", False, rows, None, (None, None))
