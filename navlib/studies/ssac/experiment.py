@@ -275,6 +275,13 @@ def pair_subspace(eig: NormalizedEigenResult, k: int):
     triples (:func:`navlib.estimability.split_modes` by position share).
 
     Returns (pair_columns, position_columns) as 0-based sorted indices.
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Sorted eigen-decomposition of the normalised covariance over time.
+    k : int
+        Epoch index.
     """
     pos = [eig.state_names.index(s) for s in POSITION if s in eig.state_names]
     return split_modes(eig.eigenvectors[k], pos, N_LARGE)
@@ -287,6 +294,18 @@ def pair_structure(eig: NormalizedEigenResult, time_s: float | None = None) -> p
     i.e. a 45° eigenvector), the projector entry ``P[x, b]`` (±0.5 for a 45° pair), the
     angle atan(share_b / share_x) in degrees, and the largest share of any other state, at
     the epoch nearest ``time_s`` (default the last).
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Sorted eigen-decomposition of the normalised covariance over time.
+    time_s : float or None, optional
+        Epoch, s; None takes the last.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per paper pair.
     """
     k = eig._epoch(time_s)
     pair_cols, _ = pair_subspace(eig, k)
@@ -313,6 +332,13 @@ def x_shape_events(eig: NormalizedEigenResult, t_from_s: float = 900.0) -> pd.Da
     after ``t_from_s`` at which the dominant paper pair of some columns changes. Returns one
     row per event: ``t`` (s), ``columns`` (1-based sorted modes involved) and ``pairs`` (the
     paper pairs that swapped columns).
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Sorted eigen-decomposition of the normalised covariance over time.
+    t_from_s : float, optional
+        Time from which exchanges count, s.
     """
     names = list(eig.state_names)
     pair_idx = [[names.index(s) for s in pair] for pair in PAIRS]
@@ -334,6 +360,18 @@ def subspace_drift(eig: NormalizedEigenResult, t_from_s: float = 1800.0) -> floa
 
     Small when the X-shape is a rotation inside a fixed subspace: the "vector sum" of the
     exchanging eigenvectors stays put (Silva et al. §3, after Figs. 9–10).
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Sorted eigen-decomposition of the normalised covariance over time.
+    t_from_s : float, optional
+        Time from which the drift is measured, s.
+
+    Returns
+    -------
+    float
+        Largest Frobenius-norm change of the projector.
     """
     pair_cols, _ = pair_subspace(eig, eig.t.size - 1)
     return projector_drift(eig.eigenvectors, pair_cols, int(np.searchsorted(eig.t, t_from_s)))
@@ -351,6 +389,22 @@ def p0_sensitivity(study: SSACStudy | None = None,
     attitude sigma (deg), which worsens when the biases lose estimability. ``modified``:
     that rerun when already made (:func:`modified_run`, e.g. stacked with others by
     :func:`p0_runs`).
+
+    Parameters
+    ----------
+    study : SSACStudy or None, optional
+        The matched-P0 run; None runs one of ``duration_s``.
+    attitude_scale : float, optional
+        Factor on the attitude sigmas of P0 for the rerun.
+    duration_s : float, optional
+        Run length when ``study`` is None, s.
+    modified : SSACStudy or None, optional
+        The rerun when already made.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run and paper pair.
     """
     base = study if study is not None else covariance_run(duration_s=duration_s, track=False)
     if modified is None:
@@ -368,7 +422,20 @@ def p0_sensitivity(study: SSACStudy | None = None,
 def modified_run(study: SSACStudy, attitude_scale: float = P0_MODIFIED_ATTITUDE_SCALE
                  ) -> SSACStudy:
     """The rerun of :func:`p0_sensitivity`: the matched P0 with its attitude sigmas times
-    ``attitude_scale``, on the time grid, site and state count of ``study``."""
+    ``attitude_scale``, on the time grid, site and state count of ``study``.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The matched-P0 run.
+    attitude_scale : float, optional
+        Factor on its attitude sigmas.
+
+    Returns
+    -------
+    SSACStudy
+        The rerun.
+    """
     p = study.model.parameters
     return covariance_run(duration_s=float(study.t[-1] - study.t[0]),
                           dt_s=float(study.t[1] - study.t[0]), lat_deg=np.degrees(p["lat"]),
@@ -388,6 +455,18 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
     Kept per orientation and duration (:func:`navlib.cache.memoized`: the notebook and
     :func:`~navlib.studies.ssac.ssac_claims` ask for the same one); each call returns its own
     copy.
+
+    Parameters
+    ----------
+    ypr_deg : array_like, optional
+        IMU yaw, pitch, roll relative to the body frame, deg.
+    duration_s : float, optional
+        Run length, s.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``body_share`` and ``ned_share`` per bias triad and axis.
     """
     ypr = tuple(float(v) for v in np.ravel(ypr_deg))
     return _orientation_table(ypr, float(duration_s)).copy()
@@ -425,6 +504,18 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     (:func:`navlib.estimability.noise_free_error`, with the gains of
     :attr:`SSACStudy.closed_loop`). Returns the error (truth - estimate) at every epoch,
     (N, n), SI units.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run whose gains correct the estimate.
+    x0 : numpy.ndarray or None, optional
+        Initial truth error, (n,), SI units; None puts every bias at its nominal 1 sigma.
+
+    Returns
+    -------
+    numpy.ndarray
+        Error at every epoch, (N, n).
     """
     model = study.model
     p = model.parameters
@@ -502,7 +593,22 @@ def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
 
 
 def x0_draws(study: SSACStudy, n: int = X0_DRAWS, seed: int = X0_SEED) -> np.ndarray:
-    """``n`` initial errors drawn from N(0, P0) of ``study`` (rows), seeded."""
+    """``n`` initial errors drawn from N(0, P0) of ``study`` (rows), seeded.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run whose P0 is sampled.
+    n : int, optional
+        Number of draws.
+    seed : int, optional
+        Seed of the generator.
+
+    Returns
+    -------
+    numpy.ndarray
+        Draws, (n, number of states).
+    """
     rng = np.random.default_rng(seed)
     return rng.multivariate_normal(np.zeros(study.model.n), study.model.P0, size=n)
 
@@ -510,7 +616,29 @@ def x0_draws(study: SSACStudy, n: int = X0_DRAWS, seed: int = X0_SEED) -> np.nda
 def reduced_run(study: SSACStudy, reduced, n_states: int, name: str) -> SSACStudy | None:
     """The ``n_states`` run matching ``study`` (``reduced`` ``"run"``), the given one, or
     None (a custom P0 or a rotated IMU has no reduced counterpart); ``name`` is the
-    argument named in the error."""
+    argument named in the error.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The full run whose settings the reduced one copies.
+    reduced : SSACStudy, str or None
+        A run, ``"run"`` to compute it, or None.
+    n_states : int
+        State count of the reduced model (12 or 10).
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    SSACStudy or None
+        The reduced run, or None where it has no counterpart.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``reduced`` is a string other than ``"run"``.
+    """
     if not isinstance(reduced, str):
         return reduced
     if reduced != "run":
