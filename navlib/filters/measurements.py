@@ -76,7 +76,17 @@ class Measurement(ABC):
     @abstractmethod
     def evaluate(self, i: int, nominal, j: int):
         """Innovation ``z`` (m,), ``H`` (m, n), ``R`` (m, m) of epoch ``i``, at sample ``j`` of
-        ``nominal`` (:class:`navlib.models.base.Nominal`)."""
+        ``nominal`` (:class:`navlib.models.base.Nominal`).
+
+        Parameters
+        ----------
+        i : int
+            Epoch index among this measurement's epochs.
+        nominal : Nominal
+            The nominal trajectory.
+        j : int
+            Its sample at the epoch.
+        """
 
 
 class FixedDesign(Measurement):
@@ -86,9 +96,30 @@ class FixedDesign(Measurement):
     @abstractmethod
     def innovations(self, i, nominal, j) -> np.ndarray:
         """Innovations ``z`` (K, m) of epochs ``i`` (K,) at samples ``j`` (K,) of ``nominal``
-        (the same numbers as epoch by epoch)."""
+        (the same numbers as epoch by epoch).
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
 
     def evaluate(self, i, nominal, j):
+        """Innovation, ``H`` and ``R`` of one epoch (:meth:`innovations` of that epoch alone).
+
+        Parameters
+        ----------
+        i : int
+            Epoch index.
+        nominal : Nominal
+            The nominal trajectory.
+        j : int
+            Its sample at the epoch.
+        """
         return self.innovations(np.array([i]), nominal, np.array([j]))[0], self.H, self.R
 
 
@@ -189,6 +220,30 @@ def ekf_measurements(model, t, gnss=None, attitude=None, reference=None) -> list
 
     GNSS velocity is used when the model has its rows and ``gnss`` has ``vx, vy, vz``; the
     attitude sensor and the reference trajectory are required when the model uses them.
+
+    Parameters
+    ----------
+    model : Model
+        The error-state model (its ``measurements`` say which are used).
+    t : numpy.ndarray
+        IMU time stamps, s.
+    gnss : pandas.DataFrame or None, optional
+        GNSS fixes with ``t, x, y, z`` (ECEF, m) and optionally ``vx, vy, vz`` (m/s).
+    attitude : optional
+        Attitude-sensor data, when the model uses it.
+    reference : optional
+        Reference trajectory, when the model uses it.
+
+    Returns
+    -------
+    list
+        The measurements.
+
+    Raises
+    ------
+    NavlibInputError
+        If the data are malformed, a measurement epoch is not on an IMU sample, or a
+        measurement the model uses is missing.
     """
     kinds = model.measurements
     out = []
@@ -238,7 +293,27 @@ def imu_arrays(imu):
 
 
 def epoch_index(t_imu, t_meas, name: str) -> np.ndarray:
-    """Nearest IMU sample of each measurement time (within half a sample)."""
+    """Nearest IMU sample of each measurement time (within half a sample).
+
+    Parameters
+    ----------
+    t_imu : numpy.ndarray
+        IMU time stamps, s.
+    t_meas : numpy.ndarray
+        Measurement time stamps, s.
+    name : str
+        Name of the measurement, for the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        Index of the IMU sample of each measurement.
+
+    Raises
+    ------
+    NavlibInputError
+        If a measurement time is not within half a sample of an IMU sample.
+    """
     t_meas = finite_array(t_meas, f"{name}.t", ndim=1)
     k = np.clip(np.searchsorted(t_imu, t_meas), 1, t_imu.size - 1)
     k = np.where(np.abs(t_imu[k - 1] - t_meas) <= np.abs(t_imu[k] - t_meas), k - 1, k)
