@@ -214,12 +214,8 @@ def flag_imu_outliers(t: np.ndarray, f_b: np.ndarray, w_ib_b: np.ndarray, source
 
     Parameters
     ----------
-    t : numpy.ndarray
-        Time stamps, s, (N,).
-    f_b : numpy.ndarray
-        Specific force, m/s^2, (N, 3).
-    w_ib_b : numpy.ndarray
-        Angular rate, rad/s, (N, 3).
+    t, f_b, w_ib_b : numpy.ndarray
+        Time stamps, s, (N,); specific force, m/s^2, and angular rate, rad/s, (N, 3).
     source : Source
         Where the rows come from.
     f_labels, w_labels : str
@@ -289,12 +285,8 @@ def validated_imu(t, f_b, w_ib_b, source: Source, time_label: str, f_labels: str
 
     Parameters
     ----------
-    t : numpy.ndarray
-        Time stamps, s, (N,).
-    f_b : numpy.ndarray
-        Specific force, m/s^2, (N, 3).
-    w_ib_b : numpy.ndarray
-        Angular rate, rad/s, (N, 3).
+    t, f_b, w_ib_b : numpy.ndarray
+        Time stamps, s, (N,); specific force, m/s^2, and angular rate, rad/s, (N, 3).
     source : Source
         Where the rows come from.
     time_label, f_labels, w_labels : str
@@ -305,11 +297,6 @@ def validated_imu(t, f_b, w_ib_b, source: Source, time_label: str, f_labels: str
         Outlier limits from :func:`reader_limits`.
     rate_hint : str
         Reader keyword named when the record is refused.
-
-    Returns
-    -------
-    tuple of (pandas.DataFrame, Source)
-        The IMU frame and the source of its kept rows.
 
     Raises
     ------

@@ -144,11 +144,6 @@ def t2_table_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResul
         Decades allowed on a printed order of magnitude.
     how : str
         How the observability was computed, the start of the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     counts = match_counts(frame)
     unobs_ok = frame[frame.n_unobservable == frame.paper_unobservable]
@@ -182,11 +177,6 @@ def t2_rw_p_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
         Table 2 frame (see :func:`match_counts`).
     how : str
         How the observability was computed, the start of the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     rw_p = _rw_p_rows(frame)
     three = rw_p[rw_p.n_unobservable == 3]
@@ -234,11 +224,6 @@ def t2_markov_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
         Table 2 frame (see :func:`match_counts`).
     how : str
         How the observability was computed, the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     markov = _rows(frame, bias_model="markov")
     ok = markov[markov.n_unobservable == 0]
@@ -260,11 +245,6 @@ def t2_rank_constant_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
         Table 2 frame (see :func:`match_counts`) with its ``rank_constant`` column.
     how : str
         How the observability was computed, the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     ok = frame[frame.rank_constant]
     return claim(
@@ -285,11 +265,6 @@ def t2_att_no_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimR
         Decades by which the attitude sensors must lower log10 cond.
     how : str
         How the observability was computed, the start of the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim (by construction, A-by-construction-beaudoin).
     """
     pair = _pair_frame(frame, "ins_gps", "ins_gps_att", ["", "G", "A", "GA"])
     lower = pair[pair.log10_cond_ins_gps_att < pair.log10_cond_ins_gps - cond_tol]
@@ -320,11 +295,6 @@ def t2_att_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResu
         Decades within which the two condition orders count as equal.
     how : str
         How the observability was computed, the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     pair = _pair_frame(frame, "ins_gps_rt", "ins_gps_att_rt", BIAS_SETS)
     pair = pair[(pair.n_unobservable_ins_gps_rt == 0) & (pair.n_unobservable_ins_gps_att_rt == 0)]
@@ -359,11 +329,6 @@ def t2_threshold_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimR
         Decades of rounding allowed above the paper's printed order 5.
     how : str
         How the observability was computed, the start of the claim's assumption text.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     full_tol = LOW_LOG10 + cond_tol
     full = frame[frame.n_unobservable == 0]
@@ -395,11 +360,6 @@ def t2_ins_gps_claim(frame: pd.DataFrame, cond_tol: float) -> ClaimResult:
         Table 2 frame (see :func:`match_counts`).
     cond_tol : float
         Decades allowed between our log10 cond and the paper's.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     ins = _rows(frame, solution="ins_gps")
     ins = ins[~((ins.bias_model == "random_walk") & ins.biases.str.contains("P"))]
@@ -443,12 +403,6 @@ def table2_claim_results(frame: pd.DataFrame, cond_tol: float = COND_TOL,
         Decades allowed on a printed order of magnitude.
     variant : str, optional
         Reading of eq. (6) the frame was computed with, named in the assumption texts.
-
-    Returns
-    -------
-    list of ClaimResult
-        T2-table, T2-RW-P, T2-bp-DR, T2-Markov, T2-rank-constant, T2-att-noRT, T2-att-RT,
-        T2-threshold and T2-ins-gps, in that order.
     """
     how = f"local O(k) at every evaluated step, {variant} reading of eq. (6), Euler form"
     return [t2_table_claim(frame, cond_tol, how), t2_rw_p_claim(frame, how),
@@ -488,11 +442,6 @@ def c3_rt_claim(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> ClaimResult:
     cond_tol : float, optional
         Decades by which log10 cond must fall for the same unobservable count to count as
         "more observable".
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     rows = []
     for plain, rt in (("ins_gps", "ins_gps_rt"), ("ins_gps_att", "ins_gps_att_rt")):
@@ -531,11 +480,6 @@ def conclusion_claims(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> list[C
         Table 2 frame (see :func:`match_counts`).
     cond_tol : float, optional
         Decades allowed on a condition order (:func:`c3_rt_claim`).
-
-    Returns
-    -------
-    list of ClaimResult
-        C1 and C3.
     """
     return [c1_bp_claim(frame), c3_rt_claim(frame, cond_tol)]
 
@@ -566,11 +510,6 @@ def f1_proportional_claim(data: pd.DataFrame, s_t: float = 0.005) -> ClaimResult
         ``cond_per_cp_st``).
     s_t : float, optional
         Sampling time, s; the fit uses ``c_p >= 100 s_t``.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim (by construction: a property of eq. (7)).
     """
     finite = data[np.isfinite(data.c_p)]
     large = finite[finite.c_p >= 100 * s_t]
@@ -600,11 +539,6 @@ def fig1_claims(data: pd.DataFrame | None = None, s_t: float = 0.005) -> list[Cl
         Fig. 1 frame; None computes it with :func:`~navlib.studies.launcher.fig1_data`.
     s_t : float, optional
         Sampling time, s.
-
-    Returns
-    -------
-    list of ClaimResult
-        F1-full-rank and F1-proportional.
     """
     data = fig1_data(s_t=s_t) if data is None else data
     return [f1_full_rank_claim(data), f1_proportional_claim(data, s_t)]
@@ -622,11 +556,6 @@ def f1_cp_mission_claim(sigmas: dict, c_p: float = 100.0) -> ClaimResult:
         ``ratio``.
     c_p : float, optional
         Markov correlation time of the GPS bias, s.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     ratio = sigmas["ratio"]
     return claim(

@@ -1,7 +1,5 @@
-"""Silva et al. (2017) claims: one small function per claim of ssac.md §5, judged by the
-claims engine (:mod:`navlib.studies.claims`); :func:`ssac_claims` evaluates them all on one
-covariance run (:mod:`navlib.studies.ssac.experiment`) and the observability tables
-(:mod:`navlib.studies.ssac.observability`)."""
+"""Silva et al. (2017) claims, one small function each, judged by :mod:`navlib.studies.claims`;
+:func:`ssac_claims` evaluates them all on one covariance run and the observability tables."""
 
 from __future__ import annotations
 
@@ -72,21 +70,14 @@ def static_tables(lat_deg: float, alt_m: float, duration_s: float, rtol: float =
 
     Parameters
     ----------
-    lat_deg : float
-        Site latitude, deg.
-    alt_m : float
-        Site altitude, m.
+    lat_deg, alt_m : float
+        Site latitude, deg, and altitude, m.
     duration_s : float
         Run length of the orientation table, s.
     rtol : float, optional
         Relative rank tolerance of O.
     orientation : pandas.DataFrame or None, optional
         An orientation table to reuse; None computes it.
-
-    Returns
-    -------
-    tuple of pandas.DataFrame
-        ``(observability_table, grouping_table, orientation_table)``.
     """
     return (observability_table(lat_deg, alt_m, rtol), grouping_table(lat_deg, alt_m,
                                                                        rtol=rtol),
@@ -103,11 +94,6 @@ def rank_claims(obs: pd.DataFrame, rank_rtol: float = RANK_RTOL) -> list[ClaimRe
         :func:`~navlib.studies.ssac.observability_table` result.
     rank_rtol : float, optional
         Relative rank tolerance it was computed with (named in the assumption).
-
-    Returns
-    -------
-    list of ClaimResult
-        One claim per model the paper gives a rank for (15 and 10 states).
     """
     out = []
     for _, row in obs.iterrows():
@@ -141,11 +127,6 @@ def individual_claim(study: SSACStudy, rank_rtol: float = RANK_RTOL) -> ClaimRes
         The run whose model is analysed.
     rank_rtol : float, optional
         Relative rank tolerance of O.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     model = study.model
     O = observability_matrix(model.A, model.H)
@@ -178,17 +159,10 @@ def groups_claim(groups: pd.DataFrame, lat_deg: float = SITE_LAT_DEG,
     groups : pandas.DataFrame
         :func:`~navlib.studies.ssac.grouping_table` result (rows: exact, thresholded,
         equivalence-scaled).
-    lat_deg : float, optional
-        Site latitude, deg.
-    alt_m : float, optional
-        Site altitude, m.
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
     rank_rtol : float, optional
         Relative rank tolerance of O.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     exact, eq_row = groups.iloc[0], groups.iloc[2]
     explanation = ""
@@ -240,11 +214,6 @@ def position_claim(conv: pd.DataFrame, duration_s: float) -> ClaimResult:
         Convergence table of the run (``SSACStudy.convergence_table()`` indexed by state).
     duration_s : float
         Run length, s.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     pos = conv.loc[list(POSITION), "ratio"]
     return claim(
@@ -278,20 +247,7 @@ def _times(conv: pd.DataFrame, convergence: str) -> pd.Series:
 
 
 def fast5_claim(conv: pd.DataFrame, convergence: str = CONVERGENCE_DEFAULT) -> ClaimResult:
-    """SSAC-fast5: five states converge within the first minute.
-
-    Parameters
-    ----------
-    conv : pandas.DataFrame
-        Convergence table of the run (``SSACStudy.convergence_table()`` indexed by state).
-    convergence : str, optional
-        Reading of "converged", a key of :data:`~navlib.studies.ssac.CONVERGENCE`.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
-    """
+    """SSAC-fast5: five states converge within the first minute."""
     reading = CONVERGENCE[convergence]
     tc = _times(conv, convergence)
     fastest = list(tc.index[:5])
@@ -311,20 +267,7 @@ def fast5_claim(conv: pd.DataFrame, convergence: str = CONVERGENCE_DEFAULT) -> C
 
 def ten_minute_claim(conv: pd.DataFrame, convergence: str = CONVERGENCE_DEFAULT
                      ) -> ClaimResult:
-    """SSAC-10min: the next three states converge after about 10 min.
-
-    Parameters
-    ----------
-    conv : pandas.DataFrame
-        Convergence table of the run (``SSACStudy.convergence_table()`` indexed by state).
-    convergence : str, optional
-        Reading of "converged", a key of :data:`~navlib.studies.ssac.CONVERGENCE`.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
-    """
+    """SSAC-10min: the next three states converge after about 10 min."""
     reading = CONVERGENCE[convergence]
     tc = _times(conv, convergence)
     middle = list(tc.index[5:8])
@@ -352,11 +295,6 @@ def bgd_claim(study: SSACStudy, conv: pd.DataFrame,
         Its convergence table indexed by state.
     convergence : str, optional
         Reading of "converged", a key of :data:`~navlib.studies.ssac.CONVERGENCE`.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     statement = "bgD converges slowest, recognisable only after 30-40 min"
     if not study.long_run:
@@ -429,11 +367,6 @@ def actual_claim(study: SSACStudy, x0=None) -> ClaimResult:
         The run whose filter gains are used.
     x0 : numpy.ndarray or None, optional
         Initial truth error, (n,), SI units; None puts every bias at 1 sigma.
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     psid = closed_form_limits(study).set_index("state").loc["psiD"]
     err = actual_error(study, x0)
@@ -491,11 +424,6 @@ def dropped_coupling(study: SSACStudy, reduced: SSACStudy) -> tuple[float, str, 
         The 15-state run.
     reduced : SSACStudy
         The reduced run whose dropped states are measured.
-
-    Returns
-    -------
-    tuple of (float, str, str)
-        The largest coupling, 1/s, the kept state and the dropped state.
     """
     names = list(study.model.state_names)
     kept = [names.index(s) for s in reduced.state_names]
@@ -535,11 +463,6 @@ def twelve_state_claim(study: SSACStudy, reduced: SSACStudy | None,
         The 15-state run (the truth).
     reduced, reduced10 : SSACStudy or None
         The 12- and 10-state runs; None for either makes the claim "not evaluated".
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     if reduced is None or reduced10 is None:
         return not_evaluated("SSAC-12state", STATEMENT_12, "conclusions",
@@ -568,11 +491,6 @@ def ten_state_claim(study: SSACStudy, reduced10: SSACStudy | None) -> ClaimResul
         The 15-state run (the truth).
     reduced10 : SSACStudy or None
         The 10-state run; None makes the claim "not evaluated".
-
-    Returns
-    -------
-    ClaimResult
-        The judged claim.
     """
     if reduced10 is None:
         return not_evaluated("SSAC-10state", STATEMENT_10, "conclusions",
@@ -610,27 +528,16 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
                 reduced10: SSACStudy | str | None = "run",
                 convergence: str = CONVERGENCE_DEFAULT,
                 rank_rtol: float = RANK_RTOL) -> list[ClaimResult]:
-    """Every claim of ssac.md §5 the covariance reconstruction can test, judged by the
-    claims engine.
-
-    ``study`` defaults to the full 60 min matched-P0 run; claims about 30-60 min time scales
-    are "not evaluated" on runs shorter than 40 min. ``p0_table``: a
-    :func:`~navlib.studies.ssac.p0_sensitivity` table to reuse; ``tables``: the
-    P0-independent ``(observability_table, grouping_table, orientation_table)`` at
-    ``rank_rtol`` to reuse (:func:`static_tables`); ``reduced``, ``reduced10``: the 12- and
-    10-state runs with the same settings (default ``"run"``: computed here; None: the claims
-    needing them are not evaluated); ``convergence``: the one reading of "converged" every
-    time claim uses (a key of :data:`~navlib.studies.ssac.CONVERGENCE`); ``rank_rtol``: the
-    relative rank tolerance of O.
+    """Every claim of Silva et al. the covariance reconstruction can test, judged by the
+    claims engine; claims about 30-60 min time scales are "not evaluated" on runs shorter
+    than 40 min.
 
     Parameters
     ----------
     study : SSACStudy or None, optional
         The run; None runs the full 60 min matched-P0 study.
-    lat_deg : float, optional
-        Site latitude, deg.
-    alt_m : float, optional
-        Site altitude, m.
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
     p0_table : pandas.DataFrame or None, optional
         A :func:`~navlib.studies.ssac.p0_sensitivity` table to reuse.
     tables : tuple or None, optional
@@ -642,10 +549,10 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
     rank_rtol : float, optional
         Relative rank tolerance of O.
 
-    Returns
-    -------
-    list of ClaimResult
-        The judged claims.
+    Raises
+    ------
+    NavlibInputError
+        If ``study`` is not a 15-state run or ``convergence`` is unknown.
     """
     study = study if study is not None else covariance_run(lat_deg=lat_deg, alt_m=alt_m)
     if study.model.n != 15:

@@ -1,11 +1,7 @@
-"""Silva et al. (2017) covariance experiment: the 60 min, 1 Hz ZVU Kalman filter run and what
-is read from it (ssac.md §3.4–§3.6): convergence, the closed-form limits, the Ham–Brown
-eigen-analysis (pairs, X-shape), the P0-sensitivity rerun, the rotated IMU and the actual
-error of a noise-free run.
-
-All numbers come from the reconstructed model (ssac.md §2.3) with the assumed P0, Q and R of
-ssac.md §4.4; the paper's own values were lost from the seed text.
-"""
+"""Silva et al. (2017) covariance experiment: the 60 min, 1 Hz ZVU Kalman filter run on the
+reconstructed model (docs/assumptions.md, Silva et al. section) and what is read from it:
+convergence, closed-form limits, the Ham-Brown eigen-analysis, the P0-sensitivity rerun, the
+rotated IMU and the actual error of a noise-free run."""
 
 from __future__ import annotations
 
@@ -275,13 +271,6 @@ def pair_subspace(eig: NormalizedEigenResult, k: int):
     triples (:func:`navlib.estimability.split_modes` by position share).
 
     Returns (pair_columns, position_columns) as 0-based sorted indices.
-
-    Parameters
-    ----------
-    eig : NormalizedEigenResult
-        Sorted eigen-decomposition of the normalised covariance over time.
-    k : int
-        Epoch index.
     """
     pos = [eig.state_names.index(s) for s in POSITION if s in eig.state_names]
     return split_modes(eig.eigenvectors[k], pos, N_LARGE)
@@ -301,11 +290,6 @@ def pair_structure(eig: NormalizedEigenResult, time_s: float | None = None) -> p
         Sorted eigen-decomposition of the normalised covariance over time.
     time_s : float or None, optional
         Epoch, s; None takes the last.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per paper pair.
     """
     k = eig._epoch(time_s)
     pair_cols, _ = pair_subspace(eig, k)
@@ -332,13 +316,6 @@ def x_shape_events(eig: NormalizedEigenResult, t_from_s: float = 900.0) -> pd.Da
     after ``t_from_s`` at which the dominant paper pair of some columns changes. Returns one
     row per event: ``t`` (s), ``columns`` (1-based sorted modes involved) and ``pairs`` (the
     paper pairs that swapped columns).
-
-    Parameters
-    ----------
-    eig : NormalizedEigenResult
-        Sorted eigen-decomposition of the normalised covariance over time.
-    t_from_s : float, optional
-        Time from which exchanges count, s.
     """
     names = list(eig.state_names)
     pair_idx = [[names.index(s) for s in pair] for pair in PAIRS]
@@ -367,11 +344,6 @@ def subspace_drift(eig: NormalizedEigenResult, t_from_s: float = 1800.0) -> floa
         Sorted eigen-decomposition of the normalised covariance over time.
     t_from_s : float, optional
         Time from which the drift is measured, s.
-
-    Returns
-    -------
-    float
-        Largest Frobenius-norm change of the projector.
     """
     pair_cols, _ = pair_subspace(eig, eig.t.size - 1)
     return projector_drift(eig.eigenvectors, pair_cols, int(np.searchsorted(eig.t, t_from_s)))
@@ -381,14 +353,12 @@ def p0_sensitivity(study: SSACStudy | None = None,
                    attitude_scale: float = P0_MODIFIED_ATTITUDE_SCALE,
                    duration_s: float = 3600.0, modified: SSACStudy | None = None
                    ) -> pd.DataFrame:
-    """The P0-sensitivity experiment (ssac.md §5.4 item 18) against the matched P0.
+    """The P0-sensitivity experiment of Silva et al. against the matched P0.
 
     Reruns with the attitude sigmas of the matched P0 times ``attitude_scale`` and reports,
     for both runs, each paper pair's bias share in the pair subspace at the end (1 = the
     eigenvector lies entirely along the bias: "complete non-estimability") and the final
-    attitude sigma (deg), which worsens when the biases lose estimability. ``modified``:
-    that rerun when already made (:func:`modified_run`, e.g. stacked with others by
-    :func:`p0_runs`).
+    attitude sigma (deg), which worsens when the biases lose estimability.
 
     Parameters
     ----------
@@ -399,12 +369,7 @@ def p0_sensitivity(study: SSACStudy | None = None,
     duration_s : float, optional
         Run length when ``study`` is None, s.
     modified : SSACStudy or None, optional
-        The rerun when already made.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per run and paper pair.
+        The rerun when already made (:func:`modified_run`, e.g. stacked by :func:`p0_runs`).
     """
     base = study if study is not None else covariance_run(duration_s=duration_s, track=False)
     if modified is None:
@@ -430,11 +395,6 @@ def modified_run(study: SSACStudy, attitude_scale: float = P0_MODIFIED_ATTITUDE_
         The matched-P0 run.
     attitude_scale : float, optional
         Factor on its attitude sigmas.
-
-    Returns
-    -------
-    SSACStudy
-        The rerun.
     """
     p = study.model.parameters
     return covariance_run(duration_s=float(study.t[-1] - study.t[0]),
@@ -462,11 +422,6 @@ def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd
         IMU yaw, pitch, roll relative to the body frame, deg.
     duration_s : float, optional
         Run length, s.
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``body_share`` and ``ned_share`` per bias triad and axis.
     """
     ypr = tuple(float(v) for v in np.ravel(ypr_deg))
     return _orientation_table(ypr, float(duration_s)).copy()
@@ -511,11 +466,6 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
         The run whose gains correct the estimate.
     x0 : numpy.ndarray or None, optional
         Initial truth error, (n,), SI units; None puts every bias at its nominal 1 sigma.
-
-    Returns
-    -------
-    numpy.ndarray
-        Error at every epoch, (N, n).
     """
     model = study.model
     p = model.parameters
@@ -603,11 +553,6 @@ def x0_draws(study: SSACStudy, n: int = X0_DRAWS, seed: int = X0_SEED) -> np.nda
         Number of draws.
     seed : int, optional
         Seed of the generator.
-
-    Returns
-    -------
-    numpy.ndarray
-        Draws, (n, number of states).
     """
     rng = np.random.default_rng(seed)
     return rng.multivariate_normal(np.zeros(study.model.n), study.model.P0, size=n)
@@ -615,8 +560,7 @@ def x0_draws(study: SSACStudy, n: int = X0_DRAWS, seed: int = X0_SEED) -> np.nda
 
 def reduced_run(study: SSACStudy, reduced, n_states: int, name: str) -> SSACStudy | None:
     """The ``n_states`` run matching ``study`` (``reduced`` ``"run"``), the given one, or
-    None (a custom P0 or a rotated IMU has no reduced counterpart); ``name`` is the
-    argument named in the error.
+    None (a custom P0 or a rotated IMU has no reduced counterpart).
 
     Parameters
     ----------
@@ -628,11 +572,6 @@ def reduced_run(study: SSACStudy, reduced, n_states: int, name: str) -> SSACStud
         State count of the reduced model (12 or 10).
     name : str
         Argument name used in the error message.
-
-    Returns
-    -------
-    SSACStudy or None
-        The reduced run, or None where it has no counterpart.
 
     Raises
     ------
