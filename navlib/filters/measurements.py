@@ -135,6 +135,17 @@ class GnssPosition(FixedDesign):
             self.H[:, groups["bp"]] = np.eye(3)
 
     def innovations(self, i, nominal, j):
+        """GNSS position innovations ``nav_sign (r_gnss - r_nominal) (- b_p)`` (K, 3), m.
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
         z = self.nav_sign * (self.values[i] - nominal.position[j])
         if "bp" in nominal.parameters:
             z = z - nominal.parameters["bp"][j]
@@ -150,6 +161,17 @@ class GnssVelocity(FixedDesign):
         self.H[:, groups["velocity"]] = np.eye(3)
 
     def innovations(self, i, nominal, j):
+        """GNSS velocity innovations ``nav_sign (v_gnss - v_nominal)`` (K, 3), m/s.
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
         return self.nav_sign * (self.values[i] - nominal.velocity[j])
 
 
@@ -173,6 +195,17 @@ class AttitudeSensor(FixedDesign):
         self.H[:, groups["attitude"]] = np.eye(3)
 
     def innovations(self, i, nominal, j):
+        """Attitude-sensor innovations ``log(C_meas C_nominal')`` (K, 3), rad.
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
         return log_so3(self.values[i] @ np.swapaxes(nominal.C_b_e[j], -1, -2))
 
 
@@ -199,6 +232,18 @@ class ReferenceAttitude(Measurement):
         self.H[:, groups["reference"]] = np.eye(3)
 
     def evaluate(self, i, nominal, j):
+        """Innovation ``log(C_hat' C_ref)`` (rad), ``H`` with ``C_hat'`` on the attitude columns,
+        and ``R`` of epoch ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Epoch index.
+        nominal : Nominal
+            The nominal trajectory.
+        j : int
+            Its sample at the epoch.
+        """
         C_hat = nominal.C_b_e[j]
         if callable(self.values):
             C_ref = np.asarray(self.values(int(self.index[i]), nominal.t[j], self._posterior),

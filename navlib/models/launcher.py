@@ -1,44 +1,7 @@
-"""Satellite-launcher error models of Beaudoin, Desbiens, Gagnon & Landry (2018).
-
-"Observability of satellite launcher navigation with INS, GPS, attitude sensors and reference
-trajectory", Acta Astronautica 142, 277-288; equations rebuilt in spec launcher.md §3.
-
-Four loosely coupled solutions (spec §1): ``ins_gps`` (eq. 1-2), ``ins_gps_att`` (eq. 3),
-``ins_gps_rt`` (eq. 4-5, 8) and ``ins_gps_att_rt`` (§2.4), each with any subset of the gyro
-(G), accelerometer (A) and GPS-position (P) biases as first-order Markov processes or random
-walks. State order (spec §3.1, §3.4; E = Earth-fixed frame, B = body, x = roll axis)::
-
-    psi_x psi_y psi_z | dv_x dv_y dv_z | dr_x dr_y dr_z        (E frame)  always
-    bg_x bg_y bg_z                                              (B frame)  if "G"
-    ba_x ba_y ba_z                                              (B frame)  if "A"
-    bp_x bp_y bp_z                                              (E frame)  if "P"
-    x19 .. x25 | psi_ref_x psi_ref_y psi_ref_z                  (B frame)  RT solutions
-
-giving 9/12/15/18 states, 19/22/25/28 with the reference trajectory (spec §3.6).
-
-The model is continuous, ``dx/dt = A(t) x + G(t) w``, with the paper's ``F(k)`` as ``A`` at
-each trajectory sample, so that ``model.discretize(method="euler")`` gives exactly the
-paper's ``A_lc = I + s_t F(k)`` and ``B = s_t G`` (spec §3, "all discrete time, Euler form");
-``method="expm"`` gives the exact zero-order-hold transition instead. The reference-trajectory
-block is written the same way: ``A1 = s_t [a1_sign T_E^B, 0]`` and ``A2 = I_10 + s_t M``
-(V3 reading with the ``-I_3`` feedback, spec §3.4 and §10b).
-
-Noise and measurement values come from the sensor preset ``data/sensors/launcher_table1.toml``
-(:func:`navlib.sensors.load_preset`; keyword ``sensors``): Table 1 (spec §7.1) gyro random
-walk 0.72 deg/h/sqrt(Hz), gyro bias stability 0.05 deg/h, accelerometer random walk
-117 ug/sqrt(Hz), accelerometer bias stability 7500 ug, attitude sensor 1 deg (1 sigma per
-axis, white), Markov time constants 100 s (spec §3.2, §5); and the GPS values the paper does
-not give, marked assumed in the preset: velocity 0.1 m/s and position 3 m (1 sigma per axis,
-per 200 Hz sample), position bias 2 m with c_p = 100 s. Not in any preset and **assumed**
-here (:data:`ASSUMED`, recorded in ``model.parameters``): wind angular rate 0.01 rad/s per
-sample (PSD (0.01 rad/s)^2 * s_t) and ``P0`` = 0.1 deg attitude, 0.1 m/s, 3 m, biases at
-their stability, reference-trajectory states exactly zero (the attitude is "perfectly known"
-on the pad, spec §5).
-
-Bias models (spec §3.2): ``markov`` has ``db/dt = -b/c + w`` with PSD ``2 sigma^2 / c``
-(Euler: the paper's ``s_t sqrt(2/(c s_t))`` noise gain); ``random_walk`` sets the ``-1/c``
-terms ("the shaded terms") to zero and keeps the driving noise.
-"""
+"""Satellite-launcher error models of Beaudoin, Desbiens, Gagnon & Landry (2018): the four
+loosely coupled INS/GPS solutions (with attitude sensors and the reference trajectory), any
+subset of gyro, accelerometer and GPS-position biases as Markov processes or random walks.
+State order, noise values and the paper readings taken: docs/models.md."""
 
 from __future__ import annotations
 
@@ -204,7 +167,14 @@ def _parse(solution, biases, bias_model):
 
 def state_names(solution: str = "ins_gps", biases: str = "GAP",
                 bias_model: str = "markov") -> tuple[str, ...]:
-    """State names of a configuration, in model order (spec launcher.md §3.1, §3.4)."""
+    """State names of a configuration, in model order (spec launcher.md §3.1, §3.4).
+
+    Parameters
+    ----------
+    solution, biases, bias_model : str, optional
+        Configuration: one of :data:`SOLUTIONS`, bias letters of ``"GAP"``, ``"markov"`` or
+        ``"random_walk"``.
+    """
     return sum((_GROUPS[g] for g in _starts(solution, _parse(solution, biases, bias_model))),
                ())
 
@@ -496,7 +466,20 @@ def launcher_steps(solution: str = "ins_gps", biases: str = "GAP",
                    sensors=DEFAULT_SENSORS, **kw) -> LauncherSteps:
     """:func:`launcher`'s configuration (same arguments) as its Euler step transitions
     computed on demand (:class:`LauncherSteps`): the observability test of 60 Table 2
-    configurations at 30 001 steps then never holds a 188 MB ``A`` stack per model."""
+    configurations at 30 001 steps then never holds a 188 MB ``A`` stack per model.
+
+    Parameters
+    ----------
+    solution, biases, bias_model : str, optional
+        Configuration: one of :data:`SOLUTIONS`, bias letters of ``"GAP"``, ``"markov"`` or
+        ``"random_walk"``.
+    trajectory : Trajectory or None, optional
+        Reference trajectory (default the launcher ascent).
+    sensors : optional
+        Sensor values, as :func:`launcher`.
+    **kw
+        Other keywords of :func:`launcher`.
+    """
     reject_unknown(kw, _OPTIONS, "launcher")
     letters = _parse(solution, biases, bias_model)
     t, C_b_e, f_b = _samples(trajectory)
@@ -528,7 +511,23 @@ class LauncherErrorState(ErrorState):
     def build(cls, solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
               *, step_s: float, sensors=DEFAULT_SENSORS, **kw) -> LauncherErrorState:
         """The configuration of :func:`launcher` (same keywords) at IMU step ``step_s``
-        (the default ``s_t``)."""
+        (the default ``s_t``).
+
+        Parameters
+        ----------
+        solution : str, optional
+            One of :data:`SOLUTIONS`.
+        biases : str, optional
+            Bias states, letters of ``"GAP"``.
+        bias_model : {"markov", "random_walk"}, optional
+            Bias model.
+        step_s : float
+            IMU step, s.
+        sensors : optional
+            Sensor values, as :func:`launcher`.
+        **kw
+            Other keywords of :func:`launcher`.
+        """
         reject_unknown(kw, _OPTIONS, "launcher")
         letters = _parse(solution, biases, bias_model)
         step_s = finite_scalar(step_s, "step_s", 0.0, low_open=True)
@@ -555,7 +554,19 @@ class LauncherErrorState(ErrorState):
                      bias_model: str, **_) -> LauncherErrorState:
         """:meth:`build` from the EKF's keywords (``options`` are :func:`launcher`'s; the
         EKF's GNSS-velocity sigma and simulated sensors do not apply: the launcher takes
-        GPS velocity at ``sigma_gps_vel`` and its values from ``sensors``)."""
+        GPS velocity at ``sigma_gps_vel`` and its values from ``sensors``).
+
+        Parameters
+        ----------
+        options : dict
+            Keywords of :func:`launcher`.
+        step_s : float
+            IMU step, s.
+        solution, biases, bias_model : str
+            The configuration.
+        **_
+            The EKF's other keywords, ignored.
+        """
         return cls.build(solution, biases, bias_model, step_s=step_s, **options)
 
     def jacobians(self, nominal):

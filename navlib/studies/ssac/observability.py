@@ -90,6 +90,13 @@ def observability_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M
     ``rank_abs_1e-3`` (the rank an absolute 1e-3 tolerance would give), ``null_residual``
     (largest ``|O v| / (|O| |v|)`` over the analytic vectors) and ``null_angle_deg``
     (largest principal angle between the numerical null space and the analytic vectors).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rtol : float, optional
+        Relative rank tolerance of O.
     """
     rows = []
     for n in (15, 12, 10):
@@ -118,7 +125,15 @@ def observability_summary(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT
     """:func:`observability_table` as a report shows it: ``sigma_next`` and
     ``null_residual`` below the numerical resolution of O, and ``null_angle_deg`` below the
     angle that resolution allows (Wedin's bound), printed as a bound ("< 1e-14 of the
-    largest"), not as round-off digits (:mod:`navlib.resolution`)."""
+    largest"), not as round-off digits (:mod:`navlib.resolution`).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rtol : float, optional
+        Relative rank tolerance of O.
+    """
     table = observability_table(lat_deg, alt_m, rtol)
     shown = table.drop(columns=["sigma_max", "resolution"])
     shown["sigma_next"] = [format_resolved(r.sigma_next, r.sigma_max, r.resolution, ".2g")
@@ -140,6 +155,13 @@ def null_space_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
 
     Rows are states plus ``residual`` (``|O v| / (sigma_max |v|)``); a genuine observable
     direction would give at least ``sigma_9 / sigma_max`` ~ 7e-5.
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rtol : float, optional
+        Relative rank tolerance of O.
     """
     model = ssac(15, lat_deg, alt_m)
     O = observability_matrix(model.A, model.H)
@@ -182,6 +204,15 @@ def grouping_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
 
     Columns: ``reading, threshold, n_groups, groups, matches_paper`` and the largest
     unobservable share among ``bgN, bgD, baD`` (the bias states the position modes take in).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    threshold : float, optional
+        Smallest coupling that joins two states in the thresholded reading.
+    rtol : float, optional
+        Relative rank tolerance of O.
     """
     model = ssac(15, lat_deg, alt_m)
     O = observability_matrix(model.A, model.H)
