@@ -83,6 +83,13 @@ def site_constants(lat: float, alt: float) -> dict:
 
     Returns a dict with ``Omega, g, R_M, R_N, R`` (geocentric radius) and ``gravity_gradient``
     ``2 g / R`` (ssac.md §4.3).
+
+    Parameters
+    ----------
+    lat : float
+        Latitude, rad.
+    alt : float
+        Height, m.
     """
     r_m, r_n = radii_of_curvature(lat)
     g = float(gravity_magnitude(lat, alt))
@@ -128,6 +135,28 @@ def initial_sigmas(variant: str, lat: float, alt: float, imu: dict, *,
     paper's 45° pair eigenvectors); ``"generic"``: 1° on all three attitude errors. Both:
     biases at their nominal values, 0.1 m/s velocity, 10 m position. ``attitude_scale``
     multiplies the attitude sigmas (the P0-sensitivity experiment, ssac.md §5.4 item 18).
+
+    Parameters
+    ----------
+    variant : {"matched", "generic"}
+        Attitude sigmas.
+    lat : float
+        Latitude, rad.
+    alt : float
+        Height, m.
+    imu : dict
+        IMU values (``gyro_bias``, rad/s; ``accel_bias``, m/s^2).
+    attitude_scale : float, optional
+        Factor on the attitude sigmas.
+    sigma_v : float, optional
+        Velocity sigma, m/s.
+    sigma_pos_m : float, optional
+        Position sigma, m.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``variant`` is unknown.
     """
     if variant not in P0_VARIANTS:
         raise NavlibInputError(f"P0: expected one of {P0_VARIANTS} or a matrix, got {variant!r}")
@@ -149,6 +178,20 @@ def display_units(lat: float, alt: float, state_names=STATES_15) -> dict:
 
     Attitude in deg, velocity m/s, position in metres (``(R_M+h) dL``, ``(R_N+h) cos L
     dlambda``), gyro biases deg/h, accelerometer biases mg.
+
+    Parameters
+    ----------
+    lat : float
+        Latitude, rad.
+    alt : float
+        Height, m.
+    state_names : sequence of str, optional
+        States.
+
+    Raises
+    ------
+    NavlibInputError
+        For a state without a display unit.
     """
     r_m, r_n = radii_of_curvature(lat)
     table = {
