@@ -1,5 +1,5 @@
 """Measurement updates of the closed-loop EKF between its feedback windows
-(:func:`navlib.filters.ekf.ekf`; spec launcher.md §6.3).
+(:func:`navlib.filters.ekf.ekf`; docs/assumptions.md, launcher.md §6.3).
 
 :class:`Epochs` holds what the updates need that does not depend on the data (the rows of
 each epoch's measurements in the results, the stacked ``H``, ``R`` of fixed designs);

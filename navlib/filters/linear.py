@@ -1,4 +1,4 @@
-"""Linear error-state Monte-Carlo simulator (spec launcher.md §6.2-6.4).
+"""Linear error-state Monte-Carlo simulator (docs/assumptions.md, launcher.md §6.2-6.4).
 
 :func:`simulate_linear` (:func:`prepare_linear` caches the covariance).
 

@@ -1,5 +1,5 @@
-"""Measurements of the EKF (spec launcher.md §6.3): GNSS position and velocity, the attitude
-sensor and the reference-trajectory pseudo-measurement, each giving its innovation, ``H``
+"""Measurements of the EKF (docs/assumptions.md, launcher.md §6.3): GNSS position and velocity, the
+attitude sensor and the reference-trajectory pseudo-measurement, each giving its innovation, ``H``
 and ``R`` for the current nominal state; and the input parsing (IMU samples, epochs on the
 IMU clock, attitude series).
 

@@ -1,6 +1,6 @@
 """Simulated EKF scenarios: sensors along a trajectory, outliers injected, one
-:func:`~navlib.filters.ekf.ekf` run (spec launcher.md §6.2-6.4), as the outlier study's
-closed-loop cross-checks use it.
+:func:`~navlib.filters.ekf.ekf` run (docs/assumptions.md, launcher.md §6.2-6.4), as the outlier
+study's closed-loop cross-checks use it.
 
 :func:`simulate_ekf` builds the IMU, GNSS, attitude sensor and reference trajectory of
 :mod:`navlib.sensors`, injects the outliers of :mod:`navlib.outliers` and perturbs the

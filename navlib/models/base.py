@@ -4,7 +4,7 @@ protocol of the filters.
 Every model carries ``state_names``; :meth:`LinearModel.subset` deletes rows and columns
 consistently (Beaudoin et al. 2018 §2.1: "corresponding lines and columns are
 eliminated"); :meth:`LinearModel.discretize` returns a :class:`DiscreteModel` with the
-arrays that ``navlib.observability`` and ``navlib.metrics`` take (spec api.md).
+arrays that ``navlib.observability`` and ``navlib.metrics`` take (docs/library.md).
 
 :class:`ErrorStateModel` is what the closed-loop EKF (:func:`navlib.filters.ekf`) needs from
 an error model: the state layout as index arrays, which states are reset after feedback,
@@ -38,7 +38,7 @@ def _stack(matrix, n_samples: int) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class DiscreteModel:
-    """A discrete error model at its step or measurement epochs (spec api.md).
+    """A discrete error model at its step or measurement epochs (docs/library.md).
 
     Attributes
     ----------
@@ -73,7 +73,7 @@ class DiscreteModel:
         return np.any(np.asarray(self.H) != 0.0, axis=(1, 2))
 
     def window(self, t_start: float, t_end: float) -> DiscreteModel:
-        """The epochs inside the closed interval ``[t_start, t_end]`` (spec A12).
+        """The epochs inside the closed interval ``[t_start, t_end]`` (docs/assumptions.md A12).
 
         Parameters
         ----------
@@ -209,7 +209,7 @@ class LinearModel:
             (see :mod:`navlib.discretize`).
         epochs : array of int, optional
             Sample indices of the measurement epochs of a trajectory model; per-step
-            transitions are chained between them (spec excitability.md A8). Default: every
+            transitions are chained between them (docs/assumptions.md A8). Default: every
             sample.
         hold : {"left", "mean"}
             Matrices used over the step ``[t_j, t_j+1]`` of a trajectory model: the left
@@ -422,7 +422,7 @@ class ErrorState:
 
     def compensate(self, parameters, f_b, w_ib_b):
         """``f = (f_hat - b_a) / (1 + s_a)``, likewise ``omega`` with ``b_g, s_g``, for the
-        groups the model holds (the IMU inverse model, spec excitability.md A7).
+        groups the model holds (the IMU inverse model, docs/assumptions.md A7).
 
         Parameters
         ----------

@@ -109,9 +109,9 @@ def imu_noise_densities(sensors=None) -> dict:
     Parameters
     ----------
     sensors : None, str, navlib.sensors.SensorSpec / ImuSpec, or mapping
-        ``None`` takes the preset ``motionpak_tactical`` (spec §5 values); a string names a
-        preset of :func:`navlib.sensors.load_preset`; a mapping gives the keys of
-        :data:`NOISE_KEYS` directly (SI units).
+        ``None`` takes the preset ``motionpak_tactical`` (docs/assumptions.md, excitability.md §5
+        values); a string names a preset of :func:`navlib.sensors.load_preset`; a mapping gives the
+        keys of :data:`NOISE_KEYS` directly (SI units).
 
     Returns
     -------
@@ -166,8 +166,8 @@ def parameter_sigmas(sensors=None) -> dict:
 def ecef21_jacobians(position, C_b_e, f_b, w_ib_b, attitude_error: str = "ecef"):
     """Dynamics ``A`` (N, 21, 21) and noise input ``G`` (N, 21, 18) along reference samples.
 
-    ``A = [[A_kin, B_kin B_pi], [0, 0]]`` (Eq. 24 as corrected in spec A4, A5, A7) and
-    ``G = blockdiag(B_kin, I_12)`` (spec A6), vectorised over samples.
+    ``A = [[A_kin, B_kin B_pi], [0, 0]]`` (Eq. 24 as corrected in docs/assumptions.md A4, A5, A7)
+    and ``G = blockdiag(B_kin, I_12)`` (docs/assumptions.md A6), vectorised over samples.
 
     Parameters
     ----------
@@ -178,7 +178,7 @@ def ecef21_jacobians(position, C_b_e, f_b, w_ib_b, attitude_error: str = "ecef")
     f_b, w_ib_b : ndarray (N, 3)
         Measured (reference) specific force, m/s^2, and inertial rate, rad/s, body axes.
     attitude_error : {"ecef", "body"}
-        Attitude-error definition (spec A4 (b) or (a)).
+        Attitude-error definition (docs/assumptions.md A4 (b) or (a)).
     """
     if attitude_error not in ATTITUDE_ERRORS:
         raise NavlibInputError(
@@ -228,15 +228,15 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         ``omega_hat = omega_ib^b``).
     sensors : None, str, IMU spec or mapping
         Source of the noise densities (see :func:`imu_noise_densities`); default the
-        ``motionpak_tactical`` preset (spec §5, assumed values).
+        ``motionpak_tactical`` preset (docs/assumptions.md, excitability.md §5, assumed values).
     attitude_error : {"ecef", "body"}
-        Attitude-error frame (spec A4): ECEF ``psi`` (default) or body ``dtheta``. The state
-        names ``theta_x..z`` are then ECEF-axis or body-axis components.
+        Attitude-error frame (docs/assumptions.md A4): ECEF ``psi`` (default) or body ``dtheta``.
+        The state names ``theta_x..z`` are then ECEF-axis or body-axis components.
     gnss_sigma_m : float
         GNSS position standard deviation per ECEF axis, ``R = sigma^2 I3`` (assumed 5 m).
     sigma_p0_m, sigma_v0_m_s, sigma_theta0_deg : float
         Initial standard deviations of position (30 m), velocity (3 m/s) and attitude
-        (1 deg per axis), spec §5 [A].
+        (1 deg per axis), docs/assumptions.md, excitability.md §5 [A].
     sigma_bg_deg_s, sigma_ba_m_s2, sigma_sg_ppm, sigma_sa_ppm : float, optional
         Initial standard deviations of the IMU parameters; None takes the sensor spec's
         turn-on values (:func:`parameter_sigmas`; the default preset holds the §5 values
@@ -342,8 +342,8 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
     """The 21-state model discretised to the GNSS epochs of ``trajectory`` (cached).
 
     Builds the model of :func:`ecef21` along the trajectory and chains the steps to epochs
-    ``gnss_rate_hz`` apart (spec A8: 100 IMU steps per 1 Hz epoch). The build streams over
-    blocks of epochs (at most :data:`STREAM_SAMPLES` trajectory samples at a time), so its
+    ``gnss_rate_hz`` apart (docs/assumptions.md A8: 100 IMU steps per 1 Hz epoch). The build streams
+    over blocks of epochs (at most :data:`STREAM_SAMPLES` trajectory samples at a time), so its
     memory does not grow with the flight's length: only the per-epoch ``F``, ``Q`` are kept.
     Results are cached in memory on the trajectory object's identity and the options, so that
     widgets changing only the metric settings (eta, nu, segments) never rebuild the model,
@@ -520,9 +520,9 @@ class Ecef21ErrorState(ErrorState):
     """The 21-state ECEF model as the error-state model of :func:`navlib.filters.ekf`.
 
     Errors are ``truth - estimate`` (``nav_sign = +1``, España et al. 2019), the attitude
-    error ECEF or body (spec A4); the 12 IMU parameters (``bg, ba, sg, sa``) are random walks
-    (no decay) and every state is reset after feedback. Measurements: GNSS position, and
-    GNSS velocity when its sigma is given. Jacobians: :func:`ecef21_jacobians`, discretised
+    error ECEF or body (docs/assumptions.md A4); the 12 IMU parameters (``bg, ba, sg, sa``) are
+    random walks (no decay) and every state is reset after feedback. Measurements: GNSS position,
+    and GNSS velocity when its sigma is given. Jacobians: :func:`ecef21_jacobians`, discretised
     by the batched matrix exponential by default. Build with :meth:`build`.
     """
 

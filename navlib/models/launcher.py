@@ -80,7 +80,7 @@ _OPTIONS = ("a1_sign", "sigma_gps_vel", "sigma_gps_pos", "sigma_bp", "sigma_wind
 def rt_dynamics_matrix() -> np.ndarray:
     """Continuous closed-loop attitude dynamics ``M`` of the RT augmentation, ``A2 = I + s_t M``.
 
-    Spec launcher.md §3.4 (V3 reading with the ``-I_3`` feedback): states
+    Spec docs/assumptions.md, launcher.md §3.4 (V3 reading with the ``-I_3`` feedback): states
     ``x19 x20 x21 | x22 x23 | x24 x25 | psi_ref_x psi_ref_y psi_ref_z``. Roll is a 2-state
     loop (x19, psi_ref_x), pitch and yaw 4-state loops. Its eigenvalues are
     ``-0.25 +- 0.733j`` (roll) and ``-2.818 +- 3.686j, -0.394, -0.096`` (pitch, yaw; §10b).
@@ -102,7 +102,8 @@ def rt_dynamics_matrix() -> np.ndarray:
 
 
 def simplified_gps_bias(c_p: float, s_t: float = 0.005):
-    """The simplified position / GPS-bias model of §4.1 (spec launcher.md §3.7, eq. 7).
+    """The simplified position / GPS-bias model of §4.1 (docs/assumptions.md, launcher.md §3.7, eq.
+    7).
 
     ``[dr; b_p](k+1) = (I_6 + s_t [[0, 0], [0, -I_3 / c_p]]) [dr; b_p](k)``,
     ``dr_m(k) = [I_3  I_3] [dr; b_p](k)``.
@@ -167,7 +168,7 @@ def _parse(solution, biases, bias_model):
 
 def state_names(solution: str = "ins_gps", biases: str = "GAP",
                 bias_model: str = "markov") -> tuple[str, ...]:
-    """State names of a configuration, in model order (spec launcher.md §3.1, §3.4).
+    """State names of a configuration, in model order (docs/assumptions.md, launcher.md §3.1, §3.4).
 
     Parameters
     ----------
@@ -198,7 +199,8 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
         Sensor preset for the noise values (default ``"launcher_table1"``); the keywords
         below override single values.
     a1_sign : {+1, -1}
-        Sign of ``A1`` (how the navigation attitude error drives the closed loop, spec §10b).
+        Sign of ``A1`` (how the navigation attitude error drives the closed loop,
+        docs/assumptions.md, launcher.md §10b).
     c_g, c_a, c_p : float
         Markov time constants, s (preset: 100).
     gyro_arw, gyro_bias, accel_vrw, accel_bias, sigma_att : float
@@ -288,7 +290,8 @@ def _slicer(start: dict):
 
 def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict):
     """``A`` (N, n, n) along attitudes ``C_b_e`` (N, 3, 3) and specific forces ``f_b``
-    (N, 3): the paper's ``F(k)`` (eq. 1-5) and the RT block of spec §3.4."""
+    (N, 3): the paper's ``F(k)`` (eq. 1-5) and the RT block of docs/assumptions.md, launcher.md
+    §3.4."""
     start = _starts(solution, letters)
     n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
@@ -317,7 +320,8 @@ def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p:
 
 def _dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict):
     """``A`` (N, n, n), ``G`` (N, n, q) and the PSDs (q,) along attitudes and specific forces
-    (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of spec §3.4)."""
+    (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of docs/assumptions.md, launcher.md
+    §3.4)."""
     start = _starts(solution, letters)
     n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
@@ -419,9 +423,9 @@ def _model(solution, letters, bias_model, t, C_b_e, f_b, sensors, kw, s_t) -> Li
 @dataclass(frozen=True, eq=False)
 class LauncherSteps:
     """A launcher configuration as the Euler transitions ``F_k = I + s_t A(k)`` of the
-    steps asked for (the paper's ``A_lc``, spec launcher.md §3), computed on demand from the
-    trajectory samples instead of held as an ``(N, n, n)`` stack: what the observability test
-    reads (:func:`navlib.observability.local_observability`, chunk by chunk), bitwise the
+    steps asked for (the paper's ``A_lc``, docs/assumptions.md, launcher.md §3), computed on demand
+    from the trajectory samples instead of held as an ``(N, n, n)`` stack: what the observability
+    test reads (:func:`navlib.observability.local_observability`, chunk by chunk), bitwise the
     transitions of ``launcher(...).discretize(method="euler")``. Build with
     :func:`launcher_steps`.
 
@@ -499,12 +503,12 @@ class LauncherErrorState(ErrorState):
     """A launcher model as the error-state model of :func:`navlib.filters.ekf`.
 
     Errors are ``estimate - truth`` (``nav_sign = -1``) with the ECEF attitude error ``psi``
-    (spec launcher.md §3.1); the parameter groups are the biases ``bg``, ``ba`` (body) and
-    ``bp`` (minus the GPS position bias, E frame), decaying at ``-1/c`` for Markov biases.
-    The reference-trajectory block (``x19..x25``, ``psi_ref``, spec §3.4) is the launcher's
-    divergence from its reference: it has no nominal counterpart and is not reset. The
-    Jacobians are :func:`launcher`'s ``A``, ``G`` (Euler steps by default, as the paper).
-    Build with :meth:`build`.
+    (docs/assumptions.md, launcher.md §3.1); the parameter groups are the biases ``bg``, ``ba``
+    (body) and ``bp`` (minus the GPS position bias, E frame), decaying at ``-1/c`` for Markov
+    biases. The reference-trajectory block (``x19..x25``, ``psi_ref``, docs/assumptions.md,
+    launcher.md §3.4) is the launcher's divergence from its reference: it has no nominal counterpart
+    and is not reset. The Jacobians are :func:`launcher`'s ``A``, ``G`` (Euler steps by default, as
+    the paper). Build with :meth:`build`.
     """
 
     @classmethod

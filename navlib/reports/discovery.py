@@ -1,7 +1,7 @@
 """Which notebooks a report runs, and with which parameters.
 
 A report notebook is ``NN_name.ipynb`` in the notebooks folder; its tagged ``parameters``
-cell names what ``-p`` may inject (spec/api.md "Reports — command line"). ``quick=True`` and
+cell names what ``-p`` may inject (docs/reports.md). ``quick=True`` and
 explicit parameters reach only the notebooks whose parameters cell assigns that name, so
 papermill never warns about unknown parameters and ``-p imu_path x.csv`` reaches only the
 notebooks that read flight data.

@@ -1,5 +1,5 @@
 """Many flights or missions in one run: ``python -m navlib assess`` and ``python -m navlib
-plan`` (spec api.md "Scale" and "Planning").
+plan`` (docs/sweeps.md).
 
 Each recorded flight (a ``LOG``: :func:`navlib.io.parse_log`) goes through
 :func:`navlib.studies.assess.assess_flight` as one task (:func:`navlib.parallel.map_tasks`)

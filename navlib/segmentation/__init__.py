@@ -1,7 +1,7 @@
 """Automatic flight-phase segmentation from a trajectory's specific force and angular rate.
 
-A recorded flight is cut into phases whose excitation differs (spec excitability.md §3, §6:
-excitability is computed per segment; the paper's segments of the sounding rocket are the
+A recorded flight is cut into phases whose excitation differs (docs/assumptions.md, excitability.md
+§3, §6: excitability is computed per segment; the paper's segments of the sounding rocket are the
 pad [0, 19] s, the powered flight and spin [19, 60] s and the free fall [60, 86] s, where
 ``|f| < 0.5 m/s^2``). The phases are read from the kinematics of a (fitted)
 :class:`~navlib.trajectory.Trajectory`, in ECEF, with ``f^e = C_b_e f^b``,

@@ -1,4 +1,5 @@
-"""Kinematic features of a trajectory that the segmentation reads (ECEF, spec excitability.md §3).
+"""Kinematic features of a trajectory that the segmentation reads (ECEF, docs/assumptions.md,
+excitability.md §3).
 
 :func:`flight_features` gives them per sample: speed, kinematic acceleration
 ``a^e = f^e + gamma(P) - 2 Omega x V``, specific force along and across the path, the body

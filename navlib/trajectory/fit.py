@@ -1,11 +1,11 @@
 """A kinematically exact reference trajectory fitted to recorded flight data.
 
-The idea of Giribet et al. (2007), as used by España et al. (2019, spec excitability.md
-§4): find the smooth B-spline trajectory that best fits the recorded IMU and GNSS data in
-a least-squares sense and whose IMU signals satisfy the kinematics (spec Eq. 1) exactly.
-Its IMU is then re-derived from the splines with
-:func:`navlib.trajectory.base.exact_imu`, so a correct strapdown integrating it reproduces
-the fitted position and attitude to the last digit of the integrator.
+The idea of Giribet et al. (2007), as used by España et al. (2019, docs/assumptions.md,
+excitability.md §4): find the smooth B-spline trajectory that best fits the recorded IMU and GNSS
+data in a least-squares sense and whose IMU signals satisfy the kinematics (spec Eq. 1) exactly. Its
+IMU is then re-derived from the splines with :func:`navlib.trajectory.base.exact_imu`, so a correct
+strapdown integrating it reproduces the fitted position and attitude to the last digit of the
+integrator.
 
 How it works (initial attitude, attitude history, the position spline with its attitude
 correction and IMU calibration, the attitude spline on SO(3), holes and rates, the residuals

@@ -1,4 +1,4 @@
-"""Satellite-launcher endo-atmospheric ascent from Churchill (spec launcher.md §4).
+"""Satellite-launcher endo-atmospheric ascent from Churchill (docs/assumptions.md, launcher.md §4).
 
 The paper's launcher simulator (DRDC) is not available; what the paper states is kept
 and the rest is a documented surrogate:
@@ -229,7 +229,8 @@ class _Bending:
 
 @cache.cached
 def launcher_ascent(**overrides) -> Trajectory:
-    """Churchill launcher, endo-atmospheric ascent, exact 200 Hz IMU (spec launcher.md §4).
+    """Churchill launcher, endo-atmospheric ascent, exact 200 Hz IMU (docs/assumptions.md,
+    launcher.md §4).
 
     Parameters
     ----------

@@ -3,7 +3,8 @@
 Method step 3 of :mod:`navlib.trajectory.fit`: ``P(t)`` is a quintic B-spline whose
 coefficients solve one weighted least-squares problem with GNSS position (and velocity) rows
 and, at every IMU sample, the kinematic rows
-``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'`` (spec excitability.md Eq. 1).
+``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'`` (docs/assumptions.md,
+excitability.md Eq. 1).
 :class:`PositionRows` holds the banded normal equations (one Cholesky factorisation for the
 three axes); :class:`AttitudeCorrection` the slowly varying attitude correction ``eps(t)``
 and the constant accelerometer bias, eliminated through a Schur complement.

@@ -152,9 +152,9 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         segment table, a list of boundaries (``[18, 46]``) or of ``(t_start, t_end)`` /
         ``(phase, t_start, t_end)`` entries. Each segment needs 2 GNSS epochs.
     eta : float in (0, 1)
-        Excitability energy threshold (spec A14).
+        Excitability energy threshold (docs/assumptions.md A14).
     nu : float in (0, 1)
-        Sensability threshold (spec A11; 0.985 is the paper's value for 21 states).
+        Sensability threshold (docs/assumptions.md A11; 0.985 is the paper's value for 21 states).
     gnss_rate_hz : float, optional
         Measurement rate of the model; None: the median rate of the GNSS record (at most
         the IMU rate). The epochs are a regular grid in time at this rate

@@ -1,5 +1,5 @@
-"""Beaudoin et al. (2018) claims: Table 2 (§4.1, spec launcher.md §7.2, the robust targets
-of §10c), conclusions 1 and 3, Fig. 1 and the end of §4.1 (simplified model), judged by
+"""Beaudoin et al. (2018) claims: Table 2 (§4.1, docs/assumptions.md, launcher.md §7.2, the robust
+targets of §10c), conclusions 1 and 3, Fig. 1 and the end of §4.1 (simplified model), judged by
 :mod:`navlib.studies.claims` (the covariance evolution: :mod:`.covariance_claims`)."""
 
 from __future__ import annotations
@@ -529,9 +529,9 @@ def f1_proportional_claim(data: pd.DataFrame, s_t: float = 0.005) -> ClaimResult
 
 
 def fig1_claims(data: pd.DataFrame | None = None, s_t: float = 0.005) -> list[ClaimResult]:
-    """Fig. 1 / §4.1 statements on the simplified model (spec §3.7, §10a); ``data`` a
-    :func:`~navlib.studies.launcher.fig1_data` frame at the sampling time ``s_t`` (s, the
-    paper's symbol).
+    """Fig. 1 / §4.1 statements on the simplified model (docs/assumptions.md, launcher.md §3.7,
+    §10a); ``data`` a :func:`~navlib.studies.launcher.fig1_data` frame at the sampling time ``s_t``
+    (s, the paper's symbol).
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Beaudoin et al. (2018) Table 2: the local observability matrix of each of the 60
-configurations at every 200 Hz step of the ascent (spec launcher.md §6.1, §7.2), next to the
-paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md`` sidecar), and
-one configuration over the mission."""
+configurations at every 200 Hz step of the ascent (docs/assumptions.md, launcher.md §6.1, §7.2),
+next to the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md`` sidecar),
+and one configuration over the mission."""
 
 from __future__ import annotations
 
@@ -70,8 +70,8 @@ def describe_direction(vector, state_names, C_b_e, top: int = 3) -> str:
     """Largest components of a state-space direction, attitude parts in body axes.
 
     The attitude error ``psi`` (E frame) is rotated to body axes and labelled roll / pitch /
-    yaw (spec §2: the body x axis is the roll axis), so the weakly observable direction of
-    spec §3.8 reads as "roll".
+    yaw (docs/assumptions.md, launcher.md §2: the body x axis is the roll axis), so the weakly
+    observable direction of docs/assumptions.md, launcher.md §3.8 reads as "roll".
 
     Parameters
     ----------
@@ -208,8 +208,8 @@ class Table2Result:
         return pd.DataFrame(rows)
 
     def claims(self, cond_tol: float | None = None) -> list[ClaimResult]:
-        """The §4.1 statements (spec launcher.md §7.2, robust targets of §10c), judged by
-        :mod:`navlib.studies.claims` at ``cond_tol`` (default the result's)."""
+        """The §4.1 statements (docs/assumptions.md, launcher.md §7.2, robust targets of §10c),
+        judged by :mod:`navlib.studies.claims` at ``cond_tol`` (default the result's)."""
         tol = self.cond_tol if cond_tol is None else finite_scalar(cond_tol, "cond_tol", 0.0)
         return table2_claim_results(self.frame, tol, self.variant)
 
@@ -276,7 +276,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
            window: int | None = None, rtol: float | None = None, method: str = "euler",
            solutions=SOLUTIONS, cond_tol: float = COND_TOL, n_jobs: int | None = None,
            progress=None, scheduler=None, rank_rtols=None, **model_kw) -> Table2Result:
-    """Regenerate Table 2 (spec launcher.md §6.1, §7.2).
+    """Regenerate Table 2 (docs/assumptions.md, launcher.md §6.1, §7.2).
 
     Parameters
     ----------
@@ -284,7 +284,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
         Default :func:`navlib.trajectory.launcher_ascent` (150 s at 200 Hz).
     variant : {"time_varying", "frozen"}
         Eq. (6) as printed, or the model frozen at each step (the paper's "piecewise
-        constant model"); spec §6.1 item 2 asks for both.
+        constant model"); docs/assumptions.md, launcher.md §6.1 item 2 asks for both.
     stride : int
         Evaluate every ``stride``-th step (1 = every 200 Hz step, the paper's test).
     window, rtol, method, n_jobs

@@ -64,7 +64,8 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 cache: FilterCache | None = None, divergence: bool = True,
                 outlier_time_s: float | None = None, reuse: OutlierStudy | None = None,
                 conclusions: bool = False, **model_options) -> OutlierStudy:
-    """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
+    """Run T1-T4 (docs/assumptions.md, launcher.md §6.4) on the launcher surrogate and judge the
+    claims.
 
     Parameters
     ----------
@@ -236,7 +237,8 @@ def correlation_fig10(trajectory=None, *, duration: float = 5.0,
                       bias_model: str = DEFAULTS["bias_model"],
                       cache: FilterCache | None = None, **model_options) -> pd.DataFrame:
     """Correlation of the body-axis attitude error ``T_E^B psi`` with the divergence
-    ``psi_ref`` per axis over the first ``duration`` seconds (Fig. 10, spec §6.3).
+    ``psi_ref`` per axis over the first ``duration`` seconds (Fig. 10, docs/assumptions.md,
+    launcher.md §6.3).
 
     Returns a tidy frame ``t, axis, rho`` (axis ``roll``/``pitch``/``yaw``); epochs where
     either variance is zero (the pad: ``psi_ref`` starts exactly known) are NaN.
@@ -285,7 +287,8 @@ def roll_sigma(trajectory=None, *, pairs=(("ins_gps", "ins_gps_rt"),
                biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                stride: int | None = None, cache: FilterCache | None = None,
                **model_options) -> pd.DataFrame:
-    """Body-axis attitude-error sigma of each solution (Figs. 7 and 11, spec §6.2 item 6).
+    """Body-axis attitude-error sigma of each solution (Figs. 7 and 11, docs/assumptions.md,
+    launcher.md §6.2 item 6).
 
     Returns a tidy frame ``t, solution, axis, sigma`` (rad), every ``stride``-th epoch
     (default about 20 ms apart).

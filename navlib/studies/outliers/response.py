@@ -320,8 +320,8 @@ def watch_rows(watch: str, state_names: Sequence[str], C_b_e) -> np.ndarray:
     """Rows ``c_k`` (K, p, n) with ``c_k' x`` the watched quantity at each epoch.
 
     ``roll``/``pitch``/``yaw``: the body-axis attitude error ``T_E^B psi`` (row i of
-    ``C_b_e'`` on the ``psi`` states, spec launcher.md §6.2 item 6); ``bp``: the three
-    GPS-bias states; ``ref_roll``: ``psi_ref_x``.
+    ``C_b_e'`` on the ``psi`` states, docs/assumptions.md, launcher.md §6.2 item 6); ``bp``: the
+    three GPS-bias states; ``ref_roll``: ``psi_ref_x``.
 
     Parameters
     ----------

@@ -170,7 +170,8 @@ def covariance_run(duration_s: float = 3600.0, dt_s: float = 1.0,
                    n_states: int = 15, P0="matched", attitude_scale: float = 1.0,
                    sigma_nu: float | None = None, track: bool = True, C_b_n=None,
                    imu=None) -> SSACStudy:
-    """Covariance run of the SSAC filter (ssac.md §3.4, §4.1: 1 Hz, 60 min, ZVU).
+    """Covariance run of the SSAC filter (docs/assumptions.md, ssac.md §3.4, §4.1: 1 Hz, 60 min,
+    ZVU).
 
     Parameters
     ----------
@@ -236,7 +237,8 @@ def _pairs(initial) -> list[tuple]:
 
 
 def closed_form_limits(study: SSACStudy) -> pd.DataFrame:
-    """Closed-form accuracy limits beside the filter's final sigma (ssac.md §3.5).
+    """Closed-form accuracy limits beside the filter's final sigma (docs/assumptions.md, ssac.md
+    §3.5).
 
     ``classic``: tilt ``b_a/g``, azimuth ``b_gE/(Omega cos L)`` (the alignment error a bias
     of nominal size causes). ``eq44``: the Bayesian form of Jekeli's statement, eq. (44):
@@ -406,9 +408,9 @@ def modified_run(study: SSACStudy, attitude_scale: float = P0_MODIFIED_ATTITUDE_
 def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd.DataFrame:
     """Non-estimable bias portions of a rotated IMU, per body axis and per NED axis.
 
-    Silva et al. §4 (ssac.md §5.4 item 19): with the IMU at an arbitrary orientation every
-    body axis gets a small non-estimable portion, and their vector sum points east for the
-    gyros and north/east for the accelerometers. Here: the projector onto the three pair
+    Silva et al. §4 (docs/assumptions.md, ssac.md §5.4 item 19): with the IMU at an arbitrary
+    orientation every body axis gets a small non-estimable portion, and their vector sum points east
+    for the gyros and north/east for the accelerometers. Here: the projector onto the three pair
     modes at the end of the run (normalised coordinates, equal sigma per axis of a triad),
     restricted to each bias triad; ``body_share`` is its diagonal (per body axis) and
     ``ned_share`` the diagonal of ``C_b_n P C_n_b`` (per NED axis), both as sqrt.
@@ -486,9 +488,9 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
 
 @cache.memoized(maxsize=4)
 def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
-    """Actual error sigmas of a reduced filter run on the 15-state truth (ssac.md §2.4, the
-    conclusions' "the 12-state filter is as good"): a covariance analysis of the suboptimal
-    filter, not the reduced filter's own sigmas.
+    """Actual error sigmas of a reduced filter run on the 15-state truth (docs/assumptions.md,
+    ssac.md §2.4, the conclusions' "the 12-state filter is as good"): a covariance analysis of the
+    suboptimal filter, not the reduced filter's own sigmas.
 
     The truth ``x`` follows the 15-state model of ``study`` (its ``F``, ``Q``, ``P0``) and
     the ZVU measurement ``z = H x + v`` (the components the reduced filter uses); the reduced

@@ -1,5 +1,6 @@
 """Silva et al. (2017) observability: ranks, the analytic null space and the grouping of the
-unobservable subspace (ssac.md §3.1, §3.3) of the reconstructed SSAC model (ssac.md §2.3)."""
+unobservable subspace (docs/assumptions.md, ssac.md §3.1, §3.3) of the reconstructed SSAC model
+(docs/assumptions.md, ssac.md §2.3)."""
 
 from __future__ import annotations
 
@@ -33,7 +34,8 @@ def set_text(names) -> str:
 
 
 def analytic_null_vectors(model: LinearModel) -> pd.DataFrame:
-    """Analytic unobservable directions of ssac.md §3.3, restricted to the model's states.
+    """Analytic unobservable directions of docs/assumptions.md, ssac.md §3.3, restricted to the
+    model's states.
 
     For the 15-state model (``s, c = sin L, cos L``, ``Omega`` Earth rate)::
 
@@ -81,7 +83,8 @@ def analytic_null_vectors(model: LinearModel) -> pd.DataFrame:
 
 def observability_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
                         rtol: float = RANK_RTOL) -> pd.DataFrame:
-    """Rank of O for the 15-, 12- and 10-state models next to the paper's (ssac.md §3.1).
+    """Rank of O for the 15-, 12- and 10-state models next to the paper's (docs/assumptions.md,
+    ssac.md §3.1).
 
     Columns: ``n_states, rank, n_unobservable, paper_rank, match, sigma_max, sigma_last``
     (smallest singular value counted), ``sigma_next`` (the first one below the tolerance),
@@ -173,7 +176,8 @@ def null_space_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
 
 
 def equivalence_scale(model: LinearModel) -> np.ndarray:
-    """State scales in which each analytic null vector has O(1) entries (ssac.md §3.3).
+    """State scales in which each analytic null vector has O(1) entries (docs/assumptions.md,
+    ssac.md §3.3).
 
     tilt ``b_a/g``, azimuth ``b_g/(Omega cos L)``, latitude and longitude ``b_g/Omega``
     (a ``dL`` of this size mimics ``b_g`` through the Earth rate, 0.084 rad for
@@ -196,7 +200,8 @@ def _groups_match(groups, paper=PAPER_GROUPS) -> bool:
 
 def grouping_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
                    threshold: float = GROUP_THRESHOLD, rtol: float = RANK_RTOL) -> pd.DataFrame:
-    """Grouping of the 15-state unobservable subspace under three readings (ssac.md §3.3).
+    """Grouping of the 15-state unobservable subspace under three readings (docs/assumptions.md,
+    ssac.md §3.3).
 
     * ``exact``: the block decomposition of the exact null space (threshold 1e-9, SI units);
     * ``P0 (matched) scaled``: states in units of ``sqrt(diag P0)`` (10 m position);
