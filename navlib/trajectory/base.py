@@ -134,7 +134,34 @@ def exact_imu(position, velocity, acceleration, C_b_e, w_eb_b):
 
 def build_trajectory(t, position, velocity, acceleration, C_b_e, w_eb_b, *, events=None,
                      name="", parameters=None) -> Trajectory:
-    """Assemble a :class:`Trajectory` whose IMU is exact for the given smooth kinematics."""
+    """Assemble a :class:`Trajectory` whose IMU is exact for the given smooth kinematics.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Strictly increasing times, s, (N,).
+    position, velocity, acceleration : numpy.ndarray
+        ECEF kinematics, m, m/s, m/s^2, each (N, 3).
+    C_b_e : numpy.ndarray
+        Body -> ECEF attitude, (N, 3, 3).
+    w_eb_b : numpy.ndarray
+        Body rate relative to ECEF, body axes, rad/s, (N, 3).
+    events : dict or None, optional
+        Event name -> time, s.
+    name : str, optional
+        Trajectory name.
+    parameters : dict or None, optional
+        Settings recorded with it.
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    NavlibInputError
+        If an array has the wrong shape, is not finite, or ``t`` is not increasing.
+    """
     t = increasing_times(t, "t")
     n = t.size
     position = finite_array(position, "position", (n, 3))

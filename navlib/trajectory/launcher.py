@@ -118,7 +118,18 @@ _FRAME_ELEVATION = 45.0 * DEG
 
 
 def launch_azimuth(lat, inclination):
-    """Northerly launch azimuth (rad) reaching ``inclination`` from latitude ``lat`` (rad)."""
+    """Northerly launch azimuth (rad) reaching ``inclination`` from latitude ``lat`` (rad).
+
+    Parameters
+    ----------
+    lat, inclination : float
+        Launch latitude and orbit inclination, rad.
+
+    Raises
+    ------
+    NavlibInputError
+        If the inclination cannot be reached by a direct ascent.
+    """
     ratio = math.cos(inclination) / math.cos(lat)
     if abs(ratio) > 1.0:
         raise NavlibInputError(

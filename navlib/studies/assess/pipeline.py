@@ -82,7 +82,25 @@ than 1e-3 relative on the sample flight (benchmarks/bench_assess.py)."""
 def choose_preset(imu: pd.DataFrame, preset: str | None = None) -> tuple[str, str]:
     """The sensor preset to assess ``imu`` with and why: ``preset`` when given, else the
     :data:`AUTOPILOT_PRESETS` entry of the autopilot the reader found in the log, else
-    :data:`DEFAULT_PRESET`."""
+    :data:`DEFAULT_PRESET`.
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record (its ``attrs["autopilot"]`` and ``attrs["hardware"]``).
+    preset : str or None, optional
+        A preset name to use as given.
+
+    Returns
+    -------
+    tuple of (str, str)
+        The preset name and the reason.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``preset`` is not a string.
+    """
     if preset is not None:
         if not isinstance(preset, str):
             raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")

@@ -120,6 +120,18 @@ def direction_sensability(result: metrics.SensabilityResult, v) -> np.ndarray:
 
     ``v`` is mapped to the normalised coordinates (``D0^-1/2 v``), made unit, and projected
     on the practically sensible subspace ``span{v^1..v^nr}``: ``||V[:, :nr]' w||``.
+
+    Parameters
+    ----------
+    result : navlib.metrics.SensabilityResult
+        Sensability of the analysis.
+    v : array_like
+        Direction in state space, (n,).
+
+    Raises
+    ------
+    NavlibInputError
+        If ``v`` is zero or of the wrong length.
     """
     v = np.asarray(v, dtype=float)
     if v.shape != (result.n,) or not np.any(v):
@@ -146,7 +158,22 @@ def quiet_gyro_analysis(analysis: RocketAnalysis, scale: float = QUIET_GYRO_SCAL
     """``analysis`` rerun with the gyro noise (ARW, bias random walk) and the initial gyro
     bias sigma scaled by ``scale``: the counterfactual of S5 ("gyro noise and bias prevent
     measuring the Earth rate", A-S5-cause). ``sensors``: the noise source of ``analysis``
-    when it was built from a mapping (default: its named preset)."""
+    when it was built from a mapping (default: its named preset).
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+        The analysis.
+    scale : float, optional
+        Factor on the gyro noise and initial gyro-bias sigma, in (0, 1].
+    sensors : optional
+        Noise source of ``analysis`` when it was built from a mapping.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``scale`` is out of range, or ``sensors`` is missing for a mapping-built analysis.
+    """
     scale = finite_scalar(scale, "scale", 0.0, 1.0, low_open=True)
     if sensors is None and analysis.settings["sensors"] == "custom":
         raise NavlibInputError("sensors: the analysis was built from a noise mapping; pass "
