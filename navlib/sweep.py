@@ -1,6 +1,6 @@
 """Design trade studies: a grid of parameters mapped over an evaluation as parallel tasks.
 
-Contract (docs/assumptions.md, api.md "Scale"):
+Contract (docs/sweeps.md):
 ``df = sweep(grid, evaluate, scheduler=None, output=None)``. ``grid`` is a dict of value
 lists (their product is swept) or a DataFrame of points; ``evaluate`` is a named evaluation
 of :data:`EVALUATIONS` (studies :func:`register` them when imported) or any picklable

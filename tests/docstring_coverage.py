@@ -31,6 +31,8 @@ class PublicFunction:
     name: str
     arguments: tuple[str, ...]
     docstring: str | None
+    keywords: bool = False
+    """Whether the signature takes ``**kwargs``."""
 
     def parsed(self) -> NumpyDocString | None:
         """The docstring read by numpydoc (None without a docstring)."""
@@ -83,7 +85,7 @@ def public_functions(package: Path = PACKAGE) -> list[PublicFunction]:
             for name, fn, method in members:
                 if not name.rpartition(".")[2].startswith("_"):
                     found.append(PublicFunction(module, name, _arguments(fn, method),
-                                                ast.get_docstring(fn)))
+                                                ast.get_docstring(fn), fn.args.kwarg is not None))
     return found
 
 

@@ -1,5 +1,5 @@
-"""The Ham & Brown (1983) normalised covariance eigen-analysis (ssac.md §3.6, Silva et al.
-2017 eqs. 45-46) with sign-consistent tracking through near-degenerate eigenvalues:
+"""The Ham & Brown (1983) normalised covariance eigen-analysis (docs/assumptions.md, ssac.md §3.6,
+Silva et al. 2017 eqs. 45-46) with sign-consistent tracking through near-degenerate eigenvalues:
 :func:`normalized_eigen`.
 """
 
@@ -23,7 +23,7 @@ __all__ = ["NormalizedEigenResult", "normalized_eigen"]
 
 @dataclass(frozen=True, eq=False)
 class NormalizedEigenResult:
-    """Ham–Brown normalised covariance eigen-analysis over time (ssac.md §3.6).
+    """Ham–Brown normalised covariance eigen-analysis over time (docs/assumptions.md, ssac.md §3.6).
 
     Attributes
     ----------
@@ -136,8 +136,8 @@ class NormalizedEigenResult:
         """Norm of each state's row in the subspace spanned by ``modes`` (1-based, sorted).
 
         ``share[j] = ||V_S[j, :]||`` is invariant to rotations inside the subspace, so it is
-        the meaningful quantity for a near-degenerate group (ssac.md §3.6 step 6: compare
-        summed or projected subspaces). 1 means state j lies wholly inside the subspace.
+        the meaningful quantity for a near-degenerate group (docs/assumptions.md, ssac.md §3.6 step
+        6: compare summed or projected subspaces). 1 means state j lies wholly inside the subspace.
 
         Parameters
         ----------
@@ -166,7 +166,7 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
     ``P_sn(t) = D0^-1 P(t) D0^-1`` with ``D0 = sqrt(diag P0)`` (or the symmetric matrix
     square root of ``P0`` with ``scale="sqrtm"``), and ``P_n(t) = o P_sn(t) / Tr P_sn(t)``,
     so the eigenvalues lie in ``[0, o]`` and sum to ``o`` at every t — the trace-at-t
-    reading of ssac.md §3.6, the one consistent with "the sum approaches 15".
+    reading of docs/assumptions.md, ssac.md §3.6, the one consistent with "the sum approaches 15".
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
-"""Covariance histories read in other frames and as correlations and ratios (spec
-launcher.md §6.2 item 6, §6.3; ssac.md §8 item 7): :func:`block_in_frame`,
-:func:`sigma_in_frame`, :func:`correlation`, :func:`group_correlation`,
-:func:`covariance_ratio`, :func:`convergence_time`.
+"""Covariance histories read in other frames and as correlations and ratios (docs/assumptions.md,
+launcher.md §6.2 item 6, §6.3; docs/assumptions.md, ssac.md §8 item 7): :func:`block_in_frame`,
+:func:`sigma_in_frame`, :func:`correlation`, :func:`group_correlation`, :func:`covariance_ratio`,
+:func:`convergence_time`.
 """
 
 from __future__ import annotations
@@ -111,7 +111,8 @@ def sigma_in_frame(P, states, C=None) -> np.ndarray:
 
 
 def correlation(P, i=None, j=None) -> np.ndarray:
-    """Correlation coefficients ``rho_ij = P_ij / sqrt(P_ii P_jj)`` over time (launcher.md §6.3).
+    """Correlation coefficients ``rho_ij = P_ij / sqrt(P_ii P_jj)`` over time (docs/assumptions.md,
+    launcher.md §6.3).
 
     Parameters
     ----------
@@ -140,7 +141,8 @@ def correlation(P, i=None, j=None) -> np.ndarray:
 
 
 def group_correlation(P, states_a, states_b, C_a=None, C_b=None) -> np.ndarray:
-    """Per-axis correlation of two rotated 3-vectors of states (launcher.md §6.3 item 2).
+    """Per-axis correlation of two rotated 3-vectors of states (docs/assumptions.md, launcher.md
+    §6.3 item 2).
 
     With ``a = C_a x_a`` and ``b = C_b x_b`` (e.g. ``C_a = T_E^B`` for an ECEF attitude
     error and ``C_b = I`` for a body-axis one), returns
@@ -204,7 +206,7 @@ def convergence_time(t, sigma, fraction: float = 0.95) -> np.ndarray:
     """Time at which each state has made ``fraction`` of its total sigma reduction.
 
     ``t_c = min { t : sigma(s) <= sigma_0 - fraction (sigma_0 - sigma_end) for all s >= t }``
-    (ssac.md §8 item 7). States with no net reduction get NaN.
+    (docs/assumptions.md, ssac.md §8 item 7). States with no net reduction get NaN.
 
     Parameters
     ----------

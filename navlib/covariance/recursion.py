@@ -1,7 +1,7 @@
 """The Kalman covariance of a linear filter along a model (docs/assumptions.md, launcher.md §6.2,
-ssac.md §8 item 6): :func:`kalman_covariance` (Joseph form, pseudo-inverse of the innovation
-covariance for singular ``R``), :func:`kalman_covariances` for several initial covariances at once
-and the unaided :func:`ins_only_covariance`, all through
+ssac.md §8 item 6): :func:`kalman_covariance` (Joseph form, pseudo-inverse of
+the innovation covariance for singular ``R``), :func:`kalman_covariances` for several initial
+covariances at once and the unaided :func:`ins_only_covariance`, all through
 :func:`navlib.kalman.covariance_recursion`.
 """
 
@@ -298,7 +298,8 @@ def kalman_covariance(F, Q=None, H=None, R=None, P0=None, *, update_first: bool 
 
 def ins_only_covariance(F, Q=None, P0=None, *, t=None, n_epochs: int | None = None,
                         state_names=None) -> CovarianceResult:
-    """Unaided covariance propagation ``P_{k+1} = F_k P_k F_k' + Q_k`` (launcher.md §6.2.1).
+    """Unaided covariance propagation ``P_{k+1} = F_k P_k F_k' + Q_k`` (docs/assumptions.md,
+    launcher.md §6.2.1).
 
     ``P_prior == P_post`` at every epoch.
 

@@ -1,5 +1,5 @@
 """Navigation filters: a closed-loop INS/GNSS error-state EKF and a linear error-state
-Monte-Carlo simulator (spec launcher.md §6.2-6.4).
+Monte-Carlo simulator (docs/assumptions.md, launcher.md §6.2-6.4).
 
 Linear mode — :func:`simulate_linear` (:func:`prepare_linear` caches the covariance)
     Monte-Carlo runs of the Kalman filter of a linear error model on sampled truth errors,

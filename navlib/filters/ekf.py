@@ -1,4 +1,4 @@
-"""Closed-loop INS/GNSS error-state EKF in ECEF (spec launcher.md §6.2-6.4).
+"""Closed-loop INS/GNSS error-state EKF in ECEF (docs/assumptions.md, launcher.md §6.2-6.4).
 
 :func:`ekf` is described in its docstring (ECEF strapdown nominal state, error-state
 covariance from the model's Jacobians along the estimate, GNSS / attitude /
@@ -108,7 +108,7 @@ class EKFResult:
     parameters : dict
         Parameter estimates (K, 3) by group: ``bg``, ``ba`` (+ ``sg``, ``sa`` for ecef21,
         ``bp`` for launcher models with the GPS bias, in the model's convention: minus the
-        GPS position bias, spec launcher.md §3.1 ``C_lc``).
+        GPS position bias, docs/assumptions.md, launcher.md §3.1 ``C_lc``).
     kept : ndarray (K, n_kept)
         Estimates of the non-reset states (the reference-trajectory block), names in
         ``kept_names``.
@@ -159,7 +159,7 @@ class EKFResult:
         Columns ``t``, ``pos_x..z`` (estimate - truth, ECEF m), ``vel_x..z`` (m/s),
         ``att_x..z`` (ECEF rotation vector of ``C_true C_hat'``, rad: the ``psi`` of
         ``C_true = (I + S(psi)) C_hat``), ``roll, pitch, yaw`` (that vector in body axes,
-        ``T_E^B psi``, spec launcher.md §6.2 item 6).
+        ``T_E^B psi``, docs/assumptions.md, launcher.md §6.2 item 6).
         """
         k = epoch_index(np.asarray(trajectory.t, dtype=float), self.t, "result")
         C = trajectory.attitude[k].as_matrix()
@@ -235,8 +235,8 @@ def ekf(imu, gnss=None, *, initial, model: str | ErrorStateModel = "launcher",
       ``R`` is singular (as :func:`navlib.covariance.kalman_covariance`).
     * **Feedback**: position, velocity, attitude and the IMU/GNSS parameters are corrected
       with the error-state estimate and those states are zeroed; the reference-trajectory
-      states (the launcher's divergence from its reference, spec launcher.md §3.4) have no
-      nominal counterpart and keep their estimate. Corrections are fed back at the end of
+      states (the launcher's divergence from its reference, docs/assumptions.md, launcher.md §3.4)
+      have no nominal counterpart and keep their estimate. Corrections are fed back at the end of
       each propagation window (every measurement epoch when epochs are at least
       ``window_s`` apart, else every ``window_s``); within a window the error-state mean
       is carried by the linearised model, as in a linearised KF. The attitude reset

@@ -176,7 +176,17 @@ def discretize_kernel(A, G, dt, pattern, F, Q):
     """``F[j]``, ``Q[j]`` (K, n, n) of the steps ``A[j]``, ``G[j]``, ``dt[j]`` (K, ...):
     :func:`navlib.discretize.discretize_steps` with ``method="series"``, over the non-zero
     entries of ``A``, ``G`` and ``Qc`` (``pattern`` of :func:`_pattern`; module
-    docstring)."""
+    docstring).
+
+    Parameters
+    ----------
+    A, G, dt : numpy.ndarray
+        Dynamics, noise input and step per step.
+    pattern : tuple
+        Sparsity pattern of ``A``, ``G`` and ``Qc``.
+    F, Q : numpy.ndarray
+        Outputs, written in place.
+    """
     a_start, a_cols, live, g_start, g_rows, pairs, weights = pattern
     steps, n = A.shape[0], A.shape[1]
     flags = np.zeros(n, dtype=np.bool_)
@@ -296,7 +306,22 @@ def discretize_window(A, G, Qc, dt, method: str, out=None):
     for ``method="series"``, written into the first K steps of ``out`` ``(F, Q)`` when given
     (the EKF reuses one pair of buffers over its windows); ``"euler"`` (``I + A dt``,
     ``G Qc G' dt``: a few batched NumPy operations) is
-    :func:`navlib.discretize.discretize_steps`'s."""
+    :func:`navlib.discretize.discretize_steps`'s.
+
+    Parameters
+    ----------
+    A, G, Qc, dt : numpy.ndarray
+        Dynamics (K, n, n), noise input (K, n, q), noise PSD (q, q) and steps (K,), s.
+    method : {"series", "euler", "expm"}
+        Discretisation.
+    out : tuple of numpy.ndarray or None, optional
+        Buffers ``(F, Q)`` to write into.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(F, Q)``.
+    """
     if method != "series":
         return discretize_steps(A, G, Qc, dt, method=method)
     A, G = np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(G, dtype=float)

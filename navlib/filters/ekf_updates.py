@@ -1,5 +1,5 @@
 """Measurement updates of the closed-loop EKF between its feedback windows
-(:func:`navlib.filters.ekf.ekf`; spec launcher.md §6.3).
+(:func:`navlib.filters.ekf.ekf`; docs/assumptions.md, launcher.md §6.3).
 
 :class:`Epochs` holds what the updates need that does not depend on the data (the rows of
 each epoch's measurements in the results, the stacked ``H``, ``R`` of fixed designs);
@@ -59,7 +59,15 @@ class Epochs:
         """Innovations of the fixed-design measurements at the epochs of the window that
         starts at sample ``w0`` (its samples after ``w0``, and ``w0`` for the first
         window), (samples, m_all): row ``j`` for sample ``j`` of ``nominal``, in each
-        measurement's result rows (rows not measured left unset)."""
+        measurement's result rows (rows not measured left unset).
+
+        Parameters
+        ----------
+        w0 : int
+            First sample of the window.
+        nominal : Nominal
+            The nominal trajectory.
+        """
         z = np.empty((nominal.t.size, self.m_all))
         for meas, (samples, order) in self._fixed.items():
             lo = np.searchsorted(samples, w0 + 1 if w0 else 0)
@@ -94,7 +102,21 @@ class WindowUpdates:
         A run of fixed-design updates (when no measurement watches the posterior) is one
         call of :func:`~navlib.kalman.fixed_updates_kernel`; any other update is a run of
         one, evaluated at its sample; the propagation to the window's end is a run of
-        none."""
+        none.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            Error-state mean at ``w0``, (n,).
+        P : numpy.ndarray
+            Covariance at ``w0``, (n, n).
+        F, Q : numpy.ndarray
+            Transition and process noise matrices per sample step of the window.
+        w0 : int
+            First sample of the window.
+        nominal : Nominal
+            The nominal trajectory.
+        """
         x, P, F, Q = kernel_array(x), kernel_array(P), kernel_array(F), kernel_array(Q)
         z_fixed = self.epochs.innovations(w0, nominal)
         at = self.epochs.at
@@ -152,7 +174,23 @@ def update_records(rec, nominal, es, kept, keep_covariance, m_all):
     """The results of one window's updates, in the order of the EKF loop's results
     (:func:`navlib.filters.ekf.ekf`): corrected nominal, kept states, covariances (None
     when not kept), sigma, innovations in the model's rows (NaN where not measured), NIS
-    and its dof."""
+    and its dof.
+
+    Parameters
+    ----------
+    rec : list of tuple
+        The window's update runs (:meth:`WindowUpdates.window`).
+    nominal : Nominal
+        The nominal trajectory.
+    es : ErrorStateModel
+        The error-state model (its ``correct``).
+    kept : numpy.ndarray
+        Indices of the states kept in the results.
+    keep_covariance : bool
+        Whether to keep the covariances.
+    m_all : int
+        Number of measurement rows of the model.
+    """
     j_up, dx, P, innov, cols, nis, dof = zip(*rec, strict=True)
     j_up, dx, P = np.concatenate(j_up), np.concatenate(dx), np.concatenate(P)
     full = np.full((j_up.size, m_all), np.nan)

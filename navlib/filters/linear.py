@@ -1,4 +1,4 @@
-"""Linear error-state Monte-Carlo simulator (spec launcher.md §6.2-6.4).
+"""Linear error-state Monte-Carlo simulator (docs/assumptions.md, launcher.md §6.2-6.4).
 
 :func:`simulate_linear` (:func:`prepare_linear` caches the covariance).
 
@@ -165,7 +165,19 @@ class LinearSimulation:
         return out
 
     def to_frame(self, states: Sequence[str] | None = None, runs=None) -> pd.DataFrame:
-        """Tidy table ``t, run, state, truth, estimate, error, sigma``."""
+        """Tidy table ``t, run, state, truth, estimate, error, sigma``.
+
+        Parameters
+        ----------
+        states : sequence of str or None, optional
+            States kept; None: all.
+        runs : int, sequence of int or None, optional
+            Runs kept; None: all.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
         idx = self.state_index(states) if states is not None else np.arange(self.n)
         r = np.arange(self.runs) if runs is None else np.atleast_1d(np.asarray(runs, int))
         K, R, S = self.t.size, r.size, idx.size
@@ -352,7 +364,24 @@ def _outlier_inputs(steps: LinearSteps, outliers) -> tuple:
 
 def recorded_epochs(N: int, record_every) -> np.ndarray:
     """The epochs :func:`simulate_linear` records of ``N``: every ``record_every``-th and
-    the last."""
+    the last.
+
+    Parameters
+    ----------
+    N : int
+        Number of epochs.
+    record_every : int
+        Record stride.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    NavlibInputError
+        If ``record_every`` is below 1.
+    """
     record_every = int(record_every)
     if record_every < 1:
         raise NavlibInputError(f"record_every: expected >= 1, got {record_every}")

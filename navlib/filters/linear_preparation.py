@@ -1,5 +1,6 @@
 """Preparation of the linear error-state filter: a model at its steps and its Kalman
-covariance and gains, computed once (spec launcher.md §6.2; Beaudoin et al. 2018 eq. 1).
+covariance and gains, computed once (docs/assumptions.md, launcher.md §6.2; Beaudoin et al. 2018 eq.
+1).
 
 :func:`linear_steps` discretises a model (Euler as in the paper, or the zero-order-hold
 exponential); :func:`prepare_linear` runs the covariance recursion

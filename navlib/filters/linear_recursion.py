@@ -36,6 +36,27 @@ def run_recursion(prepared, x, x_hat, z_add, x_input, k0, rng, progress, slot, u
     call the BLAS numba links (SciPy's) where NumPy calls its own, so the numbers equal
     those of the plain loop to rounding (docs/assumptions.md "Compiled
     kernels").
+
+    Parameters
+    ----------
+    prepared : LinearFilter
+        The prepared filter (steps, gains, update epochs).
+    x, x_hat : numpy.ndarray
+        True error and estimate at step ``k0``, (runs, n).
+    z_add : numpy.ndarray
+        Deterministic term added to each measurement.
+    x_input : numpy.ndarray or None
+        Deterministic input added to the truth at each step.
+    k0 : int
+        First step.
+    rng : numpy.random.Generator or None
+        Noise source; None runs noise-free.
+    progress : callable or None
+        Called as ``progress(steps_done, N)`` after each block.
+    slot, upd_slot : numpy.ndarray
+        Recorded row of each step and of each update (-1: not recorded).
+    out : tuple of numpy.ndarray
+        Recorded truth, estimate, innovation and NIS, written in place.
     """
     steps = prepared.steps
     runs, m = x.shape[0], steps.H.shape[-2]
@@ -68,6 +89,20 @@ def noise_blocks(rng, N: int, shape_w, shape_v):
     thread while the caller runs the current one (``Generator.standard_normal`` releases
     the GIL while it fills; the draws of a 100-run batch cost about as much as its
     filter). No more is drawn than the blocks need.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator or None
+        Noise source.
+    N : int
+        Number of steps.
+    shape_w, shape_v : tuple of int
+        Shape of one step's process and measurement noise draw.
+
+    Yields
+    ------
+    tuple of numpy.ndarray or None
+        ``(xi, nu)`` of each block.
     """
     starts = range(0, N, CHUNK)
     if rng is None:
@@ -111,6 +146,22 @@ class Work:
 
     @classmethod
     def of(cls, runs: int, n: int, m: int) -> Work:
+        """Work arrays for one block.
+
+        Parameters
+        ----------
+        runs : int
+            Number of runs.
+        n : int
+            State size.
+        m : int
+            Measurement size.
+
+        Returns
+        -------
+        Work
+            Uninitialised arrays.
+        """
         states, measured = (CHUNK, runs, n), (CHUNK, runs, m)
         return cls(np.empty((CHUNK + 1, runs, n)), np.empty((CHUNK + 1, runs, n)),
                    np.empty(states), np.empty(states), np.empty(measured),
@@ -156,7 +207,21 @@ def _rows(index: np.ndarray):
 def truth_block(steps: LinearSteps, block: Block, work: Work, draws, x_input) -> None:
     """True errors ``x_{k+1} = x_k F_k' (+ xi_k L_k') (+ u_k)`` of a block, into
     ``work.truth`` (``work.truth[j0]`` holds ``x_{k0}``): the process noise of the block in
-    one batched product, the recursion in :func:`truth_kernel`."""
+    one batched product, the recursion in :func:`truth_kernel`.
+
+    Parameters
+    ----------
+    steps : LinearSteps
+        The model per step.
+    block : Block
+        The block.
+    work : Work
+        Work arrays (``work.truth`` written).
+    draws : tuple of numpy.ndarray or None
+        The block's noise draws (:func:`noise_blocks`).
+    x_input : numpy.ndarray or None
+        Deterministic input per step.
+    """
     moves = block.moves
     F = kernel_array(steps.F[moves])
     j0 = block.j0
@@ -189,7 +254,21 @@ def truth_kernel(x, F, noise, inputs, j0):
     kernels"): ``x[j0+i+1] = x[j0+i] F[i]' (+ noise[i]) (+ inputs[i])`` for each step ``i``
     of ``F`` (s, n, n); ``x`` (., R, n), ``noise`` (s, R, n) or no rows, ``inputs``
     (s, R, n) or (s, 1, n) (the same input for every run) or no rows. The NumPy code it
-    replaced is ``tests/linear_reference.py``."""
+    replaced is ``tests/linear_reference.py``.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        True errors, written in place.
+    F : numpy.ndarray
+        Transition matrices.
+    noise : numpy.ndarray
+        Process noise per step and run.
+    inputs : numpy.ndarray
+        Inputs per step.
+    j0 : int
+        Work index of the block's first step.
+    """
     runs, n = x.shape[1], x.shape[2]
     for i in range(F.shape[0]):
         j = j0 + i
@@ -210,7 +289,28 @@ def truth_kernel(x, F, noise, inputs, j0):
 def measure_block(prepared: LinearFilter, block: Block, work: Work, draws, z_add,
                    R_sqrt) -> np.ndarray:
     """Measurements ``z_k = x_k H_k' + z_add_k (+ nu_k R_k^(1/2)')`` at the block's
-    updates, into ``work.z`` (one row per update); returns the updates' work indices."""
+    updates, into ``work.z`` (one row per update); returns the updates' work indices.
+
+    Parameters
+    ----------
+    prepared : LinearFilter
+        The prepared filter.
+    block : Block
+        The block.
+    work : Work
+        Work arrays (``work.z`` written).
+    draws : tuple of numpy.ndarray or None
+        The block's noise draws.
+    z_add : numpy.ndarray
+        Deterministic term added to each measurement.
+    R_sqrt : numpy.ndarray
+        Square roots of the measurement covariances, (1, m, m) or (N, m, m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Work indices of the block's updates.
+    """
     steps = prepared.steps
     meas = np.flatnonzero(prepared.measured[block.k0:block.k1]) + block.j0
     if meas.size:
@@ -236,7 +336,19 @@ def compile_recursion_kernels() -> None:
 
 def filter_block(prepared: LinearFilter, block: Block, work: Work, meas) -> None:
     """The filter over a block (:func:`filter_kernel`; ``work.prior[j0]`` holds the prior
-    at ``k0``)."""
+    at ``k0``).
+
+    Parameters
+    ----------
+    prepared : LinearFilter
+        The prepared filter.
+    block : Block
+        The block.
+    work : Work
+        Work arrays.
+    meas : numpy.ndarray
+        Work indices of the block's updates (:func:`measure_block`).
+    """
     steps = prepared.steps
     update = np.full(block.j1 - block.j0, -1, dtype=np.int64)
     update[meas - block.j0] = np.arange(meas.size)
@@ -254,7 +366,25 @@ def filter_kernel(prior, post, innov, z, H, K, F, update, j0, last):
     ``update[i] = p >= 0``: ``innov[p] = z[p] - x^- H[i]'`` and
     ``x^+ = x^- + innov[p] K[i]'`` into ``post[j]`` (rows are runs); then, while
     ``j < last``, ``x^-_{j+1} = x F[i]'`` into ``prior[j + 1]``. The NumPy code it replaced
-    is ``tests/linear_reference.py``."""
+    is ``tests/linear_reference.py``.
+
+    Parameters
+    ----------
+    prior, post : numpy.ndarray
+        Prior and posterior estimates per work index, written in place.
+    innov : numpy.ndarray
+        Innovations per update, written in place.
+    z : numpy.ndarray
+        Measurements per update.
+    H, K, F : numpy.ndarray
+        Measurement matrices, gains and transition matrices per step.
+    update : numpy.ndarray
+        Update row of each step, -1 without update.
+    j0 : int
+        Work index of the block's first step.
+    last : int
+        Work index after which no prior is propagated.
+    """
     runs, n = prior.shape[1], prior.shape[2]
     step = np.empty((runs, n))
     for i in range(update.size):
@@ -278,7 +408,23 @@ def filter_kernel(prior, post, innov, z, H, K, F, update, j0, last):
 def record_block(prepared: LinearFilter, block: Block, work: Work, meas, slot, upd_slot,
                   out) -> None:
     """NIS ``(z - x^- H') S^+ (z - x^- H')'`` at the block's updates and the recorded
-    truth, estimate and innovation of the block into ``out``."""
+    truth, estimate and innovation of the block into ``out``.
+
+    Parameters
+    ----------
+    prepared : LinearFilter
+        The prepared filter.
+    block : Block
+        The block.
+    work : Work
+        Work arrays.
+    meas : numpy.ndarray
+        Work indices of the block's updates.
+    slot, upd_slot : numpy.ndarray
+        Recorded row of each step and of each update (-1: not recorded).
+    out : tuple of numpy.ndarray
+        Recorded truth, estimate, innovation and NIS, written in place.
+    """
     truth_rec, est_rec, innov_rec, nis = out
     c0 = block.c0
     if meas.size:

@@ -1,5 +1,5 @@
-"""Measurements of the EKF (spec launcher.md §6.3): GNSS position and velocity, the attitude
-sensor and the reference-trajectory pseudo-measurement, each giving its innovation, ``H``
+"""Measurements of the EKF (docs/assumptions.md, launcher.md §6.3): GNSS position and velocity, the
+attitude sensor and the reference-trajectory pseudo-measurement, each giving its innovation, ``H``
 and ``R`` for the current nominal state; and the input parsing (IMU samples, epochs on the
 IMU clock, attitude series).
 
@@ -76,7 +76,17 @@ class Measurement(ABC):
     @abstractmethod
     def evaluate(self, i: int, nominal, j: int):
         """Innovation ``z`` (m,), ``H`` (m, n), ``R`` (m, m) of epoch ``i``, at sample ``j`` of
-        ``nominal`` (:class:`navlib.models.base.Nominal`)."""
+        ``nominal`` (:class:`navlib.models.base.Nominal`).
+
+        Parameters
+        ----------
+        i : int
+            Epoch index among this measurement's epochs.
+        nominal : Nominal
+            The nominal trajectory.
+        j : int
+            Its sample at the epoch.
+        """
 
 
 class FixedDesign(Measurement):
@@ -86,9 +96,30 @@ class FixedDesign(Measurement):
     @abstractmethod
     def innovations(self, i, nominal, j) -> np.ndarray:
         """Innovations ``z`` (K, m) of epochs ``i`` (K,) at samples ``j`` (K,) of ``nominal``
-        (the same numbers as epoch by epoch)."""
+        (the same numbers as epoch by epoch).
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
 
     def evaluate(self, i, nominal, j):
+        """Innovation, ``H`` and ``R`` of one epoch (:meth:`innovations` of that epoch alone).
+
+        Parameters
+        ----------
+        i : int
+            Epoch index.
+        nominal : Nominal
+            The nominal trajectory.
+        j : int
+            Its sample at the epoch.
+        """
         return self.innovations(np.array([i]), nominal, np.array([j]))[0], self.H, self.R
 
 
@@ -104,6 +135,17 @@ class GnssPosition(FixedDesign):
             self.H[:, groups["bp"]] = np.eye(3)
 
     def innovations(self, i, nominal, j):
+        """GNSS position innovations ``nav_sign (r_gnss - r_nominal) (- b_p)`` (K, 3), m.
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
         z = self.nav_sign * (self.values[i] - nominal.position[j])
         if "bp" in nominal.parameters:
             z = z - nominal.parameters["bp"][j]
@@ -119,6 +161,17 @@ class GnssVelocity(FixedDesign):
         self.H[:, groups["velocity"]] = np.eye(3)
 
     def innovations(self, i, nominal, j):
+        """GNSS velocity innovations ``nav_sign (v_gnss - v_nominal)`` (K, 3), m/s.
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
         return self.nav_sign * (self.values[i] - nominal.velocity[j])
 
 
@@ -142,6 +195,17 @@ class AttitudeSensor(FixedDesign):
         self.H[:, groups["attitude"]] = np.eye(3)
 
     def innovations(self, i, nominal, j):
+        """Attitude-sensor innovations ``log(C_meas C_nominal')`` (K, 3), rad.
+
+        Parameters
+        ----------
+        i : numpy.ndarray
+            Epoch indices, (K,).
+        nominal : Nominal
+            The nominal trajectory.
+        j : numpy.ndarray
+            Its samples at those epochs, (K,).
+        """
         return log_so3(self.values[i] @ np.swapaxes(nominal.C_b_e[j], -1, -2))
 
 
@@ -168,6 +232,18 @@ class ReferenceAttitude(Measurement):
         self.H[:, groups["reference"]] = np.eye(3)
 
     def evaluate(self, i, nominal, j):
+        """Innovation ``log(C_hat' C_ref)`` (rad), ``H`` with ``C_hat'`` on the attitude columns,
+        and ``R`` of epoch ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Epoch index.
+        nominal : Nominal
+            The nominal trajectory.
+        j : int
+            Its sample at the epoch.
+        """
         C_hat = nominal.C_b_e[j]
         if callable(self.values):
             C_ref = np.asarray(self.values(int(self.index[i]), nominal.t[j], self._posterior),
@@ -189,6 +265,30 @@ def ekf_measurements(model, t, gnss=None, attitude=None, reference=None) -> list
 
     GNSS velocity is used when the model has its rows and ``gnss`` has ``vx, vy, vz``; the
     attitude sensor and the reference trajectory are required when the model uses them.
+
+    Parameters
+    ----------
+    model : Model
+        The error-state model (its ``measurements`` say which are used).
+    t : numpy.ndarray
+        IMU time stamps, s.
+    gnss : pandas.DataFrame or None, optional
+        GNSS fixes with ``t, x, y, z`` (ECEF, m) and optionally ``vx, vy, vz`` (m/s).
+    attitude : optional
+        Attitude-sensor data, when the model uses it.
+    reference : optional
+        Reference trajectory, when the model uses it.
+
+    Returns
+    -------
+    list
+        The measurements.
+
+    Raises
+    ------
+    NavlibInputError
+        If the data are malformed, a measurement epoch is not on an IMU sample, or a
+        measurement the model uses is missing.
     """
     kinds = model.measurements
     out = []
@@ -238,7 +338,27 @@ def imu_arrays(imu):
 
 
 def epoch_index(t_imu, t_meas, name: str) -> np.ndarray:
-    """Nearest IMU sample of each measurement time (within half a sample)."""
+    """Nearest IMU sample of each measurement time (within half a sample).
+
+    Parameters
+    ----------
+    t_imu : numpy.ndarray
+        IMU time stamps, s.
+    t_meas : numpy.ndarray
+        Measurement time stamps, s.
+    name : str
+        Name of the measurement, for the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        Index of the IMU sample of each measurement.
+
+    Raises
+    ------
+    NavlibInputError
+        If a measurement time is not within half a sample of an IMU sample.
+    """
     t_meas = finite_array(t_meas, f"{name}.t", ndim=1)
     k = np.clip(np.searchsorted(t_imu, t_meas), 1, t_imu.size - 1)
     k = np.where(np.abs(t_imu[k - 1] - t_meas) <= np.abs(t_imu[k] - t_meas), k - 1, k)

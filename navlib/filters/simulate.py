@@ -1,6 +1,6 @@
 """Simulated EKF scenarios: sensors along a trajectory, outliers injected, one
-:func:`~navlib.filters.ekf.ekf` run (spec launcher.md §6.2-6.4), as the outlier study's
-closed-loop cross-checks use it.
+:func:`~navlib.filters.ekf.ekf` run (docs/assumptions.md, launcher.md §6.2-6.4), as the outlier
+study's closed-loop cross-checks use it.
 
 :func:`simulate_ekf` builds the IMU, GNSS, attitude sensor and reference trajectory of
 :mod:`navlib.sensors`, injects the outliers of :mod:`navlib.outliers` and perturbs the
@@ -84,8 +84,9 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
         position bias is simulated only when the filter estimates it (launcher ``P``), so
         truth and filter model agree; for ``ecef21`` the model's noise densities default to
         the same preset.
-    model, solution, biases, bias_model, model_options, window_s, keep_covariance,
-    gnss_velocity_sigma
+    model, solution, biases, bias_model, model_options
+        As in :func:`ekf`.
+    window_s, keep_covariance, gnss_velocity_sigma
         As in :func:`ekf`.
     gnss_rate_hz : float, optional
         GNSS fix rate (default the preset's; the paper's launcher uses every sample).

@@ -1,7 +1,7 @@
 """Flight-data import and validation: IMU/GNSS CSV files, PX4 ULog, ArduPilot DataFlash logs
 and Altus Metrum AltOS CSV exports.
 
-Public contract (spec ``api.md``, "Flight data")::
+Public contract (docs/assess.md)::
 
     imu = navlib.io.read_imu_csv(path, **units)    # t, f_x, f_y, f_z, w_x, w_y, w_z (SI)
     gnss = navlib.io.read_gnss_csv(path, **units)  # t, x, y, z (ECEF m) [+ vx, vy, vz, sigma]

@@ -185,7 +185,20 @@ def _check_range(x, bounds, label, unit, src, hints) -> None:
 
 def baro_height(baro: pd.DataFrame | None, t) -> np.ndarray | None:
     """The barometric altitude at times ``t`` (linear interpolation, held at the ends), or
-    None without a barometer frame."""
+    None without a barometer frame.
+
+    Parameters
+    ----------
+    baro : pandas.DataFrame or None
+        Barometer record (``t``, s; ``alt_m``, m).
+    t : array_like
+        Times, s.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Altitude, m.
+    """
     if baro is None or len(baro) < 2:
         return None
     return np.interp(np.asarray(t, dtype=float), baro["t"].to_numpy(dtype=float),

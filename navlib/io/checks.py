@@ -64,7 +64,22 @@ class TimeOverlap:
 
 
 def check_times(t: np.ndarray, source: Source, column: str) -> None:
-    """At least two samples; strictly increasing; duplicates and backward steps named."""
+    """At least two samples; strictly increasing; duplicates and backward steps named.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time stamps, s, (N,).
+    source : Source
+        Where the rows come from (names the offending line in the message).
+    column : str
+        Name of the time column, for the message.
+
+    Raises
+    ------
+    NavlibInputError
+        With fewer than two samples, or at the first duplicate or backward time stamp.
+    """
     if t.size < 2:
         raise source.error(column, None, f"need at least 2 samples, got {t.size}")
     dt = np.diff(t)
@@ -95,7 +110,26 @@ def _unit_hint(value: float, low: float, high: float, keyword: str, table) -> st
 
 def check_sample_interval(t: np.ndarray, source: Source, column: str, kind: str,
                           time_factor: float) -> None:
-    """The median interval must be plausible for an IMU or a GNSS receiver (unit mix-ups)."""
+    """The median interval must be plausible for an IMU or a GNSS receiver (unit mix-ups).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time stamps, s, (N,).
+    source : Source
+        Where the rows come from.
+    column : str
+        Name of the time column, for the message.
+    kind : {"imu", "gnss"}
+        Which plausible range applies.
+    time_factor : float
+        Declared time unit in s, used to suggest the ``time_unit`` that fits.
+
+    Raises
+    ------
+    NavlibInputError
+        If the median interval is outside the plausible range.
+    """
     low, high = IMU_DT_RANGE_S if kind == "imu" else GNSS_DT_RANGE_S
     dt = float(np.median(np.diff(t)))
     if low <= dt <= high:
@@ -122,6 +156,22 @@ def check_imu_magnitudes(f_b: np.ndarray, source: Source, f_labels: str,
 
     The median over the record (not the maximum) keeps short shocks and burns from
     triggering; a record that legitimately violates these passes with ``check_magnitudes=False``.
+
+    Parameters
+    ----------
+    f_b : numpy.ndarray
+        Specific force, m/s^2, (N, 3).
+    source : Source
+        Where the rows come from.
+    f_labels : str
+        Names of the specific-force columns, for the message.
+    accel_declared_g : bool
+        Whether the reader was told the accelerometer is in g.
+
+    Raises
+    ------
+    NavlibInputError
+        On any of the three unit mix-ups above.
     """
     f_norm = np.linalg.norm(f_b, axis=1)
     med = float(np.median(f_norm))
@@ -161,6 +211,28 @@ def flag_imu_outliers(t: np.ndarray, f_b: np.ndarray, w_ib_b: np.ndarray, source
     keep : ndarray of bool (N,)
         Samples to keep.
     outliers : list of dict
+
+    Parameters
+    ----------
+    t, f_b, w_ib_b : numpy.ndarray
+        Time stamps, s, (N,); specific force, m/s^2, and angular rate, rad/s, (N, 3).
+    source : Source
+        Where the rows come from.
+    f_labels, w_labels : str
+        Names of the specific-force and angular-rate columns, for the messages.
+    max_rate_rad_s : float, optional
+        Largest physical angular-rate norm, rad/s.
+    max_accel_m_s2 : float, optional
+        Largest physical specific-force norm, m/s^2.
+    max_fraction : float, optional
+        Largest share of flagged samples that is excluded rather than refused.
+    rate_hint : str, optional
+        Reader keyword named in the refusal message.
+
+    Raises
+    ------
+    NavlibInputError
+        If more than ``max_fraction`` of the samples are non-physical.
     """
     w_norm = np.linalg.norm(w_ib_b, axis=1)
     f_norm = np.linalg.norm(f_b, axis=1)
@@ -210,6 +282,26 @@ def validated_imu(t, f_b, w_ib_b, source: Source, time_label: str, f_labels: str
     the non-physical samples (:func:`flag_imu_outliers` with ``limits``: ``max_rate_rad_s``,
     ``max_accel_m_s2``, ``max_fraction``), which are excluded and listed in
     ``attrs["outliers"]``. Returns the frame ``t, f_x..w_z`` and the source of its rows.
+
+    Parameters
+    ----------
+    t, f_b, w_ib_b : numpy.ndarray
+        Time stamps, s, (N,); specific force, m/s^2, and angular rate, rad/s, (N, 3).
+    source : Source
+        Where the rows come from.
+    time_label, f_labels, w_labels : str
+        Names of the time, specific-force and angular-rate columns, for the messages.
+    check_magnitudes : bool
+        Whether to run the unit and outlier checks.
+    limits : dict
+        Outlier limits from :func:`reader_limits`.
+    rate_hint : str
+        Reader keyword named when the record is refused.
+
+    Raises
+    ------
+    NavlibInputError
+        From any of the checks.
     """
     check_times(t, source, time_label)
     check_sample_interval(t, source, time_label, "imu", 1.0)
@@ -236,6 +328,29 @@ def reader_limits(on_gap: str, imu_max_gap_s, gnss_max_gap_s, max_rate_rad_s,
     and ``max_accel_m_s2`` positive (``max_rate_rad_s`` may stay None for a reader that
     derives it from the sensor's range); ``max_outlier_fraction`` in [0, 1]. Returns
     ``{"max_rate_rad_s", "max_accel_m_s2", "max_fraction"}``.
+
+    Parameters
+    ----------
+    on_gap : str
+        Gap policy, one of :data:`ON_GAP`.
+    imu_max_gap_s, gnss_max_gap_s : float or None
+        Gap thresholds, s (None: automatic).
+    max_rate_rad_s : float or None
+        Largest physical angular-rate norm, rad/s.
+    max_accel_m_s2 : float
+        Largest physical specific-force norm, m/s^2.
+    max_outlier_fraction : float
+        Largest share of non-physical samples excluded rather than refused.
+
+    Returns
+    -------
+    dict
+        The outlier limits.
+
+    Raises
+    ------
+    NavlibInputError
+        If any keyword is out of its range.
     """
     if on_gap not in ON_GAP:
         raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")
@@ -256,6 +371,22 @@ def check_positions(r_e: np.ndarray, source: Source, labels: str,
     """Every ECEF position must lie between 6300 km and 7500 km from the Earth's centre.
 
     ``length_factor`` (the declared length unit in m) enables a unit hint in the message.
+
+    Parameters
+    ----------
+    r_e : numpy.ndarray
+        ECEF positions, m, (N, 3).
+    source : Source
+        Where the rows come from.
+    labels : str
+        Names of the position columns, for the message.
+    length_factor : float or None, optional
+        Declared length unit in m.
+
+    Raises
+    ------
+    NavlibInputError
+        At the first position out of range.
     """
     r = np.linalg.norm(r_e, axis=1)
     bad = np.flatnonzero((r < R_MIN_M) | (r > R_MAX_M))
@@ -273,7 +404,22 @@ def check_positions(r_e: np.ndarray, source: Source, labels: str,
 
 
 def check_velocities(v_e: np.ndarray, source: Source, labels: str) -> None:
-    """ECEF speeds must stay below 12 km/s."""
+    """ECEF speeds must stay below 12 km/s.
+
+    Parameters
+    ----------
+    v_e : numpy.ndarray
+        ECEF velocities, m/s, (N, 3).
+    source : Source
+        Where the rows come from.
+    labels : str
+        Names of the velocity columns, for the message.
+
+    Raises
+    ------
+    NavlibInputError
+        At the first speed above the limit.
+    """
     v = np.linalg.norm(v_e, axis=1)
     bad = np.flatnonzero(v > V_MAX_M_S)
     if bad.size:
@@ -283,7 +429,22 @@ def check_velocities(v_e: np.ndarray, source: Source, labels: str) -> None:
 
 
 def check_positive(x: np.ndarray, source: Source, label: str) -> None:
-    """Standard deviations must be strictly positive."""
+    """Standard deviations must be strictly positive.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Standard deviations, (N,).
+    source : Source
+        Where the rows come from.
+    label : str
+        Name of the column, for the message.
+
+    Raises
+    ------
+    NavlibInputError
+        At the first value that is not strictly positive.
+    """
     bad = np.flatnonzero(x <= 0.0)
     if bad.size:
         k = int(bad[0])
@@ -291,7 +452,25 @@ def check_positive(x: np.ndarray, source: Source, label: str) -> None:
 
 
 def gap_threshold(t: np.ndarray, max_gap_s: float | None) -> float:
-    """``max_gap_s``, or ``AUTO_GAP_FACTOR`` times the median interval when None."""
+    """``max_gap_s``, or ``AUTO_GAP_FACTOR`` times the median interval when None.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time stamps, s, (N,).
+    max_gap_s : float or None
+        Threshold, s; None for the automatic one.
+
+    Returns
+    -------
+    float
+        The threshold, s.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``max_gap_s`` is not a positive number or None.
+    """
     if max_gap_s is None:
         return AUTO_GAP_FACTOR * float(np.median(np.diff(t)))
     if not np.isfinite(max_gap_s) or max_gap_s <= 0:
@@ -308,6 +487,29 @@ def apply_gap_policy(frame: pd.DataFrame, source: Source, column: str,
     ``on_gap="warn"`` (default) also emits a :class:`FlightDataWarning`; ``"raise"`` raises
     :class:`NavlibInputError`; ``"split"`` adds an integer column ``segment`` (0, 1, ...)
     that increments after each gap.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Record with a time column ``t``, s.
+    source : Source
+        Where the rows come from.
+    column : str
+        Name of the time column, for the messages.
+    max_gap_s : float or None
+        Gap threshold, s (None: automatic, :func:`gap_threshold`).
+    on_gap : {"warn", "raise", "split"}
+        What to do on a gap.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The frame, with ``attrs["gaps"]`` (and ``segment`` with ``"split"``).
+
+    Raises
+    ------
+    NavlibInputError
+        If ``on_gap`` is unknown, or ``"raise"`` and a gap is found.
     """
     if on_gap not in ON_GAP:
         raise NavlibInputError(f"on_gap: expected one of {list(ON_GAP)}, got {on_gap!r}")

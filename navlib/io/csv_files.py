@@ -452,6 +452,16 @@ def combine_sigma(sigma_h, sigma_v):
     horizontal axis (PX4 ``eph``, u-blox ``hAcc`` as EKF2 uses them), sigma_v the vertical
     (``epv``, ``vAcc``); the isotropic covariance ``sigma^2 I`` has the same trace as
     ``diag(sigma_h^2, sigma_h^2, sigma_v^2)``.
+
+    Parameters
+    ----------
+    sigma_h, sigma_v : array_like
+        Horizontal (per axis) and vertical standard deviations, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        Per-axis sigma, m.
     """
     sigma_h = np.asarray(sigma_h, dtype=float)
     sigma_v = np.asarray(sigma_v, dtype=float)
@@ -495,6 +505,22 @@ def write_imu_csv(imu: pd.DataFrame, path, *, time_unit: str = "s", accel_unit: 
     The header carries the units in brackets (``t [s], f_x [m/s^2], ..., w_z [rad/s]``),
     so reading needs no unit keywords. ``float_format`` None writes shortest round-trip
     decimals (lossless); e.g. ``"%.6g"`` makes smaller files. Returns the path written.
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record (``t``, s; ``f_x..f_z``, m/s^2; ``w_x..w_z``, rad/s).
+    path : path-like
+        Output file.
+    time_unit, accel_unit, gyro_unit : str, optional
+        Units written.
+    float_format : str or None, optional
+        Format of the numbers; None: shortest round-trip.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
     vals = _frame_values(imu, "imu", IMU_KEYS)
     f_t = _units.factor("time", time_unit, "time_unit")
@@ -514,6 +540,26 @@ def write_gnss_csv(gnss: pd.DataFrame, path, *, position: str = "ecef", velocity
     lon_deg, alt [m]`` (ellipsoidal height). Velocity columns, when the frame has them, go
     out as ECEF ``vx, vy, vz`` or, with ``velocity="ned"``, as ``vn, ve, vd`` (m/s);
     ``sigma [m]`` when present. Returns the path written.
+
+    Parameters
+    ----------
+    gnss : pandas.DataFrame
+        GNSS record (``t``, s; ``x, y, z``, ECEF, m; optional velocity and sigmas).
+    path : path-like
+        Output file.
+    position : {"ecef", "geodetic"}, optional
+        Position columns written.
+    velocity : {"ecef", "ned"}, optional
+        Velocity columns written.
+    time_unit : str, optional
+        Time unit written.
+    float_format : str or None, optional
+        Format of the numbers; None: shortest round-trip.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
     if position not in ("ecef", "geodetic"):
         raise NavlibInputError(f"position: expected 'ecef' or 'geodetic', got {position!r}")

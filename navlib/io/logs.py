@@ -1,6 +1,6 @@
 """A ``LOG`` argument of ``python -m navlib assess`` / ``plan --flight``: its kind and reader.
 
-A ``LOG`` is one of (spec api.md "Scale"):
+A ``LOG`` is one of (docs/sweeps.md):
 
 * a PX4 ``.ulg`` file or an ArduPilot DataFlash ``.bin`` file (by suffix);
 * one CSV file recognised by its header, whatever its name: an Altus Metrum AltOS export,

@@ -100,7 +100,13 @@ def _batched(P_prior, H, R, definite):
 def kernel_array(a, dtype=float) -> np.ndarray:
     """``a`` as a C-contiguous, writable array of ``dtype``: the one array type the kernels
     are compiled for (a read-only or strided input would compile, and cache, another
-    specialisation of each kernel it reaches). Copies only when ``a`` is not one already."""
+    specialisation of each kernel it reaches). Copies only when ``a`` is not one already.
+
+    Parameters
+    ----------
+    a : array_like
+    dtype : numpy.dtype, optional
+    """
     a = np.ascontiguousarray(a, dtype=dtype)
     return a if a.flags.writeable else a.copy()
 
@@ -218,7 +224,20 @@ def update_kernel(x, P, z, H, R, definite, pinv_rtol, P_post, K, S_pinv):
     :func:`_joseph_kernel` into ``P_post``, ``K``, ``S_pinv``, the corrected mean
     ``x + K innovation`` and the NIS ``innovation' S^+ innovation``; returns
     ``(x_post, innovation, nis, dof)``. Inlined into :func:`fixed_updates_kernel`, the
-    EKF's one entry point (compiled there once, not a second time on its own)."""
+    EKF's one entry point (compiled there once, not a second time on its own).
+
+    Parameters
+    ----------
+    x, P, z, H, R : numpy.ndarray
+        Prior mean (n,) and covariance (n, n), measurement (m,), its matrix (m, n) and noise
+        covariance (m, m).
+    definite : bool
+        Whether ``R`` is positive definite (else the pseudo-inverse update).
+    pinv_rtol : float
+        Relative tolerance of the pseudo-inverse of ``S``.
+    P_post, K, S_pinv : numpy.ndarray
+        Outputs (n, n), (n, m), (m, m), written in place.
+    """
     innov = z - np.dot(H, x)
     dof = _joseph_kernel(P, H, R, definite, pinv_rtol, P_post, K, S_pinv)
     return x + np.dot(K, innov), innov, np.dot(np.dot(innov, S_pinv), innov), dof
@@ -270,7 +289,13 @@ def joseph_update(P_prior, H, R, *, pinv_rtol: float = PINV_RTOL, definite=None)
 @numba.njit(cache=True)
 def predict_kernel(P, F, Q, out):
     """Covariance prediction ``out = sym(F P F' + Q)`` of one matrix (compiled; ``out``
-    may be ``P``, not ``Q``)."""
+    may be ``P``, not ``Q``).
+
+    Parameters
+    ----------
+    P, F, Q, out : numpy.ndarray
+        Covariance, transition, process noise and output, each (n, n).
+    """
     _sym_sum(np.dot(np.dot(F, P), F.T), Q, out)
 
 
@@ -286,7 +311,21 @@ def riccati_kernel(P, F, Q, H, R, definite, update, pinv_rtol, a, P_prior, slot,
     gains to ``K[i], S_pinv[i], dof[i]`` (when ``K`` has rows). Returns the last posterior.
 
     The recursion of :func:`covariance_recursion` (docs/assumptions.md, launcher.md §6.2), compiled
-    (docs/assumptions.md "Compiled kernels")."""
+    (docs/assumptions.md "Compiled kernels").
+
+    Parameters
+    ----------
+    P, F, Q, H, R : numpy.ndarray
+        Starting covariance (n, n), the model per step (``F``, ``Q``) and per epoch.
+    definite, update : numpy.ndarray
+        Per epoch: ``R`` positive definite; an update.
+    pinv_rtol : float
+        Relative tolerance of the pseudo-inverse of ``S``.
+    a : int
+        First epoch.
+    P_prior, slot, P_post, K, S_pinv, dof : numpy.ndarray
+        Outputs written in place (``slot``: row of ``P_post`` per epoch, -1 not kept).
+    """
     n = P.shape[0]
     m = H.shape[1]
     cur, nxt = P.copy(), np.empty((n, n))
@@ -323,7 +362,17 @@ def propagate_kernel(x, P, F, Q, kept, j0, j1):
     estimate of the reset states, so their rows take the ``kept`` columns only.
     Returns new arrays (the inputs are not written). A kernel of its own called by
     :func:`fixed_updates_kernel` (inlined twice there, its loops doubled the first
-    compile)."""
+    compile).
+
+    Parameters
+    ----------
+    x, P, F, Q : numpy.ndarray
+        Mean (n,), covariance (n, n), transition and noise per sample step.
+    kept : numpy.ndarray
+        The kept (RT) states.
+    j0, j1 : int
+        First and last sample.
+    """
     n = P.shape[0]
     x, P = x.copy(), P.copy()
     spare, FP = np.empty_like(P), np.empty_like(P)
@@ -397,6 +446,23 @@ def covariance_recursion(F, Q, H, R, P0, measured, pinv_rtol: float, *, priors: 
     ``S_pinv`` and dof at epochs without update), else None. These are the gains
     :func:`kalman_gains` computes from the priors, to the bit (the
     same compiled kernel; docs/assumptions.md "Compiled kernels").
+
+    Parameters
+    ----------
+    F, Q, H, R : numpy.ndarray
+        The shared model (``Q`` may be a :class:`FactoredNoise`).
+    P0 : numpy.ndarray
+        Initial covariances, (B, n, n).
+    measured : numpy.ndarray
+        Whether each epoch has an update, (N,) bool.
+    pinv_rtol : float
+        Relative tolerance of the pseudo-inverse of a singular ``S``.
+    priors, gains : bool, optional
+        Whether to return the priors; the gains.
+    block : int, optional
+        Steps read at a time.
+    keep : sequence of int or None, optional
+        Epochs whose posteriors are kept; None keeps all.
     """
     count, (batch, n) = measured.size, P0.shape[:2]
     m = 0 if H is None else H.shape[-2]
@@ -443,7 +509,25 @@ def fixed_updates_kernel(x, P, F, Q, kept, j0, samples, z, H, R, definite, pinv_
     the propagation alone). The same compiled steps as one call per update, without
     Python between them (docs/assumptions.md "Compiled kernels"); the EKF's one compiled
     entry point (its update is inlined: compiled once, here).
-    Returns ``(x, P)`` at ``j_end``."""
+    Returns ``(x, P)`` at ``j_end``.
+
+    Parameters
+    ----------
+    x, P, F, Q : numpy.ndarray
+        Mean and covariance at ``j0``, transition and noise per sample step.
+    kept : numpy.ndarray
+        The kept (RT) states.
+    j0, j_end : int
+        First and last sample.
+    samples, z, H, R : numpy.ndarray
+        Sample and measurement of each update, the one design's ``H`` and ``R``.
+    definite : bool
+        Whether ``R`` is positive definite.
+    pinv_rtol : float
+        Relative tolerance of the pseudo-inverse of ``S``.
+    xs, Ps, innovations, nis, dofs : numpy.ndarray
+        Outputs per update, written in place.
+    """
     n, m = P.shape[0], H.shape[0]
     K, S_pinv = np.empty((n, m)), np.empty((m, m))
     for u in range(samples.size):

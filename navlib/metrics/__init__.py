@@ -1,6 +1,6 @@
 """Excitability and sensability of navigation states (España, Carrizo & Giribet 2019).
 
-Both metrics take plain arrays in physical units (docs/assumptions.md, api.md "Metrics"), so any
+Both metrics take plain arrays in physical units (docs/library.md), so any
 model can feed them, and both work in the normalised coordinates of the corrected Eq. 11
 (docs/assumptions.md A10)::
 

@@ -1,7 +1,7 @@
 """Checks and normalisation shared by the excitability and sensability metrics.
 
-Shapes follow docs/assumptions.md, api.md "Metrics"; the normalisation is the corrected Eq. 11 (spec
-excitability.md A10): ``D0 = diag(diag(P0))``, ``H~ = R0^-1/2 H D0^1/2``.
+Shapes follow docs/library.md; the normalisation is the corrected Eq. 11 (docs/assumptions.md A10):
+``D0 = diag(diag(P0))``, ``H~ = R0^-1/2 H D0^1/2``.
 """
 
 from __future__ import annotations

@@ -1,11 +1,10 @@
 """Sensability of navigation states (España, Carrizo & Giribet 2019, Eqs. 10, 12-16, Defs. 1-2).
 
 :func:`sensability` runs the Kalman information recursion, eigen-decomposes the normalised
-information ``I~_k = D0^1/2 I_k D0^1/2`` at every epoch (corrected Eq. 11, spec
-excitability.md A10), takes ``r^i_k`` (Eq. 15), ``nr_k`` from ``nu`` and ``s^j_k`` = norm of
-the projection of ``e_j`` on the practically sensible subspace. :func:`nu_for` /
-:func:`nu_range` give admissible ``nu`` (docs/assumptions.md A11); :func:`physical_bands` the
-k-sigma bands of Figs. 3-5.
+information ``I~_k = D0^1/2 I_k D0^1/2`` at every epoch (corrected Eq. 11, docs/assumptions.md A10),
+takes ``r^i_k`` (Eq. 15), ``nr_k`` from ``nu`` and ``s^j_k`` = norm of the projection of ``e_j`` on
+the practically sensible subspace. :func:`nu_for` / :func:`nu_range` give admissible ``nu``
+(docs/assumptions.md A11); :func:`physical_bands` the k-sigma bands of Figs. 3-5.
 """
 
 from __future__ import annotations

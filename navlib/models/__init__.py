@@ -1,4 +1,4 @@
-"""Linear error models (spec api.md "Models").
+"""Linear error models (docs/library.md).
 
 ``LinearModel`` (continuous, with ``subset`` and ``discretize``) and ``DiscreteModel``
 (``t, F, Q, H, R`` at epochs), and their builders:

@@ -57,7 +57,26 @@ def baro_sigma(height_change_m, sigma_m: float = BARO_SIGMA_M,
                scale: float = BARO_SCALE, speed_m_s=0.0,
                pressure_coefficient: float = BARO_PRESSURE_COEFFICIENT) -> np.ndarray:
     """``sqrt(sigma_m^2 + (scale dh)^2 + (C_P v^2 / (2 g0))^2)``: the sigma of a barometric
-    altitude ``dh`` metres above the pad, read at airspeed ``v`` (B2)."""
+    altitude ``dh`` metres above the pad, read at airspeed ``v`` (B2).
+
+    Parameters
+    ----------
+    height_change_m : array_like
+        Height above the pad, m.
+    sigma_m : float, optional
+        Sigma at the pad, m.
+    scale : float, optional
+        Scale error, fraction of the height.
+    speed_m_s : array_like, optional
+        Airspeed, m/s.
+    pressure_coefficient : float, optional
+        Pressure coefficient ``C_P`` of the static port.
+
+    Returns
+    -------
+    numpy.ndarray
+        Sigma, m.
+    """
     dh = np.asarray(height_change_m, dtype=float)
     v = np.asarray(speed_m_s, dtype=float)
     dynamic = pressure_coefficient * v**2 / (2.0 * units.G0)
@@ -66,7 +85,23 @@ def baro_sigma(height_change_m, sigma_m: float = BARO_SIGMA_M,
 
 def pad_epochs(t_epochs, t, velocity, speed_m_s: float = PAD_SPEED_M_S) -> np.ndarray:
     """Epochs (bool) before the first time the reference speed exceeds ``speed_m_s`` (B3);
-    none when the reference starts faster (a log starting after lift-off)."""
+    none when the reference starts faster (a log starting after lift-off).
+
+    Parameters
+    ----------
+    t_epochs : array_like
+        Epoch times, s.
+    t : numpy.ndarray
+        Reference times, s.
+    velocity : numpy.ndarray
+        Reference velocity, m/s, (N, 3).
+    speed_m_s : float, optional
+        Speed that ends the pad, m/s.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
     speed = np.linalg.norm(np.asarray(velocity, dtype=float), axis=1)
     moving = np.flatnonzero(speed > speed_m_s)
     t_launch = t[moving[0]] if moving.size else np.inf

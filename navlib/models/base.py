@@ -4,7 +4,7 @@ protocol of the filters.
 Every model carries ``state_names``; :meth:`LinearModel.subset` deletes rows and columns
 consistently (Beaudoin et al. 2018 §2.1: "corresponding lines and columns are
 eliminated"); :meth:`LinearModel.discretize` returns a :class:`DiscreteModel` with the
-arrays that ``navlib.observability`` and ``navlib.metrics`` take (spec api.md).
+arrays that ``navlib.observability`` and ``navlib.metrics`` take (docs/library.md).
 
 :class:`ErrorStateModel` is what the closed-loop EKF (:func:`navlib.filters.ekf`) needs from
 an error model: the state layout as index arrays, which states are reset after feedback,
@@ -38,7 +38,7 @@ def _stack(matrix, n_samples: int) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class DiscreteModel:
-    """A discrete error model at its step or measurement epochs (spec api.md).
+    """A discrete error model at its step or measurement epochs (docs/library.md).
 
     Attributes
     ----------
@@ -73,7 +73,23 @@ class DiscreteModel:
         return np.any(np.asarray(self.H) != 0.0, axis=(1, 2))
 
     def window(self, t_start: float, t_end: float) -> DiscreteModel:
-        """The epochs inside the closed interval ``[t_start, t_end]`` (spec A12)."""
+        """The epochs inside the closed interval ``[t_start, t_end]`` (docs/assumptions.md A12).
+
+        Parameters
+        ----------
+        t_start, t_end : float
+            Interval, s.
+
+        Returns
+        -------
+        DiscreteModel
+            The model on the epochs inside.
+
+        Raises
+        ------
+        NavlibInputError
+            If fewer than two epochs lie inside.
+        """
         sel = np.flatnonzero((self.t >= t_start - 1e-9) & (self.t <= t_end + 1e-9))
         if sel.size < 2:
             raise NavlibInputError(
@@ -89,7 +105,25 @@ class DiscreteModel:
 
 
 def state_indices(state_names: Sequence[str], names: Sequence[str]) -> np.ndarray:
-    """Positions of ``names`` in ``state_names``; NavlibInputError naming the unknown ones."""
+    """Positions of ``names`` in ``state_names``; NavlibInputError naming the unknown ones.
+
+    Parameters
+    ----------
+    state_names : sequence of str
+        The model's states.
+    names : sequence of str
+        States to find.
+
+    Returns
+    -------
+    numpy.ndarray
+        Their indices.
+
+    Raises
+    ------
+    NavlibInputError
+        Naming the unknown ones.
+    """
     lookup = {name: i for i, name in enumerate(state_names)}
     missing = [name for name in names if name not in lookup]
     if missing:
@@ -175,7 +209,7 @@ class LinearModel:
             (see :mod:`navlib.discretize`).
         epochs : array of int, optional
             Sample indices of the measurement epochs of a trajectory model; per-step
-            transitions are chained between them (spec excitability.md A8). Default: every
+            transitions are chained between them (docs/assumptions.md A8). Default: every
             sample.
         hold : {"left", "mean"}
             Matrices used over the step ``[t_j, t_j+1]`` of a trajectory model: the left
@@ -323,10 +357,38 @@ class ErrorStateModel(Protocol):
         """Continuous ``A`` (K, n, n) and noise input ``G`` (K, n, q) along ``nominal``."""
 
     def compensate(self, parameters: Mapping, f_b, w_ib_b) -> tuple[np.ndarray, np.ndarray]:
-        """IMU samples (K, 3) compensated with parameter estimates (K, 3) by group."""
+        """IMU samples (K, 3) compensated with parameter estimates (K, 3) by group.
+
+        Parameters
+        ----------
+        parameters : Mapping
+            Estimates by group (``ba``, ``bg``, ``sa``, ``sg``), each (K, 3).
+        f_b : numpy.ndarray
+            Specific force, m/s^2, (K, 3).
+        w_ib_b : numpy.ndarray
+            Angular rate, rad/s, (K, 3).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Compensated ``(f_b, w_ib_b)``.
+        """
 
     def correct(self, nominal: Nominal, dx) -> Nominal:
-        """``nominal`` corrected with error-state estimates ``dx`` (K, n) (feedback)."""
+        """``nominal`` corrected with error-state estimates ``dx`` (K, n) (feedback).
+
+        Parameters
+        ----------
+        nominal : Nominal
+            The nominal trajectory.
+        dx : numpy.ndarray
+            Error-state estimates, (K, n).
+
+        Returns
+        -------
+        Nominal
+            The corrected trajectory.
+        """
 
     def reset_jacobian(self, dx) -> np.ndarray:
         """Jacobian (n, n) of the error state across the feedback of ``dx`` (n,): the
@@ -360,7 +422,22 @@ class ErrorState:
 
     def compensate(self, parameters, f_b, w_ib_b):
         """``f = (f_hat - b_a) / (1 + s_a)``, likewise ``omega`` with ``b_g, s_g``, for the
-        groups the model holds (the IMU inverse model, spec excitability.md A7)."""
+        groups the model holds (the IMU inverse model, docs/assumptions.md A7).
+
+        Parameters
+        ----------
+        parameters : Mapping
+            Estimates by group (``ba``, ``bg``, ``sa``, ``sg``), each (K, 3).
+        f_b : numpy.ndarray
+            Specific force, m/s^2, (K, 3).
+        w_ib_b : numpy.ndarray
+            Angular rate, rad/s, (K, 3).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Compensated ``(f_b, w_ib_b)``.
+        """
         f = f_b - parameters["ba"] if "ba" in parameters else f_b
         w = w_ib_b - parameters["bg"] if "bg" in parameters else w_ib_b
         if "sa" in parameters:
@@ -371,7 +448,20 @@ class ErrorState:
 
     def correct(self, nominal: Nominal, dx) -> Nominal:
         """Feedback: position and velocity move by ``nav_sign dx``, the attitude by
-        ``exp(S(dx_att))`` on the side of :attr:`attitude_frame`, parameters by ``dx``."""
+        ``exp(S(dx_att))`` on the side of :attr:`attitude_frame`, parameters by ``dx``.
+
+        Parameters
+        ----------
+        nominal : Nominal
+            The nominal trajectory.
+        dx : numpy.ndarray
+            Error-state estimates, (K, n).
+
+        Returns
+        -------
+        Nominal
+            The corrected trajectory.
+        """
         s = self.nav_sign
         g = self.groups
         E = exp_so3(dx[:, g["attitude"]])

@@ -1,29 +1,7 @@
-"""The 21-state ECEF error model of España, Carrizo & Giribet (2019), Eqs. (1)-(5), (23)-(24).
-
-Augmented state (e1..e21 in the paper's order)::
-
-    [dP^e (3), dV^e (3), dtheta (3), b_g (3), b_a (3), s_g (3), s_a (3)]
-
-along a reference :class:`~navlib.trajectory.Trajectory`, at its IMU rate. The paper prints
-the kinematic block garbled; this module implements the two self-consistent readings of
-spec excitability.md A4:
-
-* ``attitude_error="ecef"`` (default, used to reproduce Fig. 4): ``C = (I + S(psi)) C_hat``,
-  ``A_vpsi = -S(C_hat f^b)``, ``A_psipsi = -S(Omega^e)``, gyro errors enter through ``C_hat``;
-* ``attitude_error="body"``: ``C = C_hat (I + S(dtheta))``, ``A_vtheta = -C_hat S(f^b)``,
-  ``A_thetatheta = -S(omega_ib^b)``, gyro errors enter directly.
-
-The two are related by ``psi = C_hat dtheta``. The gravity Jacobian is that of normal gravity
-(gravitation + centrifugal, spec A5). The IMU inverse model (spec A7, assumed) is
-``f = (I + diag s_a)^-1 (f_hat - b_a)``, ``omega = (I + diag s_g)^-1 (omega_hat - b_g)``, whose
-Jacobian at the nominal parameters is ``B_pi``: ``df/db_a = -I``, ``df/ds_a = -diag(f_hat)``,
-``domega/db_g = -I``, ``domega/ds_g = -diag(omega_hat)``. Noise has 18 channels (spec A6):
-accelerometer and gyro white noise (VRW, ARW) and random walks of the 12 IMU parameters.
-The measurement is GNSS ECEF position, ``H = [I3, 0]``, ``R = sigma^2 I3``.
-
-Discretisation to the GNSS epochs chains per-IMU-step transitions (spec A8):
-:func:`ecef21_at_epochs` does it with a cache so that widgets re-use the result.
-"""
+"""The 21-state ECEF error model of España, Carrizo & Giribet (2019), Eqs. (1)-(5), (23)-(24):
+navigation errors and the 12 IMU parameters along a reference trajectory, discretised to
+the GNSS epochs. The readings of the garbled kinematic block (docs/assumptions.md A4) and the
+assumed IMU inverse model (A7): docs/models.md."""
 
 from __future__ import annotations
 
@@ -132,9 +110,9 @@ def imu_noise_densities(sensors=None) -> dict:
     Parameters
     ----------
     sensors : None, str, navlib.sensors.SensorSpec / ImuSpec, or mapping
-        ``None`` takes the preset ``motionpak_tactical`` (spec §5 values); a string names a
-        preset of :func:`navlib.sensors.load_preset`; a mapping gives the keys of
-        :data:`NOISE_KEYS` directly (SI units).
+        ``None`` takes the preset ``motionpak_tactical`` (docs/assumptions.md, excitability.md §5
+        values); a string names a preset of :func:`navlib.sensors.load_preset`; a mapping gives the
+        keys of :data:`NOISE_KEYS` directly (SI units).
 
     Returns
     -------
@@ -189,8 +167,8 @@ def parameter_sigmas(sensors=None) -> dict:
 def ecef21_jacobians(position, C_b_e, f_b, w_ib_b, attitude_error: str = "ecef"):
     """Dynamics ``A`` (N, 21, 21) and noise input ``G`` (N, 21, 18) along reference samples.
 
-    ``A = [[A_kin, B_kin B_pi], [0, 0]]`` (Eq. 24 as corrected in spec A4, A5, A7) and
-    ``G = blockdiag(B_kin, I_12)`` (spec A6), vectorised over samples.
+    ``A = [[A_kin, B_kin B_pi], [0, 0]]`` (Eq. 24 as corrected in docs/assumptions.md A4, A5, A7)
+    and ``G = blockdiag(B_kin, I_12)`` (docs/assumptions.md A6), vectorised over samples.
 
     Parameters
     ----------
@@ -201,7 +179,7 @@ def ecef21_jacobians(position, C_b_e, f_b, w_ib_b, attitude_error: str = "ecef")
     f_b, w_ib_b : ndarray (N, 3)
         Measured (reference) specific force, m/s^2, and inertial rate, rad/s, body axes.
     attitude_error : {"ecef", "body"}
-        Attitude-error definition (spec A4 (b) or (a)).
+        Attitude-error definition (docs/assumptions.md A4 (b) or (a)).
     """
     if attitude_error not in ATTITUDE_ERRORS:
         raise NavlibInputError(
@@ -251,15 +229,15 @@ def ecef21(trajectory, sensors=None, *, attitude_error: str = "ecef", gnss_sigma
         ``omega_hat = omega_ib^b``).
     sensors : None, str, IMU spec or mapping
         Source of the noise densities (see :func:`imu_noise_densities`); default the
-        ``motionpak_tactical`` preset (spec §5, assumed values).
+        ``motionpak_tactical`` preset (docs/assumptions.md, excitability.md §5, assumed values).
     attitude_error : {"ecef", "body"}
-        Attitude-error frame (spec A4): ECEF ``psi`` (default) or body ``dtheta``. The state
-        names ``theta_x..z`` are then ECEF-axis or body-axis components.
+        Attitude-error frame (docs/assumptions.md A4): ECEF ``psi`` (default) or body ``dtheta``.
+        The state names ``theta_x..z`` are then ECEF-axis or body-axis components.
     gnss_sigma_m : float
         GNSS position standard deviation per ECEF axis, ``R = sigma^2 I3`` (assumed 5 m).
     sigma_p0_m, sigma_v0_m_s, sigma_theta0_deg : float
         Initial standard deviations of position (30 m), velocity (3 m/s) and attitude
-        (1 deg per axis), spec §5 [A].
+        (1 deg per axis), docs/assumptions.md, excitability.md §5 [A].
     sigma_bg_deg_s, sigma_ba_m_s2, sigma_sg_ppm, sigma_sa_ppm : float, optional
         Initial standard deviations of the IMU parameters; None takes the sensor spec's
         turn-on values (:func:`parameter_sigmas`; the default preset holds the §5 values
@@ -343,6 +321,18 @@ def initial_covariance(sensors=None, **sigmas) -> np.ndarray:
     turn-on values (:func:`parameter_sigmas`), the others to :data:`P0_DEFAULTS`. Use it to
     change ``P0`` of a discretised model without rebuilding it
     (``dataclasses.replace(discrete, P0=initial_covariance(...))``).
+
+    Parameters
+    ----------
+    sensors : None, str, IMU spec or mapping, optional
+        Source of the IMU-parameter sigmas (as :func:`ecef21`).
+    **sigmas
+        Sigmas in edge units, keys of :data:`P0_DEFAULTS`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``P0``, (21, 21).
     """
     return _initial_covariance(sigmas, "initial_covariance", sensors)[0]
 
@@ -353,8 +343,8 @@ def ecef21_at_epochs(trajectory, gnss_rate_hz: float = 1.0, method: str = "serie
     """The 21-state model discretised to the GNSS epochs of ``trajectory`` (cached).
 
     Builds the model of :func:`ecef21` along the trajectory and chains the steps to epochs
-    ``gnss_rate_hz`` apart (spec A8: 100 IMU steps per 1 Hz epoch). The build streams over
-    blocks of epochs (at most :data:`STREAM_SAMPLES` trajectory samples at a time), so its
+    ``gnss_rate_hz`` apart (docs/assumptions.md A8: 100 IMU steps per 1 Hz epoch). The build streams
+    over blocks of epochs (at most :data:`STREAM_SAMPLES` trajectory samples at a time), so its
     memory does not grow with the flight's length: only the per-epoch ``F``, ``Q`` are kept.
     Results are cached in memory on the trajectory object's identity and the options, so that
     widgets changing only the metric settings (eta, nu, segments) never rebuild the model,
@@ -424,6 +414,13 @@ def epoch_samples(t, rate_hz: float) -> np.ndarray:
     multiple of ``rate_hz`` they are those of ``Trajectory.at_rate``; on a log whose rate
     changes (an AltOS export: 100 Hz in boost, 10 Hz in descent) they stay ``1 / rate_hz``
     apart where ``at_rate``, every so many samples, would drift to 10 times that.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    rate_hz : float
+        Epoch rate, Hz.
     """
     t = np.asarray(t, dtype=float)
     rate_hz = finite_scalar(rate_hz, "rate_hz", 0.0, low_open=True)
@@ -524,9 +521,9 @@ class Ecef21ErrorState(ErrorState):
     """The 21-state ECEF model as the error-state model of :func:`navlib.filters.ekf`.
 
     Errors are ``truth - estimate`` (``nav_sign = +1``, España et al. 2019), the attitude
-    error ECEF or body (spec A4); the 12 IMU parameters (``bg, ba, sg, sa``) are random walks
-    (no decay) and every state is reset after feedback. Measurements: GNSS position, and
-    GNSS velocity when its sigma is given. Jacobians: :func:`ecef21_jacobians`, discretised
+    error ECEF or body (docs/assumptions.md A4); the 12 IMU parameters (``bg, ba, sg, sa``) are
+    random walks (no decay) and every state is reset after feedback. Measurements: GNSS position,
+    and GNSS velocity when its sigma is given. Jacobians: :func:`ecef21_jacobians`, discretised
     by the batched matrix exponential by default. Build with :meth:`build`.
     """
 
@@ -534,7 +531,21 @@ class Ecef21ErrorState(ErrorState):
     def build(cls, sensors=None, *, attitude_error: str = "ecef", gnss_sigma_m: float = 5.0,
               gnss_velocity_sigma: float | None = None, **sigmas) -> Ecef21ErrorState:
         """The model of :func:`ecef21` (same keywords), plus GNSS velocity updates with
-        sigma ``gnss_velocity_sigma`` (m/s) when given."""
+        sigma ``gnss_velocity_sigma`` (m/s) when given.
+
+        Parameters
+        ----------
+        sensors : None, str, IMU spec or mapping, optional
+            As :func:`ecef21`.
+        attitude_error : {"ecef", "body"}, optional
+            Attitude-error frame.
+        gnss_sigma_m : float, optional
+            GNSS position sigma per ECEF axis, m.
+        gnss_velocity_sigma : float or None, optional
+            GNSS velocity sigma per axis, m/s; None: no velocity updates.
+        **sigmas
+            Initial sigmas, keywords of :func:`ecef21`.
+        """
         parts = _constant_parts(sensors, attitude_error, gnss_sigma_m, sigmas)
         rows = {"gnss_pos": MeasurementRows(("gnss_x", "gnss_y", "gnss_z"),
                                             parts["parameters"]["gnss_sigma_m"])}
@@ -554,7 +565,19 @@ class Ecef21ErrorState(ErrorState):
                      sensors=None, **_) -> Ecef21ErrorState:
         """:meth:`build` from the EKF's keywords: ``options`` are :func:`ecef21`'s, whose
         ``sensors`` default to the simulated ``sensors`` preset when known (the launcher's
-        solution, biases and bias model do not apply)."""
+        solution, biases and bias model do not apply).
+
+        Parameters
+        ----------
+        options : dict
+            Keywords of :func:`ecef21`.
+        gnss_velocity_sigma : float or None, optional
+            GNSS velocity sigma per axis, m/s.
+        sensors : optional
+            The simulated sensors preset, the default of ``options["sensors"]``.
+        **_
+            The EKF's other keywords, ignored.
+        """
         options = dict(options)
         if isinstance(sensors, str):
             options.setdefault("sensors", sensors)

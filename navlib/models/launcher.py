@@ -1,44 +1,7 @@
-"""Satellite-launcher error models of Beaudoin, Desbiens, Gagnon & Landry (2018).
-
-"Observability of satellite launcher navigation with INS, GPS, attitude sensors and reference
-trajectory", Acta Astronautica 142, 277-288; equations rebuilt in spec launcher.md §3.
-
-Four loosely coupled solutions (spec §1): ``ins_gps`` (eq. 1-2), ``ins_gps_att`` (eq. 3),
-``ins_gps_rt`` (eq. 4-5, 8) and ``ins_gps_att_rt`` (§2.4), each with any subset of the gyro
-(G), accelerometer (A) and GPS-position (P) biases as first-order Markov processes or random
-walks. State order (spec §3.1, §3.4; E = Earth-fixed frame, B = body, x = roll axis)::
-
-    psi_x psi_y psi_z | dv_x dv_y dv_z | dr_x dr_y dr_z        (E frame)  always
-    bg_x bg_y bg_z                                              (B frame)  if "G"
-    ba_x ba_y ba_z                                              (B frame)  if "A"
-    bp_x bp_y bp_z                                              (E frame)  if "P"
-    x19 .. x25 | psi_ref_x psi_ref_y psi_ref_z                  (B frame)  RT solutions
-
-giving 9/12/15/18 states, 19/22/25/28 with the reference trajectory (spec §3.6).
-
-The model is continuous, ``dx/dt = A(t) x + G(t) w``, with the paper's ``F(k)`` as ``A`` at
-each trajectory sample, so that ``model.discretize(method="euler")`` gives exactly the
-paper's ``A_lc = I + s_t F(k)`` and ``B = s_t G`` (spec §3, "all discrete time, Euler form");
-``method="expm"`` gives the exact zero-order-hold transition instead. The reference-trajectory
-block is written the same way: ``A1 = s_t [a1_sign T_E^B, 0]`` and ``A2 = I_10 + s_t M``
-(V3 reading with the ``-I_3`` feedback, spec §3.4 and §10b).
-
-Noise and measurement values come from the sensor preset ``data/sensors/launcher_table1.toml``
-(:func:`navlib.sensors.load_preset`; keyword ``sensors``): Table 1 (spec §7.1) gyro random
-walk 0.72 deg/h/sqrt(Hz), gyro bias stability 0.05 deg/h, accelerometer random walk
-117 ug/sqrt(Hz), accelerometer bias stability 7500 ug, attitude sensor 1 deg (1 sigma per
-axis, white), Markov time constants 100 s (spec §3.2, §5); and the GPS values the paper does
-not give, marked assumed in the preset: velocity 0.1 m/s and position 3 m (1 sigma per axis,
-per 200 Hz sample), position bias 2 m with c_p = 100 s. Not in any preset and **assumed**
-here (:data:`ASSUMED`, recorded in ``model.parameters``): wind angular rate 0.01 rad/s per
-sample (PSD (0.01 rad/s)^2 * s_t) and ``P0`` = 0.1 deg attitude, 0.1 m/s, 3 m, biases at
-their stability, reference-trajectory states exactly zero (the attitude is "perfectly known"
-on the pad, spec §5).
-
-Bias models (spec §3.2): ``markov`` has ``db/dt = -b/c + w`` with PSD ``2 sigma^2 / c``
-(Euler: the paper's ``s_t sqrt(2/(c s_t))`` noise gain); ``random_walk`` sets the ``-1/c``
-terms ("the shaded terms") to zero and keeps the driving noise.
-"""
+"""Satellite-launcher error models of Beaudoin, Desbiens, Gagnon & Landry (2018): the four
+loosely coupled INS/GPS solutions (with attitude sensors and the reference trajectory), any
+subset of gyro, accelerometer and GPS-position biases as Markov processes or random walks.
+State order, noise values and the paper readings taken: docs/models.md."""
 
 from __future__ import annotations
 
@@ -117,7 +80,7 @@ _OPTIONS = ("a1_sign", "sigma_gps_vel", "sigma_gps_pos", "sigma_bp", "sigma_wind
 def rt_dynamics_matrix() -> np.ndarray:
     """Continuous closed-loop attitude dynamics ``M`` of the RT augmentation, ``A2 = I + s_t M``.
 
-    Spec launcher.md §3.4 (V3 reading with the ``-I_3`` feedback): states
+    Spec docs/assumptions.md, launcher.md §3.4 (V3 reading with the ``-I_3`` feedback): states
     ``x19 x20 x21 | x22 x23 | x24 x25 | psi_ref_x psi_ref_y psi_ref_z``. Roll is a 2-state
     loop (x19, psi_ref_x), pitch and yaw 4-state loops. Its eigenvalues are
     ``-0.25 +- 0.733j`` (roll) and ``-2.818 +- 3.686j, -0.394, -0.096`` (pitch, yaw; §10b).
@@ -139,7 +102,8 @@ def rt_dynamics_matrix() -> np.ndarray:
 
 
 def simplified_gps_bias(c_p: float, s_t: float = 0.005):
-    """The simplified position / GPS-bias model of §4.1 (spec launcher.md §3.7, eq. 7).
+    """The simplified position / GPS-bias model of §4.1 (docs/assumptions.md, launcher.md §3.7, eq.
+    7).
 
     ``[dr; b_p](k+1) = (I_6 + s_t [[0, 0], [0, -I_3 / c_p]]) [dr; b_p](k)``,
     ``dr_m(k) = [I_3  I_3] [dr; b_p](k)``.
@@ -204,7 +168,14 @@ def _parse(solution, biases, bias_model):
 
 def state_names(solution: str = "ins_gps", biases: str = "GAP",
                 bias_model: str = "markov") -> tuple[str, ...]:
-    """State names of a configuration, in model order (spec launcher.md §3.1, §3.4)."""
+    """State names of a configuration, in model order (docs/assumptions.md, launcher.md §3.1, §3.4).
+
+    Parameters
+    ----------
+    solution, biases, bias_model : str, optional
+        Configuration: one of :data:`SOLUTIONS`, bias letters of ``"GAP"``, ``"markov"`` or
+        ``"random_walk"``.
+    """
     return sum((_GROUPS[g] for g in _starts(solution, _parse(solution, biases, bias_model))),
                ())
 
@@ -228,7 +199,8 @@ def launcher(solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "
         Sensor preset for the noise values (default ``"launcher_table1"``); the keywords
         below override single values.
     a1_sign : {+1, -1}
-        Sign of ``A1`` (how the navigation attitude error drives the closed loop, spec §10b).
+        Sign of ``A1`` (how the navigation attitude error drives the closed loop,
+        docs/assumptions.md, launcher.md §10b).
     c_g, c_a, c_p : float
         Markov time constants, s (preset: 100).
     gyro_arw, gyro_bias, accel_vrw, accel_bias, sigma_att : float
@@ -318,7 +290,8 @@ def _slicer(start: dict):
 
 def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict):
     """``A`` (N, n, n) along attitudes ``C_b_e`` (N, 3, 3) and specific forces ``f_b``
-    (N, 3): the paper's ``F(k)`` (eq. 1-5) and the RT block of spec §3.4."""
+    (N, 3): the paper's ``F(k)`` (eq. 1-5) and the RT block of docs/assumptions.md, launcher.md
+    §3.4."""
     start = _starts(solution, letters)
     n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
@@ -347,7 +320,8 @@ def _state_dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p:
 
 def _dynamics(C_b_e, f_b, solution: str, letters: str, bias_model: str, p: dict):
     """``A`` (N, n, n), ``G`` (N, n, q) and the PSDs (q,) along attitudes and specific forces
-    (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of spec §3.4)."""
+    (eq. 1-5: the paper's ``F(k)`` and noise input; the RT block of docs/assumptions.md, launcher.md
+    §3.4)."""
     start = _starts(solution, letters)
     n, N = _state_count(start), len(C_b_e)
     sl = _slicer(start)
@@ -449,9 +423,9 @@ def _model(solution, letters, bias_model, t, C_b_e, f_b, sensors, kw, s_t) -> Li
 @dataclass(frozen=True, eq=False)
 class LauncherSteps:
     """A launcher configuration as the Euler transitions ``F_k = I + s_t A(k)`` of the
-    steps asked for (the paper's ``A_lc``, spec launcher.md §3), computed on demand from the
-    trajectory samples instead of held as an ``(N, n, n)`` stack: what the observability test
-    reads (:func:`navlib.observability.local_observability`, chunk by chunk), bitwise the
+    steps asked for (the paper's ``A_lc``, docs/assumptions.md, launcher.md §3), computed on demand
+    from the trajectory samples instead of held as an ``(N, n, n)`` stack: what the observability
+    test reads (:func:`navlib.observability.local_observability`, chunk by chunk), bitwise the
     transitions of ``launcher(...).discretize(method="euler")``. Build with
     :func:`launcher_steps`.
 
@@ -496,7 +470,20 @@ def launcher_steps(solution: str = "ins_gps", biases: str = "GAP",
                    sensors=DEFAULT_SENSORS, **kw) -> LauncherSteps:
     """:func:`launcher`'s configuration (same arguments) as its Euler step transitions
     computed on demand (:class:`LauncherSteps`): the observability test of 60 Table 2
-    configurations at 30 001 steps then never holds a 188 MB ``A`` stack per model."""
+    configurations at 30 001 steps then never holds a 188 MB ``A`` stack per model.
+
+    Parameters
+    ----------
+    solution, biases, bias_model : str, optional
+        Configuration: one of :data:`SOLUTIONS`, bias letters of ``"GAP"``, ``"markov"`` or
+        ``"random_walk"``.
+    trajectory : Trajectory or None, optional
+        Reference trajectory (default the launcher ascent).
+    sensors : optional
+        Sensor values, as :func:`launcher`.
+    **kw
+        Other keywords of :func:`launcher`.
+    """
     reject_unknown(kw, _OPTIONS, "launcher")
     letters = _parse(solution, biases, bias_model)
     t, C_b_e, f_b = _samples(trajectory)
@@ -516,19 +503,35 @@ class LauncherErrorState(ErrorState):
     """A launcher model as the error-state model of :func:`navlib.filters.ekf`.
 
     Errors are ``estimate - truth`` (``nav_sign = -1``) with the ECEF attitude error ``psi``
-    (spec launcher.md §3.1); the parameter groups are the biases ``bg``, ``ba`` (body) and
-    ``bp`` (minus the GPS position bias, E frame), decaying at ``-1/c`` for Markov biases.
-    The reference-trajectory block (``x19..x25``, ``psi_ref``, spec §3.4) is the launcher's
-    divergence from its reference: it has no nominal counterpart and is not reset. The
-    Jacobians are :func:`launcher`'s ``A``, ``G`` (Euler steps by default, as the paper).
-    Build with :meth:`build`.
+    (docs/assumptions.md, launcher.md §3.1); the parameter groups are the biases ``bg``, ``ba``
+    (body) and ``bp`` (minus the GPS position bias, E frame), decaying at ``-1/c`` for Markov
+    biases. The reference-trajectory block (``x19..x25``, ``psi_ref``, docs/assumptions.md,
+    launcher.md §3.4) is the launcher's divergence from its reference: it has no nominal counterpart
+    and is not reset. The Jacobians are :func:`launcher`'s ``A``, ``G`` (Euler steps by default, as
+    the paper). Build with :meth:`build`.
     """
 
     @classmethod
     def build(cls, solution: str = "ins_gps", biases: str = "GAP", bias_model: str = "markov",
               *, step_s: float, sensors=DEFAULT_SENSORS, **kw) -> LauncherErrorState:
         """The configuration of :func:`launcher` (same keywords) at IMU step ``step_s``
-        (the default ``s_t``)."""
+        (the default ``s_t``).
+
+        Parameters
+        ----------
+        solution : str, optional
+            One of :data:`SOLUTIONS`.
+        biases : str, optional
+            Bias states, letters of ``"GAP"``.
+        bias_model : {"markov", "random_walk"}, optional
+            Bias model.
+        step_s : float
+            IMU step, s.
+        sensors : optional
+            Sensor values, as :func:`launcher`.
+        **kw
+            Other keywords of :func:`launcher`.
+        """
         reject_unknown(kw, _OPTIONS, "launcher")
         letters = _parse(solution, biases, bias_model)
         step_s = finite_scalar(step_s, "step_s", 0.0, low_open=True)
@@ -555,7 +558,19 @@ class LauncherErrorState(ErrorState):
                      bias_model: str, **_) -> LauncherErrorState:
         """:meth:`build` from the EKF's keywords (``options`` are :func:`launcher`'s; the
         EKF's GNSS-velocity sigma and simulated sensors do not apply: the launcher takes
-        GPS velocity at ``sigma_gps_vel`` and its values from ``sensors``)."""
+        GPS velocity at ``sigma_gps_vel`` and its values from ``sensors``).
+
+        Parameters
+        ----------
+        options : dict
+            Keywords of :func:`launcher`.
+        step_s : float
+            IMU step, s.
+        solution, biases, bias_model : str
+            The configuration.
+        **_
+            The EKF's other keywords, ignored.
+        """
         return cls.build(solution, biases, bias_model, step_s=step_s, **options)
 
     def jacobians(self, nominal):

@@ -2,13 +2,15 @@
 
 Silva, Hemerly & Leite Filho (2017), "On the error state selection for stationary SINS
 alignment and calibration Kalman filters — Part II", Sensors 17(3) 439; the model is the
-reconstruction of spec ssac.md §2.3 (the paper's matrices were lost from the seed text).
+reconstruction of docs/assumptions.md, ssac.md §2.3 (the paper's matrices were lost from the seed
+text).
 
 State order (15 states, indices 0..14; radians, m/s, m, rad/s, m/s^2)::
 
     psiN psiE psiD | dvN dvE dvD | dL dlambda dh | bgN bgE bgD | baN baE baD
 
-Conventions (ssac.md §9: the paper's own are unknown, these are documented choices):
+Conventions (docs/assumptions.md, ssac.md §9: the paper's own are unknown, these are documented
+choices):
 
 * ``psi`` is the phi-angle: the small rotation of the computed navigation frame relative to
   the true one, resolved in NED; ``dv = v_computed - v_true``.
@@ -31,11 +33,11 @@ Continuous dynamics at rest (``s, c, t = sin L, cos L, tan L``; ``Omega`` Earth 
     ddL/dt = dvN/(R_M+h);  ddlambda/dt = dvE/((R_N+h) c);  ddh/dt = -dvD
 
 Measurement: zero-velocity update ``z = H x + nu`` with ``H = [0 I 0 0 0]`` on the velocity
-errors (ssac.md §2.1, eq. 14–15), ``R = sigma_nu^2 I`` (assumed 0.01 m/s).
+errors (docs/assumptions.md, ssac.md §2.1, eq. 14–15), ``R = sigma_nu^2 I`` (assumed 0.01 m/s).
 
-Reduced models (ssac.md §2.4): 12 states = without the position errors (Part I's optimum);
-10 states (Bar-Itzhack & Berman) = without position, ``dvD`` and ``baD``, measuring the two
-horizontal velocity errors.
+Reduced models (docs/assumptions.md, ssac.md §2.4): 12 states = without the position errors (Part
+I's optimum); 10 states (Bar-Itzhack & Berman) = without position, ``dvD`` and ``baD``, measuring
+the two horizontal velocity errors.
 """
 
 from __future__ import annotations
@@ -82,7 +84,14 @@ def site_constants(lat: float, alt: float) -> dict:
     """Earth quantities of the stationary model at latitude ``lat`` (rad), height ``alt`` (m).
 
     Returns a dict with ``Omega, g, R_M, R_N, R`` (geocentric radius) and ``gravity_gradient``
-    ``2 g / R`` (ssac.md §4.3).
+    ``2 g / R`` (docs/assumptions.md, ssac.md §4.3).
+
+    Parameters
+    ----------
+    lat : float
+        Latitude, rad.
+    alt : float
+        Height, m.
     """
     r_m, r_n = radii_of_curvature(lat)
     g = float(gravity_magnitude(lat, alt))
@@ -92,7 +101,7 @@ def site_constants(lat: float, alt: float) -> dict:
 
 
 def _dynamics(lat: float, alt: float, C_b_n: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
-    """15-state A (15, 15) and noise input G (15, 6) of ssac.md §2.3."""
+    """15-state A (15, 15) and noise input G (15, 6) of docs/assumptions.md, ssac.md §2.3."""
     k = site_constants(lat, alt)
     s, c, t = np.sin(lat), np.cos(lat), np.tan(lat)
     W, g = k["Omega"], k["g"]
@@ -121,13 +130,36 @@ def _dynamics(lat: float, alt: float, C_b_n: np.ndarray) -> tuple[np.ndarray, np
 def initial_sigmas(variant: str, lat: float, alt: float, imu: dict, *,
                    attitude_scale: float = 1.0, sigma_v: float = 0.1,
                    sigma_pos_m: float = 10.0) -> np.ndarray:
-    """Initial standard deviations (15,) in state units (ssac.md §4.4).
+    """Initial standard deviations (15,) in state units (docs/assumptions.md, ssac.md §4.4).
 
     ``"matched"``: tilt ``b_a/g``, azimuth ``b_gE/(Omega cos L)``, so ``g sigma_psiN0 =
     sigma_baE0`` and ``Omega cos L sigma_psiD0 = sigma_bgE0`` (the choice that gives the
     paper's 45° pair eigenvectors); ``"generic"``: 1° on all three attitude errors. Both:
     biases at their nominal values, 0.1 m/s velocity, 10 m position. ``attitude_scale``
-    multiplies the attitude sigmas (the P0-sensitivity experiment, ssac.md §5.4 item 18).
+    multiplies the attitude sigmas (the P0-sensitivity experiment, docs/assumptions.md, ssac.md §5.4
+    item 18).
+
+    Parameters
+    ----------
+    variant : {"matched", "generic"}
+        Attitude sigmas.
+    lat : float
+        Latitude, rad.
+    alt : float
+        Height, m.
+    imu : dict
+        IMU values (``gyro_bias``, rad/s; ``accel_bias``, m/s^2).
+    attitude_scale : float, optional
+        Factor on the attitude sigmas.
+    sigma_v : float, optional
+        Velocity sigma, m/s.
+    sigma_pos_m : float, optional
+        Position sigma, m.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``variant`` is unknown.
     """
     if variant not in P0_VARIANTS:
         raise NavlibInputError(f"P0: expected one of {P0_VARIANTS} or a matrix, got {variant!r}")
@@ -149,6 +181,20 @@ def display_units(lat: float, alt: float, state_names=STATES_15) -> dict:
 
     Attitude in deg, velocity m/s, position in metres (``(R_M+h) dL``, ``(R_N+h) cos L
     dlambda``), gyro biases deg/h, accelerometer biases mg.
+
+    Parameters
+    ----------
+    lat : float
+        Latitude, rad.
+    alt : float
+        Height, m.
+    state_names : sequence of str, optional
+        States.
+
+    Raises
+    ------
+    NavlibInputError
+        For a state without a display unit.
     """
     r_m, r_n = radii_of_curvature(lat)
     table = {
@@ -197,7 +243,8 @@ def ssac(n_states: int = 15, lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_
     ----------
     n_states : {15, 12, 10}
         Full model, without position (12), or Bar-Itzhack & Berman's 10 states (no position,
-        no vertical channel, horizontal velocity measurements); ssac.md §2.3–2.4.
+        no vertical channel, horizontal velocity measurements); docs/assumptions.md, ssac.md
+        §2.3–2.4.
     lat_deg, alt_m : float
         Site; default LINCS/IAE (-23.213056°, 629 m).
     P0 : {"matched", "generic"} or ndarray (n, n)

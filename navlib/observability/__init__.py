@@ -1,6 +1,6 @@
 """Observability matrices, their rank / condition / null space, and the local test per step.
 
-Contract: docs/assumptions.md, api.md "Observability". The package re-exports its public names:
+Contract: docs/library.md. The package re-exports its public names:
 
 * :mod:`~navlib.observability.matrix`: :func:`observability_matrix` and :func:`analyze` of
   one matrix (:class:`ObservabilityResult`);

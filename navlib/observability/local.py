@@ -253,11 +253,11 @@ def local_observability(model, window: int | None = None, variant: str = "time_v
     Time-varying at every step (``stride=1``, ``w m >= n``): the singular values come from
     the sliding-window factors of
     :func:`~navlib.observability.sliding.sliding_singular_values` (compiled; docs/assumptions.md,
-    launcher.md §6.1), equal to those of an SVD of each stacked ``O(k)`` to a few rounding
-    units of its largest singular value, hence the same ranks and the same finite condition
-    numbers (to a relative ``~eps * cond``); an exactly singular ``O(k)`` gets a condition
-    number of the order of ``1 / eps`` either way (its digits are rounding noise). Otherwise
-    each evaluated ``O(k)`` is stacked and factorised (QR, then the SVD of the n x n factor).
+    launcher.md §6.1), equal to those of an SVD of each stacked ``O(k)`` to a few rounding units of
+    its largest singular value, hence the same ranks and the same finite condition numbers (to a
+    relative ``~eps * cond``); an exactly singular ``O(k)`` gets a condition number of the order of
+    ``1 / eps`` either way (its digits are rounding noise). Otherwise each evaluated ``O(k)`` is
+    stacked and factorised (QR, then the SVD of the n x n factor).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """The observability matrix of a discrete pair and the analysis of one such matrix.
 
-Contract: docs/assumptions.md, api.md "Observability".
+Contract: docs/library.md.
 
 * :func:`observability_matrix` stacks ``H0; H1 F0; H2 F1 F0; ...`` for a time-varying pair, or
   ``H; H F; ...; H F^(n-1)`` for a constant (piecewise-constant, PWCS) pair.
@@ -39,7 +39,7 @@ def _matrix_or_stack(value, name: str) -> np.ndarray:
 
 
 def observability_matrix(F, H, n_rows: int | None = None) -> np.ndarray:
-    """Stack the observability matrix of a discrete pair (docs/assumptions.md, api.md; Beaudoin eq.
+    """Stack the observability matrix of a discrete pair (docs/library.md; Beaudoin eq.
     (6)).
 
     Parameters

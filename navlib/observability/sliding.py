@@ -4,7 +4,7 @@ With blocks of ``w`` steps from ``k0``, the window of step ``k = b w + r`` is th
 block ``b`` from ``r`` (``w - r`` block rows) followed by the first ``r`` block rows of block
 ``b + 1`` times the suffix transition, so ``O(k)`` is orthogonally equivalent to
 ``[Y_r; P_{r-1} Phi_r]`` (2n x n) and has its singular values (docs/assumptions.md,
-"launcher.md §7.2"; docs/assumptions.md, launcher.md §6.1):
+"docs/assumptions.md, launcher.md §7.2"; docs/assumptions.md, launcher.md §6.1):
 
 * suffixes ``Y_r`` (n x n, upper triangular) by the backward recursion
   ``Y_r = R([H_r; Y_{r+1} F_r])`` with ``Phi_r = F_{w-1} ... F_r``;

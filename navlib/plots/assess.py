@@ -42,6 +42,19 @@ def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
     colour; with ``label`` write ``"<segment> <phase>"`` along the top of the axes.
 
     Returns the artists added (their ``gid`` set to ``gid``), for :func:`reshade_phases`.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to shade.
+    segment_table : pandas.DataFrame
+        Segments (``phase, t_start, t_end``), s.
+    label : bool, optional
+        Write the segment names.
+    alpha : float, optional
+        Opacity.
+    gid : str or None, optional
+        Group id of the artists.
     """
     artists = []
     span = float(segment_table["t_end"].max() - segment_table["t_start"].min()) or 1.0
@@ -66,7 +79,15 @@ def shade_phases(ax, segment_table, label: bool = True, alpha: float = 0.12,
 
 def reshade_phases(fig, assessment) -> list:
     """Replace the assessed-segment shading of a :func:`phases_figure` by that of
-    ``assessment`` (same flight, other segments) in place; returns the new artists."""
+    ``assessment`` (same flight, other segments) in place; returns the new artists.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A :func:`phases_figure`.
+    assessment : FlightAssessment
+        The assessment whose segments are shaded.
+    """
     for ax in fig.axes[:2]:
         for artist in [*ax.patches, *ax.texts]:
             if artist.get_gid() == "assessed":

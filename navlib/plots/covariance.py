@@ -26,7 +26,25 @@ def _time(t, unit: str):
 
 def sigma_axes(ax, result, states: Sequence[str], units: Mapping | None = None,
                time_unit: str = "min", log: bool = False, prior: bool = False) -> None:
-    """Draw sigma(t) of ``states`` on ``ax``; ``units`` maps state -> (label, factor)."""
+    """Draw sigma(t) of ``states`` on ``ax``; ``units`` maps state -> (label, factor).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    result : CovarianceResult
+        Covariance history.
+    states : sequence of str
+        States drawn.
+    units : Mapping or None, optional
+        State -> (unit label, factor from SI).
+    time_unit : {"s", "min", "h"}, optional
+        Unit of the time axis.
+    log : bool, optional
+        Logarithmic y axis.
+    prior : bool, optional
+        Draw the prior instead of the posterior sigma.
+    """
     idx = result.index(list(states))
     sigma = result.sigma_prior if prior else result.sigma
     t = _time(result.t, time_unit)
@@ -71,7 +89,27 @@ def sigma_figure(result, groups: Mapping[str, Sequence[str]], units: Mapping | N
 
 def eigenvalues_figure(eig, modes: Sequence[int] | None = None, time_unit: str = "min",
                        log: bool = True, tracked: bool = False, title: str | None = None):
-    """Normalised eigenvalues over time (Silva et al. Fig. 7 analogue), modes 1-based."""
+    """Normalised eigenvalues over time (Silva et al. Fig. 7 analogue), modes 1-based.
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Eigen-decomposition of the normalised covariance over time.
+    modes : sequence of int or None, optional
+        Modes drawn, 1-based; None: all.
+    time_unit : {"s", "min", "h"}, optional
+        Unit of the time axis.
+    log : bool, optional
+        Logarithmic y axis.
+    tracked : bool, optional
+        Draw the tracked instead of the sorted eigenvalues.
+    title : str or None, optional
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     values = eig.tracked_values if tracked else eig.eigenvalues
     modes = list(range(1, eig.n + 1)) if modes is None else list(modes)
     t = _time(eig.t, time_unit)
@@ -97,6 +135,29 @@ def eigenvectors_figure(eig, modes: Sequence[int] = (1, 2, 3, 4, 5, 6), min_comp
     Only states whose component exceeds ``min_component`` in magnitude at some epoch after
     ``t_from_s`` (s) are drawn. With ``tracked=False`` (sorted order) crossings of nearly equal
     eigenvalues show as the paper's X-shape; ``tracked=True`` follows the branches.
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Eigen-decomposition of the normalised covariance over time.
+    modes : sequence of int, optional
+        Modes drawn, 1-based, one panel each.
+    min_component : float, optional
+        Smallest component magnitude of a state drawn.
+    time_unit : {"s", "min", "h"}, optional
+        Unit of the time axis.
+    tracked : bool, optional
+        Draw the tracked instead of the sorted eigenvectors.
+    ncols : int, optional
+        Panels per row.
+    t_from_s : float, optional
+        Time from which components are considered, s.
+    title : str or None, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     vectors = eig.tracked_vectors if tracked else eig.eigenvectors
     modes = list(modes)
@@ -128,7 +189,27 @@ def eigenvectors_figure(eig, modes: Sequence[int] = (1, 2, 3, 4, 5, 6), min_comp
 def ratio_figure(t, ratio, state_names: Sequence[str], states: Sequence[str] | None = None,
                  time_unit: str = "min", title: str | None = None):
     """Covariance ratio sigma_i(t0)/sigma_i(t) over time (log y), e.g. from
-    :func:`navlib.covariance.covariance_ratio`."""
+    :func:`navlib.covariance.covariance_ratio`.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Times, s.
+    ratio : numpy.ndarray
+        Covariance ratios, (N, n).
+    state_names : sequence of str
+        Names of the ``n`` columns.
+    states : sequence of str or None, optional
+        States drawn; None: all.
+    time_unit : {"s", "min", "h"}, optional
+        Unit of the time axis.
+    title : str or None, optional
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     names = list(state_names)
     states = names if states is None else list(states)
     fig, ax = subplots(figsize=(8, 4), constrained_layout=True)

@@ -75,6 +75,17 @@ def excitability_bars(analysis, ax=None):
 
     Dashed line at the analysis's ``e_threshold`` ("lies in S_O", 1/sqrt(2) by default),
     dotted at the "very low" share :data:`navlib.metrics.LOW`.
+
+    Parameters
+    ----------
+    analysis : Analysis
+        Result of :func:`navlib.metrics.analyze_trajectory`.
+    ax : matplotlib.axes.Axes or None, optional
+        Axes to draw on; None makes a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     fig, ax = (subplots(figsize=(11, 3.6)) if ax is None else (ax.figure, ax))
     names = analysis.state_names
@@ -104,7 +115,19 @@ def _bars_title(analysis) -> str:
 
 
 def energy_spectrum(analysis, ax=None):
-    """``S_tau(u^i)`` (Eq. 19) on a log axis per segment, the eta line and each ``ne``."""
+    """``S_tau(u^i)`` (Eq. 19) on a log axis per segment, the eta line and each ``ne``.
+
+    Parameters
+    ----------
+    analysis : Analysis
+        Result of :func:`navlib.metrics.analyze_trajectory`.
+    ax : matplotlib.axes.Axes or None, optional
+        Axes to draw on; None makes a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, ax = (subplots(figsize=(6, 3.6)) if ax is None else (ax.figure, ax))
     n = len(analysis.state_names)
     i_dir = np.arange(1, n + 1)
@@ -138,6 +161,17 @@ def excitability_figure(analysis, fig=None):
 
     ``fig``: a Figure made by this function to redraw in place (its two axes are cleared and
     redrawn, their positions kept), which widgets use to avoid a new layout per update.
+
+    Parameters
+    ----------
+    analysis : Analysis
+        Result of :func:`navlib.metrics.analyze_trajectory`.
+    fig : matplotlib.figure.Figure or None, optional
+        Figure to redraw in place.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     if fig is not None and _update_in_place(fig, analysis):
         return fig
@@ -203,7 +237,20 @@ def reshade_segments(fig, analysis) -> list:
     """Replace the segment shading of a :func:`sensability_figure` by that of the segments
     of ``analysis`` (coloured by phase when they have phases; or a plain list of
     ``(start, end)`` segments) in place; returns the new artists (for blitting
-    renderers)."""
+    renderers).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A :func:`sensability_figure`.
+    analysis : Analysis or list of tuple
+        The analysis whose segments are shaded, or ``(start, end)`` pairs, s.
+
+    Returns
+    -------
+    list
+        The new artists.
+    """
     axes = [ax for ax in fig.axes if any(a.get_gid() == "segment" for a in ax.patches)]
     for ax in axes:
         for artist in [*ax.patches, *ax.texts]:
@@ -252,7 +299,19 @@ def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: s
 
 
 def measures_figure(analysis, states: Sequence[str]):
-    """Sensability beside the PSINS covariance ratio ``sigma_i(t0)/sigma_i(t)`` (log)."""
+    """Sensability beside the PSINS covariance ratio ``sigma_i(t0)/sigma_i(t)`` (log).
+
+    Parameters
+    ----------
+    analysis : Analysis
+        Result of :func:`navlib.metrics.analyze_trajectory`.
+    states : sequence of str
+        States to plot.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     states = list(states)
     se = analysis.sensability
     ratio = covariance_ratio(se.sigma)
@@ -299,6 +358,17 @@ def sweep_figure(sweep, claim_ids: Sequence[str] | None = None):
 
     ``sweep`` as from :func:`navlib.studies.rocket.sensitivity_sweep`: a ``factor`` column,
     the factor columns, one boolean column per claim (default: all of them, in order).
+
+    Parameters
+    ----------
+    sweep : pandas.DataFrame
+        The sweep table.
+    claim_ids : sequence of str or None, optional
+        Claims shown as columns; None shows all.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     passed = [c for c in sweep.columns if sweep[c].dtype == bool]
     claim_ids = passed if claim_ids is None else list(claim_ids)

@@ -73,7 +73,21 @@ def response_figure(responses: Sequence, title: str | None = None, before: float
 
 def induced_figure(responses: Sequence, title: str | None = None, log: bool = True):
     """Outlier-induced error ``|d(t)|`` of several solutions on one axis, with the recovery
-    window's end marked (the quantity the verdict scores)."""
+    window's end marked (the quantity the verdict scores).
+
+    Parameters
+    ----------
+    responses : sequence
+        Outlier responses of :mod:`navlib.studies.outliers`, one per solution.
+    title : str or None, optional
+        Axes title.
+    log : bool, optional
+        Logarithmic y axis.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     responses = list(responses)
     fig, ax = subplots(figsize=(7.5, 3.6), constrained_layout=True)
     for i, r in enumerate(responses):
@@ -96,7 +110,19 @@ def induced_figure(responses: Sequence, title: str | None = None, log: bool = Tr
 
 
 def correlation_figure(frame, title: str | None = None):
-    """Correlation coefficients of ``T_E^B psi`` and ``psi_ref`` per axis (Fig. 10)."""
+    """Correlation coefficients of ``T_E^B psi`` and ``psi_ref`` per axis (Fig. 10).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Correlations with columns ``t``, ``axis`` and ``rho``.
+    title : str or None, optional
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, ax = subplots(figsize=(6.5, 3.4), constrained_layout=True)
     for axis, sel in frame.groupby("axis", sort=False):
         ax.plot(sel.t, sel.rho, label=axis)
@@ -112,7 +138,21 @@ def correlation_figure(frame, title: str | None = None):
 
 def roll_sigma_figure(frame, pairs=(("ins_gps", "ins_gps_rt"), ("ins_gps_att", "ins_gps_att_rt")),
                       axis: str = "roll"):
-    """Roll-error sigma with and without the reference trajectory (Figs. 7, 11), deg, log."""
+    """Roll-error sigma with and without the reference trajectory (Figs. 7, 11), deg, log.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Covariance evolution with a ``solution`` column and sigma columns, rad.
+    pairs : sequence of tuple of str, optional
+        ``(without RT, with RT)`` solution pairs, one panel each.
+    axis : str, optional
+        Attitude axis plotted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, axes = subplots(1, len(pairs), figsize=(5.4 * len(pairs), 3.4), squeeze=False,
                          constrained_layout=True)
     for ax, pair in zip(axes[0], pairs, strict=True):
@@ -132,7 +172,21 @@ def roll_sigma_figure(frame, pairs=(("ins_gps", "ins_gps_rt"), ("ins_gps_att", "
 
 def monte_carlo_figure(mc, watch: str = "roll", title: str | None = None):
     """Monte-Carlo errors with the outlier: RMS with and without it, the induced part and the
-    filter's sigma (the noise band a static error hides in)."""
+    filter's sigma (the noise band a static error hides in).
+
+    Parameters
+    ----------
+    mc : object
+        Monte-Carlo outlier result of :mod:`navlib.studies.outliers` (frame and score).
+    watch : str, optional
+        State plotted.
+    title : str or None, optional
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     label, f = _unit(watch)
     fr = mc.to_frame()
     fig, ax = subplots(figsize=(7.5, 3.6), constrained_layout=True)
@@ -156,7 +210,19 @@ def monte_carlo_figure(mc, watch: str = "roll", title: str | None = None):
 
 def consistency_figure(sim, title: str | None = None):
     """Run-averaged NEES and NIS of a :class:`navlib.filters.LinearSimulation` with their
-    95 % chi-square bounds."""
+    95 % chi-square bounds.
+
+    Parameters
+    ----------
+    sim : navlib.filters.LinearSimulation
+        The simulation.
+    title : str or None, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, axes = subplots(1, 2, figsize=(11, 3.4), constrained_layout=True)
     for ax, frame, key in ((axes[0], sim.nees_frame(), "nees"), (axes[1], sim.nis_frame(), "nis")):
         ax.plot(frame.t, frame[key], lw=0.8, label=f"mean {key.upper()}")
@@ -173,7 +239,19 @@ def consistency_figure(sim, title: str | None = None):
 
 
 def ekf_crosscheck_figure(check, title: str | None = None):
-    """Outlier-induced roll error through the closed-loop EKF and the linear filter."""
+    """Outlier-induced roll error through the closed-loop EKF and the linear filter.
+
+    Parameters
+    ----------
+    check : object
+        EKF cross-check of :mod:`navlib.studies.outliers.crosscheck`.
+    title : str or None, optional
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fr = check.to_frame()
     fig, ax = subplots(figsize=(7.5, 3.4), constrained_layout=True)
     ax.plot(fr.t, fr.ekf * 1e6, label=f"EKF ({check.score_ekf.verdict})")
@@ -190,7 +268,19 @@ def ekf_crosscheck_figure(check, title: str | None = None):
 
 def ekf_sigma_figure(frame, axes_names=("roll", "pitch", "yaw", "pos_x")):
     """EKF sigma against the covariance analysis, with the EKF's actual error
-    (:func:`navlib.studies.outliers.ekf_vs_covariance`); attitude in deg, position in m."""
+    (:func:`navlib.studies.outliers.ekf_vs_covariance`); attitude in deg, position in m.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Result of :func:`navlib.studies.outliers.ekf_vs_covariance`.
+    axes_names : sequence of str, optional
+        States plotted, one panel each.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, axes = subplots(1, len(axes_names), figsize=(4.2 * len(axes_names), 3.2),
                          squeeze=False, constrained_layout=True)
     for ax, name in zip(axes[0], axes_names, strict=True):

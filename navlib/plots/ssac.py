@@ -29,6 +29,17 @@ def ssac_sigma_figure(study: SSACStudy, limits=None):
 
     ``limits`` (a :func:`navlib.studies.ssac.closed_form_limits` frame) adds dashed lines at
     the eq. (44) limits of psiN/psiE and psiD.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The covariance run.
+    limits : pandas.DataFrame or None, optional
+        Closed-form limits drawn as dashed lines.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     names = set(study.state_names)
     panels = {k: tuple(s for s in v if s in names) for k, v in SIGMA_PANELS.items()}
@@ -59,6 +70,17 @@ def ssac_eigenvectors_figure(study: SSACStudy, tracked: bool = False):
 
     Sorted order (default) shows the X-shape exchanges; ``tracked=True`` follows each
     branch backwards from its 60 min direction.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The covariance run.
+    tracked : bool, optional
+        Follow each branch instead of the sorted order.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     return eigenvectors_figure(study.eigen, modes=range(1, 7), tracked=tracked, t_from_s=60.0,
                                title="eigenvectors of the six largest normalised eigenvalues"

@@ -31,6 +31,29 @@ def heatmap(frame, x: str, y: str, value: str, *, fixed: Mapping | None = None,
 
     ``threshold`` outlines the cells at or above it (e.g. ``1/sqrt(2)`` for "sensible").
     Returns the Figure (a new one unless ``ax`` is given).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Sweep results.
+    x, y : str
+        Columns on the horizontal and vertical axes.
+    value : str
+        Column shown.
+    fixed : Mapping or None, optional
+        Values of the other factors to select.
+    agg : str, optional
+        Aggregation of repeated cells.
+    threshold : float or None, optional
+        Cells at or above it are outlined.
+    ax : matplotlib.axes.Axes or None, optional
+        Axes to draw on.
+    cmap : str, optional
+        Colour map.
+    vmin, vmax : float or None, optional
+        Colour range.
+    title : str or None, optional
+        Axes title.
     """
     table = pivot(frame, x, y, value, fixed, agg)
     if ax is None:
@@ -67,7 +90,34 @@ def heatmaps_figure(frame, x: str, y: str, values: Sequence[str], *,
                     fixed: Mapping | None = None, agg: str = "mean",
                     thresholds: Mapping | None = None, titles: Mapping | None = None,
                     suptitle: str | None = None):
-    """Side-by-side heat maps of several result columns over the same axes."""
+    """Side-by-side heat maps of several result columns over the same axes.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Sweep results.
+    x, y : str
+        Columns on the horizontal and vertical axes.
+    values : sequence of str
+        Columns shown, one map each.
+    fixed : Mapping or None, optional
+        Values of the other factors to select.
+    agg : str, optional
+        Aggregation of repeated cells.
+    thresholds, titles : Mapping or None, optional
+        Per column: outline threshold; axes title.
+    suptitle : str or None, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    NavlibInputError
+        If ``values`` is empty.
+    """
     values = list(values)
     if not values:
         raise NavlibInputError("values: need at least one result column")

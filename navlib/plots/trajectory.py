@@ -28,6 +28,17 @@ def mark_events(ax, events: dict, which: Iterable[str] | None, label: bool) -> N
 
     Labels closer than 4 % of the time span to the previous one drop lower so they do not
     overprint each other.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    events : dict
+        Event name -> time, s.
+    which : iterable of str or None
+        Events marked; None: all.
+    label : bool
+        Write the names.
     """
     names = list(events) if which is None else [w for w in which if w in events]
     chosen = sorted((events[name], name) for name in names)
@@ -74,7 +85,19 @@ def axial_imu_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
 
 
 def altitude_speed_figure(traj, markers: Iterable[str] | None = ROCKET_MARKERS):
-    """Ellipsoidal height (km) and ECEF speed (m/s) vs time with event markers."""
+    """Ellipsoidal height (km) and ECEF speed (m/s) vs time with event markers.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The trajectory.
+    markers : iterable of str or None, optional
+        Events marked.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     _, _, alt = traj.geodetic
     speed = np.linalg.norm(traj.velocity, axis=1)
     fig, (ax_h, ax_v) = subplots(2, 1, sharex=True, figsize=(8, 5), layout="constrained")
@@ -102,7 +125,19 @@ def body_x_elevation(traj) -> np.ndarray:
 
 
 def launcher_figure(traj, markers: Iterable[str] | None = LAUNCHER_MARKERS):
-    """Launcher ascent: body specific force, body-x elevation (pitch) and height vs time."""
+    """Launcher ascent: body specific force, body-x elevation (pitch) and height vs time.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The launcher trajectory.
+    markers : iterable of str or None, optional
+        Events marked.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     _, _, alt = traj.geodetic
     fig, axes = subplots(3, 1, sharex=True, figsize=(8, 7), layout="constrained")
     for i, axis in enumerate("xyz"):
@@ -158,6 +193,21 @@ def closure_error_figure(closure, position_tol_m: float | None = 1.0,
     Logarithmic axes (exact zeros, e.g. on the pad, are left out); dashed lines show the
     tolerances a correct strapdown must meet on an exact-IMU trajectory (1 m and 0.1 mrad at
     the end of the flight, ``tests/trajectory/test_trajectory.py``).
+
+    Parameters
+    ----------
+    closure : pandas.DataFrame
+        Strapdown closure errors over time.
+    position_tol_m : float or None, optional
+        Position tolerance line, m.
+    attitude_tol_rad : float or None, optional
+        Attitude tolerance line, rad.
+    events : dict or None, optional
+        Event name -> time, s, marked.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     fig, axes = subplots(3, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
     series = [(closure.position_error, "position [m]", "C0", position_tol_m),

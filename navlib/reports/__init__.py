@@ -1,6 +1,6 @@
 """Run the workbook notebooks headlessly and publish them as HTML (the report command).
 
-Contract: spec/api.md "Reports — command line". :func:`run_reports` executes every
+Contract: docs/reports.md. :func:`run_reports` executes every
 ``NN_*.ipynb`` of a notebooks folder with papermill and writes each executed notebook, its
 HTML page (results only, no code) and an ``index.html`` saying what each page answers, with
 its headline, status and run time. Publishing

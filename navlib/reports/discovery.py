@@ -1,7 +1,7 @@
 """Which notebooks a report runs, and with which parameters.
 
 A report notebook is ``NN_name.ipynb`` in the notebooks folder; its tagged ``parameters``
-cell names what ``-p`` may inject (spec/api.md "Reports — command line"). ``quick=True`` and
+cell names what ``-p`` may inject (docs/reports.md). ``quick=True`` and
 explicit parameters reach only the notebooks whose parameters cell assigns that name, so
 papermill never warns about unknown parameters and ``-p imu_path x.csv`` reaches only the
 notebooks that read flight data.
@@ -138,7 +138,20 @@ def _matching(entry, available: Sequence[NotebookInfo]) -> list[str]:
 
 def dependencies(info: NotebookInfo, selected: Sequence[NotebookInfo]) -> set[str]:
     """The notebooks of ``selected`` that ``info`` starts after (its ``after`` entries
-    matched as ``--only`` entries; entries matching none are ignored)."""
+    matched as ``--only`` entries; entries matching none are ignored).
+
+    Parameters
+    ----------
+    info : NotebookInfo
+        The notebook.
+    selected : sequence of NotebookInfo
+        The notebooks of the run.
+
+    Returns
+    -------
+    set of str
+        Their names.
+    """
     return {name for entry in info.after for name in _matching(entry, selected)
             if name != info.name}
 
@@ -148,6 +161,22 @@ def select_notebooks(available: Sequence[NotebookInfo],
     """Filter ``available`` by ``only`` entries (stem, ``NN`` prefix, file name or path).
 
     Raises NavlibInputError listing the available notebooks for an entry matching none.
+
+    Parameters
+    ----------
+    available : sequence of NotebookInfo
+        The notebooks found.
+    only : iterable of str or None
+        Entries; None keeps all.
+
+    Returns
+    -------
+    list of NotebookInfo
+
+    Raises
+    ------
+    NavlibInputError
+        For an entry that matches no notebook.
     """
     if only is None:
         return list(available)
@@ -189,6 +218,17 @@ def parse_parameters(pairs: Iterable[Sequence[str]], cwd=None) -> dict[str, obje
     notebooks run with the notebooks folder as their working directory. A parameter whose
     name ends in ``_path`` must name an existing file or folder: a missing one is refused
     here, naming the folder it was looked up in, rather than inside the notebook.
+
+    Parameters
+    ----------
+    pairs : iterable of (str, str)
+        ``(key, value)`` pairs from the command line.
+    cwd : path-like or None, optional
+        Folder relative paths are resolved against; None: the current directory.
+
+    Returns
+    -------
+    dict
     """
     base = Path.cwd() if cwd is None else Path(cwd)
     out: dict[str, object] = {}
@@ -218,7 +258,21 @@ def parse_parameters(pairs: Iterable[Sequence[str]], cwd=None) -> dict[str, obje
 def parameters_for(info: NotebookInfo, quick: bool,
                    parameters: Mapping[str, object]) -> dict[str, object]:
     """What ``info`` is run with: ``quick=True`` and those of ``parameters`` that its
-    parameters cell assigns (the others are left out, not passed to papermill)."""
+    parameters cell assigns (the others are left out, not passed to papermill).
+
+    Parameters
+    ----------
+    info : NotebookInfo
+        The notebook.
+    quick : bool
+        Whether the run is quick.
+    parameters : Mapping
+        Parameters given on the command line.
+
+    Returns
+    -------
+    dict
+    """
     chosen: dict[str, object] = {}
     if quick and "quick" in info.parameters:
         chosen["quick"] = True

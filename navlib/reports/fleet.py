@@ -1,5 +1,5 @@
 """Many flights or missions in one run: ``python -m navlib assess`` and ``python -m navlib
-plan`` (spec api.md "Scale" and "Planning").
+plan`` (docs/sweeps.md).
 
 Each recorded flight (a ``LOG``: :func:`navlib.io.parse_log`) goes through
 :func:`navlib.studies.assess.assess_flight` as one task (:func:`navlib.parallel.map_tasks`)
@@ -82,6 +82,18 @@ def summary_row(label: str, build) -> tuple[dict, str | None]:
     segment, every warning caught and the seconds taken; a failure goes in ``error``. Besides
     the columns, ``row["states"]`` holds the result's
     :meth:`~navlib.studies.assess.FlightAssessment.states_table` (None when it failed).
+
+    Parameters
+    ----------
+    label : str
+        Name of the log or mission.
+    build : callable
+        ``build(warning_texts) -> (result, page)``.
+
+    Returns
+    -------
+    tuple of (dict, str or None)
+        The row and the HTML page (None when it failed).
     """
     start = time.perf_counter()
     row = dict.fromkeys(SUMMARY_COLUMNS, "")
@@ -124,6 +136,13 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
         The :data:`SUMMARY_COLUMNS` (``page`` is filled in by :func:`write_fleet`).
     page : str or None
         The flight's HTML page (None when it failed).
+
+    Parameters
+    ----------
+    log : str
+        Log specification (path, or path with a reader).
+    options : Mapping or None, optional
+        Keywords of :func:`navlib.studies.assess.assess_flight`.
     """
     def build(warning_texts):
         imu, gnss = read_log(log)
@@ -151,6 +170,22 @@ def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=N
     ``options`` are keywords of :func:`navlib.studies.assess.assess_flight` (checked here,
     before any task runs). Returns the summary table (one row per log, in order) and the
     HTML pages (None for failed flights).
+
+    Parameters
+    ----------
+    logs : sequence of str
+        Log specifications.
+    options : Mapping or None, optional
+        Keywords of :func:`navlib.studies.assess.assess_flight`.
+    scheduler : optional
+        Dask scheduler (:func:`navlib.parallel.map_tasks`).
+    progress : bool, optional
+        Show a progress bar.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``options`` names an unknown keyword.
     """
     logs = _checked_labels(logs, "logs")
     options = dict(options or {})
@@ -171,6 +206,20 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None,
     with and without a GNSS receiver is compared in one run. ``flight``: a recorded flight
     (a ``LOG``) assessed once with the plan's sensor preset and shown beside every plan
     (:func:`navlib.studies.plan.plan_beside_flight`).
+
+    Parameters
+    ----------
+    missions : sequence of str
+        Mission files.
+    options : Mapping or None, optional
+        Keywords of :func:`navlib.studies.plan.plan_mission`.
+    flight : str or None, optional
+        A recorded flight shown beside every plan.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``options`` names an unknown keyword.
     """
     missions = _checked_labels(missions, "missions")
     options = dict(options or {})
@@ -225,7 +274,17 @@ def _page_name(index: int, log: str) -> str:
 def write_fleet(table: pd.DataFrame, pages: Sequence, output) -> Path:
     """Write ``output/summary.csv``, ``output/states.csv`` (the stacked states tables of
     ``table.attrs["states"]``, one row per log x segment x state, when present) and one HTML
-    page per assessed flight or planned mission; returns the summary CSV."""
+    page per assessed flight or planned mission; returns the summary CSV.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Summary table (``attrs["states"]`` optional).
+    pages : sequence of str or None
+        HTML page per row.
+    output : pathlib.Path
+        Output folder (created).
+    """
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
     table = table.copy()

@@ -133,7 +133,15 @@ class KernelWatch:
 
     def received(self, msg: dict, at_slice_end: bool) -> None:
         """Record a message received from the kernel (``at_slice_end``: the poll that found
-        it was not woken, it returned when its slice expired)."""
+        it was not woken, it returned when its slice expired).
+
+        Parameters
+        ----------
+        msg : dict
+            The message (Jupyter protocol).
+        at_slice_end : bool
+            Whether the poll that found it returned at the end of its slice.
+        """
         now = time.monotonic()
         sent_at = msg.get("header", {}).get("date")
         if at_slice_end and isinstance(sent_at, _dt.datetime) and sent_at.tzinfo is not None:
@@ -321,7 +329,19 @@ def _classes() -> _Classes:
 
 def kernel_manager_class(watch: KernelWatch, env: Mapping[str, str] | None = None):
     """A kernel-manager class bound to ``watch`` and the kernel's extra environment ``env``
-    (papermill instantiates it itself)."""
+    (papermill instantiates it itself).
+
+    Parameters
+    ----------
+    watch : KernelWatch
+        The watch.
+    env : Mapping or None, optional
+        Extra environment of the kernel.
+
+    Returns
+    -------
+    type
+    """
     return type("WatchedKernelManager", (_classes().kernel_manager,),
                 {"watch": watch, "extra_env": dict(env or {})})
 
@@ -405,6 +425,21 @@ def execute_notebook(input_path, output_path, *, parameters: dict, cwd,
         that cell marked failed and an error output naming the reason).
     papermill.PapermillExecutionError
         A cell raised an exception.
+
+    Parameters
+    ----------
+    input_path, output_path : path-like
+        Notebook read and executed notebook written.
+    parameters : dict
+        Papermill parameters.
+    cwd : path-like
+        Working directory of the kernel.
+    timeout_s : float or None
+        Time limit per cell, s.
+    watch : KernelWatch
+        The watch that bounds the run.
+    env : Mapping or None, optional
+        Extra environment of the kernel.
     """
     import papermill  # heavy: loaded when the first notebook runs, not on import
 

@@ -1,7 +1,7 @@
 """Publishing a report: all or nothing, by an atomic swap of folders, with an index page.
 
 Pages are written to a staging folder next to the output folder and swapped into place only
-when every selected notebook succeeded (spec/api.md "Reports — command line"). Output layout
+when every selected notebook succeeded (docs/reports.md). Output layout
 (flat, inside the output folder)::
 
     index.html            per page: what it answers and its headline

@@ -1,6 +1,6 @@
 """What a report run returns: the outcome of each notebook, and the error naming the failures.
 
-Contract: spec/api.md "Reports — command line" (the notebook and cell named on failure).
+Contract: docs/reports.md (the notebook and cell named on failure).
 """
 
 from __future__ import annotations

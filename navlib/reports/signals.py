@@ -1,7 +1,7 @@
 """Signals during a report run: Ctrl-C and SIGTERM end it cleanly, never half-way through a swap.
 
 A run turns SIGINT and SIGTERM into :class:`ReportInterrupted`, so its kernels are stopped and
-its staging folder removed (spec/api.md "Reports — command line"); the two renames that
+its staging folder removed (docs/reports.md); the two renames that
 publish a report hold both signals until they are done.
 """
 

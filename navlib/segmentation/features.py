@@ -1,4 +1,5 @@
-"""Kinematic features of a trajectory that the segmentation reads (ECEF, spec excitability.md §3).
+"""Kinematic features of a trajectory that the segmentation reads (ECEF, docs/assumptions.md,
+excitability.md §3).
 
 :func:`flight_features` gives them per sample: speed, kinematic acceleration
 ``a^e = f^e + gamma(P) - 2 Omega x V``, specific force along and across the path, the body
@@ -50,6 +51,17 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
         flight's lowest point (m) and ``sideslip`` the horizontal angle between the body
         x axis and the velocity (rad, in [0, pi]; 0 below ``turn_speed_m_s`` or with the
         body x axis within 5 deg of vertical).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The (fitted) trajectory.
+    direction_speed_m_s : float, optional
+        Speed above which the path direction is ``V/|V|``, m/s.
+    rest_accel_m_s2 : float, optional
+        Acceleration below which the direction is undefined at low speed, m/s^2.
+    turn_speed_m_s : float, optional
+        Speed above which the path rate counts, m/s.
     """
     t, P, V, f_b, w_ib_b, C_b_e = trajectory_arrays(trajectory)
     omega = earth.EARTH_RATE_ECEF
@@ -105,7 +117,19 @@ def flight_features(trajectory, direction_speed_m_s: float = 1.0,
 
 
 def window_means(features: pd.DataFrame, resolution_s: float) -> pd.DataFrame:
-    """Average the per-sample features over consecutive windows of ``resolution_s``."""
+    """Average the per-sample features over consecutive windows of ``resolution_s``.
+
+    Parameters
+    ----------
+    features : pandas.DataFrame
+        Result of :func:`flight_features`.
+    resolution_s : float
+        Window length, s.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
     t = features["t"].to_numpy()
     t0, t1 = float(t[0]), float(t[-1])
     n_bins = max(int(np.ceil((t1 - t0) / resolution_s - 1e-9)), 1)

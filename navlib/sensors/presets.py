@@ -3,8 +3,7 @@
 Preset files carry unit-suffixed keys (``gyro_bias_deg_h``, ``accel_vrw_ug_sqrt_hz``...);
 :data:`_UNITS` lists every accepted spelling, all converted through :mod:`navlib.units`.
 Each preset records its ``source`` and the keys whose values are ``assumed``. The error
-terms are those of the measurement model of :mod:`navlib.sensors` (docs/assumptions.md,
-excitability.md A1, A7).
+terms are those of the measurement model of :mod:`navlib.sensors` (docs/assumptions.md A1, A7).
 """
 
 from __future__ import annotations

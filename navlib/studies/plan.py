@@ -317,6 +317,22 @@ def plan_beside_flight(plan: MissionPlan, flight: FlightAssessment) -> pd.DataFr
     sensible in at least one segment of that phase, at each analysis's own thresholds),
     ``sensible_only_planned`` and ``sensible_only_flown`` (the differences). A phase
     missing on one side shows ``-`` there.
+
+    Parameters
+    ----------
+    plan : MissionPlan
+        Result of :func:`plan_mission`.
+    flight : FlightAssessment
+        Result of :func:`~navlib.studies.assess.assess_flight` for the same vehicle.
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Raises
+    ------
+    NavlibInputError
+        If either is of the wrong type or their models' states differ.
     """
     if not isinstance(plan, MissionPlan):
         raise NavlibInputError(f"plan: expected a MissionPlan (plan_mission), got "
@@ -362,6 +378,30 @@ def plan_point(mission, sensors_preset: str | None = None, spin_hz: float | None
     ``n_excitable`` / ``n_sensible`` (states excitable or sensible in at least one segment),
     ``n_sensible_end`` (states with ``s >= s_threshold`` at the last epoch) and, per
     state, ``share_<state>`` (share of epochs sensible) and ``sigma_end_<state>`` (SI).
+
+    Parameters
+    ----------
+    mission : Mission, Mapping or path-like
+        The mission.
+    sensors_preset : str or None, optional
+        Sensor preset; None: the mission's.
+    spin_hz : float or None, optional
+        Rocket roll rate, Hz; None: the mission's.
+    outage_start_s : float or None, optional
+        Start of the one GNSS outage, s.
+    outage_s : float, optional
+        Its length, s (0: the mission's outages).
+    s_threshold, e_threshold : float, optional
+        Sensability and excitability thresholds.
+    min_fraction : float, optional
+        Smallest share of a segment's epochs with ``s >= s_threshold`` for a state to count as
+        sensible in it.
+    model_step_s : float or None, optional
+        Step of the error model, s.
+
+    Returns
+    -------
+    dict
     """
     changes = {"rocket.spin_hz": spin_hz} if spin_hz is not None else None
     outages = None

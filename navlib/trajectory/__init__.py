@@ -1,6 +1,6 @@
 """Reference trajectories whose IMU signals satisfy the ECEF kinematics exactly.
 
-Contract (spec/api.md): ``sounding_rocket``, ``launcher_ascent``, ``stationary``,
+Contract (docs/library.md): ``sounding_rocket``, ``launcher_ascent``, ``stationary``,
 ``fit_flight_data``, ``from_mission`` and the :class:`Trajectory` type.
 """
 

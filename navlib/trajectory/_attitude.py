@@ -8,7 +8,7 @@ where ``L`` is a *fixed* frame (constant in ECEF) chosen so that the pitch ``the
 far from +-90 deg along the whole flight: the only singularity of the yaw-pitch-roll
 sequence is then never approached, even for a vertical launch or a fast-spinning body
 (``phi`` and ``psi`` are unwrapped, so any number of turns is fine). With smooth angle
-functions the body rate follows analytically from the Euler kinematics (spec
+functions the body rate follows analytically from the Euler kinematics (docs/assumptions.md,
 excitability.md §4, "pointing + roll"):
 
 ``omega_eb^b = [phi' - psi' sin(theta),

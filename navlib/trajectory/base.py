@@ -1,7 +1,7 @@
 """The Trajectory type and the exact-IMU construction every generator shares.
 
-IMU signals are consistent with the kinematics by construction (spec excitability.md §4):
-given a smooth ECEF position ``P(t)`` with derivatives and a smooth attitude ``C_b_e(t)``
+IMU signals are consistent with the kinematics by construction (docs/assumptions.md, excitability.md
+§4): given a smooth ECEF position ``P(t)`` with derivatives and a smooth attitude ``C_b_e(t)``
 with its body rate ``omega_eb^b``,
 
 * ``f^b = C_e^b (dV/dt + 2 Omega x V - gamma(P))``
@@ -25,7 +25,7 @@ from navlib._validation import finite_array, increasing_times
 
 @dataclass(frozen=True, eq=False)
 class Trajectory:
-    """A reference trajectory sampled at its IMU rate (contract: spec/api.md).
+    """A reference trajectory sampled at its IMU rate (contract: docs/library.md).
 
     Attributes
     ----------
@@ -121,7 +121,8 @@ def exact_imu(position, velocity, acceleration, C_b_e, w_eb_b):
     Returns
     -------
     f_b, w_ib_b : ndarray (N, 3)
-        Specific force and inertial angular rate in body axes (spec excitability.md §4).
+        Specific force and inertial angular rate in body axes (docs/assumptions.md, excitability.md
+        §4).
     """
     omega = earth.EARTH_RATE_ECEF
     f_e = acceleration + 2.0 * np.cross(omega, velocity) - earth.normal_gravity_ecef(position)
@@ -133,7 +134,34 @@ def exact_imu(position, velocity, acceleration, C_b_e, w_eb_b):
 
 def build_trajectory(t, position, velocity, acceleration, C_b_e, w_eb_b, *, events=None,
                      name="", parameters=None) -> Trajectory:
-    """Assemble a :class:`Trajectory` whose IMU is exact for the given smooth kinematics."""
+    """Assemble a :class:`Trajectory` whose IMU is exact for the given smooth kinematics.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Strictly increasing times, s, (N,).
+    position, velocity, acceleration : numpy.ndarray
+        ECEF kinematics, m, m/s, m/s^2, each (N, 3).
+    C_b_e : numpy.ndarray
+        Body -> ECEF attitude, (N, 3, 3).
+    w_eb_b : numpy.ndarray
+        Body rate relative to ECEF, body axes, rad/s, (N, 3).
+    events : dict or None, optional
+        Event name -> time, s.
+    name : str, optional
+        Trajectory name.
+    parameters : dict or None, optional
+        Settings recorded with it.
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    NavlibInputError
+        If an array has the wrong shape, is not finite, or ``t`` is not increasing.
+    """
     t = increasing_times(t, "t")
     n = t.size
     position = finite_array(position, "position", (n, 3))

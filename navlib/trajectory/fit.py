@@ -1,11 +1,11 @@
 """A kinematically exact reference trajectory fitted to recorded flight data.
 
-The idea of Giribet et al. (2007), as used by España et al. (2019, spec excitability.md
-§4): find the smooth B-spline trajectory that best fits the recorded IMU and GNSS data in
-a least-squares sense and whose IMU signals satisfy the kinematics (spec Eq. 1) exactly.
-Its IMU is then re-derived from the splines with
-:func:`navlib.trajectory.base.exact_imu`, so a correct strapdown integrating it reproduces
-the fitted position and attitude to the last digit of the integrator.
+The idea of Giribet et al. (2007), as used by España et al. (2019, docs/assumptions.md,
+excitability.md §4): find the smooth B-spline trajectory that best fits the recorded IMU and GNSS
+data in a least-squares sense and whose IMU signals satisfy the kinematics (spec Eq. 1) exactly. Its
+IMU is then re-derived from the splines with :func:`navlib.trajectory.base.exact_imu`, so a correct
+strapdown integrating it reproduces the fitted position and attitude to the last digit of the
+integrator.
 
 How it works (initial attitude, attitude history, the position spline with its attitude
 correction and IMU calibration, the attitude spline on SO(3), holes and rates, the residuals
@@ -203,6 +203,18 @@ def rate_and_holes(t, max_bridge_s):
     """Median IMU rate (Hz) and the holes (index of the sample after each) to bridge.
 
     Refuses rates below :data:`MIN_IMU_RATE_HZ` and holes longer than ``max_bridge_s``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU times, s.
+    max_bridge_s : float
+        Longest hole bridged, s.
+
+    Raises
+    ------
+    NavlibInputError
+        If the rate is too low or a hole too long.
     """
     dt = np.diff(t)
     rate = float(1.0 / np.median(dt))
@@ -231,6 +243,15 @@ def hole_bounds(t, f_b, w_b, after):
     attitude error stays below ``theta = |w_b - w_a| L / 2`` and the position error below
     ``(|f_b - f_a| / 2 + |f| theta) L^2 / 8`` (the deflection of a string of length ``L``
     pinned at both ends under that acceleration error).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU times, s.
+    f_b, w_b : numpy.ndarray
+        Specific force, m/s^2, and angular rate, rad/s, (N, 3).
+    after : numpy.ndarray
+        Index of the sample after each hole.
     """
     out = []
     for k in after:

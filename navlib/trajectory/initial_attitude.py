@@ -38,6 +38,20 @@ def level_attitude(f_b, gamma_e, C_n_e):
     horizontal part of the body x axis (of the body y axis when x is within 1 deg of the
     vertical, as on a vertical launch rail) then points North of the geodetic NED frame
     ``C_n_e``. The caller turns the result about the vertical to the heading.
+
+    Parameters
+    ----------
+    f_b : numpy.ndarray
+        Mean specific force at rest, body axes, m/s^2, (3,).
+    gamma_e : numpy.ndarray
+        Gravity in ECEF, m/s^2, (3,).
+    C_n_e : numpy.ndarray
+        NED -> ECEF rotation matrix at the site, (3, 3).
+
+    Returns
+    -------
+    scipy.spatial.transform.Rotation
+        Body -> ECEF attitude.
     """
     d_b = -f_b / np.linalg.norm(f_b)
     z_e = gamma_e / np.linalg.norm(gamma_e)
@@ -108,6 +122,20 @@ def min_level_s(preset, rate_hz, tilt_deg):
     100 Hz and 0.1 deg this is the 10-sample floor, 0.1 s: the 0.3 s an AltOS log keeps
     before boost is enough. The accelerometer bias limits the tilt as well (0.1 m/s^2 is
     0.6 deg) whatever the window; the fit's attitude correction absorbs part of it.
+
+    Parameters
+    ----------
+    preset : str or dict
+        IMU noise preset.
+    rate_hz : float
+        IMU rate, Hz.
+    tilt_deg : float
+        Wanted tilt accuracy, deg (1 sigma).
+
+    Returns
+    -------
+    float
+        Window length, s.
     """
     sigma_f, _ = _white_sigmas(preset, rate_hz)
     n = np.pi / 2.0 * (sigma_f / (G0 * tilt_deg * DEG)) ** 2
@@ -121,7 +149,28 @@ def quiet_window(t, f_b, w_b, g, p, gnss=None):
     before the window only, and the window grows over the run of neighbouring windows at
     rest); a window of ``level_s`` later; a short one later (a later window's attitude is
     carried back by the gyros, through all the flight's rotation, so an early short
-    window is preferred to it). Returns sample indices and a description."""
+    window is preferred to it). Returns sample indices and a description.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU time stamps, s.
+    f_b : numpy.ndarray
+        Specific force, m/s^2, (N, 3).
+    w_b : numpy.ndarray
+        Angular rate, rad/s, (N, 3).
+    g : float
+        Local gravity magnitude, m/s^2.
+    p : dict
+        Fit settings (``preset``, ``level_s``, ``level_search_s``, ``level_tilt_deg`` ...).
+    gnss : pandas.DataFrame or None, optional
+        GNSS fixes, used to check that the vehicle is at rest.
+
+    Raises
+    ------
+    NavlibInputError
+        If no window is at rest.
+    """
     rate = 1.0 / float(np.median(np.diff(t)))
     short_s = min_level_s(p["preset"], rate, p["level_tilt_deg"])
     tries = [(p["level_s"], False)] + ([(short_s, True)] if short_s < p["level_s"] else [])
@@ -241,7 +290,21 @@ def _attached_near(imu, key, columns, t0_s, valid=None):
 
 def logged_attitude(imu, t0_s, C_n_e):
     """Body -> ECEF attitude at ``t0_s`` from the autopilot attitude a reader attached
-    (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None."""
+    (``imu.attrs["attitude"]``: ``t, qw, qx, qy, qz``, body -> NED), or None.
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record.
+    t0_s : float
+        Time, s.
+    C_n_e : numpy.ndarray
+        NED -> ECEF rotation matrix, (3, 3).
+
+    Returns
+    -------
+    scipy.spatial.transform.Rotation or None
+    """
     found = _attached_near(imu, "attitude", ("qx", "qy", "qz", "qw"), t0_s,
                            valid=lambda q: np.linalg.norm(q, axis=1) > 0.5)
     if found is None:
@@ -255,7 +318,20 @@ def logged_attitude(imu, t0_s, C_n_e):
 
 
 def heading_of(C_b_e0, C_n_e):
-    """Azimuth (rad) of the body x axis at the start."""
+    """Azimuth (rad) of the body x axis at the start.
+
+    Parameters
+    ----------
+    C_b_e0 : scipy.spatial.transform.Rotation
+        Body -> ECEF attitude.
+    C_n_e : numpy.ndarray
+        NED -> ECEF rotation matrix, (3, 3).
+
+    Returns
+    -------
+    float
+        Heading, rad.
+    """
     x_n = C_n_e.T @ C_b_e0.apply([1.0, 0.0, 0.0])
     return float(np.arctan2(x_n[1], x_n[0]))
 
@@ -270,6 +346,26 @@ def coarse_heading(t, f_e, axis_e, t_g, P_g, V_g=None):
     the second difference of positions (the acceleration averaged with a triangle weight,
     against the same weighting of the IMU). Velocity differences are far less noisy: at
     5 Hz, 2 m of position noise make second differences of ~100 m/s^2.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU time stamps, s.
+    f_e : numpy.ndarray
+        IMU specific force in ECEF, m/s^2, (N, 3).
+    axis_e : numpy.ndarray
+        Vertical, ECEF unit vector.
+    t_g : numpy.ndarray
+        GNSS time stamps, s.
+    P_g : numpy.ndarray
+        GNSS positions, ECEF, m.
+    V_g : numpy.ndarray or None, optional
+        GNSS velocities, ECEF, m/s.
+
+    Returns
+    -------
+    float
+        Heading correction, rad.
     """
     c_f = np.r_[np.zeros((1, 3)), np.cumsum(f_e, axis=0)]
     c_1 = np.arange(t.size + 1, dtype=float)
@@ -336,6 +432,34 @@ def start_attitude(imu, t, f_b, w_b, p, gamma0, C_n_e, gnss, earth_turn, relativ
     unless level). ``pad_end``: index of the lift-off sample
     (:func:`navlib.trajectory.liftoff.find_liftoff`); the levelling window then lies on the
     pad, never after lift-off (docs/assumptions.md FIT4).
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record (its ``attrs`` may carry a logged tilt).
+    t : numpy.ndarray
+        IMU time stamps, s.
+    f_b : numpy.ndarray
+        Specific force, m/s^2, (N, 3).
+    w_b : numpy.ndarray
+        Angular rate, rad/s, (N, 3).
+    p : dict
+        Fit settings.
+    gamma0 : numpy.ndarray
+        Gravity at the start, ECEF, m/s^2.
+    C_n_e : numpy.ndarray
+        NED -> ECEF rotation matrix, (3, 3).
+    gnss : pandas.DataFrame or None
+        GNSS fixes.
+    earth_turn, relative : scipy.spatial.transform.Rotation
+        Earth rotation and gyro-integrated body rotation since ``t[0]``, per sample.
+    pad_end : int or None, optional
+        Index of the lift-off sample.
+
+    Raises
+    ------
+    NavlibInputError
+        If no rest window, logged tilt or launch elevation is available.
     """
     pad = slice(None) if pad_end is None else slice(0, pad_end + 1)
     try:

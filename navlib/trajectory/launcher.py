@@ -1,4 +1,4 @@
-"""Satellite-launcher endo-atmospheric ascent from Churchill (spec launcher.md §4).
+"""Satellite-launcher endo-atmospheric ascent from Churchill (docs/assumptions.md, launcher.md §4).
 
 The paper's launcher simulator (DRDC) is not available; what the paper states is kept
 and the rest is a documented surrogate:
@@ -118,7 +118,18 @@ _FRAME_ELEVATION = 45.0 * DEG
 
 
 def launch_azimuth(lat, inclination):
-    """Northerly launch azimuth (rad) reaching ``inclination`` from latitude ``lat`` (rad)."""
+    """Northerly launch azimuth (rad) reaching ``inclination`` from latitude ``lat`` (rad).
+
+    Parameters
+    ----------
+    lat, inclination : float
+        Launch latitude and orbit inclination, rad.
+
+    Raises
+    ------
+    NavlibInputError
+        If the inclination cannot be reached by a direct ascent.
+    """
     ratio = math.cos(inclination) / math.cos(lat)
     if abs(ratio) > 1.0:
         raise NavlibInputError(
@@ -229,7 +240,8 @@ class _Bending:
 
 @cache.cached
 def launcher_ascent(**overrides) -> Trajectory:
-    """Churchill launcher, endo-atmospheric ascent, exact 200 Hz IMU (spec launcher.md §4).
+    """Churchill launcher, endo-atmospheric ascent, exact 200 Hz IMU (docs/assumptions.md,
+    launcher.md §4).
 
     Parameters
     ----------

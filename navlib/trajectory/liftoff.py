@@ -36,7 +36,22 @@ LIFTOFF_KNOTS_S = 0.4
 
 def moving_average(t, x, window_s):
     """Centred moving average of ``x`` (N, k) over ``window_s`` of time (uneven sampling
-    allowed: the mean of the samples within +- ``window_s / 2`` of each)."""
+    allowed: the mean of the samples within +- ``window_s / 2`` of each).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s, (N,).
+    x : numpy.ndarray
+        Values, (N, k).
+    window_s : float
+        Window length, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        (N, k).
+    """
     c = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
     i0 = np.searchsorted(t, t - 0.5 * window_s, side="left")
     i1 = np.searchsorted(t, t + 0.5 * window_s, side="right")
@@ -53,6 +68,19 @@ def find_liftoff(t, f_b, w_b, g, tolerance):
     ``|f|`` within ``tolerance * g`` of gravity (the levelling tolerance) and their mean
     rate below ``PAD_RATE_DEG_S``. Returns ``(t_liftoff, index)``: the pad is
     ``t[:index + 1]``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU times, s.
+    f_b : numpy.ndarray
+        Specific force, m/s^2, (N, 3).
+    w_b : numpy.ndarray
+        Angular rate, rad/s, (N, 3).
+    g : float
+        Local gravity, m/s^2.
+    tolerance : float
+        Levelling tolerance, a fraction of ``g``.
     """
     a = moving_average(t, np.linalg.norm(f_b, axis=1)[:, None], LIFTOFF_SMOOTH_S)[:, 0] - g
     high = a > LIFTOFF_ACCEL_MPS2
@@ -85,6 +113,15 @@ def liftoff_knots(knots, t, pad_end):
     acceleration may jump, as thrust does when the vehicle leaves the pad; the dense knots
     let it follow a thrust ramp of a few hundredths of a second, which one knot interval of
     0.1 s cannot (docs/assumptions.md FIT4). Knots of ``knots`` in that stretch are replaced.
+
+    Parameters
+    ----------
+    knots : numpy.ndarray
+        Knot vector.
+    t : numpy.ndarray
+        Sample times, s.
+    pad_end : int
+        Index of the lift-off sample.
     """
     t_lift = float(t[pad_end])
     if not t[0] < t_lift < t[-1]:
@@ -105,7 +142,21 @@ def gnss_still(t_g, P_g, t_liftoff):
     (least squares, at least 3 fixes; fewer say nothing against a pad) moves slower than
     ``PAD_GNSS_SPEED_MPS`` plus three standard errors of its speed (from the scatter of the
     fixes about the line). An IMU at rest on a hovering or drifting vehicle reads as a pad;
-    the GNSS tells them apart (docs/assumptions.md FIT4)."""
+    the GNSS tells them apart (docs/assumptions.md FIT4).
+
+    Parameters
+    ----------
+    t_g : numpy.ndarray
+        GNSS times, s.
+    P_g : numpy.ndarray
+        GNSS positions, ECEF, m, (M, 3).
+    t_liftoff : float
+        Lift-off time, s.
+
+    Returns
+    -------
+    bool
+    """
     sel = t_g <= t_liftoff
     if sel.sum() < 3:
         return True

@@ -3,7 +3,8 @@
 Method step 3 of :mod:`navlib.trajectory.fit`: ``P(t)`` is a quintic B-spline whose
 coefficients solve one weighted least-squares problem with GNSS position (and velocity) rows
 and, at every IMU sample, the kinematic rows
-``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'`` (spec excitability.md Eq. 1).
+``P'' = (I + S(eps(t))) C_b_e f^b + gamma(P) - 2 Omega x P'`` (docs/assumptions.md,
+excitability.md Eq. 1).
 :class:`PositionRows` holds the banded normal equations (one Cholesky factorisation for the
 three axes); :class:`AttitudeCorrection` the slowly varying attitude correction ``eps(t)``
 and the constant accelerometer bias, eliminated through a Schur complement.
@@ -64,6 +65,20 @@ def place_knots(t, spacing, turn=None):
     rotation angle of the body at ``t``, rad) the grid is uniform in
     ``(t - t[0]) / spacing + turn / MAX_TURN_PER_KNOT_RAD`` instead, so no knot interval
     turns the body by more than ``MAX_TURN_PER_KNOT_RAD`` (the attitude spline).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    spacing : float
+        Knot spacing, s.
+    turn : numpy.ndarray or None, optional
+        Cumulative body rotation at ``t``, rad.
+
+    Returns
+    -------
+    numpy.ndarray
+        Knot vector.
     """
     t0, t1 = float(t[0]), float(t[-1])
     if turn is None:
@@ -84,7 +99,22 @@ def place_knots(t, spacing, turn=None):
 
 def thin(t, knots, per_interval):
     """Indices of the samples kept for a fit on ``knots``: in each knot interval with ``c``
-    samples, every ``max(1, c // per_interval)``-th one (the first and last sample always)."""
+    samples, every ``max(1, c // per_interval)``-th one (the first and last sample always).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    knots : numpy.ndarray
+        Knot vector.
+    per_interval : int
+        Samples kept per knot interval, about.
+
+    Returns
+    -------
+    numpy.ndarray
+        Kept indices.
+    """
     inner = knots[SPLINE_DEGREE + 1:-SPLINE_DEGREE - 1]
     interval = np.searchsorted(inner, t, side="right")
     first = np.searchsorted(interval, np.arange(inner.size + 1), side="left")
@@ -155,6 +185,15 @@ class PositionRows:
         The first call also raises ``sigma_f`` to the robust scale of the residuals
         (1.4826 x their median absolute value) when that is larger: vibration then weighs
         as the noise it is against the GNSS rows.
+
+        Parameters
+        ----------
+        coef : numpy.ndarray
+            Spline coefficients, (m, 3).
+        f_e : numpy.ndarray
+            Specific force in ECEF, m/s^2, (N, 3).
+        eps : numpy.ndarray
+            Attitude correction rotation vectors, (N, 3).
         """
         P, V, a = self.evaluate(coef)
         r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
@@ -179,6 +218,19 @@ class PositionRows:
         With a :class:`AttitudeCorrection`, the specific force rows read
         ``P'' = (I + S(eps(t))) C f + gamma - 2 Omega x V``; ``eps`` is eliminated through
         its Schur complement (a small dense system) so the banded solve stays banded.
+
+        Parameters
+        ----------
+        f_e : numpy.ndarray
+            Specific force in ECEF, m/s^2, (N, 3).
+        coef : numpy.ndarray or None
+            Current coefficients (None: the start values).
+        correction : AttitudeCorrection or None, optional
+            Attitude correction to estimate with the position.
+        C : numpy.ndarray or None, optional
+            Body -> ECEF matrices, (N, 3, 3).
+        f_b : numpy.ndarray or None, optional
+            Body specific force, m/s^2, (N, 3).
         """
         if coef is None:
             P, V = self.P0, self.V0
@@ -265,7 +317,21 @@ class AttitudeCorrection:
     def columns(self, f_e, C, f_b=None):
         """Sparse ``G[a]`` (N, n_u) for the axes a: ``beta_i(t_k) (e_j x f_e(t_k))_a`` for
         ``eps``, ``-C_b_e[k, a, j]`` for the bias and ``-C_b_e[k, a, j] f_b[k, j]`` for the
-        scale error."""
+        scale error.
+
+        Parameters
+        ----------
+        f_e : numpy.ndarray
+            Specific force in ECEF, m/s^2, (N, 3).
+        C : numpy.ndarray
+            Body -> ECEF matrices, (N, 3, 3).
+        f_b : numpy.ndarray or None, optional
+            Body specific force, m/s^2, (N, 3).
+
+        Returns
+        -------
+        list of scipy.sparse.csr_array
+        """
         out = []
         for a in range(3):
             blocks = []
@@ -288,7 +354,20 @@ class AttitudeCorrection:
 
 def resolved_samples(t, w_b):
     """True where no sample within ``UNRESOLVED_MARGIN_S`` turns the body by more than
-    ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one."""
+    ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    w_b : numpy.ndarray
+        Angular rate, rad/s, (N, 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean mask, (N,).
+    """
     step = np.diff(t, prepend=t[0])
     fast = np.linalg.norm(w_b, axis=1) * step > MAX_TURN_PER_SAMPLE_RAD
     c = np.r_[0, np.cumsum(fast)]

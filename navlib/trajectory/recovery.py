@@ -100,7 +100,17 @@ class Canopy:
         return float(self.up @ (P - self.P0))
 
     def blend(self, t, V, acc):
-        """The ECEF acceleration ``acc`` of free flight blended into the canopy law."""
+        """The ECEF acceleration ``acc`` of free flight blended into the canopy law.
+
+        Parameters
+        ----------
+        t : float
+            Time, s.
+        V : numpy.ndarray
+            ECEF velocity, m/s.
+        acc : numpy.ndarray
+            Free-flight ECEF acceleration, m/s^2.
+        """
         c = step(t, self.t_drogue, self.p["drogue_inflation_s"])
         if c == 0.0:
             return acc
@@ -124,7 +134,15 @@ class Canopy:
         return s, ds / width
 
     def spin(self, t, ascent_spin):
-        """Roll rate on the grid ``t``: the ascent spin blended into the canopy spin."""
+        """Roll rate on the grid ``t``: the ascent spin blended into the canopy spin.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times, s.
+        ascent_spin : numpy.ndarray
+            Ascent roll rate, rad/s.
+        """
         c, _ = self.hang(t)
         return (1.0 - c) * ascent_spin + c * 2.0 * np.pi * self.p["canopy_spin_hz"]
 
@@ -132,7 +150,17 @@ class Canopy:
         """Yaw and pitch of the flight direction in :func:`recovery_frame` (and rates) turned
         with the :meth:`hang` weight to the riser: body x straight up, tilted by the swing
         ``canopy_swing_deg sin(2 pi (t - t_drogue) / canopy_swing_period_s)`` in the
-        vertical plane of the launch azimuth."""
+        vertical plane of the launch azimuth.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times, s.
+        psi, theta : numpy.ndarray
+            Yaw and pitch, rad.
+        dpsi, dtheta : numpy.ndarray
+            Their rates, rad/s.
+        """
         c, dc = self.hang(t)
         keep = 1.0 - c
         omega = 2.0 * np.pi / self.p["canopy_swing_period_s"]
@@ -146,7 +174,20 @@ class Canopy:
 def recovery_frame(lat, lon, azimuth):
     """Fixed frame with x up, y horizontal along ``azimuth`` and z across: the body axis of a
     recovery flight (up the rail, over apogee along the azimuth, down, back up the riser)
-    stays in its x-y plane, far from the yaw-pitch-roll singularity."""
+    stays in its x-y plane, far from the yaw-pitch-roll singularity.
+
+    Parameters
+    ----------
+    lat, lon : float
+        Pad latitude and longitude, rad.
+    azimuth : float
+        Launch azimuth, rad.
+
+    Returns
+    -------
+    numpy.ndarray
+        Frame -> ECEF rotation matrix, (3, 3).
+    """
     C_n_e = np.asarray(earth.ned_to_ecef_matrix(lat, lon))
     up = np.array([0.0, 0.0, -1.0])
     along = np.array([math.cos(azimuth), math.sin(azimuth), 0.0])
@@ -176,7 +217,30 @@ def _first_crossing(rhs, t0, y0, t_stop, cuts, event, rtol, atol):
 def deployments(rhs, canopy: Canopy, t_start, y_start, t_cap, cuts, rtol=1e-10, atol=1e-6):
     """Find apogee, the deployments and touchdown along the flight, setting the canopy's
     times. ``y_start`` is the state at ``t_start`` (after burnout). Returns the events and
-    the end time of the flight (touchdown or ``t_cap``)."""
+    the end time of the flight (touchdown or ``t_cap``).
+
+    Parameters
+    ----------
+    rhs : callable
+        Right-hand side of the flight ODE, ``rhs(t, y)``.
+    canopy : Canopy
+        The canopy, whose times are set.
+    t_start : float
+        Start time, s.
+    y_start : numpy.ndarray
+        State at ``t_start``.
+    t_cap : float
+        Latest end time, s.
+    cuts : sequence of float
+        Times where the integration is split, s.
+    rtol, atol : float, optional
+        Tolerances of the ODE solver.
+
+    Raises
+    ------
+    NavlibInputError
+        If the flight turns too far at apogee.
+    """
     p = canopy.p
     events = {}
     t_apo, y = _first_crossing(rhs, t_start, y_start, t_cap, cuts,

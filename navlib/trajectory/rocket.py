@@ -1,11 +1,11 @@
-"""VS30-like sounding-rocket flight with an exact IMU (spec excitability.md §3-4).
+"""VS30-like sounding-rocket flight with an exact IMU (docs/assumptions.md, excitability.md §3-4).
 
 The paper (España, Carrizo & Giribet 2019) gives only the event times and a few
 magnitudes: pad until 18 s, boost 18-46 s with aerodynamic spin and a peak axial specific
 force of about 110 m/s^2, a sign change of the axial specific force at 46 s, near free
 flight (|f| < 0.5 m/s^2) above 40 km from 60 s, a de-spin at 73 s halving the axial rate,
 end at 86 s, IMU at 100 Hz. Everything else is an assumption, exposed as a keyword of
-:func:`sounding_rocket` with a documented default (spec excitability.md §4, "[Proto]
+:func:`sounding_rocket` with a documented default (docs/assumptions.md, excitability.md §4, "[Proto]
 realisation").
 
 Construction
@@ -141,7 +141,8 @@ def _check(p):
 
 @cache.cached
 def sounding_rocket(**overrides) -> Trajectory:
-    """VS30-like sounding-rocket flight, 0..86 s, exact 100 Hz IMU (spec excitability.md §3-4).
+    """VS30-like sounding-rocket flight, 0..86 s, exact 100 Hz IMU (docs/assumptions.md,
+    excitability.md §3-4).
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """A vehicle at rest on the ground, body axes aligned with the local NED frame.
 
-Default site: the SSAC experiment at LINCS/IAE, São José dos Campos (spec ssac.md §4.1:
--23°12'47", -45°51'38", 629 m, 60 min, IMU at 100 Hz).
+Default site: the SSAC experiment at LINCS/IAE, São José dos Campos (docs/assumptions.md, ssac.md
+§4.1: -23°12'47", -45°51'38", 629 m, 60 min, IMU at 100 Hz).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from navlib.units import DEG
 
 def stationary(lat_deg=-23.213056, lon_deg=-45.860556, alt_m=629.0, duration_s=3600.0,
                rate_hz=100.0) -> Trajectory:
-    """Stationary vehicle with body = NED (spec ssac.md §4.1 defaults).
+    """Stationary vehicle with body = NED (docs/assumptions.md, ssac.md §4.1 defaults).
 
     Parameters
     ----------

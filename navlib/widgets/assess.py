@@ -56,7 +56,7 @@ class AssessPanel(Panel):
     ----------
     controls : dict
         ``boundaries`` (text), ``eta`` (log slider), ``nu`` (slider inside the admissible
-        range of spec A11), ``group`` (dropdown of the 21-state groups).
+        range of docs/assumptions.md A11), ``group`` (dropdown of the 21-state groups).
     status : ipywidgets.HTML
     parts : dict
         ``phases``, ``excitability``, ``sensability`` (images) and ``summary`` (table).

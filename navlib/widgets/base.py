@@ -72,6 +72,17 @@ def render_png(fig: Figure, dpi: float = 72.0) -> bytes:
 
     The figure should be detached (:func:`navlib.plots.figure.detached`): nothing else may
     draw it meanwhile.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        Detached figure.
+    dpi : float, optional
+        Resolution, dots per inch.
+
+    Returns
+    -------
+    bytes
     """
     fig.set_dpi(dpi)
     canvas = _agg_canvas(fig)
@@ -109,7 +120,15 @@ class Blitter:
 
     def set_dynamic(self, dynamic: Iterable, redraw_background: bool = True) -> None:
         """Replace the dynamic artists (e.g. new segment shading); with
-        ``redraw_background`` the background is drawn again without them."""
+        ``redraw_background`` the background is drawn again without them.
+
+        Parameters
+        ----------
+        dynamic : iterable of matplotlib.artist.Artist
+            The new dynamic artists.
+        redraw_background : bool, optional
+            Whether to draw the background again.
+        """
         self.dynamic = list(dynamic)
         for artist in self.dynamic:
             artist.set_animated(True)
@@ -236,7 +255,21 @@ class KeptFigures:
 
     def render(self, name: str, fig: Figure, dpi: float) -> bytes:
         """PNG bytes of ``fig`` shown as part ``name``, reusing the kept figure's layout
-        (and axes) when it fits."""
+        (and axes) when it fits.
+
+        Parameters
+        ----------
+        name : str
+            Part name.
+        fig : matplotlib.figure.Figure
+            Detached figure.
+        dpi : float
+            Resolution, dots per inch.
+
+        Returns
+        -------
+        bytes
+        """
         blitter = self._blitters.pop(name, None)
         if blitter is not None:  # its dynamic artists back to the full draw
             for artist in blitter.dynamic:
@@ -267,7 +300,23 @@ class KeptFigures:
         """The kept figure of part ``name`` with ``fig``'s data, as a :class:`Blitter` that
         redraws only ``dynamic(kept_figure)`` (the artists a panel knows to have changed) on
         the kept background; None when ``fig`` cannot move into it (another layout key or
-        other artists: show ``fig`` instead)."""
+        other artists: show ``fig`` instead).
+
+        Parameters
+        ----------
+        name : str
+            Part name.
+        fig : matplotlib.figure.Figure
+            Detached figure.
+        dynamic : callable
+            Returns the changing artists of a figure.
+        dpi : float
+            Resolution, dots per inch.
+
+        Returns
+        -------
+        Blitter or None
+        """
         kept = self._kept.get(name)
         if kept is None or kept[0] != layout_key(fig) or _artists(fig) != _artists(kept[1]) \
                 or any(a[-1] for a in _artists(fig)):
@@ -280,7 +329,19 @@ class KeptFigures:
 
 
 def table_html(frame: pd.DataFrame, index: bool = False) -> str:
-    """A DataFrame as a compact HTML table for a panel."""
+    """A DataFrame as a compact HTML table for a panel.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table.
+    index : bool, optional
+        Whether to show the index.
+
+    Returns
+    -------
+    str
+    """
     return ("<div style='font-size:13px;overflow-x:auto'>"
             + frame.to_html(index=index, border=0, float_format=lambda v: f"{v:.4g}")
             + "</div>")
@@ -290,7 +351,19 @@ _MARK = re.compile(r'<span class="navlib-update"[^>]*></span>$')
 
 
 def error_html(prefix: str, exc: BaseException) -> str:
-    """The status line of a refused input: ``prefix`` in red, then the message."""
+    """The status line of a refused input: ``prefix`` in red, then the message.
+
+    Parameters
+    ----------
+    prefix : str
+        What was refused.
+    exc : BaseException
+        The error.
+
+    Returns
+    -------
+    str
+    """
     return f'<b style="color:#b00">{html.escape(prefix)}:</b> {html.escape(str(exc))}'
 
 
@@ -394,6 +467,13 @@ class Panel(widgets.VBox):
         ``content``: a detached Figure (rendered to PNG at ``dpi``), a :class:`Blitter`
         (its current PNG), PNG bytes, a DataFrame (HTML table), an HTML string, or None
         (the part is hidden).
+
+        Parameters
+        ----------
+        name : str
+            Part name.
+        content : Figure, Blitter, bytes, pandas.DataFrame, str or None
+            What to show.
         """
         if content is None:
             if name in self.parts:

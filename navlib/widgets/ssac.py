@@ -1,7 +1,7 @@
 """Interactive panel for notebook 06: rerun the SSAC covariance study and redraw.
 
 Sliders for the site latitude, the run duration and the P0 attitude scaling (1 = matched
-P0, ssac.md §4.4) plus a P0-variant dropdown call
+P0, docs/assumptions.md, ssac.md §4.4) plus a P0-variant dropdown call
 :func:`navlib.studies.ssac.covariance_run` and redraw the sigma panels, the normalised
 eigenvalues, the pair structure and the closed-form limits (render path of
 :mod:`navlib.widgets.base`: detached figures shown as PNG images).

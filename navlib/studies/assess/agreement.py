@@ -47,7 +47,21 @@ def fit_calibration(trajectory) -> dict:
 def smoothed_residuals(t, f_rec, f_ref, w_rec, w_ref, calibration, window_s):
     """Recorded minus reference specific force and rate, each recorded axis corrected by
     the ``calibration`` of :func:`fit_calibration` (``(recorded - bias) / scale``), both
-    averaged over ``window_s`` (:func:`moving_average`): ``(df, dw)``, each (N, 3)."""
+    averaged over ``window_s`` (:func:`moving_average`): ``(df, dw)``, each (N, 3).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Times, s.
+    f_rec, f_ref : numpy.ndarray
+        Recorded and reference specific force, m/s^2, (N, 3).
+    w_rec, w_ref : numpy.ndarray
+        Recorded and reference angular rate, rad/s, (N, 3).
+    calibration : dict
+        Result of :func:`fit_calibration`.
+    window_s : float
+        Averaging window, s.
+    """
     out = []
     for name, rec, ref in (("accel", f_rec, f_ref), ("gyro", w_rec, w_ref)):
         cal = calibration[name]
@@ -59,7 +73,13 @@ def smoothed_residuals(t, f_rec, f_ref, w_rec, w_ref, calibration, window_s):
 def axis_regression(recorded, reference):
     """Per axis, the least-squares ``recorded ~ scale * reference + bias`` and the
     correlation of the two: ``(scale, bias, r)``, arrays of 3 (NaN where the reference
-    does not vary)."""
+    does not vary).
+
+    Parameters
+    ----------
+    recorded, reference : numpy.ndarray
+        Samples, (N, 3).
+    """
     scale, bias, r = np.full(3, np.nan), np.full(3, np.nan), np.full(3, np.nan)
     for a in range(3):
         x, y = reference[:, a], recorded[:, a]

@@ -46,7 +46,20 @@ reference rows are built on their own: a pre-launch buffer logged long before th
 
 def aiding_of(imu: pd.DataFrame, gnss: pd.DataFrame | None) -> str:
     """``gnss``, ``baro`` (no GNSS record) or ``gnss+baro`` (a GNSS record whose height is
-    the barometer's, ``gnss.attrs["height_source"] == "baro"``)."""
+    the barometer's, ``gnss.attrs["height_source"] == "baro"``).
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record (its barometer in ``attrs``).
+    gnss : pandas.DataFrame or None
+        GNSS record.
+
+    Raises
+    ------
+    NavlibInputError
+        Without GNSS and without a barometer.
+    """
     if gnss is None:
         if _baro(imu) is None:
             raise NavlibInputError("gnss: no GNSS record and no barometer "
@@ -63,7 +76,20 @@ def _baro(imu) -> pd.DataFrame | None:
 
 def aiding_records(imu: pd.DataFrame, gnss: pd.DataFrame | None
                    ) -> tuple[pd.DataFrame, str, list[str]]:
-    """The position rows for the fit, the aiding (:func:`aiding_of`) and notes in words."""
+    """The position rows for the fit, the aiding (:func:`aiding_of`) and notes in words.
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record.
+    gnss : pandas.DataFrame or None
+        GNSS record.
+
+    Raises
+    ------
+    NavlibInputError
+        Without GNSS, when no piece of the record yields barometer rows.
+    """
     aiding = aiding_of(imu, gnss)
     if aiding == "gnss":
         return gnss, aiding, []
@@ -114,6 +140,21 @@ def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
     gyros and its specific force twice with the pad's gravity (no Coriolis: these rows only
     seed the fit); the horizontal part of that position, at ``site_deg``, gets the
     barometric height change above the pad. ``sigma`` is :func:`navlib.models.baro.baro_sigma`.
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record (``t``, s; ``f_*``, m/s^2; ``w_*``, rad/s).
+    baro : pandas.DataFrame
+        Barometer record.
+    site_deg : tuple of float, optional
+        Latitude and longitude of the pad, deg.
+
+    Raises
+    ------
+    NavlibInputError
+        If the IMU and barometer overlap less than 2 s, or the rest before launch is shorter
+        than :data:`MIN_LEVEL_S`.
     """
     t = imu["t"].to_numpy(dtype=float)
     f_b = imu[["f_x", "f_y", "f_z"]].to_numpy(dtype=float)
@@ -191,6 +232,13 @@ def ned_sigmas(model, trajectory) -> dict[str, np.ndarray]:
     (:func:`navlib.covariance.kalman_covariance`, updated at every epoch), its ECEF position
     and velocity blocks turned into the local NED frame of the reference position. Returns
     ``t`` and ``position_m``, ``velocity_m_s`` (N, 3: north, east, down).
+
+    Parameters
+    ----------
+    model : DiscreteModel
+        The error-state model of the flight.
+    trajectory : Trajectory
+        Its reference trajectory.
     """
     result = kalman_covariance(model)
     t = np.asarray(trajectory.t, dtype=float)
@@ -203,7 +251,17 @@ def ned_sigmas(model, trajectory) -> dict[str, np.ndarray]:
 
 
 def sigma_note(model, trajectory, aiding: str) -> str:
-    """The end-of-flight position and velocity sigma in north/east/down, in words."""
+    """The end-of-flight position and velocity sigma in north/east/down, in words.
+
+    Parameters
+    ----------
+    model : DiscreteModel
+        The error-state model of the flight.
+    trajectory : Trajectory
+        Its reference trajectory.
+    aiding : str
+        ``"gnss"``, ``"baro"`` or ``"gnss+baro"``.
+    """
     s = ned_sigmas(model, trajectory)
     p, v = s["position_m"], s["velocity_m_s"]
     text = (f"aiding {aiding}: at the end ({s['t'][-1]:.1f} s) the 21-state model's sigma is "

@@ -31,6 +31,15 @@ def fit_report(trajectory, preset=None, gnss_sigma_m: float | None = None) -> pd
     white-noise sigma of the sensor ``preset`` (``density / sqrt(dt)``), for the GNSS
     position rows ``gnss_sigma_m``; a floor the residual RMS sits near when the fit explains
     the data (biases and scale-factor errors add to it). NaN where not given.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Result of :func:`navlib.trajectory.fit_flight_data`.
+    preset : str or None, optional
+        Sensor preset of the white-noise floors.
+    gnss_sigma_m : float or None, optional
+        GNSS position sigma, m.
     """
     res = getattr(trajectory, "parameters", {}).get("fit_residuals")
     if res is None:
@@ -69,6 +78,15 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
                   ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Residuals of the records against a fitted trajectory, over time.
 
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Result of :func:`navlib.trajectory.fit_flight_data`.
+    imu, gnss : pandas.DataFrame
+        The records the trajectory was fitted to.
+    bounds : dict, optional
+        :func:`~navlib.studies.assess.agreement.fit_bounds` (None: ``data/quality.toml``).
+
     Returns
     -------
     gnss_residuals : DataFrame
@@ -84,8 +102,6 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
         same after the fit's IMU calibration and a moving average
         (:func:`~navlib.studies.assess.agreement.smoothed_residuals`); ``turn_deg``: the
         recorded rotation since the previous sample, deg.
-    bounds : dict, optional
-        :func:`~navlib.studies.assess.agreement.fit_bounds` (None: ``data/quality.toml``).
     """
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
@@ -141,7 +157,27 @@ def _noise_floor(trajectory, preset) -> dict:
 
 def fit_records(imu, gnss, fit_options: dict, heading_fallback_deg):
     """:func:`fit_flight_data`, retried with a fallback heading when the motion cannot
-    give one (the fit names ``heading_deg`` in that error)."""
+    give one (the fit names ``heading_deg`` in that error).
+
+    Parameters
+    ----------
+    imu, gnss : pandas.DataFrame
+        The records.
+    fit_options : dict
+        Keywords of :func:`fit_flight_data`.
+    heading_fallback_deg : float or None
+        Heading assumed when the motion gives none, deg; None: no retry.
+
+    Returns
+    -------
+    tuple of (Trajectory, list of str)
+        The fit and the notes (the assumed heading).
+
+    Raises
+    ------
+    NavlibInputError
+        From the fit, when no fallback applies.
+    """
     notes = []
     try:
         return fit_flight_data(imu, gnss, **fit_options), notes

@@ -37,6 +37,22 @@ GNSS_KEYS = ("t", "x", "y", "z")
 
 
 def check_frame(frame, name: str, keys) -> None:
+    """A record must be a DataFrame with the columns ``keys`` and at least two rows.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The record.
+    name : str
+        Its name, for the message.
+    keys : iterable of str
+        Required columns.
+
+    Raises
+    ------
+    NavlibInputError
+        Naming what is wrong.
+    """
     if not isinstance(frame, pd.DataFrame):
         raise NavlibInputError(f"{name}: expected a pandas DataFrame (navlib.io readers), got "
                                f"{type(frame).__name__}")
@@ -120,7 +136,17 @@ def describe_inputs(imu: pd.DataFrame, gnss: pd.DataFrame) -> pd.DataFrame:
     last time (s), duration (s), median rate (Hz), longest interval (s), gaps reported by
     the reader (``attrs["gaps"]``), samples the reader excluded as outliers
     (``attrs["outliers"]``, :func:`navlib.io.checks.flag_imu_outliers`) and the source
-    file."""
+    file.
+
+    Parameters
+    ----------
+    imu, gnss : pandas.DataFrame
+        The records.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
     rows = []
@@ -143,6 +169,24 @@ def describe_inputs(imu: pd.DataFrame, gnss: pd.DataFrame) -> pd.DataFrame:
 
 
 def validate_records(imu, gnss):
+    """The records checked for an assessment: frames with the required columns that overlap
+    for long enough with enough GNSS epochs.
+
+    Parameters
+    ----------
+    imu, gnss : pandas.DataFrame
+        The records.
+
+    Returns
+    -------
+    TimeOverlap
+        Their common span (:func:`navlib.io.checks.check_overlap`).
+
+    Raises
+    ------
+    NavlibInputError
+        Naming the record at fault.
+    """
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
     span = check_overlap(imu, gnss)

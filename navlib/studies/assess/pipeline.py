@@ -82,7 +82,25 @@ than 1e-3 relative on the sample flight (benchmarks/bench_assess.py)."""
 def choose_preset(imu: pd.DataFrame, preset: str | None = None) -> tuple[str, str]:
     """The sensor preset to assess ``imu`` with and why: ``preset`` when given, else the
     :data:`AUTOPILOT_PRESETS` entry of the autopilot the reader found in the log, else
-    :data:`DEFAULT_PRESET`."""
+    :data:`DEFAULT_PRESET`.
+
+    Parameters
+    ----------
+    imu : pandas.DataFrame
+        IMU record (its ``attrs["autopilot"]`` and ``attrs["hardware"]``).
+    preset : str or None, optional
+        A preset name to use as given.
+
+    Returns
+    -------
+    tuple of (str, str)
+        The preset name and the reason.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``preset`` is not a string.
+    """
     if preset is not None:
         if not isinstance(preset, str):
             raise NavlibInputError(f"preset: expected a sensor preset name, got {preset!r}")
@@ -152,9 +170,9 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         segment table, a list of boundaries (``[18, 46]``) or of ``(t_start, t_end)`` /
         ``(phase, t_start, t_end)`` entries. Each segment needs 2 GNSS epochs.
     eta : float in (0, 1)
-        Excitability energy threshold (spec A14).
+        Excitability energy threshold (docs/assumptions.md A14).
     nu : float in (0, 1)
-        Sensability threshold (spec A11; 0.985 is the paper's value for 21 states).
+        Sensability threshold (docs/assumptions.md A11; 0.985 is the paper's value for 21 states).
     gnss_rate_hz : float, optional
         Measurement rate of the model; None: the median rate of the GNSS record (at most
         the IMU rate). The epochs are a regular grid in time at this rate

@@ -23,7 +23,7 @@ Each claim also carries a **basis**:
 Every study registers itself with :func:`register` (a :class:`Study`: a function returning
 its baseline claims, its declared assumption set as data, and a function evaluating the
 claims over that set). :func:`all_claims` runs every registered study and returns the one
-table of the contract (spec api.md, "Claims"), with the **robustness** of each measured or
+table of the contract (docs/library.md), with the **robustness** of each measured or
 fitted claim: the fraction of the points of its study's declared set, varying exactly the
 assumptions the claim declares in ``depends_on``, at which it is reproduced
 (:func:`robustness_over`; NaN for claims by construction, where the set varies none of its

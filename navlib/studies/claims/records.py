@@ -120,7 +120,25 @@ class Check:
 
 
 def check(name: str, value, op: str, target, headline: bool = False) -> Check:
-    """Shorthand for :class:`Check`."""
+    """Shorthand for :class:`Check`.
+
+    Parameters
+    ----------
+    name : str
+        What is checked.
+    value : float or bool
+        Our number.
+    op : str
+        Comparison (``"<="``, ``">="``, ``"=="``, ``"in"``, ``"out"`` ...).
+    target : float, bool or tuple
+        The paper's number or range.
+    headline : bool, optional
+        Whether the verdict rests on this check.
+
+    Returns
+    -------
+    Check
+    """
     return Check(name, value, op, target, headline)
 
 
@@ -229,7 +247,33 @@ class ClaimResult:
 def claim(claim_id: str, statement: str, paper: str, ours: str, checks: Iterable[Check],
           *, basis: str = "measured", assumption: str = "", depends_on: Sequence[str] = (),
           explanation: str = "") -> ClaimResult:
-    """Build a :class:`ClaimResult` (the verdict follows from ``checks``)."""
+    """Build a :class:`ClaimResult` (the verdict follows from ``checks``).
+
+    Parameters
+    ----------
+    claim_id : str
+        Id of the claim.
+    statement : str
+        What the paper says.
+    paper : str
+        The paper's numbers.
+    ours : str
+        Our numbers.
+    checks : iterable of Check
+        The checks.
+    basis : {"measured", "by construction", "fitted"}, optional
+        How the number relates to our assumptions (:data:`BASES`).
+    assumption : str, optional
+        Assumptions of the reading.
+    depends_on : sequence of str, optional
+        Assumptions that can move the verdict.
+    explanation : str, optional
+        Measured cause of a miss.
+
+    Returns
+    -------
+    ClaimResult
+    """
     return ClaimResult(claim_id, statement, paper, ours, tuple(checks), basis, assumption,
                        depends_on=depends_on, explanation=explanation)
 
@@ -237,7 +281,29 @@ def claim(claim_id: str, statement: str, paper: str, ours: str, checks: Iterable
 def not_evaluated(claim_id: str, statement: str, paper: str, why: str, *,
                   basis: str = "measured", assumption: str = "",
                   depends_on: Sequence[str] = ()) -> ClaimResult:
-    """A claim the given input cannot judge (``why`` says what is missing)."""
+    """A claim the given input cannot judge (``why`` says what is missing).
+
+    Parameters
+    ----------
+    claim_id : str
+        Id of the claim.
+    statement : str
+        What the paper says.
+    paper : str
+        The paper's numbers.
+    why : str
+        What is missing.
+    basis : {"measured", "by construction", "fitted"}, optional
+        How the number would relate to our assumptions (:data:`BASES`).
+    assumption : str, optional
+        Assumptions of the reading.
+    depends_on : sequence of str, optional
+        Assumptions that can move the verdict.
+
+    Returns
+    -------
+    ClaimResult
+    """
     return ClaimResult(claim_id, statement, paper, why, (), basis, assumption, note=why,
                        depends_on=depends_on)
 

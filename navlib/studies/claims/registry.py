@@ -116,14 +116,40 @@ COLUMNS = ["study", "paper_ref", "claim_id", "statement", "paper", "ours", "verd
 
 
 def study_robustness(study: Study, quick: bool = False) -> dict[str, Robustness]:
-    """:func:`robustness_over` the study's declared set (empty when it declares none)."""
+    """:func:`robustness_over` the study's declared set (empty when it declares none).
+
+    Parameters
+    ----------
+    study : Study
+        The study.
+    quick : bool, optional
+        Quick settings.
+
+    Returns
+    -------
+    dict of str to Robustness
+    """
     if study.robustness is None:
         return {}
     return robustness_over(study.robustness(quick), study.baseline_at(quick))
 
 
 def study_frame(study: Study, quick: bool = False, robustness: bool = True) -> pd.DataFrame:
-    """One study's claims in the :func:`all_claims` layout."""
+    """One study's claims in the :func:`all_claims` layout.
+
+    Parameters
+    ----------
+    study : Study
+        The study.
+    quick : bool, optional
+        Quick settings.
+    robustness : bool, optional
+        Whether to judge robustness over the declared set.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
     results = study.baseline(quick)
     rob = study_robustness(study, quick) if robustness else {}
     rows = []
@@ -157,6 +183,13 @@ def factorial_search(name: str, quick: bool = False) -> pd.DataFrame | None:
     (True = reproduced), for :func:`~navlib.studies.claims.joint_search`. None when the set
     is evaluated one assumption at a time (such points cannot show which claims hold
     together) or the study declares none.
+
+    Parameters
+    ----------
+    name : str
+        Study name.
+    quick : bool, optional
+        Quick settings.
     """
     study = studies()[name]
     if study.robustness is None or not study.grid:

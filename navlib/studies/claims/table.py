@@ -1,4 +1,4 @@
-"""The one table of every claim (:func:`all_claims`, spec api.md, "Claims"): every registered
+"""The one table of every claim (:func:`all_claims`, docs/library.md): every registered
 study's claims (:mod:`navlib.studies.claims.registry`) with the causes the stored joint
 searches (:mod:`navlib.studies.claims.search`) read."""
 
@@ -18,7 +18,7 @@ __all__ = ["all_claims", "searched_causes"]
 
 def all_claims(quick: bool = False, only: Sequence[str] | None = None,
                robustness: bool = True) -> pd.DataFrame:
-    """Every claim of every registered study, one row each (spec api.md, "Claims").
+    """Every claim of every registered study, one row each (docs/library.md).
 
     Parameters
     ----------

@@ -2,10 +2,10 @@
 figures 2, 3, 5, 6 and their claims.
 
 Composes :func:`navlib.models.launcher`, :func:`navlib.observability.local_observability` and
-:func:`navlib.observability.analyze` into the paper's §4.1 experiment (spec launcher.md §6.1,
-§7.2): for each of the 60 configurations of Table 2 (4 solutions x (no bias + 7 bias sets x
-Markov / random walk)), the local observability matrix at every 200 Hz step of the ascent,
-the number of unobservable states (``n - min rank``; a state is observable only if it is at
+:func:`navlib.observability.analyze` into the paper's §4.1 experiment (docs/assumptions.md,
+launcher.md §6.1, §7.2): for each of the 60 configurations of Table 2 (4 solutions x (no bias + 7
+bias sets x Markov / random walk)), the local observability matrix at every 200 Hz step of the
+ascent, the number of unobservable states (``n - min rank``; a state is observable only if it is at
 every step, §6.1 item 4) and log10 of the maximum condition number over the mission, next to
 the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md`` sidecar).
 
@@ -13,11 +13,13 @@ the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md``
   readings of eq. (6) side by side (:func:`variant_comparison`: the INS/GPS-only rows
   depend on the trajectory and on the frozen / time-varying reading) and one configuration
   over the mission;
-* :mod:`.fig1` — the Fig. 1 analogue (simplified model, spec §3.7, §10a);
-* :mod:`.evolution` — the covariance runs of Figs. 2, 3, 5, 6 (spec §7.3);
-* :mod:`.claims` — the robust claims of spec §10c, conclusions 1 and 3 and Fig. 1 with
-  the end of §4.1; :mod:`.covariance_claims` — the covariance evolution (conclusions 2
-  and 4), one function per claim; :mod:`.causes` — the small experiments that measure the
+* :mod:`.fig1` — the Fig. 1 analogue (simplified model, docs/assumptions.md, launcher.md §3.7,
+  §10a);
+* :mod:`.evolution` — the covariance runs of Figs. 2, 3, 5, 6 (docs/assumptions.md, launcher.md
+  §7.3);
+* :mod:`.claims` — the robust claims of docs/assumptions.md, launcher.md §10c, conclusions 1 and 3
+  and Fig. 1 with the end of §4.1; :mod:`.covariance_claims` — the covariance evolution (conclusions
+  2 and 4), one function per claim; :mod:`.causes` — the small experiments that measure the
   causes of the partly / not reproduced ones;
 * :mod:`.assumptions` — the paper's words as numbers and the declared assumption sets;
   :mod:`.robustness` — the claims over them and the registration with the claims engine;

@@ -49,7 +49,7 @@ def cp_mission_sigmas(c_p: float = 100.0, duration_s: float = 150.0, s_t: float 
                       sigma0_pos: float = ASSUMED["sigma0_pos"]) -> dict[str, float]:
     """End sigma of the GPS bias of the simplified §4.1 model (eq. 7) over the mission, with
     the bias a Markov process of time constant ``c_p`` and as a random walk with the same
-    driving noise (the paper's random-walk reading, launcher.md §3.2).
+    driving noise (the paper's random-walk reading, docs/assumptions.md, launcher.md §3.2).
 
     A Kalman covariance recursion of one axis (the three are alike): state ``[dr, b_p]``,
     ``dr`` constant, ``b_p(k+1) = (1 - s_t / c_p) b_p(k) + w``, ``var w = 2 s_t sigma_bp^2 /

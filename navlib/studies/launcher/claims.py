@@ -1,5 +1,5 @@
-"""Beaudoin et al. (2018) claims: Table 2 (§4.1, spec launcher.md §7.2, the robust targets
-of §10c), conclusions 1 and 3, Fig. 1 and the end of §4.1 (simplified model), judged by
+"""Beaudoin et al. (2018) claims: Table 2 (§4.1, docs/assumptions.md, launcher.md §7.2, the robust
+targets of §10c), conclusions 1 and 3, Fig. 1 and the end of §4.1 (simplified model), judged by
 :mod:`navlib.studies.claims` (the covariance evolution: :mod:`.covariance_claims`)."""
 
 from __future__ import annotations
@@ -23,7 +23,20 @@ from navlib.studies.launcher.fig1 import fig1_data
 
 def cond_match(ours: np.ndarray, paper: np.ndarray, tol: float) -> np.ndarray:
     """Whether our log10 cond matches the paper's within ``tol`` decades (two numerically
-    singular values, at or above :data:`SINGULAR_LOG10`, always match)."""
+    singular values, at or above :data:`SINGULAR_LOG10`, always match).
+
+    Parameters
+    ----------
+    ours, paper : numpy.ndarray
+        log10 condition numbers, ours and the paper's printed orders (same shape).
+    tol : float
+        Decades allowed between the two.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean array, True where the two match.
+    """
     both_singular = (ours >= SINGULAR_LOG10) & (paper >= SINGULAR_LOG10)
     return both_singular | (np.abs(ours - paper) <= tol)
 
@@ -52,7 +65,22 @@ def _share(sel, total) -> float:
 
 def match_counts(frame: pd.DataFrame, tolerances=TOLERANCES) -> pd.Series:
     """Configurations matching the paper (same unobservable count, condition order within
-    each tolerance, numerically singular pairs equal), per tolerance in decades."""
+    each tolerance, numerically singular pairs equal), per tolerance in decades.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (:class:`~navlib.studies.launcher.Table2Result` ``.frame``) with the
+        columns ``n_unobservable``, ``paper_unobservable``, ``log10_cond`` and
+        ``paper_log10_cond``.
+    tolerances : iterable of float
+        Tolerances on the condition order, in decades.
+
+    Returns
+    -------
+    pandas.Series
+        Number of matching configurations, indexed by tolerance.
+    """
     unobs = frame.n_unobservable.to_numpy() == frame.paper_unobservable.to_numpy()
     return pd.Series({tol: int(np.sum(unobs & cond_match(frame.log10_cond.to_numpy(),
                                                            frame.paper_log10_cond.to_numpy(),
@@ -106,7 +134,17 @@ def _cond_miss_explanation(miss: pd.DataFrame, total: int, cond_tol: float) -> s
 
 
 def t2_table_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResult:
-    """T2-table: the cells themselves."""
+    """T2-table: the cells themselves.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float
+        Decades allowed on a printed order of magnitude.
+    how : str
+        How the observability was computed, the start of the claim's assumption text.
+    """
     counts = match_counts(frame)
     unobs_ok = frame[frame.n_unobservable == frame.paper_unobservable]
     cond_ok = frame[cond_match(frame.log10_cond.to_numpy(), frame.paper_log10_cond.to_numpy(),
@@ -131,7 +169,15 @@ def t2_rw_p_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
 
     "cond at least 1e17" is checked in the only terms it can be measured (A-T2-1e17): the
     matrix is numerically singular, cond >= 1/eps (:data:`RESOLVED_LOG10`); the digits of a
-    condition number above it are the round-off of the smallest singular value."""
+    condition number above it are the round-off of the smallest singular value.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    how : str
+        How the observability was computed, the start of the claim's assumption text.
+    """
     rw_p = _rw_p_rows(frame)
     three = rw_p[rw_p.n_unobservable == 3]
     singular = rw_p[rw_p.log10_cond >= RESOLVED_LOG10]
@@ -170,7 +216,15 @@ def t2_bp_dr_claim(frame: pd.DataFrame) -> ClaimResult:
 
 
 def t2_markov_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
-    """T2-Markov: full rank everywhere."""
+    """T2-Markov: full rank everywhere.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    how : str
+        How the observability was computed, the claim's assumption text.
+    """
     markov = _rows(frame, bias_model="markov")
     ok = markov[markov.n_unobservable == 0]
     return claim(
@@ -181,7 +235,17 @@ def t2_markov_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
 
 
 def t2_rank_constant_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
-    """T2-rank-constant."""
+    """T2-rank-constant.
+
+    The rank does not change during the mission, in every configuration.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`) with its ``rank_constant`` column.
+    how : str
+        How the observability was computed, the claim's assumption text.
+    """
     ok = frame[frame.rank_constant]
     return claim(
         "T2-rank-constant", "The rank does not change during the mission",
@@ -191,7 +255,17 @@ def t2_rank_constant_claim(frame: pd.DataFrame, how: str) -> ClaimResult:
 
 
 def t2_att_no_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResult:
-    """T2-att-noRT: attitude sensors lower cond without RT (rows without P)."""
+    """T2-att-noRT: attitude sensors lower cond without RT (rows without P).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float
+        Decades by which the attitude sensors must lower log10 cond.
+    how : str
+        How the observability was computed, the start of the claim's assumption text.
+    """
     pair = _pair_frame(frame, "ins_gps", "ins_gps_att", ["", "G", "A", "GA"])
     lower = pair[pair.log10_cond_ins_gps_att < pair.log10_cond_ins_gps - cond_tol]
     detail = ", ".join(f"{(r.biases or '-')}/{r.bias_model[:2]}: {r.log10_cond_ins_gps:.1f}"
@@ -211,7 +285,17 @@ def t2_att_no_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimR
 
 
 def t2_att_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResult:
-    """T2-att-RT: with RT, attitude sensors do not change cond (full-rank rows)."""
+    """T2-att-RT: with RT, attitude sensors do not change cond (full-rank rows).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float
+        Decades within which the two condition orders count as equal.
+    how : str
+        How the observability was computed, the claim's assumption text.
+    """
     pair = _pair_frame(frame, "ins_gps_rt", "ins_gps_att_rt", BIAS_SETS)
     pair = pair[(pair.n_unobservable_ins_gps_rt == 0) & (pair.n_unobservable_ins_gps_att_rt == 0)]
     delta = pair.log10_cond_ins_gps_rt - pair.log10_cond_ins_gps_att_rt
@@ -235,7 +319,17 @@ def t2_att_rt_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResu
 
 def t2_threshold_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimResult:
     """T2-threshold: unobservable <=> cond >= 1e17 (numerically singular, A-T2-1e17),
-    otherwise cond <= 1e5."""
+    otherwise cond <= 1e5.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float
+        Decades of rounding allowed above the paper's printed order 5.
+    how : str
+        How the observability was computed, the start of the claim's assumption text.
+    """
     full_tol = LOW_LOG10 + cond_tol
     full = frame[frame.n_unobservable == 0]
     deficient = frame[frame.n_unobservable > 0]
@@ -258,7 +352,15 @@ def t2_threshold_claim(frame: pd.DataFrame, cond_tol: float, how: str) -> ClaimR
 
 
 def t2_ins_gps_claim(frame: pd.DataFrame, cond_tol: float) -> ClaimResult:
-    """T2-ins-gps: the INS/GPS-only rows except random-walk b_p (counted by T2-RW-P)."""
+    """T2-ins-gps: the INS/GPS-only rows except random-walk b_p (counted by T2-RW-P).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float
+        Decades allowed between our log10 cond and the paper's.
+    """
     ins = _rows(frame, solution="ins_gps")
     ins = ins[~((ins.bias_model == "random_walk") & ins.biases.str.contains("P"))]
     ok = ins[(ins.n_unobservable == ins.paper_unobservable)
@@ -291,7 +393,17 @@ def table2_claim_results(frame: pd.DataFrame, cond_tol: float = COND_TOL,
     """The §4.1 statements on a Table 2 frame (see
     :class:`~navlib.studies.launcher.Table2Result`), judged by the claims engine.
     ``cond_tol``: decades allowed on a printed order of magnitude (the paper prints integer
-    orders, so half a decade is its own rounding)."""
+    orders, so half a decade is its own rounding).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float, optional
+        Decades allowed on a printed order of magnitude.
+    variant : str, optional
+        Reading of eq. (6) the frame was computed with, named in the assumption texts.
+    """
     how = f"local O(k) at every evaluated step, {variant} reading of eq. (6), Euler form"
     return [t2_table_claim(frame, cond_tol, how), t2_rw_p_claim(frame, how),
             t2_bp_dr_claim(frame), t2_markov_claim(frame, how),
@@ -321,7 +433,16 @@ def c1_bp_claim(frame: pd.DataFrame) -> ClaimResult:
 
 def c3_rt_claim(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> ClaimResult:
     """C3-RT: the RT does not improve observability (its rows against the same
-    configuration without it)."""
+    configuration without it).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float, optional
+        Decades by which log10 cond must fall for the same unobservable count to count as
+        "more observable".
+    """
     rows = []
     for plain, rt in (("ins_gps", "ins_gps_rt"), ("ins_gps_att", "ins_gps_att_rt")):
         pair = _pair_frame(frame, plain, rt, BIAS_SETS)
@@ -351,7 +472,15 @@ def c3_rt_claim(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> ClaimResult:
 
 def conclusion_claims(frame: pd.DataFrame, cond_tol: float = COND_TOL) -> list[ClaimResult]:
     """Conclusions 1 and 3 (§5) as far as Table 2 speaks to them (:func:`c1_bp_claim`,
-    :func:`c3_rt_claim`)."""
+    :func:`c3_rt_claim`).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Table 2 frame (see :func:`match_counts`).
+    cond_tol : float, optional
+        Decades allowed on a condition order (:func:`c3_rt_claim`).
+    """
     return [c1_bp_claim(frame), c3_rt_claim(frame, cond_tol)]
 
 
@@ -372,7 +501,16 @@ def f1_full_rank_claim(data: pd.DataFrame) -> ClaimResult:
 
 
 def f1_proportional_claim(data: pd.DataFrame, s_t: float = 0.005) -> ClaimResult:
-    """F1-proportional: the condition number grows as ``c_p`` (``c_p >= 100 s_t``)."""
+    """F1-proportional: the condition number grows as ``c_p`` (``c_p >= 100 s_t``).
+
+    Parameters
+    ----------
+    data : pandas.DataFrame
+        :func:`~navlib.studies.launcher.fig1_data` frame (columns ``c_p``, ``cond``,
+        ``cond_per_cp_st``).
+    s_t : float, optional
+        Sampling time, s; the fit uses ``c_p >= 100 s_t``.
+    """
     finite = data[np.isfinite(data.c_p)]
     large = finite[finite.c_p >= 100 * s_t]
     slope = np.polyfit(np.log10(large.c_p), np.log10(large.cond), 1)[0]
@@ -391,9 +529,17 @@ def f1_proportional_claim(data: pd.DataFrame, s_t: float = 0.005) -> ClaimResult
 
 
 def fig1_claims(data: pd.DataFrame | None = None, s_t: float = 0.005) -> list[ClaimResult]:
-    """Fig. 1 / §4.1 statements on the simplified model (spec §3.7, §10a); ``data`` a
-    :func:`~navlib.studies.launcher.fig1_data` frame at the sampling time ``s_t`` (s, the
-    paper's symbol)."""
+    """Fig. 1 / §4.1 statements on the simplified model (docs/assumptions.md, launcher.md §3.7,
+    §10a); ``data`` a :func:`~navlib.studies.launcher.fig1_data` frame at the sampling time ``s_t``
+    (s, the paper's symbol).
+
+    Parameters
+    ----------
+    data : pandas.DataFrame or None, optional
+        Fig. 1 frame; None computes it with :func:`~navlib.studies.launcher.fig1_data`.
+    s_t : float, optional
+        Sampling time, s.
+    """
     data = fig1_data(s_t=s_t) if data is None else data
     return [f1_full_rank_claim(data), f1_proportional_claim(data, s_t)]
 
@@ -401,7 +547,16 @@ def fig1_claims(data: pd.DataFrame | None = None, s_t: float = 0.005) -> list[Cl
 def f1_cp_mission_claim(sigmas: dict, c_p: float = 100.0) -> ClaimResult:
     """F1-cp-mission: with c_p within the mission time a Markov GPS bias behaves almost as a
     random walk (end of §4.1); ``sigmas`` from
-    :func:`~navlib.studies.launcher.cp_mission_sigmas` at ``c_p`` (A-F1-cp-mission)."""
+    :func:`~navlib.studies.launcher.cp_mission_sigmas` at ``c_p`` (A-F1-cp-mission).
+
+    Parameters
+    ----------
+    sigmas : dict
+        End-of-mission b_p sigmas, m, under the keys ``markov`` and ``random_walk``, and their
+        ``ratio``.
+    c_p : float, optional
+        Markov correlation time of the GPS bias, s.
+    """
     ratio = sigmas["ratio"]
     return claim(
         "F1-cp-mission", "With c_p within the mission time, the Markov GPS bias behaves almost "

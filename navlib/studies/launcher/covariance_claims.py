@@ -31,13 +31,37 @@ class EvolutionTable:
         self.frame = evo.set_index("case")
 
     def get(self, case: str, col: str) -> float:
+        """Sigma of column ``col`` for case ``case`` (NaN when the case is missing).
+
+        Parameters
+        ----------
+        case : str
+            Case name (``"solution/biases[/model]"``).
+        col : str
+            Column (``roll``, ``gyro_bias``, ``gps_bias_0`` ...), rad or m.
+        """
         return float(self.frame.loc[case, col]) if case in self.frame.index else float("nan")
 
     def ratio(self, a: str, b: str, col: str) -> float:
+        """Ratio of column ``col`` between cases ``a`` and ``b``.
+
+        Parameters
+        ----------
+        a, b : str
+            Case names (numerator, denominator).
+        col : str
+            Column.
+        """
         return self.get(a, col) / self.get(b, col)
 
     def axes(self, a: str, b: str) -> dict[str, float]:
-        """``ratio(a, b, axis)`` for roll, pitch and yaw."""
+        """``ratio(a, b, axis)`` for roll, pitch and yaw.
+
+        Parameters
+        ----------
+        a, b : str
+            Case names (numerator, denominator).
+        """
         return {ax: self.ratio(a, b, ax) for ax in ("roll", "pitch", "yaw")}
 
     def gyro(self) -> dict[str, float]:
@@ -68,7 +92,16 @@ def _no_pitch_text(causes: Mapping | None, case: str, value: float) -> str:
 
 
 def f2_roll_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:
-    """F2-roll: GPS barely improves roll without biases (Fig. 2)."""
+    """F2-roll: GPS barely improves roll without biases (Fig. 2).
+
+    Parameters
+    ----------
+    ev : EvolutionTable
+        The covariance evolution.
+    causes : Mapping or None, optional
+        Cause experiments (:func:`~navlib.studies.launcher.evolution_causes`) explaining a
+        miss.
+    """
     r, text = _gps_ratios(ev)
     return claim(
         "F2-roll", "INS/GPS without biases: GPS barely improves roll (pitch and yaw are "
@@ -84,7 +117,15 @@ def f2_roll_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimRes
 
 
 def f2_ideal_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:
-    """F2-ideal: even ideal GPS leaves roll in the INS-only range (Fig. 2)."""
+    """F2-ideal: even ideal GPS leaves roll in the INS-only range (Fig. 2).
+
+    Parameters
+    ----------
+    ev : EvolutionTable
+        The covariance evolution.
+    causes : Mapping or None, optional
+        Cause experiments explaining a miss.
+    """
     ideal = ev.axes("ideal-gps/none", "ins-only/none")
     return claim(
         "F2-ideal", "Even with ideal GPS the roll sigma stays in the INS-only range",
@@ -97,7 +138,15 @@ def f2_ideal_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimRe
 
 
 def r38_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:
-    """R-3.8: roll is the weakly observable attitude direction (§3.8)."""
+    """R-3.8: roll is the weakly observable attitude direction (§3.8).
+
+    Parameters
+    ----------
+    ev : EvolutionTable
+        The covariance evolution.
+    causes : Mapping or None, optional
+        Cause experiments explaining a miss.
+    """
     r, text = _gps_ratios(ev)
     return claim(
         "R-3.8", "Roll is the weakly observable attitude direction: with near-zero lateral "
@@ -139,7 +188,15 @@ def _pad_text(causes: Mapping | None) -> str:
 
 
 def f3_bp_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:
-    """F3-bp: the GPS-bias sigma under both bias models (Fig. 3)."""
+    """F3-bp: the GPS-bias sigma under both bias models (Fig. 3).
+
+    Parameters
+    ----------
+    ev : EvolutionTable
+        The covariance evolution.
+    causes : Mapping or None, optional
+        Cause experiments explaining a miss.
+    """
     bp_m, bp_rw = _gps_bias(ev)
     bp_0 = ev.get("att/GAP/markov", "gps_bias_0")
     return claim(
@@ -153,7 +210,15 @@ def f3_bp_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResul
 
 
 def f5_model_claim(ev: EvolutionTable, causes: Mapping | None = None) -> ClaimResult:
-    """F5-model: the bias model matters for the gyro bias only (Fig. 5)."""
+    """F5-model: the bias model matters for the gyro bias only (Fig. 5).
+
+    Parameters
+    ----------
+    ev : EvolutionTable
+        The covariance evolution.
+    causes : Mapping or None, optional
+        Cause experiments explaining a miss.
+    """
     g = ev.gyro()
     bp_m, bp_rw = _gps_bias(ev)
     model_ratio = g["att/GAP/random_walk"] / g["att/GAP/markov"]
@@ -275,6 +340,13 @@ def evolution_claims(evo: pd.DataFrame, causes: Mapping | None = None) -> list[C
     Thresholds in the paper's words: "barely" = the aided sigma keeps more than
     :data:`BARELY` of the unaided one; "identical" / "negligible" = within
     :data:`IDENTICAL`; "strongly" = a factor :data:`STRONG`.
+
+    Parameters
+    ----------
+    evo : pandas.DataFrame
+        :func:`~navlib.studies.launcher.covariance_evolution` table.
+    causes : Mapping or None, optional
+        Cause experiments of :func:`~navlib.studies.launcher.evolution_causes`.
     """
     ev = EvolutionTable(evo)
     return [f2_roll_claim(ev, causes), f2_ideal_claim(ev, causes), r38_claim(ev, causes),

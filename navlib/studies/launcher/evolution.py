@@ -1,6 +1,6 @@
-"""Beaudoin et al. (2018) covariance evolution: the filter sigmas of Figs. 2, 3, 5, 6 (spec
-launcher.md §7.3), one stacked recursion per case over the initial sigmas of the declared
-set."""
+"""Beaudoin et al. (2018) covariance evolution: the filter sigmas of Figs. 2, 3, 5, 6
+(docs/assumptions.md, launcher.md §7.3), one stacked recursion per case over the initial sigmas of
+the declared set."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Beaudoin et al. (2018) Fig. 1: condition number of the simplified model's observability
-matrix against the GPS-bias time constant (spec launcher.md §3.7, §10a)."""
+matrix against the GPS-bias time constant (docs/assumptions.md, launcher.md §3.7, §10a)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ def fig1_data(c_p=None, s_t: float = 0.005, rtol: float | None = None) -> pd.Dat
     -------
     pandas.DataFrame
         ``c_p, rank, cond, log10_cond, cond_per_cp_st`` (the last is ``cond s_t / c_p``,
-        which tends to ~1.171 for ``c_p >> s_t``, spec §10a).
+        which tends to ~1.171 for ``c_p >> s_t``, docs/assumptions.md, launcher.md §10a).
     """
     values = np.concatenate([np.logspace(-2, 4, 25), [np.inf]]) if c_p is None \
         else np.atleast_1d(np.asarray(c_p, dtype=float))

@@ -1,7 +1,7 @@
 """Beaudoin et al. (2018) Table 2: the local observability matrix of each of the 60
-configurations at every 200 Hz step of the ascent (spec launcher.md §6.1, §7.2), next to the
-paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md`` sidecar), and
-one configuration over the mission."""
+configurations at every 200 Hz step of the ascent (docs/assumptions.md, launcher.md §6.1, §7.2),
+next to the paper's values (``data/beaudoin2018_table2.csv``, OCR caveats in its ``.md`` sidecar),
+and one configuration over the mission."""
 
 from __future__ import annotations
 
@@ -70,8 +70,23 @@ def describe_direction(vector, state_names, C_b_e, top: int = 3) -> str:
     """Largest components of a state-space direction, attitude parts in body axes.
 
     The attitude error ``psi`` (E frame) is rotated to body axes and labelled roll / pitch /
-    yaw (spec §2: the body x axis is the roll axis), so the weakly observable direction of
-    spec §3.8 reads as "roll".
+    yaw (docs/assumptions.md, launcher.md §2: the body x axis is the roll axis), so the weakly
+    observable direction of docs/assumptions.md, launcher.md §3.8 reads as "roll".
+
+    Parameters
+    ----------
+    vector : numpy.ndarray
+        State-space direction, (n,).
+    state_names : sequence of str
+        The model's states.
+    C_b_e : numpy.ndarray
+        Body -> ECEF attitude, (3, 3).
+    top : int, optional
+        Number of components listed.
+
+    Returns
+    -------
+    str
     """
     v = np.asarray(vector, dtype=float)
     names = list(state_names)
@@ -193,8 +208,8 @@ class Table2Result:
         return pd.DataFrame(rows)
 
     def claims(self, cond_tol: float | None = None) -> list[ClaimResult]:
-        """The §4.1 statements (spec launcher.md §7.2, robust targets of §10c), judged by
-        :mod:`navlib.studies.claims` at ``cond_tol`` (default the result's)."""
+        """The §4.1 statements (docs/assumptions.md, launcher.md §7.2, robust targets of §10c),
+        judged by :mod:`navlib.studies.claims` at ``cond_tol`` (default the result's)."""
         tol = self.cond_tol if cond_tol is None else finite_scalar(cond_tol, "cond_tol", 0.0)
         return table2_claim_results(self.frame, tol, self.variant)
 
@@ -261,7 +276,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
            window: int | None = None, rtol: float | None = None, method: str = "euler",
            solutions=SOLUTIONS, cond_tol: float = COND_TOL, n_jobs: int | None = None,
            progress=None, scheduler=None, rank_rtols=None, **model_kw) -> Table2Result:
-    """Regenerate Table 2 (spec launcher.md §6.1, §7.2).
+    """Regenerate Table 2 (docs/assumptions.md, launcher.md §6.1, §7.2).
 
     Parameters
     ----------
@@ -269,7 +284,7 @@ def table2(trajectory=None, *, variant: str = "time_varying", stride: int = 1,
         Default :func:`navlib.trajectory.launcher_ascent` (150 s at 200 Hz).
     variant : {"time_varying", "frozen"}
         Eq. (6) as printed, or the model frozen at each step (the paper's "piecewise
-        constant model"); spec §6.1 item 2 asks for both.
+        constant model"); docs/assumptions.md, launcher.md §6.1 item 2 asks for both.
     stride : int
         Evaluate every ``stride``-th step (1 = every 200 Hz step, the paper's test).
     window, rtol, method, n_jobs
@@ -344,6 +359,21 @@ def variant_comparison(trajectory=None, solution: str = "ins_gps", *, stride: in
     Columns ``biases, bias_model, paper_unobservable, paper_log10_cond`` and, for each
     variant, ``unobs_<variant>, log10_cond_<variant>``. Spec §10c: the INS/GPS-only rows
     depend strongly on the trajectory and the method.
+
+    Parameters
+    ----------
+    trajectory : Trajectory or None, optional
+        Reference trajectory (default the launcher ascent).
+    solution : str, optional
+        One of :data:`~navlib.models.launcher.SOLUTIONS`.
+    stride : int, optional
+        Evaluated every ``stride``-th step.
+    **kw
+        Other keywords of :func:`~navlib.studies.launcher.table2`.
+
+    Returns
+    -------
+    pandas.DataFrame
     """
     if trajectory is None:
             trajectory = launcher_ascent()
@@ -369,6 +399,29 @@ def mission_observability(solution: str = "ins_gps_att_rt", biases: str = "GAP",
     Default ``stride=200``: one evaluation per second of the 200 Hz ascent (each local
     matrix still uses consecutive 5 ms steps). Returns
     :class:`navlib.observability.LocalObservability` (``to_frame()`` for plotting).
+
+    Parameters
+    ----------
+    solution : str, optional
+        One of :data:`~navlib.models.launcher.SOLUTIONS`.
+    biases : str, optional
+        Bias states, letters of ``"GAP"``.
+    bias_model : {"markov", "random_walk"}, optional
+        Bias model.
+    trajectory : Trajectory or None, optional
+        Reference trajectory (default the launcher ascent).
+    stride : int, optional
+        Evaluated every ``stride``-th step.
+    variant : str, optional
+        Reading of eq. (6).
+    rtol : float or None, optional
+        Relative rank tolerance.
+    window : int or None, optional
+        Block rows per local matrix (None: n).
+    method : {"euler", "exact"}, optional
+        Discretisation.
+    **model_kw
+        Keywords of :func:`navlib.models.launcher.launcher`.
     """
     model = _config_model((solution, biases, bias_model), trajectory, model_kw, method)
     return local_observability(model, window=window, variant=variant, stride=stride,
@@ -380,7 +433,33 @@ def inspect_step(solution: str, biases: str, bias_model: str, trajectory, step: 
                  scale=None, coupling_threshold: float = 1e-6, method: str = "euler",
                  **model_kw):
     """:func:`navlib.observability.analyze` of the local matrix at one step (null space,
-    groups) for one configuration; ``scale="P0"`` scales states by ``sqrt(diag P0)``."""
+    groups) for one configuration; ``scale="P0"`` scales states by ``sqrt(diag P0)``.
+
+    Parameters
+    ----------
+    solution, biases, bias_model : str
+        The configuration.
+    trajectory : Trajectory
+        Reference trajectory.
+    step : int
+        Step analysed.
+    variant : str, optional
+        Reading of eq. (6).
+    rtol : float or None, optional
+        Relative rank tolerance.
+    scale : str, numpy.ndarray or None, optional
+        State scaling (``"P0"``: ``sqrt(diag P0)``).
+    coupling_threshold : float, optional
+        Smallest coupling that joins two states in a group.
+    method : {"euler", "exact"}, optional
+        Discretisation.
+    **model_kw
+        Keywords of :func:`navlib.models.launcher.launcher`.
+
+    Returns
+    -------
+    navlib.observability.ObservabilityAnalysis
+    """
     model = launcher(solution, biases, bias_model, trajectory=trajectory, **model_kw)
     O = local_matrix(model, step, variant=variant, method=method)
     if isinstance(scale, str):

@@ -2,9 +2,9 @@
 
 Composes :func:`navlib.models.launcher`, :func:`navlib.filters.prepare_linear` /
 :func:`~navlib.filters.simulate_linear` and :mod:`navlib.outliers` into the paper's
-outlier experiment (spec launcher.md §6.3, §6.4, §7.3) on the Churchill launcher surrogate
-(:func:`navlib.trajectory.launcher_ascent`, 200 Hz, GPS and all aiding at every sample as in
-the paper, spec §4):
+outlier experiment (docs/assumptions.md, launcher.md §6.3, §6.4, §7.3) on the Churchill launcher
+surrogate (:func:`navlib.trajectory.launcher_ascent`, 200 Hz, GPS and all aiding at every sample as
+in the paper, docs/assumptions.md, launcher.md §4):
 
 * :func:`outlier_response` — the outlier-induced error of a watched quantity (GPS position
   bias, body roll error, launcher divergence) for one solution: the linear filter's exact
@@ -20,11 +20,12 @@ the paper, spec §4):
 * :func:`ekf_crosscheck` — the same outlier through the closed-loop EKF on simulated sensor
   data (:func:`navlib.filters.simulate_ekf`, noise-free so the response is isolated).
 
-Assumptions that matter (spec §11): the bias model of Figs. 7-13 is not stated (default
-gyro + accelerometer + GPS biases as Markov processes, ``GAP``), the A1 sign (default +1,
-spec §10b), the wind level and GPS noise (``navlib.models.launcher.ASSUMED``), the outlier
-shape (default single-sample spike; the step is reported beside it) and the recovery window
-(default 100 s: from the outlier to the end of the 150 s surrogate mission).
+Assumptions that matter (docs/assumptions.md, launcher.md §11): the bias model of Figs. 7-13 is not
+stated (default gyro + accelerometer + GPS biases as Markov processes, ``GAP``), the A1 sign
+(default +1, docs/assumptions.md, launcher.md §10b), the wind level and GPS noise
+(``navlib.models.launcher.ASSUMED``), the outlier shape (default single-sample spike; the step is
+reported beside it) and the recovery window (default 100 s: from the outlier to the end of the 150 s
+surrogate mission).
 
 Modules: :mod:`~navlib.studies.outliers.response` (prepared filters, watched quantities, the
 response of one solution), :mod:`~navlib.studies.outliers.experiment` (T1-T4, re-scoring, the

@@ -58,6 +58,15 @@ def claim_test(study: OutlierStudy, tid: str, shape: str = "spike") -> ClaimResu
     Each solution's reported outcome is a headline check on our recovery score (see
     :func:`_outcome_check`). A solution the outlier cannot reach (T3's INS/GPS has no RT
     channel) is shown but not checked: its "unaffected" holds by construction.
+
+    Parameters
+    ----------
+    study : OutlierStudy
+        The study with its runs.
+    tid : str
+        Test id, ``"T1"`` to ``"T4"``.
+    shape : str, optional
+        Outlier shape of the runs read.
     """
     test = PAPER_TESTS[tid]
     rs = [study.responses.get((tid, sol, shape)) for sol in test.solutions]
@@ -82,7 +91,15 @@ def claim_test(study: OutlierStudy, tid: str, shape: str = "spike") -> ClaimResu
 def claim_t4_detail(study: OutlierStudy, shape: str = "spike") -> ClaimResult | None:
     """T4's detail (Figs. 12-13): with RT the roll error is captured faster at first, then
     corrected more slowly, and the divergence is underestimated (None without the T4
-    capture fractions)."""
+    capture fractions).
+
+    Parameters
+    ----------
+    study : OutlierStudy
+        The study with its runs.
+    shape : str, optional
+        Outlier shape of the runs read.
+    """
     cap = study.capture
     if not {"ins_gps_att_first", "ins_gps_att_rt_first"} <= set(cap):
         return None
@@ -106,7 +123,15 @@ def claim_t4_detail(study: OutlierStudy, shape: str = "spike") -> ClaimResult | 
 
 def outlier_claims(study: OutlierStudy, shape: str = "spike") -> list[ClaimResult]:
     """T1-T4 (:func:`claim_test`) and the T4 detail (:func:`claim_t4_detail`) from a
-    study's ``shape`` runs, judged by the claims engine."""
+    study's ``shape`` runs, judged by the claims engine.
+
+    Parameters
+    ----------
+    study : OutlierStudy
+        The study with its runs.
+    shape : str, optional
+        Outlier shape of the runs read.
+    """
     claims = [claim_test(study, tid, shape) for tid in PAPER_TESTS]
     claims.append(claim_t4_detail(study, shape))
     return [c for c in claims if c is not None]
@@ -142,7 +167,15 @@ def _outcome_explanation(r: OutlierResponse, want: str, magnitude: float) -> str
 def explained(result: ClaimResult, study: OutlierStudy) -> ClaimResult:
     """``result`` (one of T1-T4 or a conclusion claim) with the measured cause of each failed
     outcome check as its explanation (the engine's table; notebook 05 shows the claims
-    without it)."""
+    without it).
+
+    Parameters
+    ----------
+    result : ClaimResult
+        The judged claim.
+    study : OutlierStudy
+        The study whose responses hold the measured causes.
+    """
     if result.verdict in ("reproduced", "not evaluated") or result.explanation:
         return result
     texts = []
@@ -258,7 +291,15 @@ def conclusion_claims(study: OutlierStudy) -> list[ClaimResult]:
 def claim_f10(correlation: pd.DataFrame, rho_threshold: float = -0.9) -> ClaimResult:
     """Fig. 10: attitude error (body axes) and launcher divergence almost perfectly
     negatively correlated over the first 5 s (median rho at most ``rho_threshold`` on every
-    axis)."""
+    axis).
+
+    Parameters
+    ----------
+    correlation : pandas.DataFrame
+        Correlations per time and axis (columns ``t``, ``axis``, ``rho``).
+    rho_threshold : float, optional
+        Largest median correlation that counts as "almost perfectly negative".
+    """
     rho = correlation.dropna().groupby("axis")["rho"]
     worst = rho.max()                      # closest to zero over the window
     median = rho.median()
@@ -288,7 +329,21 @@ def claim_roll_sigma(cid: str, sigma: pd.DataFrame, ratios: pd.Series | None = N
     """Fig. 7 (``cid`` "F7", INS/GPS) or Fig. 11 ("F11", INS/GPS/att): the RT greatly lowers
     the roll sigma (RMS ratio RT / no RT at most ``ratio_threshold``); for Fig. 7 pitch, yaw
     and (with ``ratios`` from :func:`sigma_ratios`) every non-attitude state keep a ratio of
-    at least ``improved``. None when ``sigma`` lacks the two solutions."""
+    at least ``improved``. None when ``sigma`` lacks the two solutions.
+
+    Parameters
+    ----------
+    cid : {"F7", "F11"}
+        Which figure.
+    sigma : pandas.DataFrame
+        Sigma histories with a ``solution`` column, rad.
+    ratios : pandas.Series or None, optional
+        :func:`sigma_ratios` of the other states.
+    ratio_threshold : float, optional
+        Largest RMS ratio RT / no RT that counts as "greatly lowered".
+    improved : float, optional
+        Smallest ratio that counts as "not improved".
+    """
     (a, b), text = {"F7": (("ins_gps", "ins_gps_rt"), "INS/GPS"),
                     "F11": (("ins_gps_att", "ins_gps_att_rt"), "INS/GPS/att")}[cid]
     if not {a, b} <= set(sigma.solution):
@@ -343,6 +398,17 @@ def covariance_claims(correlation: pd.DataFrame, sigma: pd.DataFrame,
     "Greatly reduced" = an RMS sigma ratio RT / no RT at most ``ratio_threshold``; Fig. 7's
     "all other estimates are not improved" = pitch, yaw and (with ``ratios`` from
     :func:`sigma_ratios`) every non-attitude state keep a ratio of at least ``improved``.
+
+    Parameters
+    ----------
+    correlation : pandas.DataFrame
+        Correlations for Fig. 10 (:func:`claim_f10`).
+    sigma : pandas.DataFrame
+        Sigma histories for Figs. 7 and 11.
+    ratios : pandas.Series or None, optional
+        :func:`sigma_ratios` of the other states.
+    rho_threshold, ratio_threshold, improved : float, optional
+        Thresholds of :func:`claim_f10` and :func:`claim_roll_sigma`.
     """
     claims = [claim_f10(correlation, rho_threshold)]
     claims += [claim_roll_sigma(cid, sigma, ratios, ratio_threshold, improved)

@@ -64,7 +64,8 @@ def paper_tests(trajectory=None, *, shapes: Sequence[str] = ("spike", "step"),
                 cache: FilterCache | None = None, divergence: bool = True,
                 outlier_time_s: float | None = None, reuse: OutlierStudy | None = None,
                 conclusions: bool = False, **model_options) -> OutlierStudy:
-    """Run T1-T4 (spec launcher.md §6.4) on the launcher surrogate and judge the claims.
+    """Run T1-T4 (docs/assumptions.md, launcher.md §6.4) on the launcher surrogate and judge the
+    claims.
 
     Parameters
     ----------
@@ -205,7 +206,24 @@ def _rescored(r, window: float):
 
 
 def rescore(study: OutlierStudy, window: float) -> OutlierStudy:
-    """The same responses scored with another recovery window (no new filter run)."""
+    """The same responses scored with another recovery window (no new filter run).
+
+    Parameters
+    ----------
+    study : OutlierStudy
+        The study.
+    window : float
+        Recovery window, s.
+
+    Returns
+    -------
+    OutlierStudy
+
+    Raises
+    ------
+    NavlibInputError
+        If ``window`` is not a positive number.
+    """
     window = finite_scalar(window, "window", 0.0, low_open=True)
     responses = {key: _rescored(r, window) for key, r in study.responses.items()}
     extra = {key: _rescored(r, window) for key, r in study.conclusions.items()}
@@ -219,10 +237,28 @@ def correlation_fig10(trajectory=None, *, duration: float = 5.0,
                       bias_model: str = DEFAULTS["bias_model"],
                       cache: FilterCache | None = None, **model_options) -> pd.DataFrame:
     """Correlation of the body-axis attitude error ``T_E^B psi`` with the divergence
-    ``psi_ref`` per axis over the first ``duration`` seconds (Fig. 10, spec §6.3).
+    ``psi_ref`` per axis over the first ``duration`` seconds (Fig. 10, docs/assumptions.md,
+    launcher.md §6.3).
 
     Returns a tidy frame ``t, axis, rho`` (axis ``roll``/``pitch``/``yaw``); epochs where
     either variance is zero (the pad: ``psi_ref`` starts exactly known) are NaN.
+
+    Parameters
+    ----------
+    trajectory : Trajectory or None, optional
+        Reference trajectory (default the launcher ascent).
+    duration : float, optional
+        Time span, s.
+    solution : str, optional
+        Solution with the RT.
+    biases : str, optional
+        Bias states, letters of ``"GAP"``.
+    bias_model : {"markov", "random_walk"}, optional
+        Bias model.
+    cache : FilterCache or None, optional
+        Prepared filters to reuse.
+    **model_options
+        Keywords of :func:`navlib.models.launcher.launcher`.
     """
     duration = finite_scalar(duration, "duration", 0.0, low_open=True)
     bias_model = effective_bias_model(biases, bias_model)
@@ -251,10 +287,28 @@ def roll_sigma(trajectory=None, *, pairs=(("ins_gps", "ins_gps_rt"),
                biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                stride: int | None = None, cache: FilterCache | None = None,
                **model_options) -> pd.DataFrame:
-    """Body-axis attitude-error sigma of each solution (Figs. 7 and 11, spec §6.2 item 6).
+    """Body-axis attitude-error sigma of each solution (Figs. 7 and 11, docs/assumptions.md,
+    launcher.md §6.2 item 6).
 
     Returns a tidy frame ``t, solution, axis, sigma`` (rad), every ``stride``-th epoch
     (default about 20 ms apart).
+
+    Parameters
+    ----------
+    trajectory : Trajectory or None, optional
+        Reference trajectory (default the launcher ascent).
+    pairs : sequence of (str, str), optional
+        ``(without RT, with RT)`` solution pairs.
+    biases : str, optional
+        Bias states, letters of ``"GAP"``.
+    bias_model : {"markov", "random_walk"}, optional
+        Bias model.
+    stride : int or None, optional
+        Record stride, samples.
+    cache : FilterCache or None, optional
+        Prepared filters to reuse.
+    **model_options
+        Keywords of :func:`navlib.models.launcher.launcher`.
     """
     bias_model = effective_bias_model(biases, bias_model)
     if cache is None:
@@ -281,7 +335,25 @@ def sigma_ratios(a: str = "ins_gps", b: str = "ins_gps_rt", *, cache: FilterCach
                  biases: str = DEFAULTS["biases"], bias_model: str = DEFAULTS["bias_model"],
                  after: float = 10.0) -> pd.Series:
     """RMS sigma of solution ``b`` over that of ``a`` for every common state, after
-    ``after`` seconds (< 1: ``b`` estimates the state better)."""
+    ``after`` seconds (< 1: ``b`` estimates the state better).
+
+    Parameters
+    ----------
+    a, b : str
+        Solutions compared (``b`` over ``a``).
+    cache : FilterCache
+        Prepared filters.
+    biases : str, optional
+        Bias states, letters of ``"GAP"``.
+    bias_model : {"markov", "random_walk"}, optional
+        Bias model.
+    after : float, optional
+        Start of the RMS, s.
+
+    Returns
+    -------
+    pandas.Series
+    """
     bias_model = effective_bias_model(biases, bias_model)
     ca = cache.summary(a, biases, bias_model)
     cb = cache.summary(b, biases, bias_model)

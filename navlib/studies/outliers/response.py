@@ -66,6 +66,17 @@ class FilterCache:
 
     def get(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
             ) -> LinearFilter:
+        """The prepared linear filter of one configuration (prepared and kept when not known).
+
+        Parameters
+        ----------
+        solution : str
+            Solution name (``"ins_gps"``, ``"ins_gps_rt"`` ...).
+        biases : str, optional
+            Bias states, letters of ``"GAP"``.
+        bias_model : str, optional
+            ``"markov"`` or ``"random_walk"``.
+        """
         key = (solution, biases, bias_model)
         if key in self._items:
             value = self._items.pop(key)
@@ -88,7 +99,17 @@ class FilterCache:
 
     def summary(self, solution: str, biases: str = "GAP", bias_model: str = "markov"
                 ) -> CovarianceSummary:
-        """The :class:`CovarianceSummary` of one configuration (prepared when not known)."""
+        """The :class:`CovarianceSummary` of one configuration (prepared when not known).
+
+        Parameters
+        ----------
+        solution : str
+            Solution name.
+        biases : str, optional
+            Bias states, letters of ``"GAP"``.
+        bias_model : str, optional
+            ``"markov"`` or ``"random_walk"``.
+        """
         key = (solution, biases, bias_model)
         if key not in self._summaries:
             found, summary = self._disk.get(("summary", key))
@@ -121,6 +142,21 @@ class FilterCache:
         (their responses are kept, on disk too, not returned): they never prepare a filter
         by themselves, and a later reader of them (the claims engine reading what
         notebook 05 computed) then prepares none either.
+
+        Parameters
+        ----------
+        solution : str
+            Solution name.
+        requests : sequence of (Outlier, str)
+            Outlier and watched quantity of each response.
+        biases : str, optional
+            Bias states, letters of ``"GAP"``.
+        bias_model : str, optional
+            ``"markov"`` or ``"random_walk"``.
+        record_every : int, optional
+            Record stride, samples.
+        also : sequence of (Outlier, str), optional
+            Requests computed in the same recursion and kept, not returned.
         """
         config = (solution, biases, bias_model)
         wanted = [(config, _unit(o), watch) for o, watch in requests]
@@ -228,7 +264,15 @@ RT_ONLY_OPTIONS = ("a1_sign", "sigma_wind")
 def adopt_filters(cache: FilterCache, other: FilterCache) -> None:
     """Put into ``cache`` the prepared filters and unit responses of ``other`` that are the
     same models: all of them when both use the same trajectory and model options, the
-    non-RT ones when the options differ only in :data:`RT_ONLY_OPTIONS`."""
+    non-RT ones when the options differ only in :data:`RT_ONLY_OPTIONS`.
+
+    Parameters
+    ----------
+    cache : FilterCache
+        The cache filled.
+    other : FilterCache
+        The cache read.
+    """
     if other.trajectory is not cache.trajectory:
         return
     a, b = cache.model_options, other.model_options
@@ -247,12 +291,28 @@ def adopt_filters(cache: FilterCache, other: FilterCache) -> None:
 
 
 def record_stride(trajectory, spacing_s: float = 0.02) -> int:
-    """Samples between recorded epochs about ``spacing_s`` apart (at least 1)."""
+    """Samples between recorded epochs about ``spacing_s`` apart (at least 1).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The trajectory (its ``rate_hz``).
+    spacing_s : float, optional
+        Wanted spacing, s.
+    """
     return max(1, round(spacing_s * trajectory.rate_hz))
 
 
 def effective_bias_model(biases: str, bias_model: str) -> str:
-    """``bias_model``, or "none" for a configuration without biases."""
+    """``bias_model``, or "none" for a configuration without biases.
+
+    Parameters
+    ----------
+    biases : str
+        Bias states, letters of ``"GAP"`` (empty: none).
+    bias_model : str
+        ``"markov"`` or ``"random_walk"``.
+    """
     return "none" if not biases else bias_model
 
 
@@ -260,8 +320,22 @@ def watch_rows(watch: str, state_names: Sequence[str], C_b_e) -> np.ndarray:
     """Rows ``c_k`` (K, p, n) with ``c_k' x`` the watched quantity at each epoch.
 
     ``roll``/``pitch``/``yaw``: the body-axis attitude error ``T_E^B psi`` (row i of
-    ``C_b_e'`` on the ``psi`` states, spec launcher.md §6.2 item 6); ``bp``: the three
-    GPS-bias states; ``ref_roll``: ``psi_ref_x``.
+    ``C_b_e'`` on the ``psi`` states, docs/assumptions.md, launcher.md §6.2 item 6); ``bp``: the
+    three GPS-bias states; ``ref_roll``: ``psi_ref_x``.
+
+    Parameters
+    ----------
+    watch : str
+        Watched quantity, one of :data:`WATCHES`.
+    state_names : sequence of str
+        The model's states.
+    C_b_e : numpy.ndarray
+        Body -> ECEF attitude per epoch, (K, 3, 3).
+
+    Raises
+    ------
+    NavlibInputError
+        If ``watch`` is unknown or the model lacks its states.
     """
     if watch not in WATCHES:
         raise NavlibInputError(f"watch: expected one of {WATCHES}, got {watch!r}")

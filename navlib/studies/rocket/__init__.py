@@ -8,7 +8,7 @@ returning a :class:`~navlib.studies.claims.ClaimResult`, evaluated by code.
 
 The paper's statements are qualitative ("mostly in S_O", "very low", "briefly sensible");
 the operational thresholds used here are constants of :mod:`~navlib.studies.rocket.flight`
-(spec excitability.md §3; docs/assumptions.md):
+(docs/assumptions.md, excitability.md §3; docs/assumptions.md):
 
 * :data:`IN_SO` = 1/sqrt(2): a state "lies in S_O" when more than half of its unit vector's
   squared norm projects on the excited subspace (X1-X4); the same value for "sensible"
@@ -16,14 +16,15 @@ the operational thresholds used here are constants of :mod:`~navlib.studies.rock
 * :data:`LOW` = 0.25: "very low" / "barely" = less than 1/16 of the squared norm.
 * :data:`BRIEF_S` = 10 s: "briefly sensible"; :data:`TRANSIENT_S` = 5 s: epochs before it
   are left out of the "weakly sensible" counts (every state is sensible at t0 under the
-  literal reading of spec A9, and the sensible subspace is still large for a few epochs).
+  literal reading of docs/assumptions.md A9, and the sensible subspace is still large for a few
+  epochs).
 
 Each claim is a list of explicit checks judged by the one rule of
 :mod:`navlib.studies.claims` (the headline check decides "not reproduced"), and is
 registered there with its declared assumption set (:data:`ROBUSTNESS_GRID`).
 The metrics are *relative* (normalised by D0 and R0) and depend strongly on the assumed
-P0, GNSS sigma, eta and nu (spec §3 "What the prototype showed"): :func:`sensitivity_sweep`
-shows how much.
+P0, GNSS sigma, eta and nu (docs/assumptions.md, excitability.md §3 "What the prototype showed"):
+:func:`sensitivity_sweep` shows how much.
 
 Modules: :mod:`~navlib.studies.rocket.flight` (trajectory, model, thresholds),
 :mod:`~navlib.studies.rocket.experiment` (:func:`excitability_study`, the pad geometry, S5's

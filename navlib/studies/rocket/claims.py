@@ -225,7 +225,17 @@ def _pad(analysis: RocketAnalysis) -> np.ndarray:
 
 
 def sensible_time(analysis: RocketAnalysis, state: str, epochs: np.ndarray) -> float:
-    """Seconds (epoch count x GNSS period) with s >= SENSIBLE among ``epochs``."""
+    """Seconds (epoch count x GNSS period) with s >= SENSIBLE among ``epochs``.
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+        The analysis.
+    state : str
+        State name.
+    epochs : numpy.ndarray
+        Epoch indices considered.
+    """
     if epochs.size == 0:
         return 0.0
     period = float(np.median(np.diff(analysis.model.t)))
@@ -350,7 +360,15 @@ def _heading_at_ignition(analysis: RocketAnalysis) -> float:
 def claim_s5(analysis: RocketAnalysis, quiet: RocketAnalysis | None = None) -> ClaimResult:
     """S5: gyro noise and bias hide the Earth rate: excitability at rest does not become
     sensability (heading not sensible on the pad), *because of* the gyro errors: with them
-    scaled down (``quiet``, :func:`quiet_gyro_analysis`) the heading becomes sensible."""
+    scaled down (``quiet``, :func:`quiet_gyro_analysis`) the heading becomes sensible.
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+        The analysis.
+    quiet : RocketAnalysis or None, optional
+        The counterfactual run with scaled-down gyro errors; None computes it.
+    """
     _require_three(analysis)
     pad = _pad(analysis)
     heading = direction_sensability(analysis.sensability, heading_direction(analysis))
@@ -509,14 +527,39 @@ def excitability_claims(analysis: RocketAnalysis) -> list[ClaimResult]:
 def sensability_claims(analysis: RocketAnalysis, quiet: RocketAnalysis | None = None
                        ) -> list[ClaimResult]:
     """S1-S8 (Figs. 3-5) evaluated on ``analysis`` (``quiet``: S5's counterfactual run,
-    :func:`quiet_gyro_analysis`, computed when not given)."""
+    :func:`quiet_gyro_analysis`, computed when not given).
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+        The analysis.
+    quiet : RocketAnalysis or None, optional
+        S5's counterfactual run; None computes it.
+    """
     out = [claim_s5(analysis, quiet) if claim is claim_s5 else claim(analysis)
            for claim in SENSABILITY_CLAIMS]
     return [replace(c, depends_on=c.depends_on or SENSABILITY_DEPENDS) for c in out]
 
 
 def claims_table(analysis: RocketAnalysis, which: str = "all") -> pd.DataFrame:
-    """Table of claim results: ``which`` = ``"excitability"``, ``"sensability"`` or ``"all"``."""
+    """Table of claim results: ``which`` = ``"excitability"``, ``"sensability"`` or ``"all"``.
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+        The analysis.
+    which : {"excitability", "sensability", "all"}, optional
+        Which claims.
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Raises
+    ------
+    NavlibInputError
+        If ``which`` is unknown.
+    """
     if which not in ("excitability", "sensability", "all"):
         raise NavlibInputError(f"which: expected 'excitability', 'sensability' or 'all', "
                                f"got {which!r}")

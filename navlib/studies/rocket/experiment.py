@@ -59,21 +59,22 @@ def excitability_study(spin_hz: float = 2.0, attitude_error: str = "ecef", eta: 
     spin_hz : float
         Aerodynamic spin reached in powered flight (assumed 2 Hz; halved at 73 s).
     attitude_error : {"ecef", "body"}
-        Attitude-error frame (spec A4); ECEF default (reading of Fig. 4).
+        Attitude-error frame (docs/assumptions.md A4); ECEF default (reading of Fig. 4).
     eta : float
-        Excitability energy threshold (assumed 1e-3, spec A14).
+        Excitability energy threshold (assumed 1e-3, docs/assumptions.md A14).
     nu : float
         Sensability threshold (paper: 0.985).
     segments : sequence of (t_start, t_end)
         Default tau1 = [0, 19], tau2 = [19, 60], tau3 = [60, 86] s.
     d0 : {"global", "filter"}
-        D0 of the excitability per segment (spec A19).
+        D0 of the excitability per segment (docs/assumptions.md A19).
     gnss_sigma_m : float
         GNSS position sigma per axis, R = R0 (assumed 5 m).
     sensors : None, str or mapping
         IMU noise (default preset ``motionpak_tactical``).
     prior_update : bool
-        Sensability with P0 as a prior updated at t0 (spec A9; default: literal reading).
+        Sensability with P0 as a prior updated at t0 (docs/assumptions.md A9; default: literal
+        reading).
     trajectory_options : dict, optional
         Further :func:`navlib.trajectory.sounding_rocket` keywords (site, rail, timings).
     **sigmas
@@ -105,8 +106,8 @@ def _up(analysis: RocketAnalysis) -> np.ndarray:
 def tangent_projections(analysis: RocketAnalysis) -> np.ndarray:
     """Norms of the projections of the three attitude-error axes on the pad's tangent plane.
 
-    ECEF axes for the ``ecef`` attitude error, body axes at t0 for ``body`` (spec §3
-    prototype: 0.58 / 0.82 / 0.99 for the ECEF axes at the assumed site).
+    ECEF axes for the ``ecef`` attitude error, body axes at t0 for ``body`` (docs/assumptions.md,
+    excitability.md §3 prototype: 0.58 / 0.82 / 0.99 for the ECEF axes at the assumed site).
     """
     up = _up(analysis)
     if analysis.settings["attitude_error"] == "body":
@@ -119,6 +120,18 @@ def direction_sensability(result: metrics.SensabilityResult, v) -> np.ndarray:
 
     ``v`` is mapped to the normalised coordinates (``D0^-1/2 v``), made unit, and projected
     on the practically sensible subspace ``span{v^1..v^nr}``: ``||V[:, :nr]' w||``.
+
+    Parameters
+    ----------
+    result : navlib.metrics.SensabilityResult
+        Sensability of the analysis.
+    v : array_like
+        Direction in state space, (n,).
+
+    Raises
+    ------
+    NavlibInputError
+        If ``v`` is zero or of the wrong length.
     """
     v = np.asarray(v, dtype=float)
     if v.shape != (result.n,) or not np.any(v):
@@ -145,7 +158,22 @@ def quiet_gyro_analysis(analysis: RocketAnalysis, scale: float = QUIET_GYRO_SCAL
     """``analysis`` rerun with the gyro noise (ARW, bias random walk) and the initial gyro
     bias sigma scaled by ``scale``: the counterfactual of S5 ("gyro noise and bias prevent
     measuring the Earth rate", A-S5-cause). ``sensors``: the noise source of ``analysis``
-    when it was built from a mapping (default: its named preset)."""
+    when it was built from a mapping (default: its named preset).
+
+    Parameters
+    ----------
+    analysis : RocketAnalysis
+        The analysis.
+    scale : float, optional
+        Factor on the gyro noise and initial gyro-bias sigma, in (0, 1].
+    sensors : optional
+        Noise source of ``analysis`` when it was built from a mapping.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``scale`` is out of range, or ``sensors`` is missing for a mapping-built analysis.
+    """
     scale = finite_scalar(scale, "scale", 0.0, 1.0, low_open=True)
     if sensors is None and analysis.settings["sensors"] == "custom":
         raise NavlibInputError("sensors: the analysis was built from a noise mapping; pass "

@@ -85,6 +85,23 @@ def add_coning(traj, coning_deg: float = 3.0, coning_hz: float = 0.5,
     lateral specific force ``|f| sin(alpha)``; the IMU stays exact (analytic body rate,
     :func:`navlib.trajectory.build_trajectory`). Used to test whether lateral *body* motion
     resolves the X3/S6 tension (it does not: the ECEF attitude error couples through ``f^e``).
+
+    Parameters
+    ----------
+    traj : Trajectory
+        The flight.
+    coning_deg : float, optional
+        Cone half-angle, deg.
+    coning_hz : float, optional
+        Coning frequency, Hz.
+    start_s : float or None, optional
+        Start of the ramp, s; None: lift-off.
+    ramp_s : float, optional
+        Ramp length, s.
+
+    Returns
+    -------
+    Trajectory
     """
     coning_deg = finite_scalar(coning_deg, "coning_deg", 0.0, 30.0)
     coning_hz = finite_scalar(coning_hz, "coning_hz", 0.0)
@@ -134,6 +151,17 @@ def rocket_trajectory(spin_hz: float = 2.0, **overrides):
     (:func:`add_coning`). The same object comes back for the same settings, so the
     discretised model cached on it (:func:`navlib.models.ecef.ecef21_at_epochs`) is reused
     by widgets and sweeps.
+
+    Parameters
+    ----------
+    spin_hz : float, optional
+        Roll rate, Hz.
+    **overrides
+        Keywords of :func:`navlib.trajectory.sounding_rocket` and of :func:`add_coning`.
+
+    Returns
+    -------
+    Trajectory
     """
     spin_hz = finite_scalar(spin_hz, "spin_hz", 0.0)
     if "spin_hz" in overrides:
@@ -156,6 +184,23 @@ def rocket_chain(spin_hz: float = 2.0, attitude_error: str = "ecef", sensors=Non
     DiscreteModel
         ``t`` (87,) at 1 Hz for the 0-86 s flight, ``F``, ``Q`` (86, 21, 21), ``H``, ``R``,
         ``P0``.
+
+    Parameters
+    ----------
+    spin_hz : float, optional
+        Roll rate, Hz.
+    attitude_error : {"ecef", "body"}, optional
+        Attitude-error frame.
+    sensors : optional
+        Sensor preset (as :func:`navlib.models.ecef21`).
+    gnss_sigma_m : float, optional
+        GNSS position sigma, m.
+    gnss_rate_hz : float, optional
+        GNSS rate, Hz.
+    trajectory_options : dict or None, optional
+        Keywords of :func:`rocket_trajectory`.
+    **sigmas
+        Initial sigmas, keywords of :func:`navlib.models.ecef21`.
     """
     traj = rocket_trajectory(spin_hz, **dict(_frozen(trajectory_options)))
     base = ecef21_at_epochs(traj, gnss_rate_hz, sensors=sensors, attitude_error=attitude_error)

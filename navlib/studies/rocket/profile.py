@@ -1,5 +1,5 @@
 """The sounding-rocket profile claims of España, Carrizo & Giribet (2019), checked on a
-synthetic trajectory (spec excitability.md §3 event table and §4; notebook 01).
+synthetic trajectory (docs/assumptions.md, excitability.md §3 event table and §4; notebook 01).
 
 The paper describes its VS30 flight only through Fig. 1 and a few sentences: on the pad until
 18 s, boost to 46 s with a peak axial specific force of about 110 m/s^2, a sign change of

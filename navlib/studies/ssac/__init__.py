@@ -1,12 +1,12 @@
 """Silva, Hemerly & Leite Filho (2017) SSAC study: observability, estimability, eigen-analysis.
 
 Composes :func:`navlib.models.ssac`, :mod:`navlib.observability`, :mod:`navlib.covariance`
-and :mod:`navlib.estimability` into the paper's experiments (spec ssac.md §3–§5) and
+and :mod:`navlib.estimability` into the paper's experiments (docs/assumptions.md, ssac.md §3–§5) and
 evaluates each claim in code (judged by :mod:`navlib.studies.claims`):
 
-* :mod:`.observability` — ranks of the 15-, 12- and 10-state models (ssac.md §3.1), the
-  exact null space against the analytic vectors of §3.3 and the grouping of the unobservable
-  subspace under three readings (exact, P0-scaled, equivalence-scaled);
+* :mod:`.observability` — ranks of the 15-, 12- and 10-state models (docs/assumptions.md, ssac.md
+  §3.1), the exact null space against the analytic vectors of §3.3 and the grouping of the
+  unobservable subspace under three readings (exact, P0-scaled, equivalence-scaled);
 * :mod:`.experiment` — the 60 min, 1 Hz covariance run with ZVU updates
   (:func:`covariance_run`; several initial covariances of one model stacked:
   :func:`p0_runs`), the closed-form limits (eq. 44 and the classical ``b_a/g``,
@@ -19,8 +19,9 @@ evaluates each claim in code (judged by :mod:`navlib.studies.claims`):
   evaluation, :data:`SEARCH`);
 * :mod:`.reading` — the notebook's generated reading.
 
-All numbers come from the reconstructed model (ssac.md §2.3) with the assumed P0, Q and R of
-ssac.md §4.4; the paper's own values were lost from the seed text.
+All numbers come from the reconstructed model (docs/assumptions.md, ssac.md §2.3) with the assumed
+P0, Q and R of docs/assumptions.md, ssac.md §4.4; the paper's own values were lost from the seed
+text.
 """
 
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG

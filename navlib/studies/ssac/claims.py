@@ -1,7 +1,5 @@
-"""Silva et al. (2017) claims: one small function per claim of ssac.md §5, judged by the
-claims engine (:mod:`navlib.studies.claims`); :func:`ssac_claims` evaluates them all on one
-covariance run (:mod:`navlib.studies.ssac.experiment`) and the observability tables
-(:mod:`navlib.studies.ssac.observability`)."""
+"""Silva et al. (2017) claims, one small function each, judged by :mod:`navlib.studies.claims`;
+:func:`ssac_claims` evaluates them all on one covariance run and the observability tables."""
 
 from __future__ import annotations
 
@@ -68,7 +66,19 @@ ESTIMABLE = tuple(s for g in ("attitude", "gyro bias", "accelerometer bias")
 def static_tables(lat_deg: float, alt_m: float, duration_s: float, rtol: float = RANK_RTOL,
                   orientation: pd.DataFrame | None = None):
     """The P0-independent tables of the claims (observability, grouping, orientation) at the
-    relative rank tolerance ``rtol`` (``orientation``: a table to reuse)."""
+    relative rank tolerance ``rtol`` (``orientation``: a table to reuse).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float
+        Site latitude, deg, and altitude, m.
+    duration_s : float
+        Run length of the orientation table, s.
+    rtol : float, optional
+        Relative rank tolerance of O.
+    orientation : pandas.DataFrame or None, optional
+        An orientation table to reuse; None computes it.
+    """
     return (observability_table(lat_deg, alt_m, rtol), grouping_table(lat_deg, alt_m,
                                                                        rtol=rtol),
             orientation_table(duration_s=duration_s) if orientation is None else orientation)
@@ -76,7 +86,15 @@ def static_tables(lat_deg: float, alt_m: float, duration_s: float, rtol: float =
 
 # ------------------------------------------------------------------------- observability
 def rank_claims(obs: pd.DataFrame, rank_rtol: float = RANK_RTOL) -> list[ClaimResult]:
-    """SSAC-rank15, SSAC-rank10: the rank of O of :func:`observability_table` ``obs``."""
+    """SSAC-rank15, SSAC-rank10: the rank of O of :func:`observability_table` ``obs``.
+
+    Parameters
+    ----------
+    obs : pandas.DataFrame
+        :func:`~navlib.studies.ssac.observability_table` result.
+    rank_rtol : float, optional
+        Relative rank tolerance it was computed with (named in the assumption).
+    """
     out = []
     for _, row in obs.iterrows():
         n = int(row["n_states"])
@@ -101,7 +119,15 @@ def individual_claim(study: SSACStudy, rank_rtol: float = RANK_RTOL) -> ClaimRes
     """SSAC-individual: only the velocity errors are individually observable. Basis "by
     construction": the ZVU measures the velocity errors themselves (H = [0 I 0]), so they
     have no null-space weight for any P0, noise, site or rank tolerance; no declared
-    assumption moves the count (docs/assumptions.md, A-SSAC-set)."""
+    assumption moves the count (docs/assumptions.md, A-SSAC-set).
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run whose model is analysed.
+    rank_rtol : float, optional
+        Relative rank tolerance of O.
+    """
     model = study.model
     O = observability_matrix(model.A, model.H)
     basis = analyze(O, rtol=rank_rtol, state_names=model.state_names).null_space
@@ -126,7 +152,18 @@ def groups_claim(groups: pd.DataFrame, lat_deg: float = SITE_LAT_DEG,
     """SSAC-groups: the grouping of the unobservable subspace (:func:`grouping_table`
     ``groups`` at ``lat_deg``, ``alt_m``). When the exact null space does not split into the
     paper's groups, the explanation reruns the grouping at the equator, where the
-    Omega sin L terms vanish, to measure which coupling joins them."""
+    Omega sin L terms vanish, to measure which coupling joins them.
+
+    Parameters
+    ----------
+    groups : pandas.DataFrame
+        :func:`~navlib.studies.ssac.grouping_table` result (rows: exact, thresholded,
+        equivalence-scaled).
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rank_rtol : float, optional
+        Relative rank tolerance of O.
+    """
     exact, eq_row = groups.iloc[0], groups.iloc[2]
     explanation = ""
     if not exact["matches_paper"]:
@@ -169,7 +206,15 @@ def estimable_claim(conv: pd.DataFrame) -> ClaimResult:
 
 
 def position_claim(conv: pd.DataFrame, duration_s: float) -> ClaimResult:
-    """SSAC-position: flat position sigmas over the run."""
+    """SSAC-position: flat position sigmas over the run.
+
+    Parameters
+    ----------
+    conv : pandas.DataFrame
+        Convergence table of the run (``SSACStudy.convergence_table()`` indexed by state).
+    duration_s : float
+        Run length, s.
+    """
     pos = conv.loc[list(POSITION), "ratio"]
     return claim(
         "SSAC-position", "position errors show no decrease in variance (non-estimable)",
@@ -240,7 +285,17 @@ def ten_minute_claim(conv: pd.DataFrame, convergence: str = CONVERGENCE_DEFAULT
 
 def bgd_claim(study: SSACStudy, conv: pd.DataFrame,
               convergence: str = CONVERGENCE_DEFAULT) -> ClaimResult:
-    """SSAC-bgD: bgD converges slowest, after 30-40 min (runs of 40 min or more)."""
+    """SSAC-bgD: bgD converges slowest, after 30-40 min (runs of 40 min or more).
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run (claims on runs shorter than 40 min are "not evaluated").
+    conv : pandas.DataFrame
+        Its convergence table indexed by state.
+    convergence : str, optional
+        Reading of "converged", a key of :data:`~navlib.studies.ssac.CONVERGENCE`.
+    """
     statement = "bgD converges slowest, recognisable only after 30-40 min"
     if not study.long_run:
         return not_evaluated("SSAC-bgD", statement, "30-40 min (Fig. 5)", short_run_text(study),
@@ -304,7 +359,15 @@ def actual_claim(study: SSACStudy, x0=None) -> ClaimResult:
     bias at 1 sigma, :func:`~navlib.studies.ssac.actual_error`) against the (44) sigma. Its
     number is set by ``x0``, which the paper does not give (A-SSAC-actual), and by the
     filter's gains: ``depends_on`` x0 and the run's assumptions, and the claims engine judges
-    it over :func:`~navlib.studies.ssac.x0_draws` as well."""
+    it over :func:`~navlib.studies.ssac.x0_draws` as well.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run whose filter gains are used.
+    x0 : numpy.ndarray or None, optional
+        Initial truth error, (n,), SI units; None puts every bias at 1 sigma.
+    """
     psid = closed_form_limits(study).set_index("state").loc["psiD"]
     err = actual_error(study, x0)
     i_psid = study.model.state_names.index("psiD")
@@ -353,7 +416,15 @@ TRUTH_READING = ("a reduced filter's actual errors on the 15-state truth (the sa
 def dropped_coupling(study: SSACStudy, reduced: SSACStudy) -> tuple[float, str, str]:
     """How strongly the states a reduced filter drops drive the ones it keeps in the
     15-state dynamics: the largest ``|A[kept, dropped]|`` (1/s) with its kept and dropped
-    state."""
+    state.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The 15-state run.
+    reduced : SSACStudy
+        The reduced run whose dropped states are measured.
+    """
     names = list(study.model.state_names)
     kept = [names.index(s) for s in reduced.state_names]
     dropped = [i for i in range(len(names)) if i not in kept]
@@ -384,7 +455,15 @@ def _twelve_explanation(study: SSACStudy, reduced: SSACStudy, actual: tuple) -> 
 def twelve_state_claim(study: SSACStudy, reduced: SSACStudy | None,
                        reduced10: SSACStudy | None) -> ClaimResult:
     """SSAC-12state: the 12-state filter is adequate and the 10-state one is not, each read
-    from its actual errors on the 15-state truth (:data:`TRUTH_READING`)."""
+    from its actual errors on the 15-state truth (:data:`TRUTH_READING`).
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The 15-state run (the truth).
+    reduced, reduced10 : SSACStudy or None
+        The 12- and 10-state runs; None for either makes the claim "not evaluated".
+    """
     if reduced is None or reduced10 is None:
         return not_evaluated("SSAC-12state", STATEMENT_12, "conclusions",
                              "no 12- and 10-state runs given", depends_on=RUN_DEPS)
@@ -404,7 +483,15 @@ def twelve_state_claim(study: SSACStudy, reduced: SSACStudy | None,
 
 def ten_state_claim(study: SSACStudy, reduced10: SSACStudy | None) -> ClaimResult:
     """SSAC-10state: the 10-state filter is inadequate, read from its actual errors on the
-    15-state truth (:data:`TRUTH_READING`)."""
+    15-state truth (:data:`TRUTH_READING`).
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The 15-state run (the truth).
+    reduced10 : SSACStudy or None
+        The 10-state run; None makes the claim "not evaluated".
+    """
     if reduced10 is None:
         return not_evaluated("SSAC-10state", STATEMENT_10, "conclusions",
                              "no 12- and 10-state runs given", depends_on=RUN_DEPS)
@@ -441,18 +528,31 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
                 reduced10: SSACStudy | str | None = "run",
                 convergence: str = CONVERGENCE_DEFAULT,
                 rank_rtol: float = RANK_RTOL) -> list[ClaimResult]:
-    """Every claim of ssac.md §5 the covariance reconstruction can test, judged by the
-    claims engine.
+    """Every claim of Silva et al. the covariance reconstruction can test, judged by the
+    claims engine; claims about 30-60 min time scales are "not evaluated" on runs shorter
+    than 40 min.
 
-    ``study`` defaults to the full 60 min matched-P0 run; claims about 30-60 min time scales
-    are "not evaluated" on runs shorter than 40 min. ``p0_table``: a
-    :func:`~navlib.studies.ssac.p0_sensitivity` table to reuse; ``tables``: the
-    P0-independent ``(observability_table, grouping_table, orientation_table)`` at
-    ``rank_rtol`` to reuse (:func:`static_tables`); ``reduced``, ``reduced10``: the 12- and
-    10-state runs with the same settings (default ``"run"``: computed here; None: the claims
-    needing them are not evaluated); ``convergence``: the one reading of "converged" every
-    time claim uses (a key of :data:`~navlib.studies.ssac.CONVERGENCE`); ``rank_rtol``: the
-    relative rank tolerance of O.
+    Parameters
+    ----------
+    study : SSACStudy or None, optional
+        The run; None runs the full 60 min matched-P0 study.
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    p0_table : pandas.DataFrame or None, optional
+        A :func:`~navlib.studies.ssac.p0_sensitivity` table to reuse.
+    tables : tuple or None, optional
+        :func:`static_tables` result to reuse.
+    reduced, reduced10 : SSACStudy, str or None, optional
+        The 12- and 10-state runs, ``"run"`` to compute them, None to skip their claims.
+    convergence : str, optional
+        Reading of "converged", a key of :data:`~navlib.studies.ssac.CONVERGENCE`.
+    rank_rtol : float, optional
+        Relative rank tolerance of O.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``study`` is not a 15-state run or ``convergence`` is unknown.
     """
     study = study if study is not None else covariance_run(lat_deg=lat_deg, alt_m=alt_m)
     if study.model.n != 15:
@@ -483,5 +583,18 @@ def ssac_claims(study: SSACStudy | None = None, *, lat_deg: float = SITE_LAT_DEG
 
 
 def claims_table(study: SSACStudy | None = None, **options) -> pd.DataFrame:
-    """:func:`ssac_claims` as a DataFrame (one row per claim)."""
+    """:func:`ssac_claims` as a DataFrame (one row per claim).
+
+    Parameters
+    ----------
+    study : SSACStudy or None, optional
+        The run (see :func:`ssac_claims`).
+    **options
+        Keyword arguments of :func:`ssac_claims`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per claim.
+    """
     return claims_frame(ssac_claims(study, **options))

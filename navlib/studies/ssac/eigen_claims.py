@@ -1,6 +1,6 @@
-"""Silva et al. (2017) claims read from the Ham–Brown eigen-analysis (ssac.md §3.6, §5): the
-six large modes, the 45° pairs, the position modes, the X-shape, the rotated IMU and the
-P0-sensitivity experiment; one small function per claim."""
+"""Silva et al. (2017) claims read from the Ham–Brown eigen-analysis (docs/assumptions.md, ssac.md
+§3.6, §5): the six large modes, the 45° pairs, the position modes, the X-shape, the rotated IMU and
+the P0-sensitivity experiment; one small function per claim."""
 
 from __future__ import annotations
 

@@ -1,11 +1,7 @@
-"""Silva et al. (2017) covariance experiment: the 60 min, 1 Hz ZVU Kalman filter run and what
-is read from it (ssac.md §3.4–§3.6): convergence, the closed-form limits, the Ham–Brown
-eigen-analysis (pairs, X-shape), the P0-sensitivity rerun, the rotated IMU and the actual
-error of a noise-free run.
-
-All numbers come from the reconstructed model (ssac.md §2.3) with the assumed P0, Q and R of
-ssac.md §4.4; the paper's own values were lost from the seed text.
-"""
+"""Silva et al. (2017) covariance experiment: the 60 min, 1 Hz ZVU Kalman filter run on the
+reconstructed model (docs/assumptions.md, Silva et al. section) and what is read from it:
+convergence, closed-form limits, the Ham-Brown eigen-analysis, the P0-sensitivity rerun, the
+rotated IMU and the actual error of a noise-free run."""
 
 from __future__ import annotations
 
@@ -174,7 +170,8 @@ def covariance_run(duration_s: float = 3600.0, dt_s: float = 1.0,
                    n_states: int = 15, P0="matched", attitude_scale: float = 1.0,
                    sigma_nu: float | None = None, track: bool = True, C_b_n=None,
                    imu=None) -> SSACStudy:
-    """Covariance run of the SSAC filter (ssac.md §3.4, §4.1: 1 Hz, 60 min, ZVU).
+    """Covariance run of the SSAC filter (docs/assumptions.md, ssac.md §3.4, §4.1: 1 Hz, 60 min,
+    ZVU).
 
     Parameters
     ----------
@@ -240,7 +237,8 @@ def _pairs(initial) -> list[tuple]:
 
 
 def closed_form_limits(study: SSACStudy) -> pd.DataFrame:
-    """Closed-form accuracy limits beside the filter's final sigma (ssac.md §3.5).
+    """Closed-form accuracy limits beside the filter's final sigma (docs/assumptions.md, ssac.md
+    §3.5).
 
     ``classic``: tilt ``b_a/g``, azimuth ``b_gE/(Omega cos L)`` (the alignment error a bias
     of nominal size causes). ``eq44``: the Bayesian form of Jekeli's statement, eq. (44):
@@ -287,6 +285,13 @@ def pair_structure(eig: NormalizedEigenResult, time_s: float | None = None) -> p
     i.e. a 45° eigenvector), the projector entry ``P[x, b]`` (±0.5 for a 45° pair), the
     angle atan(share_b / share_x) in degrees, and the largest share of any other state, at
     the epoch nearest ``time_s`` (default the last).
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Sorted eigen-decomposition of the normalised covariance over time.
+    time_s : float or None, optional
+        Epoch, s; None takes the last.
     """
     k = eig._epoch(time_s)
     pair_cols, _ = pair_subspace(eig, k)
@@ -334,6 +339,13 @@ def subspace_drift(eig: NormalizedEigenResult, t_from_s: float = 1800.0) -> floa
 
     Small when the X-shape is a rotation inside a fixed subspace: the "vector sum" of the
     exchanging eigenvectors stays put (Silva et al. §3, after Figs. 9–10).
+
+    Parameters
+    ----------
+    eig : NormalizedEigenResult
+        Sorted eigen-decomposition of the normalised covariance over time.
+    t_from_s : float, optional
+        Time from which the drift is measured, s.
     """
     pair_cols, _ = pair_subspace(eig, eig.t.size - 1)
     return projector_drift(eig.eigenvectors, pair_cols, int(np.searchsorted(eig.t, t_from_s)))
@@ -343,14 +355,23 @@ def p0_sensitivity(study: SSACStudy | None = None,
                    attitude_scale: float = P0_MODIFIED_ATTITUDE_SCALE,
                    duration_s: float = 3600.0, modified: SSACStudy | None = None
                    ) -> pd.DataFrame:
-    """The P0-sensitivity experiment (ssac.md §5.4 item 18) against the matched P0.
+    """The P0-sensitivity experiment of Silva et al. against the matched P0.
 
     Reruns with the attitude sigmas of the matched P0 times ``attitude_scale`` and reports,
     for both runs, each paper pair's bias share in the pair subspace at the end (1 = the
     eigenvector lies entirely along the bias: "complete non-estimability") and the final
-    attitude sigma (deg), which worsens when the biases lose estimability. ``modified``:
-    that rerun when already made (:func:`modified_run`, e.g. stacked with others by
-    :func:`p0_runs`).
+    attitude sigma (deg), which worsens when the biases lose estimability.
+
+    Parameters
+    ----------
+    study : SSACStudy or None, optional
+        The matched-P0 run; None runs one of ``duration_s``.
+    attitude_scale : float, optional
+        Factor on the attitude sigmas of P0 for the rerun.
+    duration_s : float, optional
+        Run length when ``study`` is None, s.
+    modified : SSACStudy or None, optional
+        The rerun when already made (:func:`modified_run`, e.g. stacked by :func:`p0_runs`).
     """
     base = study if study is not None else covariance_run(duration_s=duration_s, track=False)
     if modified is None:
@@ -368,7 +389,15 @@ def p0_sensitivity(study: SSACStudy | None = None,
 def modified_run(study: SSACStudy, attitude_scale: float = P0_MODIFIED_ATTITUDE_SCALE
                  ) -> SSACStudy:
     """The rerun of :func:`p0_sensitivity`: the matched P0 with its attitude sigmas times
-    ``attitude_scale``, on the time grid, site and state count of ``study``."""
+    ``attitude_scale``, on the time grid, site and state count of ``study``.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The matched-P0 run.
+    attitude_scale : float, optional
+        Factor on its attitude sigmas.
+    """
     p = study.model.parameters
     return covariance_run(duration_s=float(study.t[-1] - study.t[0]),
                           dt_s=float(study.t[1] - study.t[0]), lat_deg=np.degrees(p["lat"]),
@@ -379,15 +408,22 @@ def modified_run(study: SSACStudy, attitude_scale: float = P0_MODIFIED_ATTITUDE_
 def orientation_table(ypr_deg=ORIENTATION_DEG, duration_s: float = 3600.0) -> pd.DataFrame:
     """Non-estimable bias portions of a rotated IMU, per body axis and per NED axis.
 
-    Silva et al. §4 (ssac.md §5.4 item 19): with the IMU at an arbitrary orientation every
-    body axis gets a small non-estimable portion, and their vector sum points east for the
-    gyros and north/east for the accelerometers. Here: the projector onto the three pair
+    Silva et al. §4 (docs/assumptions.md, ssac.md §5.4 item 19): with the IMU at an arbitrary
+    orientation every body axis gets a small non-estimable portion, and their vector sum points east
+    for the gyros and north/east for the accelerometers. Here: the projector onto the three pair
     modes at the end of the run (normalised coordinates, equal sigma per axis of a triad),
     restricted to each bias triad; ``body_share`` is its diagonal (per body axis) and
     ``ned_share`` the diagonal of ``C_b_n P C_n_b`` (per NED axis), both as sqrt.
     Kept per orientation and duration (:func:`navlib.cache.memoized`: the notebook and
     :func:`~navlib.studies.ssac.ssac_claims` ask for the same one); each call returns its own
     copy.
+
+    Parameters
+    ----------
+    ypr_deg : array_like, optional
+        IMU yaw, pitch, roll relative to the body frame, deg.
+    duration_s : float, optional
+        Run length, s.
     """
     ypr = tuple(float(v) for v in np.ravel(ypr_deg))
     return _orientation_table(ypr, float(duration_s)).copy()
@@ -425,6 +461,13 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     (:func:`navlib.estimability.noise_free_error`, with the gains of
     :attr:`SSACStudy.closed_loop`). Returns the error (truth - estimate) at every epoch,
     (N, n), SI units.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run whose gains correct the estimate.
+    x0 : numpy.ndarray or None, optional
+        Initial truth error, (n,), SI units; None puts every bias at its nominal 1 sigma.
     """
     model = study.model
     p = model.parameters
@@ -445,9 +488,9 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
 
 @cache.memoized(maxsize=4)
 def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
-    """Actual error sigmas of a reduced filter run on the 15-state truth (ssac.md §2.4, the
-    conclusions' "the 12-state filter is as good"): a covariance analysis of the suboptimal
-    filter, not the reduced filter's own sigmas.
+    """Actual error sigmas of a reduced filter run on the 15-state truth (docs/assumptions.md,
+    ssac.md §2.4, the conclusions' "the 12-state filter is as good"): a covariance analysis of the
+    suboptimal filter, not the reduced filter's own sigmas.
 
     The truth ``x`` follows the 15-state model of ``study`` (its ``F``, ``Q``, ``P0``) and
     the ZVU measurement ``z = H x + v`` (the components the reduced filter uses); the reduced
@@ -502,15 +545,41 @@ def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
 
 
 def x0_draws(study: SSACStudy, n: int = X0_DRAWS, seed: int = X0_SEED) -> np.ndarray:
-    """``n`` initial errors drawn from N(0, P0) of ``study`` (rows), seeded."""
+    """``n`` initial errors drawn from N(0, P0) of ``study`` (rows), seeded.
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The run whose P0 is sampled.
+    n : int, optional
+        Number of draws.
+    seed : int, optional
+        Seed of the generator.
+    """
     rng = np.random.default_rng(seed)
     return rng.multivariate_normal(np.zeros(study.model.n), study.model.P0, size=n)
 
 
 def reduced_run(study: SSACStudy, reduced, n_states: int, name: str) -> SSACStudy | None:
     """The ``n_states`` run matching ``study`` (``reduced`` ``"run"``), the given one, or
-    None (a custom P0 or a rotated IMU has no reduced counterpart); ``name`` is the
-    argument named in the error."""
+    None (a custom P0 or a rotated IMU has no reduced counterpart).
+
+    Parameters
+    ----------
+    study : SSACStudy
+        The full run whose settings the reduced one copies.
+    reduced : SSACStudy, str or None
+        A run, ``"run"`` to compute it, or None.
+    n_states : int
+        State count of the reduced model (12 or 10).
+    name : str
+        Argument name used in the error message.
+
+    Raises
+    ------
+    NavlibInputError
+        If ``reduced`` is a string other than ``"run"``.
+    """
     if not isinstance(reduced, str):
         return reduced
     if reduced != "run":

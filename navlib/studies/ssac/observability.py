@@ -1,5 +1,6 @@
 """Silva et al. (2017) observability: ranks, the analytic null space and the grouping of the
-unobservable subspace (ssac.md §3.1, §3.3) of the reconstructed SSAC model (ssac.md §2.3)."""
+unobservable subspace (docs/assumptions.md, ssac.md §3.1, §3.3) of the reconstructed SSAC model
+(docs/assumptions.md, ssac.md §2.3)."""
 
 from __future__ import annotations
 
@@ -33,7 +34,8 @@ def set_text(names) -> str:
 
 
 def analytic_null_vectors(model: LinearModel) -> pd.DataFrame:
-    """Analytic unobservable directions of ssac.md §3.3, restricted to the model's states.
+    """Analytic unobservable directions of docs/assumptions.md, ssac.md §3.3, restricted to the
+    model's states.
 
     For the 15-state model (``s, c = sin L, cos L``, ``Omega`` Earth rate)::
 
@@ -81,7 +83,8 @@ def analytic_null_vectors(model: LinearModel) -> pd.DataFrame:
 
 def observability_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
                         rtol: float = RANK_RTOL) -> pd.DataFrame:
-    """Rank of O for the 15-, 12- and 10-state models next to the paper's (ssac.md §3.1).
+    """Rank of O for the 15-, 12- and 10-state models next to the paper's (docs/assumptions.md,
+    ssac.md §3.1).
 
     Columns: ``n_states, rank, n_unobservable, paper_rank, match, sigma_max, sigma_last``
     (smallest singular value counted), ``sigma_next`` (the first one below the tolerance),
@@ -90,6 +93,13 @@ def observability_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M
     ``rank_abs_1e-3`` (the rank an absolute 1e-3 tolerance would give), ``null_residual``
     (largest ``|O v| / (|O| |v|)`` over the analytic vectors) and ``null_angle_deg``
     (largest principal angle between the numerical null space and the analytic vectors).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rtol : float, optional
+        Relative rank tolerance of O.
     """
     rows = []
     for n in (15, 12, 10):
@@ -118,7 +128,15 @@ def observability_summary(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT
     """:func:`observability_table` as a report shows it: ``sigma_next`` and
     ``null_residual`` below the numerical resolution of O, and ``null_angle_deg`` below the
     angle that resolution allows (Wedin's bound), printed as a bound ("< 1e-14 of the
-    largest"), not as round-off digits (:mod:`navlib.resolution`)."""
+    largest"), not as round-off digits (:mod:`navlib.resolution`).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rtol : float, optional
+        Relative rank tolerance of O.
+    """
     table = observability_table(lat_deg, alt_m, rtol)
     shown = table.drop(columns=["sigma_max", "resolution"])
     shown["sigma_next"] = [format_resolved(r.sigma_next, r.sigma_max, r.resolution, ".2g")
@@ -140,6 +158,13 @@ def null_space_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
 
     Rows are states plus ``residual`` (``|O v| / (sigma_max |v|)``); a genuine observable
     direction would give at least ``sigma_9 / sigma_max`` ~ 7e-5.
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    rtol : float, optional
+        Relative rank tolerance of O.
     """
     model = ssac(15, lat_deg, alt_m)
     O = observability_matrix(model.A, model.H)
@@ -151,7 +176,8 @@ def null_space_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
 
 
 def equivalence_scale(model: LinearModel) -> np.ndarray:
-    """State scales in which each analytic null vector has O(1) entries (ssac.md §3.3).
+    """State scales in which each analytic null vector has O(1) entries (docs/assumptions.md,
+    ssac.md §3.3).
 
     tilt ``b_a/g``, azimuth ``b_g/(Omega cos L)``, latitude and longitude ``b_g/Omega``
     (a ``dL`` of this size mimics ``b_g`` through the Earth rate, 0.084 rad for
@@ -174,7 +200,8 @@ def _groups_match(groups, paper=PAPER_GROUPS) -> bool:
 
 def grouping_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
                    threshold: float = GROUP_THRESHOLD, rtol: float = RANK_RTOL) -> pd.DataFrame:
-    """Grouping of the 15-state unobservable subspace under three readings (ssac.md §3.3).
+    """Grouping of the 15-state unobservable subspace under three readings (docs/assumptions.md,
+    ssac.md §3.3).
 
     * ``exact``: the block decomposition of the exact null space (threshold 1e-9, SI units);
     * ``P0 (matched) scaled``: states in units of ``sqrt(diag P0)`` (10 m position);
@@ -182,6 +209,15 @@ def grouping_table(lat_deg: float = SITE_LAT_DEG, alt_m: float = SITE_ALT_M,
 
     Columns: ``reading, threshold, n_groups, groups, matches_paper`` and the largest
     unobservable share among ``bgN, bgD, baD`` (the bias states the position modes take in).
+
+    Parameters
+    ----------
+    lat_deg, alt_m : float, optional
+        Site latitude, deg, and altitude, m.
+    threshold : float, optional
+        Smallest coupling that joins two states in the thresholded reading.
+    rtol : float, optional
+        Relative rank tolerance of O.
     """
     model = ssac(15, lat_deg, alt_m)
     O = observability_matrix(model.A, model.H)

@@ -70,7 +70,7 @@ def load_mission(path_or_mapping) -> Mission:
 
 
 def from_mission(path_or_mapping) -> Trajectory:
-    """The trajectory a mission file describes, with an exact IMU (spec api.md "Planning").
+    """The trajectory a mission file describes, with an exact IMU (docs/plan.md).
 
     Parameters
     ----------

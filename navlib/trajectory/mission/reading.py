@@ -84,6 +84,32 @@ def read_mission(path_or_mapping) -> tuple[dict, str]:
 
 def checked_number(table: Mapping, key: str, where: str, low=None, high=None, low_open=False,
             default=None) -> float:
+    """A number of a mission table, checked against its range.
+
+    Parameters
+    ----------
+    table : Mapping
+        The table.
+    key : str
+        Its key.
+    where : str
+        Where the table is, for the message.
+    low, high : float or None, optional
+        Range.
+    low_open : bool, optional
+        Exclude ``low``.
+    default : float or None, optional
+        Value when the key is missing; None: required.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    NavlibInputError
+        If the key is missing and required, or the value is not a number in range.
+    """
     if key not in table:
         if default is None:
             raise NavlibInputError(f"{where}: missing key {key!r}")
@@ -95,6 +121,28 @@ def checked_number(table: Mapping, key: str, where: str, low=None, high=None, lo
 
 
 def sub_table(parent: Mapping, key: str, where: str, required: bool = True) -> dict:
+    """A sub-table of a mission table.
+
+    Parameters
+    ----------
+    parent : Mapping
+        The table.
+    key : str
+        The sub-table's key.
+    where : str
+        Where the table is, for the message.
+    required : bool, optional
+        Whether a missing sub-table is an error (else ``{}``).
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    NavlibInputError
+        If it is missing and required, or not a table.
+    """
     if key not in parent:
         if required:
             raise NavlibInputError(f"{where}: missing table [{key}]")
@@ -106,6 +154,24 @@ def sub_table(parent: Mapping, key: str, where: str, required: bool = True) -> d
 
 
 def checked_outages(gnss: Mapping, where: str) -> tuple:
+    """The ``outages`` list of a ``[gnss]`` table, as ``(start_s, end_s)`` pairs.
+
+    Parameters
+    ----------
+    gnss : Mapping
+        The ``[gnss]`` table.
+    where : str
+        Where the table is, for the message.
+
+    Returns
+    -------
+    tuple of (float, float)
+
+    Raises
+    ------
+    NavlibInputError
+        If the list or a pair is malformed, or an end is not after its start.
+    """
     raw = gnss.get("outages", [])
     if not isinstance(raw, list):
         raise NavlibInputError(f"{where} [gnss] outages: expected a list of [start_s, end_s] "
@@ -126,7 +192,20 @@ def with_values(mission, changes: Mapping) -> dict:
     key, ``{"rocket.spin_hz": 1.0}`` or ``{"gnss.outages": [[30, 40]]}`` for a key of a
     table, ``{"phase.2.burn_time_s": 20}`` / ``{"waypoint.3.speed_m_s": 8}`` for a key of
     the n-th (0-based) phase or waypoint. Returns the mapping (give it to
-    :func:`from_mission` or :func:`load_mission`)."""
+    :func:`from_mission` or :func:`load_mission`).
+
+    Parameters
+    ----------
+    mission : Mission or path-like
+        A loaded mission or a mission file.
+    changes : Mapping
+        Dotted key -> new value.
+
+    Raises
+    ------
+    NavlibInputError
+        If a key names no table of the mission.
+    """
     table = mission.table if isinstance(mission, Mission) else read_mission(mission)[0]
     table = copy.deepcopy(table)
     for key, value in dict(changes).items():
