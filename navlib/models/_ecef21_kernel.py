@@ -2,7 +2,7 @@
 (docs/assumptions.md "Compiled kernels").
 
 :func:`ecef21_jacobians_kernel` writes what :func:`navlib.models.ecef.ecef21_jacobians` returns
-(spec excitability.md A4-A7; the gravity Jacobian of :func:`navlib.earth.gravity_jacobian_ecef`,
+(docs/assumptions.md A4-A7; the gravity Jacobian of :func:`navlib.earth.gravity_jacobian_ecef`,
 A5) into buffers the EKF reuses over its windows: the NumPy function builds about thirty
 (N, 21, 21) temporaries a window, which made it a sixth of the EKF's time per sample
 (issue 37). Every entry is the same formula, so the two agree to rounding

@@ -1,9 +1,9 @@
-"""ECEF strapdown mechanisation for point-sampled IMU signals (spec excitability.md Eq. 1, A2).
+"""ECEF strapdown mechanisation for point-sampled IMU signals (docs/assumptions.md, excitability.md Eq. 1, and A2).
 
 The navigation equations integrated here are those of España et al. (2019, Eq. 1) in ECEF::
 
     dP/dt = V
-    dV/dt = C_b_e f_b + gamma(P) - 2 Omega x V          (gamma = normal gravity, spec A5)
+    dV/dt = C_b_e f_b + gamma(P) - 2 Omega x V          (gamma = normal gravity, docs/assumptions.md A5)
     dC_b_e/dt = C_b_e S(omega_ib_b) - S(Omega) C_b_e
 
 The IMU delivers **point samples** of ``f_b`` and ``omega_ib_b`` (not increments). Between
@@ -13,7 +13,7 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
 * **Attitude.** Over a step ``[t_k, t_k + h]`` the attitude factorises exactly as
   ``C(t_k + tau) = exp(-S(Omega) tau) C_k exp(S(phi(tau)))``: the Earth-rate part is a known
   rotation about ECEF z and ``phi`` is the body rotation vector relative to inertial space,
-  driven by the Bortz equation in its body-rate form (spec A2,
+  driven by the Bortz equation in its body-rate form (docs/assumptions.md A2,
   :func:`navlib.rotations.bortz_rate`). ``phi(h)`` is integrated by classical RK4 using the
   rates at ``0, h/2, h``; RK4 on the Bortz equation is exact for rotation about a fixed
   axis, and the full equation (including the ``1/12`` coning term and its higher-order
@@ -24,7 +24,7 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
   attitude *at* each abscissa, not through a step-start attitude. The Coriolis term is
   removed exactly by the substitution ``V = exp(-2 S(Omega) t) U``; ``U`` is integrated by
   Simpson's rule (exact for quadratic acceleration) and ``P`` by Simpson's rule on ``V``.
-  Normal gravity (:func:`navlib.earth.normal_gravity_ecef`, spec A5) is evaluated at the
+  Normal gravity (:func:`navlib.earth.normal_gravity_ecef`, docs/assumptions.md A5) is evaluated at the
   solution's own sample and mid-step positions by fixed-point iteration over 10 s windows
   (contraction ``|Gamma| T^2 / 2 ~ 1.5e-4``, stopped at 1e-8 m).
 
@@ -295,7 +295,7 @@ def step(state: StrapdownState, f_b, w_ib_b, dt_s: float, *, f_mid=None, w_mid=N
     Notes
     -----
     Input checking is limited to shapes and ``dt_s``; see the module docstring for the
-    mechanisation (spec excitability.md A2). Gravity is evaluated at the points
+    mechanisation (docs/assumptions.md A2). Gravity is evaluated at the points
     ``P + tau V + tau^2/2 f_e`` predicted from the start state. Each call costs a few hundred
     microseconds of NumPy overhead; to propagate a block of samples (e.g. between GNSS
     epochs) call :func:`integrate` with ``state.position, state.velocity, state.q_b_e``.
@@ -429,7 +429,7 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
 
     Notes
     -----
-    Fourth-order scheme described in the module docstring (spec excitability.md Eq. 1, A2,
+    Fourth-order scheme described in the module docstring (docs/assumptions.md, excitability.md Eq. 1, A2,
     A5). Closure on the exact IMU of ``navlib.trajectory.sounding_rocket()`` (100 Hz) is
     checked by ``tests/test_strapdown.py``.
     """
@@ -447,7 +447,7 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
 def propagate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
     """:func:`integrate` without its input checks, for loops over many short blocks.
 
-    The same compiled mechanisation (module docstring; spec excitability.md Eq. 1, A2, A5)
+    The same compiled mechanisation (module docstring; docs/assumptions.md, excitability.md Eq. 1, A2, A5)
     for callers that propagate blocks from states they computed themselves, such as the
     EKF's windows (:func:`navlib.filters.ekf`).
 

@@ -1,5 +1,5 @@
 """The strapdown mechanisation of :func:`navlib.strapdown.integrate` as one compiled kernel
-(spec excitability.md Eq. 1, A2, A5; docs/assumptions.md "Compiled kernels").
+(docs/assumptions.md, excitability.md Eq. 1, A2, A5; docs/assumptions.md "Compiled kernels").
 
 :func:`integrate_kernel` runs the fourth-order scheme the module docstring of
 :mod:`navlib.strapdown` describes over a block of samples: cubic Lagrange mid-step samples,
@@ -159,7 +159,7 @@ def _prefix_products(q):
 @numba.njit(cache=True)
 def _gravity(r, out):
     """:func:`navlib.earth.normal_gravity_ecef` (central, J2 and centrifugal) at one ECEF
-    position into ``out`` (spec A5)."""
+    position into ``out`` (docs/assumptions.md A5)."""
     r2 = r[0] ** 2 + r[1] ** 2 + r[2] ** 2
     norm = math.sqrt(r2)
     s = r[2] ** 2 / r2
