@@ -1,9 +1,11 @@
-"""ECEF strapdown mechanisation for point-sampled IMU signals (docs/assumptions.md, excitability.md Eq. 1, and A2).
+"""ECEF strapdown mechanisation for point-sampled IMU signals.
+
+It follows docs/assumptions.md, excitability.md Eq. 1, and A2.
 
 The navigation equations integrated here are those of España et al. (2019, Eq. 1) in ECEF::
 
     dP/dt = V
-    dV/dt = C_b_e f_b + gamma(P) - 2 Omega x V          (gamma = normal gravity, docs/assumptions.md A5)
+    dV/dt = C_b_e f_b + gamma(P) - 2 Omega x V          (normal gravity: docs/assumptions.md A5)
     dC_b_e/dt = C_b_e S(omega_ib_b) - S(Omega) C_b_e
 
 The IMU delivers **point samples** of ``f_b`` and ``omega_ib_b`` (not increments). Between
@@ -24,8 +26,9 @@ samples (one-sided at the ends), which is fourth-order accurate like the integra
   attitude *at* each abscissa, not through a step-start attitude. The Coriolis term is
   removed exactly by the substitution ``V = exp(-2 S(Omega) t) U``; ``U`` is integrated by
   Simpson's rule (exact for quadratic acceleration) and ``P`` by Simpson's rule on ``V``.
-  Normal gravity (:func:`navlib.earth.normal_gravity_ecef`, docs/assumptions.md A5) is evaluated at the
-  solution's own sample and mid-step positions by fixed-point iteration over 10 s windows
+  Normal gravity (:func:`navlib.earth.normal_gravity_ecef`, docs/assumptions.md A5) is
+  evaluated at the solution's own sample and mid-step positions by fixed-point iteration
+  over 10 s windows
   (contraction ``|Gamma| T^2 / 2 ~ 1.5e-4``, stopped at 1e-8 m).
 
 The attitude recursion does not depend on position or velocity, so every step's rotation
@@ -429,8 +432,9 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
 
     Notes
     -----
-    Fourth-order scheme described in the module docstring (docs/assumptions.md, excitability.md Eq. 1, A2,
-    A5). Closure on the exact IMU of ``navlib.trajectory.sounding_rocket()`` (100 Hz) is
+    Fourth-order scheme described in the module docstring (docs/assumptions.md,
+    excitability.md Eq. 1, A2, A5). Closure on the exact IMU of
+    ``navlib.trajectory.sounding_rocket()`` (100 Hz) is
     checked by ``tests/test_strapdown.py``.
     """
     t = increasing_times(t, "t")
@@ -447,8 +451,9 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
 def propagate(t, f_b, w_ib_b, r, v, q0, clock=None) -> StrapdownResult:
     """:func:`integrate` without its input checks, for loops over many short blocks.
 
-    The same compiled mechanisation (module docstring; docs/assumptions.md, excitability.md Eq. 1, A2, A5)
-    for callers that propagate blocks from states they computed themselves, such as the
+    The same compiled mechanisation (module docstring; docs/assumptions.md,
+    excitability.md Eq. 1, A2, A5) for callers that propagate blocks from states they
+    computed themselves, such as the
     EKF's windows (:func:`navlib.filters.ekf`).
 
     Parameters
