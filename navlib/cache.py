@@ -56,8 +56,9 @@ from scipy.spatial.transform import Rotation
 from navlib import __version__
 from navlib.resources import data_dir
 
-__all__ = ["DEFAULT_MAX_MB", "Scope", "cache_dir", "cached", "clear_memos", "enabled", "key",
-           "max_bytes", "memoized", "salt", "source_closure", "stats"]
+__all__ = ["DEFAULT_MAX_MB", "Scope", "cache_dir", "cached", "clear_memos",
+           "drop_stale_kernel_caches", "enabled", "key", "max_bytes", "memoized", "salt",
+           "source_closure", "stats"]
 
 DEFAULT_MAX_MB = 1024.0
 """Default size bound of the cache folder, MB."""
@@ -213,6 +214,53 @@ def source_closure(module: str) -> tuple[str, ...]:
         seen.add(name)
         todo += _navlib_imports(name, source.decode("utf-8"), is_package)
     return tuple(sorted(seen))
+
+
+def _module_path(name: str) -> Path | None:
+    """The source file of navlib module ``name`` (None when there is none)."""
+    base = Path(__file__).resolve().parent.joinpath(*name.split(".")[1:])
+    for path in (base / "__init__.py", base.with_suffix(".py")):
+        if path.is_file():
+            return path
+    return None
+
+
+def drop_stale_kernel_caches(module: str, namespace: Mapping) -> None:
+    """Delete the numba cache index of each compiled kernel defined in ``module`` that is
+    older than a kernel module it depends on.
+
+    numba compares a cached kernel with its own source file only (numba issue #1833): a
+    kernel that compiles in kernels of other modules (the EKF's loop, the Kalman algebra's
+    sparse prediction) would keep running their old code after they change, in a checkout
+    where they were edited. The dependencies are the modules of :func:`source_closure`
+    that define compiled kernels (their source says ``njit``); a deleted index makes numba
+    compile afresh on first use. A dispatcher without numba's usual cache attributes is
+    left alone.
+
+    Parameters
+    ----------
+    module : str
+        The kernel module's name (its ``__name__``).
+    namespace : Mapping
+        Its globals: the dispatchers whose ``__module__`` is ``module`` are checked.
+    """
+    paths = [_module_path(name) for name in source_closure(module)]
+    newest = max((path.stat().st_mtime for path in paths
+                  if path is not None and b"njit" in path.read_bytes()), default=None)
+    if newest is None:
+        return
+    for value in list(namespace.values()):
+        if getattr(value, "__module__", None) != module:
+            continue
+        index = getattr(getattr(getattr(value, "_cache", None), "_cache_file", None),
+                        "_index_path", None)
+        if index is None:
+            continue
+        try:
+            if os.stat(index).st_mtime < newest:
+                os.remove(index)
+        except OSError:
+            continue
 
 
 @functools.cache

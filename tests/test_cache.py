@@ -4,7 +4,10 @@ kernels. conftest.py turns the cache off for every other test; the ``cache_on`` 
 it on here, in the test's own folder."""
 
 import dataclasses
+import os
 import pickle
+import time
+import types
 from pathlib import Path
 
 import nbformat
@@ -13,7 +16,7 @@ import pandas as pd
 import pytest
 from scipy.spatial.transform import Rotation
 
-from navlib import cache
+from navlib import cache, kalman, strapdown
 from navlib.models import ecef
 from navlib.trajectory import launcher_ascent, sounding_rocket
 
@@ -352,3 +355,29 @@ def test_claims_reading_of_a_sensitivity_variant_prepares_no_filter(cache_on, mo
                                   **options)
     for key, response in fresh.responses.items():
         np.testing.assert_array_equal(st.responses[key].induced, response.induced)
+
+
+def _fake_kernel(module: str, index):
+    """An object shaped like a numba dispatcher with an on-disk cache index."""
+    cache_file = types.SimpleNamespace(_index_path=str(index))
+    return types.SimpleNamespace(__module__=module, _cache=types.SimpleNamespace(
+        _cache_file=cache_file))
+
+
+def test_a_kernel_index_older_than_a_kernel_it_calls_is_dropped(tmp_path):
+    """numba checks a cached kernel against its own file only: the EKF loop's index must go
+    when a module whose kernels it compiles in (the Kalman algebra) is newer."""
+    old, fresh, other = (tmp_path / f"{n}.nbi" for n in ("old", "fresh", "other"))
+    for path in (old, fresh, other):
+        path.write_bytes(b"index")
+    callee = min(Path(m.__file__).stat().st_mtime for m in (kalman, strapdown._kernel))
+    os.utime(old, (callee - 10.0, callee - 10.0))
+    os.utime(fresh, (time.time() + 60.0,) * 2)
+    os.utime(other, (callee - 10.0, callee - 10.0))
+    namespace = {"a": _fake_kernel("navlib.filters.ekf_loop", old),
+                 "b": _fake_kernel("navlib.filters.ekf_loop", fresh),
+                 "imported": _fake_kernel("navlib.kalman", other), "x": 1.0}
+    cache.drop_stale_kernel_caches("navlib.filters.ekf_loop", namespace)
+    assert not old.exists()
+    assert fresh.exists()
+    assert other.exists()  # a kernel imported from elsewhere is its own module's business

@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from navlib import earth, strapdown, units
+from navlib.cache import drop_stale_kernel_caches
 from navlib.filters.ekf_steps import discretize_kernel, pattern_kernel
 from navlib.filters.ekf_updates import Epochs
 from navlib.filters.measurements import GnssPosition, GnssVelocity, ekf_measurements
@@ -396,3 +397,6 @@ def compile_kernel() -> None:
                                           np.eye(3)),
                  {g: np.zeros(3) for g in _GROUPS}, np.array(es.P0, dtype=float),
                  Epochs(events, rows, 3), [0, 3], "series", False, rows, None, (None, None))
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from navlib.cache import drop_stale_kernel_caches
 from navlib.discretize import discretize_steps
 
 TAYLOR_THETA = 4.0
@@ -333,3 +334,6 @@ def discretize_window(A, G, Qc, dt, method: str, out=None):
     discretize_kernel(A, G, np.ascontiguousarray(dt, dtype=float),
                       _pattern(A, G, np.asarray(Qc, dtype=float)), F, Q)
     return F, Q
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

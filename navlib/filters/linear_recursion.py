@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from navlib.cache import drop_stale_kernel_caches
 from navlib.filters.linear_preparation import LinearFilter, LinearSteps
 from navlib.kalman import kernel_array, psd_sqrt
 
@@ -440,3 +441,6 @@ def record_block(prepared: LinearFilter, block: Block, work: Work, meas, slot, u
     updated = prepared.measured[rec + c0]
     for pick, source in ((updated, work.post), (~updated, work.prior)):
         est_rec[_rows(slot[rec[pick] + c0])] = source[_rows(rec[pick])]
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

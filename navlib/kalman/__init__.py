@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from navlib.cache import drop_stale_kernel_caches
 from navlib.kalman.algebra import definite_noise, psd_sqrt, symmetrize
 from navlib.kalman.consistency import chi2_bounds, nees_basis, nees_values
 from navlib.kalman.sparse import predict_sparse
@@ -584,3 +585,6 @@ def kalman_gains(P_prior, H, R, measured, pinv_rtol: float = PINV_RTOL) -> Gains
     measured = np.asarray(measured, dtype=bool)
     gains.K[~measured] = 0.0
     return Gains(gains.K, gains.S_pinv, np.where(measured, gains.dof, 0))
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

@@ -17,6 +17,7 @@ import math
 import numba
 
 from navlib import earth
+from navlib.cache import drop_stale_kernel_caches
 
 _GM = earth.GM
 _J2_K = 1.5 * earth.J2 * earth.GM * earth.A**2
@@ -89,3 +90,6 @@ def ecef21_jacobians_kernel(position, C_b_e, f_b, w_ib_b, body, A, G):
                     g[6 + i, 3 + j] = C[i, j]
         for i in range(12):
             g[9 + i, 6 + i] = 1.0
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

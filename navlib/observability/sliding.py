@@ -33,6 +33,7 @@ from llvmlite import binding
 from numba import types
 from numba.extending import get_cython_function_address
 
+from navlib.cache import drop_stale_kernel_caches
 from navlib.errors import NavlibInputError
 from navlib.kernel_copy import copy_matrix
 
@@ -355,3 +356,6 @@ def compile_kernel() -> None:
     (README "Compiled kernels")."""
     sliding_singular_values(lambda k: np.broadcast_to(np.eye(2), (k.size, 2, 2)),
                             np.ones((4, 1, 2)), 0, 2, 2)
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

@@ -26,6 +26,7 @@ import numba
 import numpy as np
 
 from navlib import earth
+from navlib.cache import drop_stale_kernel_caches
 from navlib.quaternions import quat_from_matrix
 
 WINDOW_S = 10.0
@@ -351,3 +352,6 @@ def compile_kernel() -> None:
                      np.tile([0.0, 0.0, 0.0, 1.0], (2, 1)), np.array([[0.0, 0.0, 0.0, 1.0]]),
                      np.empty((2, 3)), np.empty((2, 3)), np.empty((2, 4)))
     quat_from_matrix(np.eye(3))
+
+
+drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)
