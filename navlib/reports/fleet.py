@@ -125,9 +125,12 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
     page : str or None
         The flight's HTML page (None when it failed).
     """
+    options = dict(options or {})
+    read_options = options.pop("read_options", None) or {}
+
     def build(warning_texts):
-        imu, gnss = read_log(log)
-        result = assess_flight(imu, gnss, **dict(options or {}))
+        imu, gnss = read_log(log, **read_options)
+        result = assess_flight(imu, gnss, **options)
         return result, flight_page(log, result, warning_texts())
 
     return summary_row(log, build)
@@ -149,12 +152,17 @@ def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=N
     """Assess flights as Dask tasks (:func:`navlib.parallel.map_tasks`).
 
     ``options`` are keywords of :func:`navlib.studies.assess.assess_flight` (checked here,
-    before any task runs). Returns the summary table (one row per log, in order) and the
+    before any task runs) and ``read_options``, keywords of the log's reader
+    (:func:`navlib.io.read_log`). Returns the summary table (one row per log, in order) and the
     HTML pages (None for failed flights).
     """
     logs = _checked_labels(logs, "logs")
     options = dict(options or {})
-    reject_unknown(options, _keywords(assess_flight, "imu", "gnss"), "assess options (-p)")
+    reject_unknown(options, (*_keywords(assess_flight, "imu", "gnss"), "read_options"),
+                   "assess options (-p)")
+    if not isinstance(options.get("read_options") or {}, Mapping):
+        raise NavlibInputError(f"read_options: expected a mapping of reader keyword -> value "
+                               f"(navlib.io.read_log), got {options['read_options']!r}")
     results = map_tasks(_task, logs, scheduler, shared={"options": options},
                         progress=progress, desc="flights")
     return _table([row for row, _ in results]), [page for _, page in results]

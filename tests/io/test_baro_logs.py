@@ -143,21 +143,32 @@ def _write_cats(folder, gnss=True, baro=True):
     if baro:
         (folder / "baro.csv").write_text("ts,id,T,P\n" + "".join(
             f"{a:.3f},BARO0,20.0,{99_600 - 10 * k}\n" for k, a in enumerate(t)))
-    if gnss:   # a fix every 0.5 s, logged every 0.1 s (held in between), 193 satellites
+    if gnss:   # a fix every 0.5 s, logged every 0.1 s (held in between); 193 satellites
         (folder / "gnssInfo.csv").write_text("ts,latitude,longitude,satellites\n" + "".join(
-            f"{a:.3f},39.39,{-8.2885 + 1e-5 * (k // 5)},193\n"
-            for k, a in enumerate(t[::10])))
+            f"{a:.3f},39.39,{-8.2885 + 1e-5 * (k // 5)},{193 if k < 5 else 9}\n"
+            for k, a in enumerate(t[::10])))     # reported with the first fix
     return folder / "imu.csv"
 
 
 def test_cats_export_reads_its_folder_and_drops_held_fixes(tmp_path):
     path = _write_cats(tmp_path / "cats")
     assert io.parse_log(str(path)) == ("cats", (path,))
-    imu, gnss = io.read_log(str(path))
+    with pytest.warns(io.FlightDataWarning) as caught:
+        imu, gnss = io.read_log(str(path))
+    messages = [str(w.message) for w in caught]
     assert imu.attrs["vehicle"] == "rocket" and len(imu.attrs["baro"]) == 400
     np.testing.assert_allclose(imu.w_x, np.deg2rad(1.0))
     assert gnss.attrs["height_source"] == "baro"
+    # 8 fixes each logged 5 times: 32 held rows; the first fix reports 193 satellites
     assert len(gnss) == 8 and gnss.attrs["held_fixes_dropped"] == 32
+    assert gnss.attrs["implausible_rows"] == 1
+    assert any("32 of 40 GNSS rows repeat the previous row's fix exactly (a fix held "
+               "between the receiver's updates; the longest hold 0.4 s), at line 3, line 4, "
+               "line 5, line 6, line 8 and 27 more: not new measurements, dropped" in m
+               for m in messages), messages
+    assert any("column 'satellites': 1 of 40 GNSS rows report more than 100 satellites (up "
+               "to 193; about 60 can be above the horizon), at line 2: an implausible count; "
+               "their positions are kept" in m for m in messages), messages
     only = _write_cats(tmp_path / "no_gnss", gnss=False)
     assert io.read_log(str(only))[1] is None
     lacking = _write_cats(tmp_path / "no_baro", baro=False)
@@ -178,7 +189,9 @@ def test_shared_firm_log_reads_without_gnss():
 def test_shared_cats_export_reads_gnss_with_barometric_height():
     _, gnss = io.read_log(str(CATS_LOG))
     assert gnss.attrs["height_source"] == "baro"
-    assert gnss.attrs["held_fixes_dropped"] > 200   # README: many rows repeat the position
+    # README: many rows repeat the position, the first rows report 193 satellites
+    assert gnss.attrs["held_fixes_dropped"] == 234      # of 388 rows (the issue counted 235)
+    assert gnss.attrs["implausible_rows"] > 0 and gnss.attrs["too_few_satellites"] > 0
 
 
 def _moving_imu(n=400, seed=0):

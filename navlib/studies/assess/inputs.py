@@ -67,7 +67,7 @@ def _finite_columns(frame: pd.DataFrame, name: str, keys) -> None:
 
 def check_imu_record(imu: pd.DataFrame) -> None:
     """The IMU checks every assessment runs before the data-quality checks that rely on the
-    IMU (:func:`navlib.quality.check_records`: the GNSS faults are judged against it).
+    IMU (:func:`navlib.io.quality.check_records`: the GNSS faults are judged against it).
 
     * at least :data:`MIN_IMU_SAMPLES` samples;
     * finite samples, strictly increasing times;
