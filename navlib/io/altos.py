@@ -52,7 +52,7 @@ from navlib.io.checks import (
     reader_limits,
     validated_imu,
 )
-from navlib.io.sensor_health import check_imu_alive
+from navlib.io.sensor_health import check_imu_alive, dead_magnetometer
 
 ACCEL_COLUMNS = ("accel_x", "accel_y", "accel_z")
 """AltOS accelerometer columns (m/s^2) on the along, across, through axes."""
@@ -165,6 +165,18 @@ def _repair_header(header: list[str], fields: int, label: str) -> list[str]:
                   f"lacks ({', '.join(missing)}, after accel_z)", FlightDataWarning,
                   stacklevel=4)
     return [*header[:where], *IMU_BLOCK, *header[where + len(present):]]
+
+
+MAG_LABELS = "'mag_x'/'mag_y'/'mag_z'"
+
+
+def _magnetometer(table: TextTable, index: dict, rows: np.ndarray) -> np.ndarray | None:
+    """The ``mag_x/y/z`` cells of ``rows`` (NaN where empty), or None without them."""
+    if not all(c in index for c in ("mag_x", "mag_y", "mag_z")):
+        return None
+    cols = {c: Column(c, table.header[index[c]], index[c]) for c in ("mag_x", "mag_y", "mag_z")}
+    data = parse_columns(table, cols)
+    return np.column_stack([data[c][rows] for c in cols])
 
 
 def _cells(table: TextTable, field: int) -> list[str]:
@@ -291,8 +303,13 @@ max_outlier_fraction, require_overlap
     t = t_all[rows]
     f_b = imu_values[rows, :3]
     w_ib_b = imu_values[rows, 3:] * units.DEG
+    mag_note = dead_magnetometer(_magnetometer(table, index, rows), MAG_LABELS)
     check_imu_alive(f_b, w_ib_b, imu_src, "'accel_x'/'accel_y'/'accel_z'",
-                    "'gyro_roll'/'gyro_pitch'/'gyro_yaw'")
+                    "'gyro_roll'/'gyro_pitch'/'gyro_yaw'", also=mag_note)
+    if mag_note:
+        warnings.warn(f"{label}: {mag_note[2:].replace(': the IMU looks unpowered', '')}: a "
+                      "dead magnetometer (navlib does not use it)", FlightDataWarning,
+                      stacklevel=2)
 
     hardware = _hardware(table, index, path)
     sensor_range = dict(TELEMEGA_RANGE)  # _layout accepts gyro + GPS boards only: TeleMega

@@ -237,7 +237,19 @@ def test_altos_dead_imu_is_named_and_an_empty_tilt_column_ignored(tmp_path):
     dead = rows.assign(accel_x=0.0, accel_y=0.0, accel_z=0.0, tilt=np.nan)
     write_altos(path, dead)
     with pytest.raises(NavlibInputError, match=r"'accel_x'/'accel_y'/'accel_z'.*dead "
-                                               r"accelerometer"):
+                                               r"accelerometer") as err:
+        io.read_altos(path)
+    assert "magnetometer" not in str(err.value)      # it reads a field: alive
+    write_altos(path, dead.assign(mag_x=0.0, mag_y=0.0, mag_z=0.0))
+    with pytest.raises(NavlibInputError, match=(
+            r"dead accelerometer: the specific force never exceeds 0 m/s\^2 over .* samples, "
+            r".*; the magnetometer 'mag_x'/'mag_y'/'mag_z' reads 0 on every axis in all "
+            r"\d+ rows too: the IMU looks unpowered")):
+        io.read_altos(path)
+    write_altos(path, rows.assign(mag_x=0.0, mag_y=0.0, mag_z=0.0))
+    with pytest.warns(io.FlightDataWarning, match=r"the magnetometer 'mag_x'/'mag_y'/'mag_z' "
+                                                  r"reads 0 on every axis .*: a dead "
+                                                  r"magnetometer \(navlib does not use it\)"):
         io.read_altos(path)
 
 
