@@ -272,8 +272,11 @@ def _rate_hint(w_ib_b: np.ndarray, max_rate_rad_s: float) -> str:
     if median >= DEG_S_MEDIAN_RATE and float(np.max(norm)) * units.DEG <= max_rate_rad_s:
         return ("; the data look like deg/s: set gyro_unit='deg/s' (or raise max_rate_rad_s "
                 "for a fast spinner)")
+    limit = float(np.ceil(1.05 * np.max(norm)))
     return (f"; the median rate {median:.3g} rad/s is plausible, so the units look right: a "
-            f"vehicle this fast (a tumble, a break-up) needs a larger max_rate_rad_s")
+            f"vehicle this fast (a tumble, a break-up) needs a larger max_rate_rad_s (e.g. "
+            f"max_rate_rad_s={limit:g}; python -m navlib assess LOG --read max_rate_rad_s "
+            f"{limit:g})")
 
 
 def _choose(mode: str | None, keyword: str, present: dict[str, bool], src) -> str | None:

@@ -245,11 +245,13 @@ def _refuse_faulty_time(gnss: pd.DataFrame, bad: np.ndarray, table: dict, messag
     limit = table["max_faulty_time_fraction"]
     if span <= 0 or faulty <= limit * span:
         return
+    accept = min(0.95, float(np.ceil(20.0 * faulty / span)) / 20.0 + 0.05)
+    found = f": {'; '.join(messages)}" if len(messages) else ""
     raise NavlibInputError(
         f"gnss: faulty fixes cover {faulty:.3g} s of the GNSS record's {span:.3g} s "
         f"({100 * faulty / span:.3g} %: {', '.join(parts)}), leaving {span - faulty:.3g} s "
         f"usable; an assessment needs at least {100 * (1 - limit):.3g} % of the time usable "
-        f"(data/quality.toml [gnss] max_faulty_time_fraction = {limit:g}; to accept more, "
-        f"e.g. python -m navlib assess LOG -p quality_thresholds "
-        f"'{{\"gnss\": {{\"max_faulty_time_fraction\": {min(0.95, limit + 0.3):.2g}}}}}', or "
-        f"assess_flight(..., quality_thresholds=...)): {'; '.join(messages)}")
+        f"(data/quality.toml [gnss] max_faulty_time_fraction = {limit:g}; to accept this "
+        f"record, e.g. python -m navlib assess LOG -p quality_thresholds "
+        f"'{{\"gnss\": {{\"max_faulty_time_fraction\": {accept:.2g}}}}}', or "
+        f"assess_flight(..., quality_thresholds=...)){found}")

@@ -264,3 +264,20 @@ def test_cut_last_row_of_a_short_header_export_is_dropped(rows, tmp_path):
                                                   r"mid-write"):
         imu, _ = io.read_altos(path)
     assert len(imu) > 100
+
+
+@pytest.mark.parametrize("generation", ["version", "legacy"])
+def test_easymega_export_with_a_cut_last_row_is_read_without_it(rows, tmp_path, generation):
+    """An EasyMega export whose logger lost power mid-write: the cut last row is dropped with
+    a warning naming its line, the rest read (it was refused as 'truncated')."""
+    path = tmp_path / "easymega.csv"
+    write_altos(path, rows, generation=generation, board="easymega")
+    whole, _ = _read(path)
+    text = path.read_text().rstrip("\n")
+    n_lines = text.count("\n") + 1
+    path.write_text(text[: text.rindex(",") - 3])
+    with pytest.warns(io.FlightDataWarning, match=rf"line {n_lines}: the last row was cut "
+                                                  r"mid-write \(\d+ of \d+ fields"):
+        imu, gnss = io.read_altos(path)
+    assert gnss is None and len(imu) in (len(whole), len(whole) - 1)
+    assert imu.attrs["baro"] is not None

@@ -258,9 +258,14 @@ def test_deg_s_hint_only_when_the_rates_look_like_deg_s(tmp_path):
     w = 0.3 * w                            # a calm flight: median rate about 0.3 rad/s
     tumble = w.copy()
     tumble[300:340] = [40.0, 5.0, 0.0]     # a break-up at 2300 deg/s, logged in rad/s
-    with pytest.raises(NavlibInputError, match=r"median rate .* units look right") as err:
+    with pytest.raises(NavlibInputError, match=r"median rate .* units look right: a vehicle "
+                                               r"this fast .* needs a larger max_rate_rad_s "
+                                               r"\(e.g. max_rate_rad_s=43; python -m navlib "
+                                               r"assess LOG --read max_rate_rad_s 43\)") as err:
         io.read_imu_csv(_write_rows(tmp_path / "tumble.csv", t, f, tumble))
     assert "look like deg/s" not in str(err.value)
+    assert len(io.read_imu_csv(_write_rows(tmp_path / "tumble.csv", t, f, tumble),
+                               max_rate_rad_s=43.0)) == 400
     with pytest.raises(NavlibInputError, match=r"look like deg/s"):
         io.read_imu_csv(_write_rows(tmp_path / "deg.csv", t, f, np.rad2deg(w) + 60.0))
 
