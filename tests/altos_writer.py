@@ -26,10 +26,12 @@ GPS = ("nsat", "latitude", "longitude", "altitude", "hour", "minute", "second", 
 LAT0, LON0, ALT0 = 39.0159236, -105.7107031, 2682.0
 
 
-def rocket_rows(t_drogue=6.0, t_end=12.0, *, duplicates=(0.5, 2.0), low_sat_second=None):
+def rocket_rows(t_drogue=6.0, t_end=12.0, *, duplicates=(0.5, 2.0), low_sat_second=None,
+                pad_s=0.3):
     """Rows (DataFrame, one per export row, ``gps_altitude`` and ``baro_altitude`` named
-    apart) of a short record; ``low_sat_second``: the fix of that second has 3 satellites."""
-    fast = np.round(np.arange(-0.30, t_drogue, 0.01), 2)
+    apart) of a short record, ``pad_s`` on the pad before boost; ``low_sat_second``: the fix
+    of that second has 3 satellites."""
+    fast = np.round(np.arange(-pad_s, t_drogue, 0.01), 2)
     slow = np.round(np.arange(t_drogue, t_end + 1e-9, 0.1), 2)
     t = np.concatenate([fast, slow])
     burn = (t >= 0.0) & (t < 2.0)
