@@ -49,7 +49,20 @@ def load_thresholds(overrides: Mapping | None = None) -> dict[str, dict[str, flo
 
 
 def spans(t: np.ndarray, join_s: float) -> list[tuple[float, float]]:
-    """Times ``t`` (sorted) grouped into spans whose members are closer than ``join_s``."""
+    """Times grouped into spans whose members are closer than ``join_s``.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sorted times, s.
+    join_s : float
+        Largest interval inside a span, s.
+
+    Returns
+    -------
+    list of (float, float)
+        First and last time of each span.
+    """
     if t.size == 0:
         return []
     cut = np.flatnonzero(np.diff(t) > join_s)
@@ -59,7 +72,19 @@ def spans(t: np.ndarray, join_s: float) -> list[tuple[float, float]]:
 
 
 def spans_text(spans: list[tuple[float, float]], shown: int = 3) -> str:
-    """The first ``shown`` spans as ``"12.0 s, 14.2-15.0 s and 2 more span(s)"``."""
+    """The first ``shown`` spans as ``"12.0 s, 14.2-15.0 s and 2 more span(s)"``.
+
+    Parameters
+    ----------
+    spans : list of (float, float)
+        As :func:`spans` returns them.
+    shown : int
+        How many are written out.
+
+    Returns
+    -------
+    str
+    """
     parts = [f"{a:.1f} s" if b - a < 0.05 else f"{a:.1f}-{b:.1f} s" for a, b in spans[:shown]]
     text = ", ".join(parts)
     if len(spans) > shown:
@@ -69,9 +94,25 @@ def spans_text(spans: list[tuple[float, float]], shown: int = 3) -> str:
 
 def finding(check: str, channel: str, t_hit: np.ndarray, total: int, join_s: float,
             what: str, count_word: str, after: str = "") -> dict:
-    """One finding (a :data:`FINDING_COLUMNS` row) of the samples at times ``t_hit`` out of
-    ``total``: ``message`` reads ``"<what>: <n> <count_word> (<share> %) at <spans><after>"``,
-    the times grouped into spans closer than ``join_s``."""
+    """One finding (a :data:`FINDING_COLUMNS` row) of the samples at times ``t_hit``.
+
+    Parameters
+    ----------
+    check, channel : str
+        The finding's ``check`` and ``channel`` columns.
+    t_hit : ndarray
+        Times of the samples found, s.
+    total : int
+        Samples of the record (the ``fraction``'s denominator).
+    join_s : float
+        Samples closer than this form one span, s.
+    what, count_word, after : str
+        The message reads ``"<what>: <n> <count_word> (<share> %) at <spans><after>"``.
+
+    Returns
+    -------
+    dict
+    """
     grouped = spans(np.sort(t_hit), join_s)
     fraction = t_hit.size / total
     message = (f"{what}: {t_hit.size} {count_word} ({100.0 * fraction:.2g} %) at "
@@ -87,8 +128,23 @@ def findings_frame(rows: list[dict]) -> pd.DataFrame:
 
 
 def check_record(frame, name: str, columns) -> None:
-    """A DataFrame with ``t`` and ``columns`` finite, at least 2 rows, times strictly
-    increasing (as the navlib.io readers return); NavlibInputError naming what is not."""
+    """Check a record is a DataFrame with ``t`` and ``columns`` finite, at least 2 rows and
+    times strictly increasing (as the navlib.io readers return).
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The record.
+    name : str
+        Its name in the messages (``imu``, ``gnss``).
+    columns : sequence of str
+        The columns besides ``t`` it must have.
+
+    Raises
+    ------
+    NavlibInputError
+        Naming what is not so.
+    """
     if not isinstance(frame, pd.DataFrame):
         raise NavlibInputError(f"{name}: expected a pandas DataFrame, got {type(frame).__name__}")
     missing = [c for c in ("t", *columns) if c not in frame.columns]

@@ -293,6 +293,16 @@ def faulty_time(gnss: pd.DataFrame, bad: np.ndarray, min_held_s: float
     A fault is counted by the time it covers, not by its rows: a receiver logged at 20 Hz
     while frozen fills many rows with little time (assumptions Q4, Q7).
 
+    Parameters
+    ----------
+    gnss : DataFrame
+        The GNSS record as read (``t``; ``attrs["held_runs"]`` when a reader dropped held
+        rows).
+    bad : ndarray of bool (len(gnss),)
+        The fixes found faulty (:func:`gnss_faults`).
+    min_held_s : float
+        Shortest hold counted as faulty, s.
+
     Returns
     -------
     faulty_s, span_s : float

@@ -67,7 +67,30 @@ def screen_fixes(values: Mapping[str, np.ndarray], fix_keys, src: Source,
     and first lines; and the ``attrs`` to record: ``implausible_rows`` (above the maximum),
     ``too_few_satellites``,
     ``held_fixes_dropped`` and ``held_runs`` (``(t_fix, t_last_repeat)`` per fix logged
-    again, s, for :func:`navlib.io.gnss_faults.faulty_time`)."""
+    again, s, for :func:`navlib.io.gnss_faults.faulty_time`).
+
+    Parameters
+    ----------
+    values : mapping of str to ndarray
+        The parsed columns by key (``t``, the ``fix_keys``, optional ``satellites``).
+    fix_keys : sequence of str
+        The columns a held row repeats.
+    src : navlib.io._table.Source
+        Where the rows come from, for the line numbers.
+    satellites_label : str or None
+        The satellite column as the file names it, for the message.
+    keep_held : bool
+        Keep the held rows.
+
+    Returns
+    -------
+    values : dict
+        The kept rows of each column.
+    src : navlib.io._table.Source
+        The source of the kept rows.
+    attrs : dict
+        The counts and held runs named above.
+    """
     n = values["t"].size
     keep = np.ones(n, dtype=bool)
     attrs: dict = {"implausible_rows": 0, "too_few_satellites": 0, "held_fixes_dropped": 0,

@@ -148,10 +148,29 @@ def _routed(spec: str, kind: str, options: dict) -> dict[str, dict]:
 
 
 def read_log(spec: str, **read_options):
-    """``imu, gnss`` of a ``LOG`` argument (:func:`parse_log`), read with the reader of its
-    kind, given ``read_options`` (module docstring; e.g. ``max_rate_rad_s=60``,
-    ``on_gap="split"``) and otherwise its defaults. ``gnss`` is None for a log without GNSS;
-    a barometer, when the log has one, is ``imu.attrs["baro"]``."""
+    """``imu, gnss`` of a ``LOG`` argument, read with the reader of its kind.
+
+    Parameters
+    ----------
+    spec : str
+        The ``LOG`` (:func:`parse_log`).
+    **read_options
+        Keywords of the reader of its kind (module docstring, :func:`reader_keywords`; e.g.
+        ``max_rate_rad_s=60``, ``on_gap="split"``); the reader's defaults otherwise.
+
+    Returns
+    -------
+    imu : DataFrame
+        The IMU record; a barometer, when the log has one, is ``imu.attrs["baro"]``.
+    gnss : DataFrame or None
+        The GNSS record; None for a log without GNSS.
+
+    Raises
+    ------
+    NavlibInputError
+        A keyword no reader of the log takes (naming those it takes), and the reader's own
+        errors.
+    """
     kind, paths = parse_log(spec)
     options = _routed(spec, kind, read_options)
     if kind == "csv":

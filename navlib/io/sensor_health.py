@@ -63,9 +63,20 @@ def check_imu_alive(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source, f_label
 
 
 def dead_magnetometer(mag: np.ndarray | None, labels: str) -> str:
-    """A clause naming a magnetometer that reads exactly zero on every axis in every sample
-    (``mag`` (N, 3), any unit; None: the log has none), for the dead-IMU message: ``""``
-    when it reads anything else."""
+    """A clause naming a magnetometer that reads exactly zero on every axis in every sample,
+    for the dead-IMU message: ``""`` when it reads anything else.
+
+    Parameters
+    ----------
+    mag : ndarray (N, 3) or None
+        The magnetometer samples, any unit (NaN where empty); None: the log has none.
+    labels : str
+        Its columns as ``'a'/'b'/'c'``, for the message.
+
+    Returns
+    -------
+    str
+    """
     if mag is None or mag.size == 0 or np.any(np.nan_to_num(mag, nan=0.0) != 0.0):
         return ""
     return (f"; the magnetometer {labels} reads 0 on every axis in all {mag.shape[0]} rows "
