@@ -80,5 +80,7 @@ def test_pre_launch_buffer_before_a_long_gap_is_split_off_with_a_note(tmp_path, 
     assert status == 0 and row.aiding == "baro"
     spans = len(gaps) + 1
     assert f"split into {spans} spans" in row.warnings, row.warnings
+    assert row.warnings.count("(no barometer reference rows in this span (0): a piece of "
+                              "the record the barometer aiding could not level") == len(gaps)
     assert row.phases.startswith("pad ")          # on the clock since ignition
     assert row.t_ignition > shift

@@ -143,7 +143,17 @@ def describe_inputs(imu: pd.DataFrame, gnss: pd.DataFrame) -> pd.DataFrame:
 
 
 def validate_records(imu, gnss):
+    """The common span of a span's IMU and position rows (:func:`check_overlap`), at least
+    :data:`MIN_DURATION_S` long with :data:`MIN_GNSS_EPOCHS` epochs; NavlibInputError
+    naming what is short (a span without barometer rows, such as a pre-launch buffer the
+    barometer aiding could not level, is named as such)."""
     check_frame(imu, "imu", IMU_KEYS)
+    if (isinstance(gnss, pd.DataFrame) and len(gnss) < 2
+            and str(gnss.attrs.get("source", "")).startswith("barometer")):
+        raise NavlibInputError(
+            f"no barometer reference rows in this span ({len(gnss)}): a piece of the record "
+            "the barometer aiding could not level (too short, or not at rest; the notes say "
+            "why), such as a pre-launch buffer")
     check_frame(gnss, "gnss", GNSS_KEYS)
     span = check_overlap(imu, gnss)
     if span.duration < MIN_DURATION_S:
