@@ -40,6 +40,13 @@ def _moving_evidence(imu, gnss, a: int, b: int, t_next, p: dict) -> str | None:
         v = np.linalg.norm(gnss[["vx", "vy", "vz"]].to_numpy(dtype=float)[a:b + 1], axis=1)
         if np.nanmax(v) > p["moving_speed_m_s"]:
             return f"the GNSS velocity reads up to {np.nanmax(v):.3g} m/s"
+    return _imu_motion(imu, t0, t1, gnss[list(_XYZ)].to_numpy(dtype=float)[a], p)
+
+
+def _imu_motion(imu, t0: float, t1: float, position: np.ndarray, p: dict) -> str | None:
+    """Why the IMU says the vehicle moved over ``t0..t1`` (a mean angular rate above
+    ``moving_rate_deg_s``, a mean specific force off the normal gravity at ``position``,
+    ECEF m, by more than ``moving_accel_m_s2``), or None."""
     t_i = imu["t"].to_numpy(dtype=float)
     inside = (t_i >= t0) & (t_i <= t1)
     if np.count_nonzero(inside) >= 2:
@@ -47,8 +54,7 @@ def _moving_evidence(imu, gnss, a: int, b: int, t_next, p: dict) -> str | None:
         if rate > p["moving_rate_deg_s"] * DEG:
             return f"the gyros read {rate / DEG:.3g} deg/s on average"
         f_norm = np.linalg.norm(imu[list(_ACCEL)].to_numpy(dtype=float)[inside], axis=1)
-        P = gnss[list(_XYZ)].to_numpy(dtype=float)[a]
-        g = float(np.linalg.norm(earth.normal_gravity_ecef(P)))
+        g = float(np.linalg.norm(earth.normal_gravity_ecef(position)))
         off = abs(float(f_norm.mean()) - g)
         if off > p["moving_accel_m_s2"]:
             return f"the mean specific force is {off:.3g} m/s^2 off gravity"
@@ -280,7 +286,7 @@ def gnss_faults(imu: pd.DataFrame, gnss: pd.DataFrame, sigma_m: float,
     return frozen | baro | jumps, findings_frame(rows + baro_rows + jump_rows)
 
 
-def faulty_time(gnss: pd.DataFrame, bad: np.ndarray, min_held_s: float
+def faulty_time(gnss: pd.DataFrame, bad: np.ndarray, imu: pd.DataFrame, p: dict
                 ) -> tuple[float, float, list[str]]:
     """The time of the GNSS record its faulty fixes cover, its span, and what covers it.
 
@@ -288,20 +294,24 @@ def faulty_time(gnss: pd.DataFrame, bad: np.ndarray, min_held_s: float
     half-interval on their inner side); the faulty time is the sum over the fixes ``bad``
     flags, plus the fixes a reader dropped as held (``attrs["held_runs"]``, ``(t_fix,
     t_last_repeat)`` per fix logged again unchanged) over every run lasting at least
-    ``min_held_s`` (the ``[gnss] frozen_min_duration_s``): a receiver that repeats one fix
-    that long delivers no measurement, whereas shorter repeats are its update interval.
+    ``frozen_min_duration_s`` while the vehicle moved (the IMU says so, or the next fresh
+    fix lies more than ``frozen_exit_distance_m`` away: the signs of a frozen fix, Q2): a
+    receiver that repeats one fix that long in motion delivers no measurement,
+    whereas shorter repeats are its update interval and repeats at rest may be the truth.
     A fault is counted by the time it covers, not by its rows: a receiver logged at 20 Hz
     while frozen fills many rows with little time (assumptions Q4, Q7).
 
     Parameters
     ----------
     gnss : DataFrame
-        The GNSS record as read (``t``; ``attrs["held_runs"]`` when a reader dropped held
-        rows).
+        The GNSS record as read (``t, x, y, z``; ``attrs["held_runs"]`` when a reader
+        dropped held rows).
     bad : ndarray of bool (len(gnss),)
         The fixes found faulty (:func:`gnss_faults`).
-    min_held_s : float
-        Shortest hold counted as faulty, s.
+    imu : DataFrame
+        The IMU record, for the motion during each hold.
+    p : dict
+        The ``[gnss]`` thresholds of :func:`~navlib.io.findings.load_thresholds`.
 
     Returns
     -------
@@ -318,10 +328,20 @@ def faulty_time(gnss: pd.DataFrame, bad: np.ndarray, min_held_s: float
     share = np.diff(edges)
     excluded = float(share[bad].sum())
     parts = [f"{excluded:.3g} s of excluded fixes"] if bad.any() else []
-    runs = [(a, b) for a, b in gnss.attrs.get("held_runs", ()) if b - a >= min_held_s]
+    P = gnss[list(_XYZ)].to_numpy(dtype=float)
+
+    def moved(a: float, b: float) -> bool:
+        k = min(int(np.searchsorted(t, a)), t.size - 1)         # the fix that was held
+        step = float(np.linalg.norm(P[k + 1] - P[k])) if k + 1 < t.size else 0.0
+        return (step > p["frozen_exit_distance_m"]
+                or _imu_motion(imu, a, b, P[k], p) is not None)
+
+    runs = [(a, b) for a, b in gnss.attrs.get("held_runs", ())
+            if b - a >= p["frozen_min_duration_s"] and moved(a, b)]
     held = float(sum(b - a for a, b in runs))
     if runs:
-        parts.append(f"{held:.3g} s of {len(runs)} fix(es) held at least {min_held_s:g} s "
-                     f"(the longest {max(b - a for a, b in runs):.3g} s from "
-                     f"{max(runs, key=lambda r: r[1] - r[0])[0]:.1f} s)")
+        longest = max(runs, key=lambda r: r[1] - r[0])
+        parts.append(f"{held:.3g} s of {len(runs)} fix(es) held at least "
+                     f"{p['frozen_min_duration_s']:g} s while the vehicle moved (the longest "
+                     f"{longest[1] - longest[0]:.3g} s from {longest[0]:.1f} s)")
     return min(excluded + held, span), span, parts

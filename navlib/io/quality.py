@@ -217,7 +217,7 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
                   p["saturation"], "saturation", "max_fraction", sat["message"])
     clean_imu = _drop(imu, saturated)
     bad, faults = gnss_faults(clean_imu, gnss, sigma_m, p["gnss"])
-    _refuse_faulty_time(gnss, bad, p["gnss"], faults["message"])
+    _refuse_faulty_time(gnss, bad, clean_imu, p["gnss"], faults["message"])
     findings = pd.concat([f for f in (sat, faults) if len(f)] or [findings_frame([])],
                          ignore_index=True)
     return QualityCheck(imu=clean_imu, gnss=_drop(gnss, bad), findings=findings,
@@ -237,11 +237,12 @@ def _refuse_share(flags, what: str, table: dict, section: str, key: str, message
 
 
 
-def _refuse_faulty_time(gnss: pd.DataFrame, bad: np.ndarray, table: dict, messages) -> None:
+def _refuse_faulty_time(gnss: pd.DataFrame, bad: np.ndarray, imu: pd.DataFrame, table: dict,
+                        messages) -> None:
     """NavlibInputError when the faulty fixes (and long held ones) cover more than ``[gnss]
     max_faulty_time_fraction`` of the GNSS record's time (:func:`faulty_time`), saying what
     covers it, what is left and how to change the threshold."""
-    faulty, span, parts = faulty_time(gnss, bad, table["frozen_min_duration_s"])
+    faulty, span, parts = faulty_time(gnss, bad, imu, table)
     limit = table["max_faulty_time_fraction"]
     if span <= 0 or faulty <= limit * span:
         return

@@ -14,6 +14,7 @@ import pytest
 from flights import multicopter, records
 
 from navlib import NavlibInputError, io
+from navlib.io import quality
 from navlib.studies.assess import assess_flight
 
 
@@ -61,6 +62,29 @@ def test_receiver_frozen_over_most_of_the_record_is_refused_by_time(recs, tmp_pa
         imu_r, gnss_r = io.read_log(log)
         with pytest.raises(NavlibInputError, match=(
                 r"gnss: faulty fixes cover 70 s of the GNSS record's 90 s \(77.7 %: 70 s of 1 "
-                r"fix\(es\) held at least 2 s \(the longest 70 s from 10.0 s\)\), leaving 20 s "
-                r"usable; .* -p quality_thresholds .*max_faulty_time_fraction.: 0.85")):
+                r"fix\(es\) held at least 2 s while the vehicle moved \(the longest 70 s from "
+                r"10.0 s\)\), leaving 20 s usable; .* -p quality_thresholds "
+                r".*max_faulty_time_fraction.: 0.85")):
             assess_flight(imu_r, gnss_r)
+
+
+def test_a_hold_at_rest_is_no_fault_a_hold_in_motion_is(recs, tmp_path):
+    """8 s of one fix repeated on the pad (the vehicle still: the repeats may be the truth)
+    count as no faulty time; 8 s repeated in flight do (a 5 % threshold shows it), told by
+    the next fresh fix 50 m away where the IMU alone cannot (a steady circle: 1.2 deg/s)."""
+    imu, gnss = recs
+    strict = {"gnss": {"max_faulty_time_fraction": 0.05}}
+    for t0, refused in ((1.0, False), (40.0, True)):
+        folder = tmp_path / f"t{t0:g}"
+        folder.mkdir()
+        log, _, _ = _frozen_csv(folder, imu, gnss, t0, t0 + 8.0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", io.FlightDataWarning)
+            imu_r, gnss_r = io.read_log(log)
+            if refused:
+                with pytest.raises(NavlibInputError, match=r"held at least 2 s while the "
+                                                           r"vehicle moved"):
+                    quality.check_records(imu_r, gnss_r, thresholds=strict)
+            else:
+                checked = quality.check_records(imu_r, gnss_r, thresholds=strict)
+                assert len(checked.gnss) == len(gnss_r)
