@@ -5,7 +5,7 @@
 [--launch-azimuth DEG] [--read KEY VALUE ...] [-p key value ...]`` (default DIR:
 ``./assessments``),
 ``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] [--flight LOG]
-[--output DIR] [-p key value ...]`` (default DIR: ``./plans``) and
+[--read KEY VALUE ...] [--output DIR] [-p key value ...]`` (default DIR: ``./plans``) and
 ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
@@ -279,15 +279,21 @@ def _add_plan(sub) -> None:
                      help="a recorded flight of the same vehicle (a LOG as for assess: .ulg, "
                           ".bin, AltOS .csv or an imu.csv,gnss.csv pair): its "
                           "assessment is shown beside each plan, per phase")
+    pln.add_argument("--read", nargs=2, action="append", default=[], metavar=("KEY", "VALUE"),
+                     help="a keyword of the --flight LOG's reader, as for assess (e.g. --read "
+                          "max_rate_rad_s 60); repeatable")
     _add_parameter_option(pln, "a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
-                               "s_threshold, ...); VALUE parsed as JSON or a Python literal, "
-                               "else a string")
+                               "s_threshold, ...) or read_options; VALUE parsed as JSON or a "
+                               "Python literal, else a string")
 
 
 def _plan(args) -> int:
     from navlib.reports import fleet  # the studies are heavy: loaded by the commands using them
 
     options = {key: reports.parse_parameter_value(text) for key, text in args.parameter}
+    read_options = _read_options(options.get("read_options"), args.read)
+    if read_options:
+        options["read_options"] = read_options
     if args.sensors is not None:
         options["sensors_preset"] = args.sensors
     table, pages = fleet.plan_missions(args.missions, options, flight=args.flight)

@@ -178,15 +178,20 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None,
     planned once per aiding, one row each (``log``: ``mission (aiding baro)``), so a rocket
     with and without a GNSS receiver is compared in one run. ``flight``: a recorded flight
     (a ``LOG``) assessed once with the plan's sensor preset and shown beside every plan
-    (:func:`navlib.studies.plan.plan_beside_flight`).
+    (:func:`navlib.studies.plan.plan_beside_flight`), read with ``options["read_options"]``
+    (keywords of its reader, :func:`navlib.io.read_log`).
     """
     missions = _checked_labels(missions, "missions")
     options = dict(options or {})
+    read_options = options.pop("read_options", None) or {}
+    if not isinstance(read_options, Mapping):
+        raise NavlibInputError(f"read_options: expected a mapping of reader keyword -> value "
+                               f"(navlib.io.read_log), got {read_options!r}")
     reject_unknown(options, _keywords(plan_mission, "mission"), "plan options (-p)")
     aidings = _aidings(options.pop("aiding", None))
     flown = None
     if flight is not None:
-        imu, gnss = read_log(flight)
+        imu, gnss = read_log(flight, **read_options)
         flown = (flight, assess_flight(imu, gnss, preset=options.get("sensors_preset")))
 
     def row(mission: str, aiding: str | None) -> tuple[dict, str | None]:

@@ -98,3 +98,14 @@ def test_fleet_takes_read_options_and_names_a_wrong_one(tmp_path):
     row, page = fleet.assess_log(log, {"read_options": {"imu_instance": 1}})
     assert row["status"] == "failed" and page is None
     assert "read options ['imu_instance']: not a keyword of the csv reader" in row["error"]
+
+
+def test_plan_flight_takes_reader_options(tmp_path, capsys):
+    from navlib.__main__ import main
+
+    log = f"{_write_imu(tmp_path / 'imu.csv')},{_write_baro(tmp_path / 'baro.csv')}"
+    status = main(["plan", "hpr_rocket", "--flight", log, "--read", "imu_instance", "1",
+                   "--output", str(tmp_path / "plans")])
+    assert status == 2
+    assert ("read options ['imu_instance']: not a keyword of the csv reader"
+            in capsys.readouterr().err)
