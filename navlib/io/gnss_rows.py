@@ -35,9 +35,10 @@ def _lines(src: Source, rows: np.ndarray) -> str:
     return shown + (f" and {rows.size - _SHOWN} more" if rows.size > _SHOWN else "")
 
 
-def _satellites(sats: np.ndarray, kept: np.ndarray, src: Source, column: str) -> np.ndarray:
-    """Rows among ``kept`` with fewer than :data:`MIN_SATELLITES` (no 3-D fix: dropped);
-    rows reporting more than :data:`MAX_SATELLITES` are warned about but kept (the count is
+def _satellites(sats: np.ndarray, kept: np.ndarray, src: Source, column: str
+                ) -> tuple[np.ndarray, int]:
+    """Rows among ``kept`` with fewer than :data:`MIN_SATELLITES` (no 3-D fix: dropped), and
+    how many report more than :data:`MAX_SATELLITES` (warned about but kept: the count is
     corrupt, not necessarily the position, which the quality checks judge)."""
     few = kept & (sats < MIN_SATELLITES)
     many = kept & (sats > MAX_SATELLITES)
@@ -59,22 +60,18 @@ def _satellites(sats: np.ndarray, kept: np.ndarray, src: Source, column: str) ->
 def screen_fixes(values: Mapping[str, np.ndarray], fix_keys, src: Source,
                  satellites_label: str | None, keep_held: bool
                  ) -> tuple[dict[str, np.ndarray], Source, dict]:
-    """``values`` and ``src`` without, unless ``keep_held``, the held rows (every one of
-    ``fix_keys`` (position, and velocity and sigma when the file has them) equal to the
-    previous row's), and without the other rows whose
-    ``satellites`` value is below :data:`MIN_SATELLITES` (rows above
-    :data:`MAX_SATELLITES` are warned about and kept); each kind warned about with its count
-    and first lines; and the ``attrs`` to record: ``implausible_rows`` (above the maximum),
-    ``too_few_satellites``,
-    ``held_fixes_dropped`` and ``held_runs`` (``(t_fix, t_last_repeat)`` per fix logged
-    again, s, for :func:`navlib.io.gnss_faults.faulty_time`).
+    """The GNSS rows without, unless ``keep_held``, the held ones (every one of ``fix_keys``
+    equal to the previous row's) and without the other rows whose ``satellites`` value is
+    below :data:`MIN_SATELLITES` (rows above :data:`MAX_SATELLITES` are warned about and
+    kept); each kind warned about with its count and first lines (assumption Q7).
 
     Parameters
     ----------
     values : mapping of str to ndarray
         The parsed columns by key (``t``, the ``fix_keys``, optional ``satellites``).
     fix_keys : sequence of str
-        The columns a held row repeats.
+        The columns a held row repeats: position, and velocity and sigma when the file has
+        them.
     src : navlib.io._table.Source
         Where the rows come from, for the line numbers.
     satellites_label : str or None
@@ -89,7 +86,9 @@ def screen_fixes(values: Mapping[str, np.ndarray], fix_keys, src: Source,
     src : navlib.io._table.Source
         The source of the kept rows.
     attrs : dict
-        The counts and held runs named above.
+        ``implausible_rows`` (above the maximum), ``too_few_satellites``,
+        ``held_fixes_dropped`` and ``held_runs`` (``(t_fix, t_last_repeat)`` per fix logged
+        again, s, for :func:`navlib.io.gnss_faults.faulty_time`).
     """
     n = values["t"].size
     keep = np.ones(n, dtype=bool)
