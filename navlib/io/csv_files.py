@@ -402,7 +402,7 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
     _require(cols, ["t", *need], table, GNSS_SPECS)
     cols = {k: cols[k] for k in ["t", *need, *(["satellites"] if "satellites" in cols else [])]}
     values = parse_columns(table, cols)
-    check_finite(values, cols, src)
+    check_finite({k: v for k, v in values.items() if k != "satellites"}, cols, src)
     values, src, screened = screen_fixes(values, need, src,
                                          cols["satellites"].label if "satellites" in cols
                                          else None, keep_held)

@@ -279,3 +279,14 @@ def test_duplicated_time_stamps_are_reported_with_their_lines(tmp_path):
                                                r"line 51\); 3 duplicated time stamps in all, "
                                                r"at line 52, line 122, line 123"):
         io.read_imu_csv(_write_rows(tmp_path / "dup.csv", t, f, w))
+
+
+def test_gnss_satellite_column_empty_is_ignored(tmp_path):
+    """An optional satellite-count column left empty (all cells, or some) drops no row."""
+    path = tmp_path / "gnss.csv"
+    path.write_text("t,lat_deg,lon_deg,alt,satellites\n" + "".join(
+        f"{k:.1f},39.39,{-8.2885 + 1e-5 * k},100.0,\n" for k in range(10)))
+    assert len(io.read_gnss_csv(path)) == 10
+    path.write_text("t,lat_deg,lon_deg,alt,nsat\n" + "".join(
+        f"{k:.1f},39.39,{-8.2885 + 1e-5 * k},100.0,{9 if k % 2 else ''}\n" for k in range(10)))
+    assert len(io.read_gnss_csv(path)) == 10
