@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import tomllib
+import warnings
 from collections.abc import Mapping
 
 import numpy as np
@@ -14,8 +15,8 @@ from navlib._validation import finite_array, finite_scalar, increasing_times, re
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir
 
-__all__ = ["FINDING_COLUMNS", "THRESHOLDS_FILE", "check_record", "finding", "findings_frame",
-           "load_thresholds", "spans", "spans_text"]
+__all__ = ["FINDING_COLUMNS", "RENAMED", "THRESHOLDS_FILE", "check_record", "finding",
+           "findings_frame", "load_thresholds", "spans", "spans_text"]
 
 THRESHOLDS_FILE = "quality.toml"
 """File of ``data/`` holding the thresholds (sections ``[saturation]`` and ``[gnss]``)."""
@@ -34,7 +35,7 @@ def load_thresholds(overrides: Mapping | None = None) -> dict[str, dict[str, flo
     table = tomllib.loads(path.read_text(encoding="utf-8"))
     out = {section: {k: float(v) for k, v in values.items()} for section, values in
            table.items()}
-    overrides = dict(overrides or {})
+    overrides = _renamed(dict(overrides or {}))
     reject_unknown(overrides, out, "quality thresholds")
     for section, values in overrides.items():
         if not isinstance(values, Mapping):
@@ -46,6 +47,26 @@ def load_thresholds(overrides: Mapping | None = None) -> dict[str, dict[str, flo
                                               0.0, low_open=True)
     return out
 
+
+
+RENAMED = {("gnss", "max_excluded_fraction"): "max_faulty_time_fraction"}
+"""Threshold keys renamed, old -> new, accepted for one release with a DeprecationWarning
+(``[gnss] max_excluded_fraction`` counted faulty rows; its successor counts their time)."""
+
+
+def _renamed(overrides: dict) -> dict:
+    """``overrides`` with the :data:`RENAMED` keys under their new names, each warned about."""
+    for (section, old), new in RENAMED.items():
+        values = overrides.get(section)
+        if isinstance(values, Mapping) and old in values:
+            warnings.warn(f"quality thresholds [{section}] {old} is now {new} (the share of the "
+                          f"record's time, not of its rows); the old name goes in the next "
+                          "release", DeprecationWarning, stacklevel=4)
+            values = dict(values)
+            values.setdefault(new, values[old])
+            del values[old]
+            overrides[section] = values
+    return overrides
 
 
 def spans(t: np.ndarray, join_s: float) -> list[tuple[float, float]]:

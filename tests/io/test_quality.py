@@ -320,3 +320,11 @@ def test_sounding_rocket_with_a_frozen_receiver_keeps_its_phases():
                and "the gyros read" in str(w.message) for w in caught)
     assert result.segment_table["phase"].tolist() == ["pad", "boost", "coast", "free_fall"]
     assert blind.segment_table["phase"].tolist().count("boost") > 1
+
+
+def test_the_old_faulty_share_key_is_read_under_its_new_name():
+    with pytest.warns(DeprecationWarning, match=r"\[gnss\] max_excluded_fraction is now "
+                                                r"max_faulty_time_fraction"):
+        p = load_thresholds({"gnss": {"max_excluded_fraction": 0.7}})
+    assert p["gnss"]["max_faulty_time_fraction"] == 0.7
+    assert "max_excluded_fraction" not in p["gnss"]
