@@ -1,6 +1,6 @@
 """Flight-data quality checks on a long flight (saturation, frozen GNSS, barometer).
 
-``quality.check_records_1800s``: :func:`navlib.quality.check_records` (saturation, frozen
+``quality.check_records_1800s``: :func:`navlib.io.quality.check_records` (saturation, frozen
 fixes, barometer, jumps) of a generated 30-minute multicopter flight (``tests/flights.py``)
 at 250 Hz with 10 Hz GNSS, the ``pixhawk_mems`` errors and a barometer record; the records
 are generated once, outside the timing. Goal: 5 s, a small part of the assessment's 60 s.
@@ -37,7 +37,7 @@ def _records():
 
 
 def _check():
-    from navlib.quality import check_records
+    from navlib.io.quality import check_records
 
     imu, gnss, spec = _records()
     return check_records(imu, gnss, spec, 2.0)

@@ -2,9 +2,10 @@
 [--jobs N] [--no-cache]``
 ``python -m navlib assess LOG [LOG ...] [--output DIR] [--scheduler ADDR] [--preset NAME]
 [--vehicle CLASS] [--initial-attitude YAW,PITCH,ROLL] [--launch-elevation DEG]
-[--launch-azimuth DEG] [-p key value ...]`` (default DIR: ``./assessments``),
+[--launch-azimuth DEG] [--read KEY VALUE ...] [-p key value ...]`` (default DIR:
+``./assessments``),
 ``python -m navlib plan MISSION [MISSION ...] [--sensors PRESET_OR_FILE] [--flight LOG]
-[--output DIR] [-p key value ...]`` (default DIR: ``./plans``) and
+[--read KEY VALUE ...] [--output DIR] [-p key value ...]`` (default DIR: ``./plans``) and
 ``python -m navlib sweep EVALUATION -g NAME VALUE [VALUE ...] ... [--output FILE]``.
 
 Exit status: 0 on success, 1 when a notebook failed (notebook and cell named on stderr),
@@ -40,7 +41,17 @@ LOG_FORMS = """LOG forms (navlib.io.read_log):
   firm.csv               FIRM flight computer CSV (IMU and barometer; recognised by its header)
   imu.csv                CATS Vega export (baro.csv and gnssInfo.csv found beside it)
   flight.csv             AltOS EasyMega export (IMU and barometer, no GPS)
-Example: python -m navlib assess data/sample_flight/imu.csv,data/sample_flight/gnss.csv"""
+Example: python -m navlib assess data/sample_flight/imu.csv,data/sample_flight/gnss.csv
+
+Reader options (--read KEY VALUE, repeatable; or -p read_options '{"KEY": VALUE, ...}'):
+keywords of the LOG's reader (navlib.io.read_log), e.g.
+  --read max_rate_rad_s 60       a tumble above the default 35 rad/s (2000 deg/s) limit
+  --read max_outlier_fraction 0.05   --read on_gap split   --read imu_max_gap_s 0.5
+  --read gyro_unit deg/s         (CSV files)   --read keep_held true   (GNSS CSV: keep held rows)
+A keyword the LOG's reader does not take is refused, naming those it takes. The
+data-quality thresholds (data/quality.toml) are an assess keyword, e.g. the share of the
+GNSS record's time faulty fixes may cover:
+  -p quality_thresholds '{"gnss": {"max_faulty_time_fraction": 0.8}}'"""
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -133,11 +144,15 @@ def _add_assess(sub) -> None:
     ass.add_argument("--launch-azimuth", type=float, default=None, metavar="DEG",
                      help="launch-rail azimuth from North, degrees (fit option "
                           "launch_azimuth_deg)")
+    ass.add_argument("--read", nargs=2, action="append", default=[], metavar=("KEY", "VALUE"),
+                     help="a keyword of the LOG's reader (see 'Reader options' above), "
+                          "VALUE parsed as JSON or a Python literal, else a string; "
+                          "repeatable")
     _add_parameter_option(ass, "a keyword of assess_flight (eta, nu, gnss_rate_hz, "
-                               "fit_options, segment_options, quality_thresholds, ...); VALUE "
-                               "parsed as JSON or a Python literal, else a string; a JSON value "
-                               "may be split over several shell words (they are joined with "
-                               "spaces)", nargs="+")
+                               "fit_options, segment_options, quality_thresholds, ...) or "
+                               "read_options; VALUE parsed as JSON or a Python literal, else a "
+                               "string; a JSON value may be split over several shell words "
+                               "(they are joined with spaces)", nargs="+")
 
 
 def _parameter_words(key: str, words: list[str]):
@@ -157,7 +172,9 @@ def assess_options(args) -> dict:
     """The :func:`navlib.studies.assess.assess_flight` keywords of an ``assess`` command
     line: the ``-p`` pairs with ``--preset``, ``--vehicle`` and the fit options
     ``initial_attitude_deg`` (yaw, pitch, roll), ``launch_elevation_deg`` and
-    ``launch_azimuth_deg`` of the flags merged in (a keyword given both ways is refused)."""
+    ``launch_azimuth_deg`` of the flags merged in (a keyword given both ways is refused), and
+    ``read_options``, the log reader's keywords of ``--read KEY VALUE`` and ``-p
+    read_options``, for :func:`navlib.reports.fleet.assess_log`."""
     options = {}
     for key, *words in args.parameter:
         if key in options:
@@ -189,6 +206,9 @@ def assess_options(args) -> dict:
         fit_options[key] = value
     if fit_options:
         options["fit_options"] = fit_options
+    read_options = _read_options(options.get("read_options"), args.read)
+    if read_options:
+        options["read_options"] = read_options
     for key in ("preset", "vehicle"):
         value = getattr(args, key)
         if value is not None:
@@ -196,6 +216,21 @@ def assess_options(args) -> dict:
                 raise NavlibInputError(f"--{key}: also given as -p {key}; give it once")
             options[key] = value
     return options
+
+
+def _read_options(given, pairs) -> dict:
+    """The reader options of ``-p read_options {...}`` and the ``--read KEY VALUE`` pairs
+    merged (a keyword given twice, or both ways, is refused)."""
+    given = given or {}
+    if not isinstance(given, dict):
+        raise NavlibInputError(f"-p read_options: expected a JSON object of reader keyword -> "
+                               f"value, e.g. '{{\"max_rate_rad_s\": 60}}', got {given!r}")
+    out = dict(given)
+    for key, text in pairs or ():
+        if key in out:
+            raise NavlibInputError(f"--read {key}: given twice (or also in -p read_options)")
+        out[key] = reports.parse_parameter_value(text)
+    return out
 
 
 def _outcome(table, path: Path, done: str, describe_ok=None) -> int:
@@ -244,15 +279,21 @@ def _add_plan(sub) -> None:
                      help="a recorded flight of the same vehicle (a LOG as for assess: .ulg, "
                           ".bin, AltOS .csv or an imu.csv,gnss.csv pair): its "
                           "assessment is shown beside each plan, per phase")
+    pln.add_argument("--read", nargs=2, action="append", default=[], metavar=("KEY", "VALUE"),
+                     help="a keyword of the --flight LOG's reader, as for assess (e.g. --read "
+                          "max_rate_rad_s 60); repeatable")
     _add_parameter_option(pln, "a keyword of plan_mission (eta, nu, gnss_rate_hz, outages, "
-                               "s_threshold, ...); VALUE parsed as JSON or a Python literal, "
-                               "else a string")
+                               "s_threshold, ...) or read_options; VALUE parsed as JSON or a "
+                               "Python literal, else a string")
 
 
 def _plan(args) -> int:
     from navlib.reports import fleet  # the studies are heavy: loaded by the commands using them
 
     options = {key: reports.parse_parameter_value(text) for key, text in args.parameter}
+    read_options = _read_options(options.get("read_options"), args.read)
+    if read_options:
+        options["read_options"] = read_options
     if args.sensors is not None:
         options["sensors_preset"] = args.sensors
     table, pages = fleet.plan_missions(args.missions, options, flight=args.flight)

@@ -26,10 +26,12 @@ GPS = ("nsat", "latitude", "longitude", "altitude", "hour", "minute", "second", 
 LAT0, LON0, ALT0 = 39.0159236, -105.7107031, 2682.0
 
 
-def rocket_rows(t_drogue=6.0, t_end=12.0, *, duplicates=(0.5, 2.0), low_sat_second=None):
+def rocket_rows(t_drogue=6.0, t_end=12.0, *, duplicates=(0.5, 2.0), low_sat_second=None,
+                pad_s=0.3):
     """Rows (DataFrame, one per export row, ``gps_altitude`` and ``baro_altitude`` named
-    apart) of a short record; ``low_sat_second``: the fix of that second has 3 satellites."""
-    fast = np.round(np.arange(-0.30, t_drogue, 0.01), 2)
+    apart) of a short record, ``pad_s`` on the pad before boost; ``low_sat_second``: the fix
+    of that second has 3 satellites."""
+    fast = np.round(np.arange(-pad_s, t_drogue, 0.01), 2)
     slow = np.round(np.arange(t_drogue, t_end + 1e-9, 0.1), 2)
     t = np.concatenate([fast, slow])
     burn = (t >= 0.0) & (t < 2.0)
@@ -69,10 +71,17 @@ def _new_row(r) -> list[str]:
             f"{r.state_name:>8s}", f"{r.accel_x:8.2f}", "73957.00", f"{r.baro_altitude:8.2f}",
             f"{r.baro_altitude - ALT0:8.2f}", "0.00", "27.0", f"{r.accel_x:7.2f}",
             f"{r.accel_y:7.2f}", f"{r.accel_z:7.2f}", f"{r.gyro_roll:8.2f}",
-            f"{r.gyro_pitch:8.2f}", f"{r.gyro_yaw:8.2f}", " -0.08", " -0.22", " -0.20",
+            f"{r.gyro_pitch:8.2f}", f"{r.gyro_yaw:8.2f}", *_mag(r, (" -0.08", " -0.22", " -0.20")),
             f"{r.tilt:7.2f}", "4.36", "1", "1", f"{int(r.nsat):3d}", f"{r.latitude:12.7f}",
             f"{r.longitude:12.7f}", f"{r.gps_altitude:8.1f}", "2019", " 5", "26", "16",
             f"{33 + (11 + second) // 60:3d}", f"{(11 + second) % 60:3d}", "1.6", "0.8", "1.4"]
+
+
+def _mag(r, default) -> tuple[str, ...]:
+    """The magnetometer cells: the rows' ``mag_x/y/z`` when given, else ``default``."""
+    if not hasattr(r, "mag_x"):
+        return default
+    return tuple(f"{getattr(r, c):6.2f}" for c in ("mag_x", "mag_y", "mag_z"))
 
 
 def _old_row(r) -> list[str]:

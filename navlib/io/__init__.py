@@ -18,8 +18,10 @@ Column names, aliases and unit keywords: :mod:`navlib.io.csv_files`; PX4 body fr
 field mapping: :mod:`navlib.io.ulog`; DataFlash messages: :mod:`navlib.io.dataflash`; AltOS
 columns and axes: :mod:`navlib.io.altos`; barometer CSV files: :mod:`navlib.io.baro`; FIRM and
 CATS exports: :mod:`navlib.io.firm`, :mod:`navlib.io.cats`; dead IMU channels:
-:mod:`navlib.io.sensor_health`; the kind of a ``LOG`` argument and its reader:
-:mod:`navlib.io.logs`. A barometer record rides on ``imu.attrs["baro"]``; a log without
+:mod:`navlib.io.sensor_health`; held and implausible GNSS rows: :mod:`navlib.io.gnss_rows`;
+the kind of a ``LOG`` argument, its reader and reader options: :mod:`navlib.io.logs`; the
+data-quality checks run before an assessment (saturation, GNSS faults judged by time):
+:mod:`navlib.io.quality`. A barometer record rides on ``imu.attrs["baro"]``; a log without
 GNSS reads as ``gnss = None``. Every
 problem raises :class:`navlib.NavlibInputError` naming file, column and line (or topic,
 field and message).

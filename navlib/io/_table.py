@@ -132,13 +132,16 @@ def existing_file(path) -> tuple[Path, str]:
     return p, label
 
 
-def read_text_table(path, sep: str | None = None, *,
-                    header_prefix: str | None = None) -> TextTable:
+def read_text_table(path, sep: str | None = None, *, header_prefix: str | None = None,
+                    repair_header=None) -> TextTable:
     """Read ``path`` as a delimited text table with a header row.
 
     ``sep`` None detects ``,``, ``;``, tab or blanks from the header line. ``header_prefix``
     (e.g. ``"#version"``, the AltOS export) names a ``#`` line that is the header rather than
     a comment when it is the first non-blank line; its leading ``#`` is dropped.
+    ``repair_header(header, fields, label)``, when given, is called when every data row has
+    ``fields`` fields (one count, after a cut last row is dropped) but the header names
+    another number: it returns the header to read the rows with, or raises saying why not.
     """
     p, label = existing_file(path)
     data = p.read_bytes()
@@ -182,13 +185,16 @@ def read_text_table(path, sep: str | None = None, *,
     else:
         counts = np.fromiter((len(ln.split()) for ln in raw), dtype=np.int64, count=len(raw))
     last = len(raw) - 1
-    cut = last > 0 and (counts[last] < len(header) or (
+    cut = last > 0 and (counts[last] < max(len(header), counts[last - 1]) or (
         sep is not None and raw[last].rstrip().endswith(sep)
         and not raw[last - 1].rstrip().endswith(sep)))
     if cut:
         _warn_cut(label, int(data_i[last]) + 1, counts[last], len(header))
         raw, data_i, counts = raw[:last], data_i[:last], counts[:last]
         source = Source(label, data_i + 1, raw, sep)
+    if (repair_header is not None and counts.size and np.all(counts == counts[0])
+            and counts[0] != len(header)):
+        header = list(repair_header(header, int(counts[0]), label))
     bad = np.flatnonzero(counts != len(header))
     if bad.size:
         k = int(bad[0])

@@ -24,13 +24,14 @@ rule. All columns are taken with their logged signs; no axis is flipped.
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 import pandas as pd
 
 from navlib import units
 from navlib.earth import geodetic_to_ecef
-from navlib.errors import NavlibInputError
+from navlib.errors import FlightDataWarning, NavlibInputError
 from navlib.io._table import (
     Column,
     Source,
@@ -51,7 +52,7 @@ from navlib.io.checks import (
     reader_limits,
     validated_imu,
 )
-from navlib.io.sensor_health import check_imu_alive
+from navlib.io.sensor_health import check_imu_alive, dead_magnetometer
 
 ACCEL_COLUMNS = ("accel_x", "accel_y", "accel_z")
 """AltOS accelerometer columns (m/s^2) on the along, across, through axes."""
@@ -63,6 +64,11 @@ TELEMEGA_RANGE = {"gyro_rad_s": 2000.0 * units.DEG, "accel_m_s2": 16.0 * units.G
 """Full scale of the TeleMega IMU as AltOS configures it: +-2000 deg/s, +-16 g per axis."""
 MIN_SATELLITES = 4
 """Fewest satellites (``nsat``) of a kept fix: fewer cannot give a 3-D position."""
+IMU_BLOCK = ("gyro_roll", "gyro_pitch", "gyro_yaw", "mag_x", "mag_y", "mag_z", "tilt")
+"""The IMU block of an AltOS export after ``accel_z``: gyro, magnetometer and tilt columns, in
+order. Some exports name fewer of them in the header than every row holds (a header of 75
+names over rows of 81 fields): :func:`read_altos` then reads the rows with the block's names
+(assumption IO7)."""
 _HEADER_PREFIX = "#version"
 _OLD_HEAD = ("time", "acceleration", "pressure")
 _SERIAL = re.compile(r"serial-(\d+)", re.IGNORECASE)
@@ -132,6 +138,45 @@ def _layout(table: TextTable, label: str) -> dict[str, int]:
                                  f"'altitude' (no GPS receiver: an EasyMega or EasyMini "
                                  f"export); read_altos needs GPS fixes or the barometer")
     return index
+
+
+def _repair_header(header: list[str], fields: int, label: str) -> list[str]:
+    """The header of an export whose every row has ``fields`` fields: with the names of
+    :data:`IMU_BLOCK` it lacks put back after ``accel_z`` when they are exactly the extra
+    fields (a FlightDataWarning says so); NavlibInputError with that diagnosis otherwise."""
+    names = [h.strip().lower() for h in header]
+    extra = fields - len(header)
+    missing = [c for c in IMU_BLOCK if c not in names]
+    present = [c for c in IMU_BLOCK if c in names]
+    where = names.index("accel_z") + 1 if "accel_z" in names else None
+    contiguous = where is not None and names[where:where + len(present)] == present
+    if extra <= 0 or len(missing) != extra or not contiguous:
+        lacks = (f"it lacks {missing} of that block" if missing else
+                 "it names the whole block")
+        raise NavlibInputError(
+            f"{label}: the header names {len(header)} columns but every row has {fields} "
+            f"fields; the {abs(extra)} {'extra' if extra > 0 else 'missing'} field(s) are not "
+            f"the AltOS gyro/magnetometer/tilt block {list(IMU_BLOCK)} after accel_z ({lacks}"
+            f"{'' if contiguous or where is None else ', not in its place after accel_z'}"
+            f"{'' if where is not None else '; no accel_z column'}), so which field is which "
+            "cannot be told; export the flight again with AltOS")
+    warnings.warn(f"{label}: the header names {len(header)} columns but every row has {fields} "
+                  f"fields; the {extra} extra fields are read as the AltOS IMU block the header "
+                  f"lacks ({', '.join(missing)}, after accel_z)", FlightDataWarning,
+                  stacklevel=4)
+    return [*header[:where], *IMU_BLOCK, *header[where + len(present):]]
+
+
+MAG_LABELS = "'mag_x'/'mag_y'/'mag_z'"
+
+
+def _magnetometer(table: TextTable, index: dict, rows: np.ndarray) -> np.ndarray | None:
+    """The ``mag_x/y/z`` cells of ``rows`` (NaN where empty), or None without them."""
+    if not all(c in index for c in ("mag_x", "mag_y", "mag_z")):
+        return None
+    cols = {c: Column(c, table.header[index[c]], index[c]) for c in ("mag_x", "mag_y", "mag_z")}
+    data = parse_columns(table, cols)
+    return np.column_stack([data[c][rows] for c in cols])
 
 
 def _cells(table: TextTable, field: int) -> list[str]:
@@ -225,15 +270,18 @@ max_outlier_fraction, require_overlap
     ------
     NavlibInputError
         Missing, empty, binary or foreign file; a header of neither generation; no gyro
-        (TeleMetrum) columns; neither GPS nor barometer columns; rows with a wrong number of fields
-        (truncated file), non-numeric or non-finite cells, repeated or decreasing times with
-        different values, fewer than two fixes, implausible magnitudes or positions,
-        non-overlapping spans (naming column and line).
+        (TeleMetrum) columns; neither GPS nor barometer columns; rows with a wrong number of
+        fields (a header shorter than every row is read when its missing names are the
+        :data:`IMU_BLOCK`, and refused with that diagnosis otherwise), non-numeric or
+        non-finite cells, repeated or decreasing times with different values, fewer than
+        two fixes, implausible magnitudes or positions, non-overlapping spans (naming column
+        and line).
     """
     limits = reader_limits(on_gap, imu_max_gap_s, gnss_max_gap_s, max_rate_rad_s,
                            max_accel_m_s2, max_outlier_fraction)
     _, label = existing_file(path)
-    table = read_text_table(path, ",", header_prefix=_HEADER_PREFIX)
+    table = read_text_table(path, ",", header_prefix=_HEADER_PREFIX,
+                            repair_header=_repair_header)
     index = _layout(table, label)
     src = table.source
     has_gps = all(c in index for c in ("latitude", "longitude", "gps_altitude"))
@@ -255,8 +303,13 @@ max_outlier_fraction, require_overlap
     t = t_all[rows]
     f_b = imu_values[rows, :3]
     w_ib_b = imu_values[rows, 3:] * units.DEG
+    mag_note = dead_magnetometer(_magnetometer(table, index, rows), MAG_LABELS)
     check_imu_alive(f_b, w_ib_b, imu_src, "'accel_x'/'accel_y'/'accel_z'",
-                    "'gyro_roll'/'gyro_pitch'/'gyro_yaw'")
+                    "'gyro_roll'/'gyro_pitch'/'gyro_yaw'", also=mag_note)
+    if mag_note:
+        warnings.warn(f"{label}: {mag_note[2:].replace(': the IMU looks unpowered', '')}: a "
+                      "dead magnetometer (navlib does not use it)", FlightDataWarning,
+                      stacklevel=2)
 
     hardware = _hardware(table, index, path)
     sensor_range = dict(TELEMEGA_RANGE)  # _layout accepts gyro + GPS boards only: TeleMega

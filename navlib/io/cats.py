@@ -5,19 +5,19 @@ An export is recognised by the header of its ``imu.csv`` (:func:`looks_like_cats
 ``ts, id, Ax, Ay, Az, Gx, Gy, Gz`` (s, sensor id, m/s^2, deg/s; board axes). In the same
 folder, ``baro.csv`` (``ts, id, T, P``: s, id, deg C, Pa) is the barometer and
 ``gnssInfo.csv`` (``ts, latitude, longitude, satellites``), when present, the GNSS fixes,
-**without height**: their height is the barometric altitude (assumptions.md B1), and a fix
+**without height**: their height is the barometric altitude (assumptions.md B1). A fix
 repeating the previous one exactly (a receiver's position held between its updates, logged
-again) is not a new measurement and is dropped, with the count in ``attrs``.
+again) is not a new measurement, and a row reporting an impossible satellite count (the
+first rows of the shared Hedy flight report 193) is not trusted: :func:`read_gnss_csv` drops
+both with a warning naming their count and lines (assumption Q7).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-from navlib.earth import ecef_to_geodetic
 from navlib.errors import NavlibInputError
 from navlib.io.baro import read_baro_csv
 from navlib.io.csv_files import read_gnss_csv, read_imu_csv
@@ -27,9 +27,6 @@ CATS_IMU_HEADER = ("ts", "id", "ax", "ay", "az", "gx", "gy", "gz")
 """Normalised header of a CATS ``imu.csv``."""
 BARO_FILE = "baro.csv"
 GNSS_FILE = "gnssInfo.csv"
-HELD_RAD = 1e-12
-"""Latitude/longitude change below which a fix repeats the previous one, rad (6 um: the
-round trip through ECEF, not a movement)."""
 
 
 def looks_like_cats(path) -> bool:
@@ -85,15 +82,4 @@ def read_cats(path, **imu_options) -> tuple[pd.DataFrame, pd.DataFrame | None]:
     if not gnss_path.is_file():
         return imu, None
     gnss = read_gnss_csv(gnss_path, columns={"t": "ts"}, baro=baro, position="geodetic")
-    return imu, drop_held_fixes(gnss)
-
-
-def drop_held_fixes(gnss: pd.DataFrame) -> pd.DataFrame:
-    """``gnss`` without the rows whose latitude and longitude repeat the previous row's (a
-    held fix logged again; its barometric height may differ); the count is
-    ``attrs["held_fixes_dropped"]``."""
-    lat, lon, _ = ecef_to_geodetic(gnss[["x", "y", "z"]].to_numpy(dtype=float))
-    held = np.r_[False, (np.abs(np.diff(lat)) < HELD_RAD) & (np.abs(np.diff(lon)) < HELD_RAD)]
-    out = gnss[~held].reset_index(drop=True)
-    out.attrs = {**gnss.attrs, "held_fixes_dropped": int(held.sum())}
-    return out
+    return imu, gnss

@@ -66,6 +66,7 @@ from navlib.io.checks import (
     check_velocities,
     flag_imu_outliers,
 )
+from navlib.io.gnss_rows import SATELLITE_ALIASES, screen_fixes
 from navlib.io.sensor_health import check_imu_alive
 
 AXES = ("x", "y", "z")
@@ -120,6 +121,7 @@ GNSS_SPECS = (
                          "pos_std", "sigma_r"), "length"),
     ColumnSpec("sigma_h", ("eph", "hacc", "h_acc", "sigma_horizontal"), "length"),
     ColumnSpec("sigma_v", ("epv", "vacc", "v_acc", "sigma_vertical"), "length"),
+    ColumnSpec("satellites", SATELLITE_ALIASES[1:]),
 )
 IMU_COLUMNS = {s.key: s.aliases for s in IMU_SPECS}
 """Accepted header names (after normalisation) for each IMU column."""
@@ -270,8 +272,11 @@ def _rate_hint(w_ib_b: np.ndarray, max_rate_rad_s: float) -> str:
     if median >= DEG_S_MEDIAN_RATE and float(np.max(norm)) * units.DEG <= max_rate_rad_s:
         return ("; the data look like deg/s: set gyro_unit='deg/s' (or raise max_rate_rad_s "
                 "for a fast spinner)")
+    limit = float(np.ceil(1.05 * np.max(norm)))
     return (f"; the median rate {median:.3g} rad/s is plausible, so the units look right: a "
-            f"vehicle this fast (a tumble, a break-up) needs a larger max_rate_rad_s")
+            f"vehicle this fast (a tumble, a break-up) needs a larger max_rate_rad_s (e.g. "
+            f"max_rate_rad_s={limit:g}; python -m navlib assess LOG --read max_rate_rad_s "
+            f"{limit:g})")
 
 
 def _choose(mode: str | None, keyword: str, present: dict[str, bool], src) -> str | None:
@@ -293,7 +298,7 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
                   velocity: str | None = None, columns: Mapping[str, str] | None = None,
                   sep: str | None = None, max_gap_s: float | None = None,
                   on_gap: str = "warn", check_magnitudes: bool = True,
-                  baro: pd.DataFrame | None = None) -> pd.DataFrame:
+                  baro: pd.DataFrame | None = None, keep_held: bool = False) -> pd.DataFrame:
     """Read GNSS fixes (time, position, optional velocity and sigma) from a CSV file.
 
     Position is given either in ECEF (``x, y, z``) or geodetic (``lat_deg, lon_deg, alt``,
@@ -323,13 +328,21 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
         A barometer record (``t, alt_m``, :func:`navlib.io.baro.read_baro_csv`): a geodetic
         file without a height column takes the barometric altitude at each fix as its
         height (assumptions.md B1; ``attrs["height_source"] = "baro"``).
+    keep_held : bool
+        Keep the rows that repeat the previous fix exactly (held between a receiver's
+        updates). False (default): they are no new measurement and are dropped with a
+        :class:`~navlib.io.FlightDataWarning` naming their count and lines; so are rows of a
+        ``satellites`` column (``nsat``, ``sats``, ...) reporting more than 100 or fewer than
+        4 satellites, whatever ``keep_held`` (assumption Q7, :mod:`navlib.io.gnss_rows`).
 
     Returns
     -------
     DataFrame
         ``t`` (s), ``x, y, z`` (ECEF, m), then ``vx, vy, vz`` (ECEF, m/s) and ``sigma`` (m)
         when given, plus ``segment`` with ``on_gap="split"``. ``attrs``: ``source``,
-        ``position_input``, ``velocity_input``, ``gaps``, ``max_gap_s``.
+        ``position_input``, ``velocity_input``, ``gaps``, ``max_gap_s``,
+        ``held_fixes_dropped``, ``held_runs`` (``(t_fix, t_last_repeat)`` per held fix, s),
+        ``implausible_rows``.
 
     Accepted header names (normalised): ``x``: x, x_ecef, ecef_x, r_x, ...; ``lat_deg``:
     lat_deg, latitude_deg; ``lat``: lat, latitude, lat_rad; ``lon_deg``: lon_deg,
@@ -387,9 +400,12 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
     elif "sigma_h" in cols or "sigma_v" in cols:
         need += ["sigma_h", "sigma_v"]
     _require(cols, ["t", *need], table, GNSS_SPECS)
-    cols = {k: cols[k] for k in ["t", *need]}
+    cols = {k: cols[k] for k in ["t", *need, *(["satellites"] if "satellites" in cols else [])]}
     values = parse_columns(table, cols)
-    check_finite(values, cols, src)
+    check_finite({k: v for k, v in values.items() if k != "satellites"}, cols, src)
+    values, src, screened = screen_fixes(values, need, src,
+                                         cols["satellites"].label if "satellites" in cols
+                                         else None, keep_held)
     v_unit = None if length_unit is None else _units.VELOCITY_OF_LENGTH[
         _units.normalise(length_unit)]
     declared = {"time": ("time_unit", time_unit, "s"),
@@ -441,7 +457,8 @@ def read_gnss_csv(path, *, time_unit: str | None = None, length_unit: str | None
         out["sigma"] = combine_sigma(s_h, s_v)
     frame = pd.DataFrame(out)
     frame.attrs.update(source=str(path), position_input=pos, velocity_input=vel,
-                       height_source="gnss" if pos == "ecef" or "alt" in cols else "baro")
+                       height_source="gnss" if pos == "ecef" or "alt" in cols else "baro",
+                       **screened)
     return apply_gap_policy(frame, src, cols["t"].label, max_gap_s, on_gap)
 
 

@@ -14,10 +14,17 @@ A ``LOG`` is one of (docs/sweeps.md):
 
 A barometer record goes in ``imu.attrs["baro"]`` (``t, alt_m``); a log without GNSS reads as
 ``gnss = None``. A CSV file that is none of these is refused with what it lacks.
+
+Reader options (``read_log(spec, **read_options)``, ``python -m navlib assess --read KEY
+VALUE``) are keywords of the reader of the log's kind (:func:`reader_keywords`): for CSV
+files each goes to every file's reader that takes it (``time_unit`` to all three,
+``gyro_unit`` to the IMU file, ``keep_held`` to the GNSS file); a keyword no reader of the
+log takes is refused, naming those it takes.
 """
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 
 from navlib.errors import NavlibInputError
@@ -103,32 +110,85 @@ def parse_log(spec: str) -> tuple[str, tuple[Path, ...]]:
     raise NavlibInputError(_what_is_missing(spec, parts[0]))
 
 
-def read_log(spec: str):
-    """``imu, gnss`` of a ``LOG`` argument (:func:`parse_log`), read with the reader of its
-    kind and that reader's defaults. ``gnss`` is None for a log without GNSS; a barometer,
-    when the log has one, is ``imu.attrs["baro"]``."""
+def _keywords(fn, *fixed: str) -> tuple[str, ...]:
+    return tuple(p.name for p in inspect.signature(fn).parameters.values()
+                 if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in fixed)
+
+
+_FIXED_BY_EXPORT = ("columns", "accel_unit", "gyro_unit", "sep")
+"""Keywords of :func:`read_imu_csv` that the FIRM and CATS readers set themselves."""
+_CSV_READERS = {"imu": _keywords(read_imu_csv), "gnss": _keywords(read_gnss_csv, "baro"),
+                "baro": _keywords(read_baro_csv)}
+
+
+def reader_keywords(kind: str) -> dict[str, tuple[str, ...]]:
+    """The reader options a log of ``kind`` (:data:`LOG_KINDS`) accepts, by reader: one
+    entry (the kind) for a single-file log, ``imu``, ``gnss`` and ``baro`` for CSV files."""
+    if kind == "csv":
+        return dict(_CSV_READERS)
+    if kind in ("firm", "cats"):
+        return {kind: _keywords(read_imu_csv, *_FIXED_BY_EXPORT)}
+    reader = {"ulog": read_ulog, "dataflash": read_dataflash, "altos": read_altos}.get(kind)
+    if reader is None:
+        raise NavlibInputError(f"kind: expected one of {list(LOG_KINDS)}, got {kind!r}")
+    return {kind: _keywords(reader)}
+
+
+def _routed(spec: str, kind: str, options: dict) -> dict[str, dict]:
+    """``options`` split by reader (:func:`reader_keywords`); unknown keywords refused."""
+    accepted = reader_keywords(kind)
+    taken = {k for names in accepted.values() for k in names}
+    unknown = sorted(set(options) - taken)
+    if unknown:
+        raise NavlibInputError(
+            f"read options {unknown}: not a keyword of the {kind} reader of log {spec!r}; it "
+            f"takes {sorted(taken)}")
+    return {reader: {k: v for k, v in options.items() if k in names}
+            for reader, names in accepted.items()}
+
+
+def read_log(spec: str, **read_options):
+    """``imu, gnss`` of a ``LOG`` argument, read with the reader of its kind.
+
+    Parameters
+    ----------
+    spec : str
+        The ``LOG`` (:func:`parse_log`).
+    **read_options
+        Keywords of the reader of its kind (module docstring, :func:`reader_keywords`; e.g.
+        ``max_rate_rad_s=60``, ``on_gap="split"``); the reader's defaults otherwise.
+
+    Returns
+    -------
+    imu : DataFrame
+        The IMU record; a barometer, when the log has one, is ``imu.attrs["baro"]``.
+    gnss : DataFrame or None
+        The GNSS record; None for a log without GNSS.
+
+    Raises
+    ------
+    NavlibInputError
+        A keyword no reader of the log takes (naming those it takes), and the reader's own
+        errors.
+    """
     kind, paths = parse_log(spec)
-    if kind == "ulog":
-        return read_ulog(paths[0])
+    options = _routed(spec, kind, read_options)
     if kind == "csv":
         if len(paths) == 2:
             paths = (paths[0], None, paths[1]) if _is_baro(str(paths[1])) else (*paths, None)
         elif _is_baro(str(paths[1])) and not _is_baro(str(paths[2])):
             paths = (paths[0], paths[2], paths[1])          # 'imu.csv,baro.csv,gnss.csv'
-        return _read_csv_files(*paths)
-    if kind == "altos":
-        return read_altos(paths[0])
-    if kind == "firm":
-        return read_firm(paths[0])
-    if kind == "cats":
-        return read_cats(paths[0])
-    return read_dataflash(paths[0])
+        return _read_csv_files(*paths, options)
+    reader = {"ulog": read_ulog, "altos": read_altos, "firm": read_firm, "cats": read_cats,
+              "dataflash": read_dataflash}[kind]
+    return reader(paths[0], **options[kind])
 
 
-def _read_csv_files(imu_path, gnss_path, baro_path):
-    imu = read_imu_csv(imu_path)
-    baro = read_baro_csv(baro_path) if baro_path is not None else None
-    gnss = read_gnss_csv(gnss_path, baro=baro) if gnss_path is not None else None
+def _read_csv_files(imu_path, gnss_path, baro_path, options):
+    imu = read_imu_csv(imu_path, **options["imu"])
+    baro = read_baro_csv(baro_path, **options["baro"]) if baro_path is not None else None
+    gnss = (read_gnss_csv(gnss_path, baro=baro, **options["gnss"]) if gnss_path is not None
+            else None)
     if baro is not None:
         imu.attrs["baro"] = baro
     return imu, gnss

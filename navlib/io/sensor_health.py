@@ -24,14 +24,15 @@ the five others do is stuck, not quiet (a vehicle at rest may read one quantised
 
 
 def check_imu_alive(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source, f_labels: str,
-                    w_labels: str) -> None:
+                    w_labels: str, also: str = "") -> None:
     """Raise naming the dead sensor: no gravity on the accelerometer, or one accelerometer or
     gyro axis that reads one value over the whole record while the five other channels change
     and show motion (another gyro axis beyond :data:`MOVING_RATE_RAD_S`, or another
     accelerometer axis changing by more than half a g).
 
     ``f_b`` (m/s^2) and ``w_ib_b`` (rad/s) are (N, 3); ``f_labels`` / ``w_labels`` the
-    columns as ``'a'/'b'/'c'``, for the message.
+    columns as ``'a'/'b'/'c'``, for the message; ``also`` is appended to it (what the
+    log's other sensors of the IMU read, :func:`dead_magnetometer`).
     """
     n = f_b.shape[0]
     if n < MIN_SAMPLES:
@@ -41,7 +42,7 @@ def check_imu_alive(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source, f_label
         raise source.error(f_labels, None,
                            f"dead accelerometer: the specific force never exceeds "
                            f"{largest:.3g} m/s^2 over {n} samples, while gravity alone reads "
-                           f"9.8 m/s^2 at rest (unpowered, disconnected or not logged)")
+                           f"9.8 m/s^2 at rest (unpowered, disconnected or not logged){also}")
     channels = np.column_stack([f_b, w_ib_b])
     constant = np.ptp(channels, axis=0) == 0.0
     if constant.sum() != 1:
@@ -58,4 +59,25 @@ def check_imu_alive(f_b: np.ndarray, w_ib_b: np.ndarray, source: Source, f_label
     raise source.error(labels[k % 3] if len(labels) == 3 else labels[0], None,
                        f"stuck {what} axis: all {n} samples read {channels[0, k]:.6g} while "
                        f"the other five IMU channels change and the vehicle moves; the "
-                       f"sensor (or this channel) is dead")
+                       f"sensor (or this channel) is dead{also}")
+
+
+def dead_magnetometer(mag: np.ndarray | None, labels: str) -> str:
+    """A clause naming a magnetometer that reads exactly zero on every axis in every sample,
+    for the dead-IMU message: ``""`` when it reads anything else.
+
+    Parameters
+    ----------
+    mag : ndarray (N, 3) or None
+        The magnetometer samples, any unit (NaN where empty); None: the log has none.
+    labels : str
+        Its columns as ``'a'/'b'/'c'``, for the message.
+
+    Returns
+    -------
+    str
+    """
+    if mag is None or mag.size == 0 or np.any(np.nan_to_num(mag, nan=0.0) != 0.0):
+        return ""
+    return (f"; the magnetometer {labels} reads 0 on every axis in all {mag.shape[0]} rows "
+            "too: the IMU looks unpowered")

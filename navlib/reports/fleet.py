@@ -144,9 +144,12 @@ def assess_log(log: str, options: Mapping | None = None) -> tuple[dict, str | No
     options : Mapping or None, optional
         Keywords of :func:`navlib.studies.assess.assess_flight`.
     """
+    options = dict(options or {})
+    read_options = options.pop("read_options", None) or {}
+
     def build(warning_texts):
-        imu, gnss = read_log(log)
-        result = assess_flight(imu, gnss, **dict(options or {}))
+        imu, gnss = read_log(log, **read_options)
+        result = assess_flight(imu, gnss, **options)
         return result, flight_page(log, result, warning_texts())
 
     return summary_row(log, build)
@@ -168,7 +171,8 @@ def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=N
     """Assess flights as Dask tasks (:func:`navlib.parallel.map_tasks`).
 
     ``options`` are keywords of :func:`navlib.studies.assess.assess_flight` (checked here,
-    before any task runs). Returns the summary table (one row per log, in order) and the
+    before any task runs) and ``read_options``, keywords of the log's reader
+    (:func:`navlib.io.read_log`). Returns the summary table (one row per log, in order) and the
     HTML pages (None for failed flights).
 
     Parameters
@@ -189,7 +193,11 @@ def assess_logs(logs: Sequence[str], options: Mapping | None = None, scheduler=N
     """
     logs = _checked_labels(logs, "logs")
     options = dict(options or {})
-    reject_unknown(options, _keywords(assess_flight, "imu", "gnss"), "assess options (-p)")
+    reject_unknown(options, (*_keywords(assess_flight, "imu", "gnss"), "read_options"),
+                   "assess options (-p)")
+    if not isinstance(options.get("read_options") or {}, Mapping):
+        raise NavlibInputError(f"read_options: expected a mapping of reader keyword -> value "
+                               f"(navlib.io.read_log), got {options['read_options']!r}")
     results = map_tasks(_task, logs, scheduler, shared={"options": options},
                         progress=progress, desc="flights")
     return _table([row for row, _ in results]), [page for _, page in results]
@@ -205,29 +213,35 @@ def plan_missions(missions: Sequence[str], options: Mapping | None = None,
     planned once per aiding, one row each (``log``: ``mission (aiding baro)``), so a rocket
     with and without a GNSS receiver is compared in one run. ``flight``: a recorded flight
     (a ``LOG``) assessed once with the plan's sensor preset and shown beside every plan
-    (:func:`navlib.studies.plan.plan_beside_flight`).
+    (:func:`navlib.studies.plan.plan_beside_flight`), read with ``options["read_options"]``
+    (keywords of its reader, :func:`navlib.io.read_log`).
 
     Parameters
     ----------
     missions : sequence of str
         Mission files.
     options : Mapping or None, optional
-        Keywords of :func:`navlib.studies.plan.plan_mission`.
+        Keywords of :func:`navlib.studies.plan.plan_mission`, and ``read_options`` for the
+        flight's reader.
     flight : str or None, optional
         A recorded flight shown beside every plan.
 
     Raises
     ------
     NavlibInputError
-        If ``options`` names an unknown keyword.
+        If ``options`` names an unknown keyword or ``read_options`` is not a mapping.
     """
     missions = _checked_labels(missions, "missions")
     options = dict(options or {})
+    read_options = options.pop("read_options", None) or {}
+    if not isinstance(read_options, Mapping):
+        raise NavlibInputError(f"read_options: expected a mapping of reader keyword -> value "
+                               f"(navlib.io.read_log), got {read_options!r}")
     reject_unknown(options, _keywords(plan_mission, "mission"), "plan options (-p)")
     aidings = _aidings(options.pop("aiding", None))
     flown = None
     if flight is not None:
-        imu, gnss = read_log(flight)
+        imu, gnss = read_log(flight, **read_options)
         flown = (flight, assess_flight(imu, gnss, preset=options.get("sensors_preset")))
 
     def row(mission: str, aiding: str | None) -> tuple[dict, str | None]:

@@ -119,7 +119,7 @@ class TriadSpec:
     range : float or None
         Measurement range: the largest magnitude one axis reports, rad/s or m/s^2 (preset
         keys ``gyro_range_deg_s`` / ``_rad_s``, ``accel_range_g`` / ``_m_s2``); None when
-        the preset does not say. Samples at it are saturated (:mod:`navlib.quality`).
+        the preset does not say. Samples at it are saturated (:mod:`navlib.io.quality`).
     """
 
     bias: float = 0.0

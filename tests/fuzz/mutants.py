@@ -2,9 +2,11 @@
 each mutant through its reader and :func:`navlib.studies.assess.assess_flight` under a time
 limit (the fuzz tests of ``test_fuzz_assess.py``).
 
-Kinds (:data:`navlib.io.LOG_KINDS`): an ``imu.csv,gnss.csv`` pair and a DataFlash ``.bin``
-of a simulated 24 s multicopter flight (``tests/flights.py``, ``tests/dataflash_writer.py``),
-AltOS exports of both header generations (``tests/altos_writer.py``) and, when the shared
+Kinds (:data:`navlib.io.LOG_KINDS`): an ``imu.csv,gnss.csv`` pair, an ``imu.csv,baro.csv``
+pair (no GNSS: the barometric altitude of the GNSS heights) and a DataFlash ``.bin`` of a
+simulated 24 s multicopter flight (``tests/flights.py``, ``tests/dataflash_writer.py``),
+AltOS exports of both header generations and an EasyMega export without GPS (1 s on the pad:
+a flight without GNSS is levelled on at least 0.5 s; ``tests/altos_writer.py``) and, when the shared
 logs are present (``tests/locations.py``), a PX4 ULog cut from a public sample log to its
 first seconds. :func:`real_originals` adds the shared logs themselves (read at run time,
 never copied into the repository).
@@ -35,6 +37,7 @@ from flights import dataflash_flight
 from locations import SHARED_DATA
 
 from navlib import NavlibInputError, io
+from navlib.earth import ecef_to_geodetic
 from navlib.studies.assess import assess_flight
 
 OUTCOMES = ("assessed", "refused", "bare", "hung")
@@ -89,11 +92,16 @@ def generated_originals(folder: Path) -> list[Original]:
     out = [Original("csv pair", "csv", (folder / "imu.csv", folder / "gnss.csv"))]
     write_flight(folder / "flight.bin", imu, geo, att, layout="4.x", imu_instances=(0, 1))
     out.append(Original("dataflash", "dataflash", (folder / "flight.bin",)))
+    _, _, h = ecef_to_geodetic(gnss[["x", "y", "z"]].to_numpy())
+    pd.DataFrame({"t": gnss["t"], "altitude_m": h}).to_csv(folder / "baro.csv", index=False)
+    out.append(Original("csv imu+baro", "csv", (folder / "imu.csv", folder / "baro.csv")))
     rows = rocket_rows()
     for generation in ("version", "legacy"):
         path = folder / f"altos-{generation}.csv"
         write_altos(path, rows, generation=generation)
         out.append(Original(f"altos {generation}", "altos", (path,)))
+    write_altos(folder / "easymega.csv", rocket_rows(pad_s=1.0), board="easymega")
+    out.append(Original("altos easymega", "altos", (folder / "easymega.csv",)))
     source = SHARED_DATA / "px4" / "sample_log_small.ulg"
     if source.is_file():
         _cut_ulog(source, folder / "cut.ulg", 20.0)

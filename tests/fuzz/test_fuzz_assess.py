@@ -29,7 +29,8 @@ SEED = 39
 FAST_PER_ORIGINAL = 3
 CAMPAIGN_PER_ORIGINAL = 6
 FLEET_ASSESSED = 4
-KINDS = ("csv pair", "dataflash", "altos version", "altos legacy", "ulog (cut)")
+KINDS = ("csv pair", "csv imu+baro", "dataflash", "altos version", "altos legacy",
+         "altos easymega", "ulog (cut)")
 
 
 @pytest.fixture(scope="module")

@@ -205,3 +205,79 @@ def test_shared_flights_roll_sign_against_the_magnetometer(name):
     rolled = np.sum(seg["w_x"].to_numpy()[:-1] * np.diff(seg["t"].to_numpy()))
     assert abs(rolled) > units.deg2rad(720.0)
     assert (turned[-1] - turned[0]) / rolled == pytest.approx(-1.0, abs=0.1)
+
+
+def _short_header(path, names):
+    """The export at ``path`` with ``names`` left out of its header only (the rows keep
+    every field): a header of fewer columns than every row."""
+    lines = path.read_text().splitlines()
+    head = lines[0].split(",")
+    lines[0] = ",".join(h for h in head if h.strip().lower().lstrip("#") not in names)
+    path.write_text("\n".join(lines) + "\n")
+    return len(head), len(lines[0].split(","))
+
+
+@pytest.mark.parametrize("missing", [("gyro_roll", "gyro_pitch", "gyro_yaw", "mag_x", "mag_y",
+                                      "mag_z"), ("mag_x", "mag_y", "mag_z", "tilt")])
+def test_header_shorter_than_its_rows_by_the_imu_block_is_read(rows, tmp_path, missing):
+    full = tmp_path / "full.csv"
+    write_altos(full, rows)
+    imu_full, gnss_full = _read(full)
+    path = tmp_path / "short.csv"
+    write_altos(path, rows)
+    n_rows, n_head = _short_header(path, missing)
+    assert n_rows - n_head == len(missing)
+    with pytest.warns(io.FlightDataWarning, match=(
+            rf"the header names {n_head} columns but every row has {n_rows} fields; the "
+            rf"{len(missing)} extra fields are read as the AltOS IMU block the header lacks "
+            rf"\({', '.join(missing)}, after accel_z\)")):
+        imu, gnss = io.read_altos(path)
+    pd.testing.assert_frame_equal(imu, imu_full)
+    pd.testing.assert_frame_equal(gnss, gnss_full)
+
+
+def test_header_shorter_than_its_rows_by_other_columns_is_refused(rows, tmp_path):
+    path = tmp_path / "short.csv"
+    write_altos(path, rows)
+    n_rows, n_head = _short_header(path, ("pdop", "hdop"))
+    with pytest.raises(NavlibInputError, match=(
+            rf"the header names {n_head} columns but every row has {n_rows} fields; the 2 extra "
+            r"field\(s\) are not the AltOS gyro/magnetometer/tilt block .* \(it names the whole "
+            r"block\), so which field is which cannot be told")):
+        io.read_altos(path)
+    write_altos(path, rows)
+    _short_header(path, ("gyro_roll", "gyro_pitch", "gyro_yaw", "mag_x", "mag_y", "mag_z",
+                         "tilt", "pdop"))
+    with pytest.raises(NavlibInputError, match=r"the 8 extra field\(s\) are not the AltOS "
+                                               r".*it lacks \['gyro_roll'"):
+        io.read_altos(path)
+
+
+def test_cut_last_row_of_a_short_header_export_is_dropped(rows, tmp_path):
+    path = tmp_path / "cut.csv"
+    write_altos(path, rows)
+    _short_header(path, ("gyro_roll", "gyro_pitch", "gyro_yaw", "mag_x", "mag_y", "mag_z"))
+    text = path.read_text().rstrip("\n")
+    n_lines = text.count("\n") + 1
+    path.write_text(text[:-30])             # the last row cut mid-write
+    with pytest.warns(io.FlightDataWarning, match=rf"line {n_lines}: the last row was cut "
+                                                  r"mid-write"):
+        imu, _ = io.read_altos(path)
+    assert len(imu) > 100
+
+
+@pytest.mark.parametrize("generation", ["version", "legacy"])
+def test_easymega_export_with_a_cut_last_row_is_read_without_it(rows, tmp_path, generation):
+    """An EasyMega export whose logger lost power mid-write: the cut last row is dropped with
+    a warning naming its line, the rest read (it was refused as 'truncated')."""
+    path = tmp_path / "easymega.csv"
+    write_altos(path, rows, generation=generation, board="easymega")
+    whole, _ = _read(path)
+    text = path.read_text().rstrip("\n")
+    n_lines = text.count("\n") + 1
+    path.write_text(text[: text.rindex(",") - 3])
+    with pytest.warns(io.FlightDataWarning, match=rf"line {n_lines}: the last row was cut "
+                                                  r"mid-write \(\d+ of \d+ fields"):
+        imu, gnss = io.read_altos(path)
+    assert gnss is None and len(imu) in (len(whole), len(whole) - 1)
+    assert imu.attrs["baro"] is not None

@@ -143,21 +143,32 @@ def _write_cats(folder, gnss=True, baro=True):
     if baro:
         (folder / "baro.csv").write_text("ts,id,T,P\n" + "".join(
             f"{a:.3f},BARO0,20.0,{99_600 - 10 * k}\n" for k, a in enumerate(t)))
-    if gnss:   # a fix every 0.5 s, logged every 0.1 s (held in between), 193 satellites
+    if gnss:   # a fix every 0.5 s, logged every 0.1 s (held in between); 193 satellites
         (folder / "gnssInfo.csv").write_text("ts,latitude,longitude,satellites\n" + "".join(
-            f"{a:.3f},39.39,{-8.2885 + 1e-5 * (k // 5)},193\n"
-            for k, a in enumerate(t[::10])))
+            f"{a:.3f},39.39,{-8.2885 + 1e-5 * (k // 5)},{193 if k < 5 else 9}\n"
+            for k, a in enumerate(t[::10])))     # reported with the first fix
     return folder / "imu.csv"
 
 
 def test_cats_export_reads_its_folder_and_drops_held_fixes(tmp_path):
     path = _write_cats(tmp_path / "cats")
     assert io.parse_log(str(path)) == ("cats", (path,))
-    imu, gnss = io.read_log(str(path))
+    with pytest.warns(io.FlightDataWarning) as caught:
+        imu, gnss = io.read_log(str(path))
+    messages = [str(w.message) for w in caught]
     assert imu.attrs["vehicle"] == "rocket" and len(imu.attrs["baro"]) == 400
     np.testing.assert_allclose(imu.w_x, np.deg2rad(1.0))
     assert gnss.attrs["height_source"] == "baro"
+    # 8 fixes each logged 5 times: 32 held rows; the first fix reports 193 satellites
     assert len(gnss) == 8 and gnss.attrs["held_fixes_dropped"] == 32
+    assert gnss.attrs["implausible_rows"] == 1
+    assert any("32 of 40 GNSS rows repeat the previous row's fix exactly (a fix held "
+               "between the receiver's updates; the longest hold 0.4 s), at line 3, line 4, "
+               "line 5, line 6, line 8 and 27 more: not new measurements, dropped" in m
+               for m in messages), messages
+    assert any("column 'satellites': 1 of 40 GNSS rows report more than 100 satellites (up "
+               "to 193; about 60 can be above the horizon), at line 2: an implausible count; "
+               "their positions are kept" in m for m in messages), messages
     only = _write_cats(tmp_path / "no_gnss", gnss=False)
     assert io.read_log(str(only))[1] is None
     lacking = _write_cats(tmp_path / "no_baro", baro=False)
@@ -178,7 +189,9 @@ def test_shared_firm_log_reads_without_gnss():
 def test_shared_cats_export_reads_gnss_with_barometric_height():
     _, gnss = io.read_log(str(CATS_LOG))
     assert gnss.attrs["height_source"] == "baro"
-    assert gnss.attrs["held_fixes_dropped"] > 200   # README: many rows repeat the position
+    # README: many rows repeat the position, the first rows report 193 satellites
+    assert gnss.attrs["held_fixes_dropped"] == 234      # of 388 rows (the issue counted 235)
+    assert gnss.attrs["implausible_rows"] > 0 and gnss.attrs["too_few_satellites"] > 0
 
 
 def _moving_imu(n=400, seed=0):
@@ -224,7 +237,19 @@ def test_altos_dead_imu_is_named_and_an_empty_tilt_column_ignored(tmp_path):
     dead = rows.assign(accel_x=0.0, accel_y=0.0, accel_z=0.0, tilt=np.nan)
     write_altos(path, dead)
     with pytest.raises(NavlibInputError, match=r"'accel_x'/'accel_y'/'accel_z'.*dead "
-                                               r"accelerometer"):
+                                               r"accelerometer") as err:
+        io.read_altos(path)
+    assert "magnetometer" not in str(err.value)      # it reads a field: alive
+    write_altos(path, dead.assign(mag_x=0.0, mag_y=0.0, mag_z=0.0))
+    with pytest.raises(NavlibInputError, match=(
+            r"dead accelerometer: the specific force never exceeds 0 m/s\^2 over .* samples, "
+            r".*; the magnetometer 'mag_x'/'mag_y'/'mag_z' reads 0 on every axis in all "
+            r"\d+ rows too: the IMU looks unpowered")):
+        io.read_altos(path)
+    write_altos(path, rows.assign(mag_x=0.0, mag_y=0.0, mag_z=0.0))
+    with pytest.warns(io.FlightDataWarning, match=r"the magnetometer 'mag_x'/'mag_y'/'mag_z' "
+                                                  r"reads 0 on every axis .*: a dead "
+                                                  r"magnetometer \(navlib does not use it\)"):
         io.read_altos(path)
 
 
@@ -233,9 +258,14 @@ def test_deg_s_hint_only_when_the_rates_look_like_deg_s(tmp_path):
     w = 0.3 * w                            # a calm flight: median rate about 0.3 rad/s
     tumble = w.copy()
     tumble[300:340] = [40.0, 5.0, 0.0]     # a break-up at 2300 deg/s, logged in rad/s
-    with pytest.raises(NavlibInputError, match=r"median rate .* units look right") as err:
+    with pytest.raises(NavlibInputError, match=r"median rate .* units look right: a vehicle "
+                                               r"this fast .* needs a larger max_rate_rad_s "
+                                               r"\(e.g. max_rate_rad_s=43; python -m navlib "
+                                               r"assess LOG --read max_rate_rad_s 43\)") as err:
         io.read_imu_csv(_write_rows(tmp_path / "tumble.csv", t, f, tumble))
     assert "look like deg/s" not in str(err.value)
+    assert len(io.read_imu_csv(_write_rows(tmp_path / "tumble.csv", t, f, tumble),
+                               max_rate_rad_s=43.0)) == 400
     with pytest.raises(NavlibInputError, match=r"look like deg/s"):
         io.read_imu_csv(_write_rows(tmp_path / "deg.csv", t, f, np.rad2deg(w) + 60.0))
 
@@ -249,3 +279,14 @@ def test_duplicated_time_stamps_are_reported_with_their_lines(tmp_path):
                                                r"line 51\); 3 duplicated time stamps in all, "
                                                r"at line 52, line 122, line 123"):
         io.read_imu_csv(_write_rows(tmp_path / "dup.csv", t, f, w))
+
+
+def test_gnss_satellite_column_empty_is_ignored(tmp_path):
+    """An optional satellite-count column left empty (all cells, or some) drops no row."""
+    path = tmp_path / "gnss.csv"
+    path.write_text("t,lat_deg,lon_deg,alt,satellites\n" + "".join(
+        f"{k:.1f},39.39,{-8.2885 + 1e-5 * k},100.0,\n" for k in range(10)))
+    assert len(io.read_gnss_csv(path)) == 10
+    path.write_text("t,lat_deg,lon_deg,alt,nsat\n" + "".join(
+        f"{k:.1f},39.39,{-8.2885 + 1e-5 * k},100.0,{9 if k % 2 else ''}\n" for k in range(10)))
+    assert len(io.read_gnss_csv(path)) == 10

@@ -11,7 +11,8 @@ import pandas as pd
 import pytest
 from locations import REPO
 
-from navlib import NavlibInputError, io, quality
+from navlib import NavlibInputError, io
+from navlib.io import quality
 from navlib.studies.assess import assess_flight
 from navlib.studies.assess.inputs import MIN_IMU_SAMPLES
 
@@ -84,7 +85,7 @@ def test_a_non_finite_imu_value_is_named():
 
 
 def test_gnss_faults_on_an_imu_record_shorter_than_the_jerk_smoothing(gnss):
-    """navlib.quality.gnss_faults on its own (public): an IMU record of fewer samples than the
+    """navlib.io.quality.gnss_faults on its own (public): an IMU record of fewer samples than the
     jerk bound's moving average (0.1 s) gave np.gradient's ValueError."""
     t = np.arange(5) * 0.001 + float(gnss.t.iloc[0])
     imu = pd.DataFrame({"t": t, "f_x": 9.8 + 0 * t, "f_y": 0 * t, "f_z": 0 * t,

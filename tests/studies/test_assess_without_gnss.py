@@ -59,18 +59,28 @@ def test_shared_firm_and_cats_flights_are_assessed(tmp_path):
     assert "boost" in table.phases.iloc[0] and "descent" in table.phases.iloc[1]
 
 
-def test_pre_launch_buffer_before_a_long_gap_is_split_off_with_a_note(tmp_path):
+@pytest.mark.parametrize("gaps", [(1068.0,), (3246.0, 1068.0)])
+def test_pre_launch_buffer_before_a_long_gap_is_split_off_with_a_note(tmp_path, gaps):
+    """Pre-launch buffers of 1.5 s on the pad, each followed by a long gap (the 1068 s and
+    3246 s met on real logs), before the flight's record: split off with a note, the flight
+    assessed on its own clock."""
     imu_path, baro_path = _hpr_records(tmp_path)
     imu, baro = pd.read_csv(imu_path), pd.read_csv(baro_path)
-    buffer = imu.iloc[:150].copy()               # 1.5 s on the pad ...
-    imu.iloc[:, 0] += 1068.0                     # ... 1068 s before the flight's record
-    baro_buffer = baro.iloc[:8].copy()
-    baro.iloc[:, 0] += 1068.0
-    pd.concat([buffer, imu]).to_csv(imu_path, index=False)
-    pd.concat([baro_buffer, baro]).to_csv(baro_path, index=False)
+    imu_parts, baro_parts, shift = [], [], 0.0
+    for gap in gaps:
+        imu_parts.append(imu.iloc[:150].assign(**{imu.columns[0]: imu.iloc[:150, 0] + shift}))
+        baro_parts.append(baro.iloc[:8].assign(**{baro.columns[0]: baro.iloc[:8, 0] + shift}))
+        shift += gap
+    imu.iloc[:, 0] += shift
+    baro.iloc[:, 0] += shift
+    pd.concat([*imu_parts, imu]).to_csv(imu_path, index=False)
+    pd.concat([*baro_parts, baro]).to_csv(baro_path, index=False)
     status, table, _ = _row(tmp_path, [f"{imu_path},{baro_path}"])
     row = table.iloc[0]
     assert status == 0 and row.aiding == "baro"
-    assert "split it into 2 spans" in row.warnings or "split into 2 spans" in row.warnings
+    spans = len(gaps) + 1
+    assert f"split into {spans} spans" in row.warnings, row.warnings
+    assert row.warnings.count("(no barometer reference rows in this span (0): a piece of "
+                              "the record the barometer aiding could not level") == len(gaps)
     assert row.phases.startswith("pad ")          # on the clock since ignition
-    assert row.t_ignition > 1068.0
+    assert row.t_ignition > shift

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from navlib import quality
+from navlib.io import quality
 from navlib.metrics import in_segment
 from navlib.trajectory.liftoff import moving_average
 from navlib.units import DEG
@@ -30,7 +30,7 @@ AGREEMENT_COLUMNS = ("fit_f_rms", "fit_w_rms", "fit_gnss_rms", "represented", "f
 
 def fit_bounds(overrides=None) -> dict:
     """The ``[fit]`` section of ``data/quality.toml`` (overrides as in
-    :func:`navlib.quality.load_thresholds`, e.g. ``{"fit": {"gnss_m": 20}}``)."""
+    :func:`navlib.io.quality.load_thresholds`, e.g. ``{"fit": {"gnss_m": 20}}``)."""
     return quality.load_thresholds(overrides)["fit"]
 
 

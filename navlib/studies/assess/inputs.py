@@ -83,7 +83,7 @@ def _finite_columns(frame: pd.DataFrame, name: str, keys) -> None:
 
 def check_imu_record(imu: pd.DataFrame) -> None:
     """The IMU checks every assessment runs before the data-quality checks that rely on the
-    IMU (:func:`navlib.quality.check_records`: the GNSS faults are judged against it).
+    IMU (:func:`navlib.io.quality.check_records`: the GNSS faults are judged against it).
 
     * at least :data:`MIN_IMU_SAMPLES` samples;
     * finite samples, strictly increasing times;
@@ -170,24 +170,32 @@ def describe_inputs(imu: pd.DataFrame, gnss: pd.DataFrame) -> pd.DataFrame:
 
 def validate_records(imu, gnss):
     """The records checked for an assessment: frames with the required columns that overlap
-    for long enough with enough GNSS epochs.
+    for long enough with enough position epochs.
 
     Parameters
     ----------
     imu, gnss : pandas.DataFrame
-        The records.
+        The records (``gnss`` may be the barometer's reference rows of a flight without GNSS).
 
     Returns
     -------
     TimeOverlap
-        Their common span (:func:`navlib.io.checks.check_overlap`).
+        Their common span (:func:`navlib.io.checks.check_overlap`), at least
+        :data:`MIN_DURATION_S` long with :data:`MIN_GNSS_EPOCHS` epochs.
 
     Raises
     ------
     NavlibInputError
-        Naming the record at fault.
+        Naming the record at fault and what is short (a span without barometer rows, such
+        as a pre-launch buffer the barometer aiding could not level, is named as such).
     """
     check_frame(imu, "imu", IMU_KEYS)
+    if (isinstance(gnss, pd.DataFrame) and len(gnss) < 2
+            and str(gnss.attrs.get("source", "")).startswith("barometer")):
+        raise NavlibInputError(
+            f"no barometer reference rows in this span ({len(gnss)}): a piece of the record "
+            "the barometer aiding could not level (too short, or not at rest; the notes say "
+            "why), such as a pre-launch buffer")
     check_frame(gnss, "gnss", GNSS_KEYS)
     span = check_overlap(imu, gnss)
     if span.duration < MIN_DURATION_S:

@@ -3,7 +3,7 @@ and the outages of the record (docs/assumptions.md Q5).
 
 The 21-state model is discretised to a regular grid of epochs (``gnss_rate_hz``); a fix
 that is missing from the record (a gap), or was dropped by the quality checks (a frozen or
-held position, a barometer disagreement, a jump: :func:`navlib.quality.check_records`),
+held position, a barometer disagreement, a jump: :func:`navlib.io.quality.check_records`),
 aids no epoch. An epoch without a kept fix keeps its transition but has a zero
 measurement matrix, as a planned outage does (assumption M6), so the covariance grows on
 the IMU alone there and the sensability falls.

@@ -10,10 +10,10 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from navlib import quality, sensors
+from navlib import sensors
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.errors import NavlibInputError
-from navlib.io import FlightDataWarning
+from navlib.io import FlightDataWarning, quality
 from navlib.metrics import (
     E_THRESHOLD,
     MIN_FRACTION,
@@ -203,9 +203,9 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
         reason are in ``options``.
     quality_thresholds : mapping, optional
         Overrides of the data-quality thresholds of ``data/quality.toml``
-        (:func:`navlib.quality.load_thresholds`, e.g. ``{"gnss": {"jump_min_m": 20}}``).
+        (:func:`navlib.io.quality.load_thresholds`, e.g. ``{"gnss": {"jump_min_m": 20}}``).
         Saturated IMU samples and faulty GNSS fixes are found, warned about with times and
-        dropped before the fit (:func:`navlib.quality.check_records`, assumptions Q1-Q4).
+        dropped before the fit (:func:`navlib.io.quality.check_records`, assumptions Q1-Q4).
 
     Returns
     -------

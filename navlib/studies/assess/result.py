@@ -67,7 +67,7 @@ class FlightAssessment(SegmentedAnalysis):
         When the record was split at long holes: every span's assessment in time order
         (this one among them); empty otherwise.
     quality : DataFrame or None
-        The data-quality findings of the whole record (:func:`navlib.quality.check_records`:
+        The data-quality findings of the whole record (:func:`navlib.io.quality.check_records`:
         saturated IMU samples, frozen, disagreeing or jumping GNSS fixes, all dropped
         before the fit); each ``message`` was also issued as a
         :class:`~navlib.io.FlightDataWarning`.

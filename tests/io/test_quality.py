@@ -1,4 +1,4 @@
-"""Saturation and GNSS-fault checks (navlib.quality, data/quality.toml, assumptions Q1-Q4)."""
+"""Saturation and GNSS-fault checks (navlib.io.quality, data/quality.toml, assumptions Q1-Q4)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from flights import multicopter, records
 
 from navlib import earth, sensors
 from navlib.errors import NavlibInputError
-from navlib.quality import (
+from navlib.io.quality import (
     check_records,
     gnss_faults,
     imu_saturation,
@@ -243,11 +243,38 @@ def test_gnss_jump(recs):
     assert "at 50.0 s" in found["message"].iloc[0]
 
 
-def test_too_many_faulty_fixes_refused(recs, pixhawk):
+def test_too_much_faulty_time_refused_saying_how_to_change_the_threshold(recs, pixhawk):
     imu, gnss = recs
-    frozen, _ = _frozen(gnss, 15.0, 80.0)
-    with pytest.raises(NavlibInputError, match=r"gnss: .* of the fixes are faulty"):
+    frozen, _ = _frozen(gnss, 15.0, 80.0)       # 65 of the record's 90 s
+    with pytest.raises(NavlibInputError, match=(
+            r"gnss: faulty fixes cover 65 s of the GNSS record's 90 s \(72.2 %: 65 s of "
+            r"excluded fixes\), leaving 25 s usable; .*max_faulty_time_fraction = 0.5; .*"
+            r"-p quality_thresholds '\{\"gnss\": \{\"max_faulty_time_fraction\": 0.8\}\}'"
+            r".*GNSS position frozen for 65 s")):
         check_records(imu, frozen, pixhawk, 2.0)
+    checked = check_records(imu, frozen, pixhawk, 2.0,
+                            {"gnss": {"max_faulty_time_fraction": 0.8}})
+    assert len(checked.gnss) == len(gnss) - (np.count_nonzero(
+        (gnss.t >= 15.0) & (gnss.t <= 80.0)) - 1)
+
+
+def test_faulty_gnss_is_measured_by_time_not_rows(recs, pixhawk):
+    """A receiver logged at 20 Hz while frozen for 20 s (400 rows) among 5 Hz fixes: most of
+    the rows are faulty, a fifth of the time is; the flight is kept, the stretch dropped."""
+    imu, gnss = recs
+    t = gnss["t"].to_numpy()
+    frozen_t = np.arange(40.0, 60.0, 0.05)
+    inside = (t >= 40.0) & (t < 60.0)
+    k = int(np.flatnonzero(inside)[0])
+    fast = pd.DataFrame({c: np.interp(frozen_t, t, gnss[c]) for c in gnss.columns})
+    fast[["x", "y", "z"]] = gnss[["x", "y", "z"]].iloc[k].to_numpy()
+    fast["t"] = frozen_t
+    record = pd.concat([gnss[~inside], fast]).sort_values("t").reset_index(drop=True)
+    rows_bad = len(fast) - 1
+    assert rows_bad / len(record) > 0.5                 # most rows repeat the frozen fix
+    checked = check_records(imu, record, pixhawk, 2.0)
+    assert len(checked.gnss) == len(record) - rows_bad
+    assert "GNSS position frozen for 19.9 s" in checked.warnings[0]
 
 
 def test_assessment_excludes_a_frozen_span(recs):
@@ -281,7 +308,7 @@ def test_sounding_rocket_with_a_frozen_receiver_keeps_its_phases():
     phases are the paper's again; with the check switched off they are not."""
     from navlib import io
 
-    sample = Path(__file__).resolve().parents[1] / "data" / "sample_flight"
+    sample = Path(__file__).resolve().parents[2] / "data" / "sample_flight"
     imu, gnss = io.read_imu_csv(sample / "imu.csv"), io.read_gnss_csv(sample / "gnss.csv")
     frozen, _ = _frozen(gnss.drop(columns=["vx", "vy", "vz"]), 50.0, 76.0)
     with warnings.catch_warnings(record=True) as caught:
@@ -293,3 +320,11 @@ def test_sounding_rocket_with_a_frozen_receiver_keeps_its_phases():
                and "the gyros read" in str(w.message) for w in caught)
     assert result.segment_table["phase"].tolist() == ["pad", "boost", "coast", "free_fall"]
     assert blind.segment_table["phase"].tolist().count("boost") > 1
+
+
+def test_the_old_faulty_share_key_is_read_under_its_new_name():
+    with pytest.warns(DeprecationWarning, match=r"\[gnss\] max_excluded_fraction is now "
+                                                r"max_faulty_time_fraction"):
+        p = load_thresholds({"gnss": {"max_excluded_fraction": 0.7}})
+    assert p["gnss"]["max_faulty_time_fraction"] == 0.7
+    assert "max_excluded_fraction" not in p["gnss"]
