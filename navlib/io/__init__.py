@@ -37,9 +37,8 @@ from navlib.io.csv_files import (
     combine_sigma,
     read_gnss_csv,
     read_imu_csv,
-    write_gnss_csv,
-    write_imu_csv,
 )
+from navlib.io.csv_writers import write_gnss_csv, write_imu_csv
 from navlib.io.dataflash import read_dataflash
 from navlib.io.firm import read_firm
 from navlib.io.logs import LOG_KINDS, parse_log, read_log
