@@ -93,18 +93,22 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
         if (p0, scale) == ("matched", 1.0):
             base = (study, kw)
     study, kw = base
+    # the convergence and rank-tolerance points keep only the claims depending on them; the
+    # reduced filters' claims do not (RUN_DEPS), so their truth-model runs are not re-read
+    judged = {**kw, "reduced": None, "reduced10": None}
     for k, run in zip(priors, headings, strict=True):
         out.append(({"heading_prior": k}, [eq44_claim(run)]))
     for reading in ROBUSTNESS_GRID["convergence"]:
         if reading != CONVERGENCE_DEFAULT:
             out.append(({"convergence": reading}, _depending(
-                ssac_claims(study, tables=tables, convergence=reading, **kw), "convergence")))
+                ssac_claims(study, tables=tables, convergence=reading, **judged),
+                "convergence")))
     for rtol in ROBUSTNESS_GRID["rank_rtol"]:
         if rtol != RANK_RTOL:
             out.append(({"rank_rtol": rtol}, _depending(
                 ssac_claims(study, tables=static_tables(SITE_LAT_DEG, SITE_ALT_M, duration,
                                                         rtol, tables[2]),
-                            rank_rtol=rtol, **kw), "rank_rtol")))
+                            rank_rtol=rtol, **judged), "rank_rtol")))
     for label, x0 in zip(ROBUSTNESS_GRID["x0"][1:], x0_draws(study), strict=True):
         out.append(({"x0": label}, [actual_claim(study, x0)]))
     for ypr in ROBUSTNESS_GRID["imu_orientation"][1:]:
