@@ -8,7 +8,6 @@ import pandas as pd
 import pytest
 
 from navlib import NavlibInputError
-from navlib.allan import BI_FACTOR, datasheet_units
 from navlib.sensors import (
     allan_deviation,
     fit_allan,
@@ -17,6 +16,7 @@ from navlib.sensors import (
     white_noise,
     write_allan_preset,
 )
+from navlib.sensors.allan import BI_FACTOR, datasheet_units
 from navlib.units import DEG, HOUR
 
 AXES = ["w_x", "w_y", "w_z", "f_x", "f_y", "f_z"]

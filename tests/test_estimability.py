@@ -1,9 +1,9 @@
-"""Generic estimability readings of a covariance run (navlib.estimability)."""
+"""Generic estimability readings of a covariance run (navlib.covariance.estimability)."""
 
 import numpy as np
 from scipy.linalg import subspace_angles
 
-from navlib.estimability import (
+from navlib.covariance.estimability import (
     dominant_changes,
     noise_free_error,
     projector_drift,

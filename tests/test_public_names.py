@@ -4,6 +4,7 @@
 
 import importlib
 import pkgutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -17,7 +18,7 @@ MAX_LINES = 600
 WITH_ALL = ("navlib.earth", "navlib.rotations", "navlib.units", "navlib.quaternions",
             "navlib.discretize", "navlib.observability", "navlib.metrics", "navlib.covariance",
             "navlib.sensors", "navlib.sweep", "navlib.parallel", "navlib.cache", "navlib.kalman",
-            "navlib.estimability", "navlib.allan", "navlib.resolution")
+            "navlib.resolution")
 
 
 def _public_modules() -> list[str]:
@@ -81,3 +82,17 @@ def test_no_module_over_600_lines():
     assert len(lengths) > 100
     over = {path: n for path, n in sorted(lengths.items()) if n > MAX_LINES}
     assert not over, f"modules over {MAX_LINES} lines (split them by domain): {over}"
+
+
+@pytest.mark.parametrize("old", sorted(navlib.MOVED))
+def test_a_moved_address_warns_and_gives_the_new_module(old):
+    """Issue 38 moved root modules; their old addresses import for one release, warning."""
+    sys.modules.pop(old, None)
+    with pytest.warns(DeprecationWarning, match=rf"{old} moved to"):
+        module = importlib.import_module(old)
+    homes = [importlib.import_module(home) for home in navlib.MOVED[old]]
+    if len(homes) == 1:
+        assert module is homes[0]
+    for home in homes:
+        assert all(getattr(module, name) is getattr(home, name) for name in home.__all__)
+    assert not (ROOT / f"{old.rpartition('.')[2]}.py").exists()

@@ -1,18 +1,18 @@
-"""Generated readings (navlib.readings): every number in the text comes from the table."""
+"""Generated readings (navlib.studies.design, .plan, .outliers): every number in the text
+comes from the table."""
 
 from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 
-from navlib.readings import (
-    ekf_sigma_agreement,
+from navlib.studies.design import (
     observability_grid_reading,
     sensability_grid_reading,
-    timeline_reading,
-    trade_reading,
     with_gyro_observability,
 )
+from navlib.studies.outliers import ekf_sigma_agreement
+from navlib.studies.plan import timeline_reading, trade_reading
 
 
 def _rocket_grid():

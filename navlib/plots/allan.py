@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from navlib.allan import TERMS, allan_model
 from navlib.errors import NavlibInputError
 from navlib.plots.figure import subplots
+from navlib.sensors.allan import TERMS, allan_model
 
 _SLOPES = {"random_walk": -0.5, "bias_instability": 0.0, "rate_random_walk": 0.5}
 

@@ -31,12 +31,12 @@ reference) and :class:`ReferenceTrajectory` (the launcher's reference-trajectory
 
 Modules: :mod:`~navlib.sensors.presets` (specifications and presets),
 :mod:`~navlib.sensors.simulation` (IMU and GNSS errors), :mod:`~navlib.sensors.aiding`
-(attitude references) and the Allan-variance fit of :mod:`navlib.allan`; the public names
+(attitude references) and the Allan-variance fit of :mod:`navlib.sensors.allan`; the public names
 are re-exported here.
 """
 
-from navlib.allan import allan_deviation, fit_allan, write_allan_preset
 from navlib.sensors.aiding import ReferenceTrajectory, simulate_attitude_sensor
+from navlib.sensors.allan import allan_deviation, fit_allan, write_allan_preset
 from navlib.sensors.presets import (
     DEFAULT_IMU_PRESET,
     PRESET_DIR,

@@ -44,8 +44,8 @@ from navlib.studies.assess import (
 from navlib.studies.assess.aiding import sigma_note
 from navlib.trajectory.mission import Mission, from_mission, load_mission, with_values
 
-__all__ = ["VEHICLE_PRESETS", "MissionPlan", "plan_beside_flight", "plan_mission",
-           "plan_point"]
+__all__ = ["VEHICLE_PRESETS", "MissionPlan", "plan_beside_flight", "plan_mission", "plan_point",
+           "timeline_reading", "trade_reading"]
 
 VEHICLE_PRESETS = {"rocket": "motionpak_tactical", "multicopter": "pixhawk_mems",
                    "fixed-wing": "pixhawk_mems", "ground": "pixhawk_mems"}
@@ -420,3 +420,49 @@ def plan_point(mission, sensors_preset: str | None = None, spin_hz: float | None
         out[f"share_{row.state}"] = row.sensible_share
         out[f"sigma_end_{row.state}"] = row.sigma_end
     return out
+
+
+def timeline_reading(plans: Mapping[str, object], last: int = 3) -> str:
+    """When the states of each planned mission become sensible.
+
+    Parameters
+    ----------
+    plans : mapping
+        Mission name -> plan (:func:`navlib.studies.plan.plan_mission`), read through its
+        ``timeline()`` (assumption M6: the start-up transient is left out) and ``outages``.
+    last : int
+        How many of the latest states to become sensible are named.
+
+    Returns
+    -------
+    str
+        Per mission: how many states become sensible at some epoch, the ``last`` ones to
+        do so and those that never do; for a mission with GNSS outages, the share of the
+        epochs with the position states sensible inside the outages against the mission.
+    """
+    lines = []
+    for name, plan in plans.items():
+        tl = plan.timeline()
+        never = tl[tl["sensible_from_s"].isna()]["state"].tolist()
+        late = tl.dropna(subset=["sensible_from_s"]).sort_values("sensible_from_s").tail(last)
+        lines.append(f"{name}: {len(tl) - len(never)} of {len(tl)} states become sensible at "
+                     f"some epoch; last to do so: "
+                     + ", ".join(f"{r.state} at {r.sensible_from_s:.1f} s"
+                                 for r in late.itertuples())
+                     + (f"; never: {', '.join(never)}" if never else ""))
+        if plan.outages:
+            pos = tl[tl["group"] == "position"]
+            lines.append(f"    inside the outage(s) the position states are sensible at "
+                         f"{100 * pos['sensible_share_outage'].mean():.0f}% of the epochs "
+                         f"against {100 * pos['sensible_share'].mean():.0f}% over the mission")
+    return "\n".join(lines)
+
+
+def trade_reading(trade: pd.DataFrame) -> str:
+    """The sensor trade study of one mission (``sweep`` of ``plan_point`` over
+    ``sensors_preset``): the preset with the smallest final heading-axis sigma
+    (``sigma_end_theta_z``, rad) and the number of states sensible at the end per preset."""
+    best = trade.sort_values("sigma_end_theta_z").iloc[0]
+    return (f"smallest final heading-axis sigma: {best.sensors_preset} "
+            f"({best.sigma_end_theta_z:.3g} rad); states sensible at the end per preset: "
+            + ", ".join(f"{r.sensors_preset} {r.n_sensible_end}" for r in trade.itertuples()))

@@ -66,6 +66,7 @@ from navlib.studies.outliers.experiment import (
     sigma_ratios,
 )
 from navlib.studies.outliers.reading import (
+    ekf_sigma_agreement,
     reading_markdown,
 )
 from navlib.studies.outliers.response import (
@@ -112,6 +113,7 @@ __all__ = [
     "default_trajectory",
     "effective_bias_model",
     "ekf_crosscheck",
+    "ekf_sigma_agreement",
     "ekf_vs_covariance",
     "monte_carlo_outlier",
     "outlier_claims",

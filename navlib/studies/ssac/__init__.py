@@ -1,7 +1,8 @@
 """Silva, Hemerly & Leite Filho (2017) SSAC study: observability, estimability, eigen-analysis.
 
 Composes :func:`navlib.models.ssac`, :mod:`navlib.observability`, :mod:`navlib.covariance`
-and :mod:`navlib.estimability` into the paper's experiments (docs/assumptions.md, ssac.md §3–§5) and
+and :mod:`navlib.covariance.estimability` into the paper's experiments (docs/assumptions.md,
+ssac.md §3–§5) and
 evaluates each claim in code (judged by :mod:`navlib.studies.claims`):
 
 * :mod:`.observability` — ranks of the 15-, 12- and 10-state models (docs/assumptions.md, ssac.md

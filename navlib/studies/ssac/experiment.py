@@ -21,8 +21,7 @@ from navlib.covariance import (
     kalman_covariances,
     normalized_eigen,
 )
-from navlib.errors import NavlibInputError
-from navlib.estimability import (
+from navlib.covariance.estimability import (
     closed_loop_error,
     dominant_changes,
     projector_drift,
@@ -31,6 +30,7 @@ from navlib.estimability import (
     subspace_shares,
     update_factors,
 )
+from navlib.errors import NavlibInputError
 from navlib.models.base import LinearModel
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, ssac
 
@@ -104,7 +104,7 @@ class SSACStudy:
     @cached_property
     def closed_loop(self) -> tuple[np.ndarray, np.ndarray]:
         """``F`` (N-1, n, n) and ``I - K_k H`` (N, n, n) of the run's filter
-        (:func:`navlib.estimability.update_factors`), computed when first read and shared
+        (:func:`navlib.covariance.estimability.update_factors`), computed when first read and shared
         by every noise-free run of it (:func:`actual_error`: the baseline truth and the
         draws of the claims engine's set)."""
         model, t = self.model, self.t
@@ -270,7 +270,7 @@ def closed_form_limits(study: SSACStudy) -> pd.DataFrame:
 
 def pair_subspace(eig: NormalizedEigenResult, k: int):
     """Split the :data:`N_LARGE` largest sorted modes at epoch k into pair and position
-    triples (:func:`navlib.estimability.split_modes` by position share).
+    triples (:func:`navlib.covariance.estimability.split_modes` by position share).
 
     Returns (pair_columns, position_columns) as 0-based sorted indices.
     """
@@ -335,7 +335,7 @@ def x_shape_events(eig: NormalizedEigenResult, t_from_s: float = 900.0) -> pd.Da
 
 def subspace_drift(eig: NormalizedEigenResult, t_from_s: float = 1800.0) -> float:
     """Largest change of the pair-subspace projector after ``t_from_s`` (Frobenius norm,
-    :func:`navlib.estimability.projector_drift`).
+    :func:`navlib.covariance.estimability.projector_drift`).
 
     Small when the X-shape is a rotation inside a fixed subspace: the "vector sum" of the
     exchanging eigenvectors stays put (Silva et al. §3, after Figs. 9–10).
@@ -458,7 +458,7 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     The truth is ``x0`` (default: every bias at its nominal 1-sigma value, all other errors
     zero), the estimate starts at zero and is corrected with the study's Kalman gains at
     every epoch: ``e_0 = (I - K_0 H) x0``, ``e_{k+1} = (I - K_{k+1} H) F e_k``
-    (:func:`navlib.estimability.noise_free_error`, with the gains of
+    (:func:`navlib.covariance.estimability.noise_free_error`, with the gains of
     :attr:`SSACStudy.closed_loop`). Returns the error (truth - estimate) at every epoch,
     (N, n), SI units.
 

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 from scipy.linalg import null_space, subspace_angles
 
+from navlib.covariance.estimability import sparse_basis
 from navlib.errors import NavlibInputError
-from navlib.estimability import sparse_basis
 from navlib.models.base import LinearModel
 from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, STATES_15, ssac
 from navlib.observability import analyze, observability_matrix

@@ -1,30 +1,30 @@
-"""Generated readings of result tables: the sentences and summaries the notebooks show.
+"""The design study of notebook 08: readings of its sweep grids.
 
 Every number in a reading is computed from the table it is given, never typed in; the
-functions return text or a table and print nothing (the notebook shows it): the design-study
-grids of notebook 08, the mission plans and sensor trade of notebook 09 and the EKF-against-
-covariance check of notebook 05. The sensability words
+functions return text or a table and print nothing (the notebook shows it). The readings of
+the mission plans are in :mod:`navlib.studies.plan`, the EKF-against-covariance check in
+:mod:`navlib.studies.outliers.reading`. The sensability words
 follow :mod:`navlib.metrics`: a state is *sensible* at an epoch when its sensability reaches
 ``S_THRESHOLD``, and over a span when it is so on at least ``MIN_FRACTION`` of the epochs
-(assumption A11 for the threshold; api.md "Scale" for the sweep tables, "Planning" for the
-mission plans in ``docs/assumptions.md``).
+(assumption A11 of docs/assumptions.md for the threshold; docs/sweeps.md for the sweep
+tables).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
-import numpy as np
 import pandas as pd
 
 from navlib.metrics import MIN_FRACTION, S_THRESHOLD
+
+__all__ = ["GYRO_BIAS_STATES", "NULL_SHARE_TOL", "observability_grid_reading",
+           "sensability_grid_reading", "with_gyro_observability"]
 
 GYRO_BIAS_STATES = ("bg_x", "bg_y", "bg_z")
 """The gyro-bias states of the launcher models (``navlib.models.launcher``)."""
 
 NULL_SHARE_TOL = 1e-6
 """Largest share of a gyro-bias state in the unobservable subspace for it to count as
-observable (rank reading of the launcher sweep, api.md "Observability"): the null-space
+observable (rank reading of the launcher sweep, docs/sweeps.md): the null-space
 shares of observable states are round-off, many decades below it."""
 
 
@@ -108,75 +108,3 @@ def observability_grid_reading(table: pd.DataFrame) -> str:
                      f"unobservable state(s), gyro-bias share in the null space "
                      f"{r.gyro_unobservable_share:.1e}")
     return "\n".join(lines)
-
-
-def timeline_reading(plans: Mapping[str, object], last: int = 3) -> str:
-    """When the states of each planned mission become sensible.
-
-    Parameters
-    ----------
-    plans : mapping
-        Mission name -> plan (:func:`navlib.studies.plan.plan_mission`), read through its
-        ``timeline()`` (assumption M6: the start-up transient is left out) and ``outages``.
-    last : int
-        How many of the latest states to become sensible are named.
-
-    Returns
-    -------
-    str
-        Per mission: how many states become sensible at some epoch, the ``last`` ones to
-        do so and those that never do; for a mission with GNSS outages, the share of the
-        epochs with the position states sensible inside the outages against the mission.
-    """
-    lines = []
-    for name, plan in plans.items():
-        tl = plan.timeline()
-        never = tl[tl["sensible_from_s"].isna()]["state"].tolist()
-        late = tl.dropna(subset=["sensible_from_s"]).sort_values("sensible_from_s").tail(last)
-        lines.append(f"{name}: {len(tl) - len(never)} of {len(tl)} states become sensible at "
-                     f"some epoch; last to do so: "
-                     + ", ".join(f"{r.state} at {r.sensible_from_s:.1f} s"
-                                 for r in late.itertuples())
-                     + (f"; never: {', '.join(never)}" if never else ""))
-        if plan.outages:
-            pos = tl[tl["group"] == "position"]
-            lines.append(f"    inside the outage(s) the position states are sensible at "
-                         f"{100 * pos['sensible_share_outage'].mean():.0f}% of the epochs "
-                         f"against {100 * pos['sensible_share'].mean():.0f}% over the mission")
-    return "\n".join(lines)
-
-
-def trade_reading(trade: pd.DataFrame) -> str:
-    """The sensor trade study of one mission (``sweep`` of ``plan_point`` over
-    ``sensors_preset``): the preset with the smallest final heading-axis sigma
-    (``sigma_end_theta_z``, rad) and the number of states sensible at the end per preset."""
-    best = trade.sort_values("sigma_end_theta_z").iloc[0]
-    return (f"smallest final heading-axis sigma: {best.sensors_preset} "
-            f"({best.sigma_end_theta_z:.3g} rad); states sensible at the end per preset: "
-            + ", ".join(f"{r.sensors_preset} {r.n_sensible_end}" for r in trade.itertuples()))
-
-
-def ekf_sigma_agreement(frame: pd.DataFrame, after_s: float = 1.0) -> pd.DataFrame:
-    """How well the closed-loop EKF's sigma matches the covariance analysis, per axis.
-
-    Parameters
-    ----------
-    frame : DataFrame
-        Columns ``t`` (s), ``axis``, ``sigma_ekf``, ``sigma_cov`` and ``error`` (the EKF's
-        actual error), as :func:`navlib.studies.outliers.ekf_vs_covariance` returns them
-        (assumption launcher.md §6.4).
-    after_s : float
-        Epochs up to this time, s, are left out (the first updates of both filters).
-
-    Returns
-    -------
-    DataFrame
-        Index ``axis`` (in the frame's order); ``sigma_ratio_max_dev`` = max |sigma_ekf /
-        sigma_cov - 1| and ``rms_normalised_error`` = RMS of error / sigma_ekf (about 1 for a
-        consistent filter).
-    """
-    late = frame[frame.t > after_s]
-    return late.assign(ratio=late.sigma_ekf / late.sigma_cov,
-                       z=late.error / late.sigma_ekf).groupby("axis", sort=False).agg(
-        sigma_ratio_max_dev=("ratio", lambda r: float(np.max(np.abs(r - 1)))),
-        rms_normalised_error=("z", lambda z: float(np.sqrt(np.mean(z**2)))))

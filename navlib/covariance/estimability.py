@@ -3,7 +3,8 @@ direction between sorted modes, settling times and the noise-free error of a fil
 
 Generic analyses of a :func:`navlib.covariance.normalized_eigen` result and of a
 :class:`navlib.covariance.CovarianceResult` (Ham & Brown normalised eigen-analysis,
-ssac.md §3.6; covariance analysis and estimability, ssac.md §3.4); the SSAC study
+docs/assumptions.md, ssac.md §3.6; covariance analysis and estimability,
+docs/assumptions.md, ssac.md §3.4); the SSAC study
 (:mod:`navlib.studies.ssac`) reads the paper's pairs, X-shape and limits with them.
 
 * :func:`subspace_shares` — share of each state in the span of some modes;
@@ -31,7 +32,7 @@ def subspace_shares(V: np.ndarray) -> np.ndarray:
     """Share of each state in the span of the orthonormal columns of ``V`` (n, k).
 
     ``sqrt(diag(V V'))``: 1 for a state lying entirely in the subspace, 0 for one orthogonal
-    to it (ssac.md §3.6).
+    to it (docs/assumptions.md, ssac.md §3.6).
     """
     return np.sqrt(np.clip(np.diag(V @ V.T), 0.0, None))
 
@@ -54,7 +55,7 @@ def split_modes(V: np.ndarray, index, n_large: int) -> tuple[np.ndarray, np.ndar
     others, along : ndarray of int
         Sorted 0-based columns of the ``n_large - len(index)`` modes with the least weight
         on those states, and of the ``len(index)`` modes with the most (e.g. the position
-        modes among the six largest, ssac.md §3.6).
+        modes among the six largest, docs/assumptions.md, ssac.md §3.6).
     """
     index = list(index)
     head = V[:, :n_large]
@@ -150,7 +151,8 @@ def noise_free_error(F: np.ndarray, H: np.ndarray, R: np.ndarray, P_prior: np.nd
 
     The truth starts at ``x0``, the estimate at zero, and each epoch applies the filter's
     gains ``K_k`` (:func:`navlib.kalman.kalman_gain` of ``P_prior``):
-    ``e_0 = (I - K_0 H) x0``, ``e_{k+1} = (I - K_{k+1} H) F_k e_k`` (ssac.md §3.4, the
+    ``e_0 = (I - K_0 H) x0``, ``e_{k+1} = (I - K_{k+1} H) F_k e_k``
+    (docs/assumptions.md, ssac.md §3.4, the
     actual error of Silva et al. Part I, Fig. 3).
 
     Parameters
@@ -222,7 +224,7 @@ def sparse_basis(V: np.ndarray) -> np.ndarray:
     """Reduced row-echelon basis of span(V) (n, k), scaled so the pivot entries are 1.
 
     Readable null vectors: each basis vector has a 1 on its own pivot state and zeros on the
-    others' (the reduced-model analytic vectors of ssac.md §3.3).
+    others' (the reduced-model analytic vectors of docs/assumptions.md, ssac.md §3.3).
     """
     Q, _ = np.linalg.qr(V)
     B = Q.T.copy()  # rows span the subspace
