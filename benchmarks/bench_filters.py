@@ -62,7 +62,7 @@ def _ekf_outlier_study():
     thread), without their linear-filter parts."""
     from threadpoolctl import threadpool_limits
 
-    from navlib.outliers import PAPER_TESTS
+    from navlib.studies.outliers.paper import PAPER_TESTS
     from navlib.trajectory import launcher_ascent
 
     traj = _launcher()
@@ -101,7 +101,7 @@ def _linear_runs_prepared():
 
 def _linear_unit_responses():
     from navlib.filters.linear import unit_responses
-    from navlib.outliers import PAPER_TESTS
+    from navlib.studies.outliers.paper import PAPER_TESTS
 
     units = [test.outlier(shape) for test in PAPER_TESTS.values()
              for shape in ("spike", "step") if "ins_gps_att" in test.solutions]

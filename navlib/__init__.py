@@ -20,7 +20,7 @@ __version__ = "0.1.0"
 
 _SUBMODULES = (
     "covariance", "discretize", "earth", "filters", "io", "metrics", "models",
-    "observability", "outliers", "parallel", "plots", "reports", "rotations", "segmentation",
+    "observability", "parallel", "plots", "reports", "rotations", "segmentation",
     "sensors", "strapdown",
     "studies", "sweep", "trajectory", "units", "widgets",
 )
@@ -31,6 +31,8 @@ __all__ = ["NavlibInputError", "__version__", *_SUBMODULES]
 MOVED = {
     "navlib.allan": ("navlib.sensors.allan",),
     "navlib.estimability": ("navlib.covariance.estimability",),
+    "navlib.outliers": ("navlib.sensors.faults", "navlib.filters.recovery",
+                        "navlib.studies.outliers.paper"),
     "navlib.quality": ("navlib.io.quality",),
     "navlib.readings": ("navlib.studies.design", "navlib.studies.plan",
                         "navlib.studies.outliers.reading"),

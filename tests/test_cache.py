@@ -289,7 +289,7 @@ def test_scope_keeps_items_apart_and_follows_its_context(cache_on):
 
 
 def test_outlier_results_are_read_back_bitwise_without_preparing(cache_on, monkeypatch):
-    from navlib.outliers import Outlier
+    from navlib.sensors.faults import Outlier
     from navlib.studies import outliers as study
 
     traj = launcher_ascent(duration_s=20.0, rate_hz=20.0)

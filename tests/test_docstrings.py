@@ -90,8 +90,6 @@ def test_parameters_name_only_arguments():
 
 
 REPOSITORY = Path(__file__).resolve().parents[1]
-MOVED = ("outliers",)
-"""Root modules another change of issue 38 moves; their docstrings are checked once moved."""
 OUTSIDE = re.compile(r"\.\./(?:shared|spec)|shared/spec|\bspec/|\bspec\s+(?:§|A\d|[a-z]+\.md)")
 """A pointer at the seed specification, which is not part of the repository."""
 SECTION = re.compile(r"\b([a-z]+\.md)\s*(§\s*[\d.]*\d[a-z]?|Eq\. \d+)?")
@@ -99,8 +97,6 @@ SECTION = re.compile(r"\b([a-z]+\.md)\s*(§\s*[\d.]*\d[a-z]?|Eq\. \d+)?")
 
 def _docstrings():
     for path in sorted((REPOSITORY / "navlib").rglob("*.py")):
-        if path.parent.name == "navlib" and path.stem in MOVED:
-            continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef,
                                  ast.AsyncFunctionDef)):

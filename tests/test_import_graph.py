@@ -14,7 +14,7 @@ LAYERS = (
                 "navlib.cache", "navlib.vehicles")),
     ("numerics", ("navlib.kalman", "navlib.kernel_copy", "navlib.discretize",
                   "navlib.parallel")),
-    ("world", ("navlib.outliers", "navlib.strapdown", "navlib.io",
+    ("world", ("navlib.strapdown", "navlib.io",
                "navlib.sensors", "navlib.models", "navlib.trajectory")),
     ("analysis", ("navlib.covariance", "navlib.observability", "navlib.metrics",
                   "navlib.filters",

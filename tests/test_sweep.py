@@ -354,7 +354,7 @@ def test_address_and_thread_schedulers_equal_serial(client):
 
 
 def test_named_claims_and_outliers_match_the_studies():
-    from navlib.outliers import Outlier
+    from navlib.sensors.faults import Outlier
     from navlib.studies import rocket
     from navlib.studies.outliers import outlier_response
 

@@ -12,11 +12,11 @@ step-by-step recursions of the truth and of the filter run as compiled kernels
 Python between them. Because
 everything is linear, the estimation error of a run with an outlier is the error of the
 same run without it plus the noise-free outlier response (``noise=False``), exactly —
-:mod:`navlib.outliers` uses this. Outliers on measurement channels are added to ``z``;
+:mod:`navlib.sensors.faults` uses this. Outliers on measurement channels are added to ``z``;
 IMU outliers enter as a known input on the matching noise channel,
 ``x_{k+1} += Gamma_k e_j u_k`` with ``Gamma_k = G_k dt`` (Euler, the paper's
 ``B = s_t G``) or ``int_0^dt expm(A s) ds G`` (``method="expm"``); see
-:mod:`navlib.outliers` for the signs.
+:mod:`navlib.sensors.faults` for the signs.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from navlib.filters.linear_preparation import (
 )
 from navlib.filters.linear_recursion import run_recursion
 from navlib.kalman import chi2_bounds, nees_values, psd_sqrt
-from navlib.outliers import Outlier, as_outliers, channel_profile, linear_mapping
+from navlib.sensors.faults import Outlier, as_outliers, channel_profile, linear_mapping
 
 MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it

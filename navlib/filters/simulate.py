@@ -3,7 +3,7 @@
 study's closed-loop cross-checks use it.
 
 :func:`simulate_ekf` builds the IMU, GNSS, attitude sensor and reference trajectory of
-:mod:`navlib.sensors`, injects the outliers of :mod:`navlib.outliers` and perturbs the
+:mod:`navlib.sensors`, injects the outliers of :mod:`navlib.sensors.faults` and perturbs the
 initial state; :class:`EKFRun` is what it returns.
 """
 
@@ -22,9 +22,9 @@ from navlib.filters.measurements import epoch_index
 from navlib.kalman import psd_sqrt
 from navlib.models.base import Nominal
 from navlib.models.launcher import rt_dynamics_matrix
-from navlib.outliers import as_outliers, inject
 from navlib.quaternions import quat_from_matrix
 from navlib.sensors import ReferenceTrajectory, simulate_attitude_sensor
+from navlib.sensors.faults import as_outliers, inject
 
 _AXES = ("x", "y", "z")
 
@@ -67,7 +67,7 @@ def simulate_ekf(trajectory, *, sensors="launcher_table1", model: str = "launche
     :func:`~navlib.sensors.simulate_gnss` with the preset ``sensors``; the attitude sensor
     from :func:`simulate_attitude_sensor` (the preset's sigma), the reference trajectory from
     :class:`ReferenceTrajectory`. ``outliers`` are added to those data (EKF-mode injection of
-    :mod:`navlib.outliers`). The initial nominal state is the truth perturbed by a draw from
+    :mod:`navlib.sensors.faults`). The initial nominal state is the truth perturbed by a draw from
     the model's ``P0`` navigation block (``initial_error``). With ``noise=False`` the
     sensors are error-free (a deterministic run, e.g. to isolate an outlier response).
 

@@ -2,7 +2,7 @@
 
 :func:`simulate_attitude_sensor` is a generic attitude reference; :class:`ReferenceTrajectory`
 the launcher's reference-trajectory attitudes (the RT pseudo-measurement). Outliers come
-from :mod:`navlib.outliers` (channels ``att`` and ``rt_*``).
+from :mod:`navlib.sensors.faults` (channels ``att`` and ``rt_*``).
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import pandas as pd
 
 from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
-from navlib.outliers import as_outliers, channel_profile, inject
 from navlib.rotations import exp_so3, log_so3
+from navlib.sensors.faults import as_outliers, channel_profile, inject
 
 __all__ = ["ReferenceTrajectory", "simulate_attitude_sensor"]
 
@@ -91,7 +91,7 @@ def simulate_attitude_sensor(trajectory, sigma: float, rate_hz: float | None = N
     """Attitude-sensor fixes ``C_att = exp(S(n)) C`` with white ECEF-axis noise ``n``.
 
     Generic attitude reference sensor of Beaudoin et al. §2.2 (white noise only, Table 1:
-    1 deg per axis); ``att`` outliers (:mod:`navlib.outliers`) are added to ``n``.
+    1 deg per axis); ``att`` outliers (:mod:`navlib.sensors.faults`) are added to ``n``.
 
     Parameters
     ----------
@@ -106,7 +106,7 @@ def simulate_attitude_sensor(trajectory, sigma: float, rate_hz: float | None = N
     rng : numpy.random.Generator, optional
         Source of the noise (overrides ``seed``).
     outliers : optional
-        Outlier specification read by :func:`navlib.outliers.as_outliers` (channel ``att``).
+        Outlier specification read by :func:`navlib.sensors.faults.as_outliers` (channel ``att``).
 
     Returns
     -------

@@ -18,9 +18,10 @@ from __future__ import annotations
 import ipywidgets as widgets
 import pandas as pd
 
+from navlib.filters.recovery import scores_frame
 from navlib.models.launcher import SOLUTIONS
-from navlib.outliers import CHANNELS, KINDS, Outlier, scores_frame
 from navlib.plots.outliers import induced_figure, monte_carlo_figure, response_figure
+from navlib.sensors.faults import CHANNELS, KINDS, Outlier
 from navlib.studies.outliers import (
     WATCHES,
     FilterCache,

@@ -13,8 +13,8 @@ from navlib.filters.measurements import GnssPosition
 from navlib.models import ecef21, launcher
 from navlib.models.base import DiscreteModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
-from navlib.outliers import Outlier, channel_profile, linear_mapping
 from navlib.rotations import exp_so3, log_so3
+from navlib.sensors.faults import Outlier, channel_profile, linear_mapping
 from navlib.trajectory import launcher_ascent, sounding_rocket
 
 

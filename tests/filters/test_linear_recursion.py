@@ -12,7 +12,7 @@ from paths import assert_same_numbers
 from navlib.filters import linear, linear_preparation, prepare_linear, simulate_linear
 from navlib.kalman import psd_sqrt
 from navlib.models import launcher
-from navlib.outliers import Outlier
+from navlib.sensors.faults import Outlier
 from navlib.trajectory import launcher_ascent
 
 BLOCK = 256

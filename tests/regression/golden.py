@@ -110,7 +110,7 @@ def ekf_values(case: str, trajectory, **changes) -> np.ndarray:
     """Final errors and mean NIS (10 numbers) of an EKF snapshot case; ``changes`` override
     its ``simulate_ekf`` keywords (to show that a real change is caught)."""
     from navlib import filters
-    from navlib.outliers import Outlier
+    from navlib.sensors.faults import Outlier
 
     kw = dict(EKF_SNAPSHOT[case][0])
     kw["outliers"] = [Outlier(*o) for o in kw.get("outliers", [])] or None

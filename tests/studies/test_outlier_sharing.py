@@ -9,7 +9,7 @@ from paths import assert_same_numbers
 from navlib import NavlibInputError
 from navlib.filters import linear, linear_preparation, prepare_linear, simulate_ekf, simulate_linear
 from navlib.models import launcher
-from navlib.outliers import Outlier
+from navlib.sensors.faults import Outlier
 from navlib.studies import outliers as study
 from navlib.trajectory import launcher_ascent
 

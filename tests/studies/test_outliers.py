@@ -8,20 +8,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from navlib import NavlibInputError
+from navlib.filters.recovery import score_recovery, scores_frame
 from navlib.models import ecef21, launcher
-from navlib.outliers import (
+from navlib.sensors.faults import (
     CHANNELS,
     LINEAR_NAMES,
-    PAPER_TESTS,
     Outlier,
     expand_channel,
     inject,
     linear_mapping,
-    score_recovery,
-    scores_frame,
 )
 from navlib.studies import outliers as study
 from navlib.studies.claims import STATUSES as VERDICTS
+from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.trajectory import launcher_ascent, sounding_rocket
 
 

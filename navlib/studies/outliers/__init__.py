@@ -1,7 +1,7 @@
 """Beaudoin et al. (2018) §4.2: outlier sensitivity T1-T4, Fig. 10 correlation, roll sigma.
 
 Composes :func:`navlib.models.launcher`, :func:`navlib.filters.prepare_linear` /
-:func:`~navlib.filters.simulate_linear` and :mod:`navlib.outliers` into the paper's
+:func:`~navlib.filters.simulate_linear` and :mod:`navlib.sensors.faults` into the paper's
 outlier experiment (docs/assumptions.md, launcher.md §6.3, §6.4, §7.3) on the Churchill launcher
 surrogate (:func:`navlib.trajectory.launcher_ascent`, 200 Hz, GPS and all aiding at every sample as
 in the paper, docs/assumptions.md, launcher.md §4):
@@ -9,7 +9,7 @@ in the paper, docs/assumptions.md, launcher.md §4):
 * :func:`outlier_response` — the outlier-induced error of a watched quantity (GPS position
   bias, body roll error, launcher divergence) for one solution: the linear filter's exact
   noise-free response (by linearity, what any noisy run adds), its filter sigma and the
-  :func:`navlib.outliers.score_recovery` verdict;
+  :func:`navlib.filters.recovery.score_recovery` verdict;
 * :func:`paper_tests` — T1-T4 for both outlier shapes and their :class:`ClaimResult`
   verdicts (:func:`outlier_claims`);
 * :func:`correlation_fig10` — per-axis correlation of ``T_E^B psi`` with the divergence

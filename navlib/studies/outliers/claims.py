@@ -9,8 +9,8 @@ import numpy as np
 import pandas as pd
 
 from navlib.models.launcher import SOLUTION_LABELS
-from navlib.outliers import PAPER_TESTS
 from navlib.studies.claims import Check, ClaimResult, check, claim
+from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.studies.outliers.response import OutlierResponse, OutlierStudy
 
 

@@ -12,8 +12,9 @@ from threadpoolctl import threadpool_limits
 
 from navlib.covariance import sigma_in_frame
 from navlib.filters import nees_values, prepare_linear, simulate_ekf, simulate_linear
+from navlib.filters.recovery import RecoveryScore, score_recovery
 from navlib.models.launcher import launcher
-from navlib.outliers import Outlier, RecoveryScore, score_recovery
+from navlib.sensors.faults import Outlier
 from navlib.studies.outliers.response import (
     DEFAULTS,
     FilterCache,

@@ -9,7 +9,7 @@ from __future__ import annotations
 from navlib import observability
 from navlib.cache import memoized
 from navlib.models.launcher import launcher_steps
-from navlib.outliers import Outlier
+from navlib.sensors.faults import Outlier
 from navlib.studies.outliers.response import FilterCache, outlier_response
 from navlib.sweep import Evaluation, register
 from navlib.trajectory import launcher_ascent

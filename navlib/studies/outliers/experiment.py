@@ -13,8 +13,9 @@ import pandas as pd
 from navlib._validation import finite_scalar
 from navlib.covariance import group_correlation, sigma_in_frame
 from navlib.errors import NavlibInputError
-from navlib.outliers import PAPER_TESTS, score_recovery
+from navlib.filters.recovery import score_recovery
 from navlib.studies.outliers.claims import conclusion_claims, outlier_claims
+from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.studies.outliers.response import (
     DEFAULTS,
     RT_ONLY_OPTIONS,

@@ -14,9 +14,11 @@ from navlib import cache as disk_cache
 from navlib.errors import NavlibInputError
 from navlib.filters import LinearFilter, prepare_linear
 from navlib.filters.linear import recorded_epochs, unit_responses
+from navlib.filters.recovery import RecoveryScore, score_recovery
 from navlib.models.launcher import SOLUTIONS, launcher
-from navlib.outliers import PAPER_TESTS, Outlier, RecoveryScore, score_recovery
+from navlib.sensors.faults import Outlier
 from navlib.studies.claims import claims_frame
+from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.trajectory import launcher_ascent
 
 WATCHES = ("roll", "pitch", "yaw", "bp", "ref_roll")

@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 import pandas as pd
 
-from navlib.outliers import PAPER_TESTS
 from navlib.studies.outliers.experiment import paper_tests
+from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.studies.outliers.response import (
     DEFAULTS,
     FilterCache,
