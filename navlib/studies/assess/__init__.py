@@ -52,8 +52,10 @@ from navlib.studies.assess.result import (
     automatic_segment_table,
     segment_pairs,
 )
+from navlib.studies.assess.settings import AssessmentSettings
 
 __all__ = ["AUTOPILOT_PRESETS", "DEFAULT_PRESET", "E_THRESHOLD", "MIN_DURATION_S",
-           "MIN_FRACTION", "MIN_GNSS_EPOCHS", "MODEL_STEP_S", "S_THRESHOLD", "FlightAssessment",
+           "MIN_FRACTION", "MIN_GNSS_EPOCHS", "MODEL_STEP_S", "S_THRESHOLD", "AssessmentSettings",
+           "FlightAssessment",
            "assess_flight", "automatic_segment_table", "choose_preset", "describe_inputs",
            "fit_report", "fit_residuals", "segment_pairs"]

@@ -50,6 +50,7 @@ from navlib.studies.assess.result import (
     segment_pairs,
     with_agreement,
 )
+from navlib.studies.assess.settings import AssessmentSettings
 from navlib.trajectory.fit import FIT_DEFAULTS
 
 
@@ -255,23 +256,23 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     for message in checked.warnings:
         warnings.warn(message, FlightDataWarning, stacklevel=2)
     imu, gnss = checked.imu, checked.gnss
-    kwargs = {"spec": spec, "preset": preset, "preset_reason": preset_reason,
-              "segments": segments, "thresholds": thresholds, "gnss_rate_hz": gnss_rate_hz,
-              "gnss_sigma_m": gnss_sigma_m, "heading_fallback_deg": heading_fallback_deg,
-              "fit_options": fit_options, "segment_options": segment_options,
-              "model_options": model_options, "model_step_s": model_step_s,
-              "vehicle": vehicle, "vehicle_reason": vehicle_reason,
-              "findings": checked.findings, "t_record": float(imu["t"].iloc[0]),
-              "outage_report_s": checked.thresholds["gnss"]["outage_report_s"],
-              "bounds": fit_bounds(quality_thresholds),
-              "aiding": aiding, "aiding_notes": aiding_notes}
+    settings = AssessmentSettings(
+        spec=spec, preset=preset, preset_reason=preset_reason, thresholds=thresholds,
+        segments=segments, gnss_rate_hz=gnss_rate_hz, gnss_sigma_m=gnss_sigma_m,
+        heading_fallback_deg=heading_fallback_deg, fit_options=fit_options,
+        segment_options=segment_options, model_options=model_options,
+        model_step_s=model_step_s, vehicle=vehicle, vehicle_reason=vehicle_reason,
+        bounds=fit_bounds(quality_thresholds),
+        outage_report_s=checked.thresholds["gnss"]["outage_report_s"], aiding=aiding,
+        aiding_notes=tuple(aiding_notes), findings=checked.findings,
+        t_record=float(imu["t"].iloc[0]))
     pieces = _pieces(imu, max_bridge_s)
     if len(pieces) == 1:
-        return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, **kwargs)
+        return _assess_span(imu.drop(columns="segment", errors="ignore"), gnss, settings)
     results, skipped = [], []
     for t0, t1 in pieces:
         try:
-            results.append(_assess_span(_piece(imu, t0, t1), _piece(gnss, t0, t1), **kwargs))
+            results.append(_assess_span(_piece(imu, t0, t1), _piece(gnss, t0, t1), settings))
         except NavlibInputError as exc:
             skipped.append(f"{t0:.6g}..{t1:.6g} s ({exc})")
     listing = ", ".join(f"{a:.6g}..{b:.6g} s" for a, b in pieces)
@@ -293,12 +294,10 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     return replace(results[index], spans=spans)
 
 
-def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds,
-                 gnss_rate_hz, gnss_sigma_m, heading_fallback_deg, fit_options,
-                 segment_options, model_options, model_step_s, vehicle, vehicle_reason,
-                 findings, t_record, outage_report_s, bounds, aiding,
-                 aiding_notes) -> FlightAssessment:
+def _assess_span(imu, gnss, settings: AssessmentSettings) -> FlightAssessment:
     """:func:`assess_flight` of one span without holes longer than ``max_bridge_s``."""
+    s = settings
+    gnss_rate_hz, vehicle, vehicle_reason = s.gnss_rate_hz, s.vehicle, s.vehicle_reason
     span = validate_records(imu, gnss)
     inputs = describe_inputs(imu, gnss)
     t_g = gnss["t"].to_numpy(dtype=float)
@@ -306,18 +305,18 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     if gnss_rate_hz is None:
         gnss_rate_hz = median_rate(t_g)
     gnss_rate_hz = finite_scalar(gnss_rate_hz, "gnss_rate_hz", 0.0, low_open=True)
-    sigma = _gnss_sigma(gnss, spec) if gnss_sigma_m is None else gnss_sigma_m
+    sigma = _gnss_sigma(gnss, s.spec) if s.gnss_sigma_m is None else s.gnss_sigma_m
     sigma = finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True)
 
-    trajectory, notes = fit_records(imu, gnss, fit_options, heading_fallback_deg)
+    trajectory, notes = fit_records(imu, gnss, s.fit_options, s.heading_fallback_deg)
     gnss_rate_hz = min(gnss_rate_hz, trajectory.rate_hz)
-    notes = [f"sensor preset {preset!r}: {preset_reason}", *aiding_notes, *notes,
+    notes = [f"sensor preset {s.preset!r}: {s.preset_reason}", *s.aiding_notes, *notes,
              *fit_notes(trajectory), *_outlier_notes(imu)]
-    fit = fit_report(trajectory, preset, sigma)
-    gnss_res, imu_res = fit_residuals(trajectory, imu, gnss, bounds)
+    fit = fit_report(trajectory, s.preset, sigma)
+    gnss_res, imu_res = fit_residuals(trajectory, imu, gnss, s.bounds)
 
     min_epochs_s = 2.0 / gnss_rate_hz
-    seg_opts = dict(segment_options)
+    seg_opts = dict(s.segment_options)
     seg_opts["min_duration_s"] = max(seg_opts.get("min_duration_s", 2.0), min_epochs_s)
     if vehicle is None:
         vehicle, vehicle_reason = recognise_vehicle(trajectory)
@@ -325,15 +324,15 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     logged = imu.attrs.get("flight_states") if vehicle == "rocket" else None
     automatic = segment_flight(trajectory, vehicle=vehicle, flight_states=logged, **seg_opts)
 
-    model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=preset, gnss_sigma_m=sigma,
-                             max_step_s=model_step_s,
-                             epochs=epoch_samples(trajectory.t, gnss_rate_hz), **model_options)
-    model = aided_model(model, trajectory, aiding, gnss_sigma_m=sigma)
-    model, outages = _as_recorded(model, None if aiding == "baro" else gnss, trajectory.t,
-                                  outage_report_s)
-    if aiding != "gnss":                     # the model as recorded: its outages included
-        notes.append(sigma_note(model, trajectory, aiding))
-    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, t_record)
+    model = ecef21_at_epochs(trajectory, gnss_rate_hz, sensors=s.preset, gnss_sigma_m=sigma,
+                             max_step_s=s.model_step_s,
+                             epochs=epoch_samples(trajectory.t, gnss_rate_hz), **s.model_options)
+    model = aided_model(model, trajectory, s.aiding, gnss_sigma_m=sigma)
+    model, outages = _as_recorded(model, None if s.aiding == "baro" else gnss, trajectory.t,
+                                  s.outage_report_s)
+    if s.aiding != "gnss":                     # the model as recorded: its outages included
+        notes.append(sigma_note(model, trajectory, s.aiding))
+    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, s.t_record)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
                            inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res,
                            gnss_outages=outages, logged=_logged(imu, trajectory.t))
@@ -343,30 +342,31 @@ def _assess_span(imu, gnss, *, spec, preset, preset_reason, segments, thresholds
     notes.append(f"times are seconds since the {zero}, at {t_zero:.6g} s on the log's clock"
                  + (" (phases from the flight computer's logged states; detected beside them "
                     "in .automatic.events)" if automatic.source == "logged" else ""))
-    notes += [n for n in (outage_note(outages, outage_report_s),) if n]
+    notes += [n for n in (outage_note(outages, s.outage_report_s),) if n]
     table, joined = automatic_segment_table(
-        automatic.segments if segments is None else segments, model, automatic, trajectory.t,
-        automatic_segments=segments is None)
+        automatic.segments if s.segments is None else s.segments, model, automatic, trajectory.t,
+        automatic_segments=s.segments is None)
     notes += joined
-    table, unrepresented = with_agreement(table, trajectory, imu_res, gnss_res, bounds)
+    table, unrepresented = with_agreement(table, trajectory, imu_res, gnss_res, s.bounds)
     for message in unrepresented:
         warnings.warn(message, FlightDataWarning, stacklevel=3)
     notes += unrepresented
     residuals = trajectory.parameters.get("fit_residuals", {})
-    options = {"preset": preset, "preset_reason": preset_reason, "gnss_rate_hz": gnss_rate_hz,
-               "gnss_sigma_m": sigma, "heading_fallback_deg": heading_fallback_deg,
-               "fit_options": fit_options, "segment_options": seg_opts,
-               "model_options": model_options, "model_step_s": model_step_s,
+    options = {"preset": s.preset, "preset_reason": s.preset_reason, "gnss_rate_hz": gnss_rate_hz,
+               "gnss_sigma_m": sigma, "heading_fallback_deg": s.heading_fallback_deg,
+               "fit_options": s.fit_options, "segment_options": seg_opts,
+               "model_options": s.model_options, "model_step_s": s.model_step_s,
                "imu_rate_hz": trajectory.rate_hz, "heading_deg": residuals.get("heading_deg"),
                "attitude_source": residuals.get("heading_source"), "vehicle": vehicle,
                "vehicle_reason": vehicle_reason, "t_zero": t_zero, "time_zero": zero,
-               "phase_source": automatic.source, "fit_bounds": bounds, "aiding": aiding}
-    settings = {"attitude_error": model_options.get("attitude_error", "ecef"),
-                "preset": preset, "gnss_sigma_m": sigma}
+               "phase_source": automatic.source, "fit_bounds": s.bounds, "aiding": s.aiding}
+    model_settings = {"attitude_error": s.model_options.get("attitude_error", "ecef"),
+                      "preset": s.preset, "gnss_sigma_m": sigma}
     return FlightAssessment.build(
-        model, segment_pairs(table), trajectory=trajectory, **thresholds, settings=settings,
+        model, segment_pairs(table), trajectory=trajectory, **s.thresholds,
+        settings=model_settings,
         inputs=inputs, fit=fit, automatic=automatic, segment_table=table, options=options,
-        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=findings,
+        gnss_residuals=gnss_res, imu_residuals=imu_res, notes=tuple(notes), quality=s.findings,
         gnss_outages=outages, logged=logged_channels)
 
 
