@@ -66,7 +66,7 @@ from _harness import Case, run_jobs
 from _harness import rocket_flight as _rocket
 from scipy.spatial.transform import Rotation
 
-from navlib import earth, filters, sensors, strapdown, units
+from navlib import earth, filters, kalman, sensors, strapdown, units
 from navlib.kalman import psd_sqrt
 from navlib.models import Ecef21ErrorState
 from navlib.models.base import Nominal
@@ -324,7 +324,7 @@ def _row(label: dict, runs: list[Run]) -> dict:
     nees = {name: np.einsum("ski,ski->sk", E[..., s],
                             np.linalg.solve(P[..., s, s], E[..., s, None])[..., 0]).mean(axis=0)
             for name, s in _BLOCKS.items()}
-    lo, hi = filters.chi2_bounds(9, len(runs))
+    lo, hi = kalman.chi2_bounds(9, len(runs))
     return {**label, "seeds": len(runs), "rms_pos_m": rms["pos"], "rms_vel_m_s": rms["vel"],
             "rms_att_deg": np.degrees(rms["att"]),
             **{f"nees_{name}": v.mean() for name, v in nees.items()},

@@ -9,11 +9,13 @@ import kalman_reference as ref
 import numpy as np
 import pytest
 
-from navlib import covariance
-from navlib.filters import joseph_update, kalman_gain, linear_steps
+from navlib import kalman
+from navlib.filters import linear_steps
 from navlib.kalman import (
     definite_noise,
     fixed_updates_kernel,
+    joseph_update,
+    kalman_gain,
     predict_kernel,
     propagate_kernel,
     riccati_kernel,
@@ -156,7 +158,7 @@ def test_paper_recursion_30001_epochs_equals_numpy(launcher_steps):
     1e-12 on this model), the gains within 1e-9 of their largest entry."""
     s = launcher_steps
     measured = np.ones(s.t.size, dtype=bool)
-    P_prior, P_post, gains = covariance.covariance_recursion(s.F, s.Q, s.H, s.R, s.P0[None],
+    P_prior, P_post, gains = kalman.covariance_recursion(s.F, s.Q, s.H, s.R, s.P0[None],
                                                              measured, 1e-12, gains=True)
     want_prior, want_post, want_K, _, want_dof = ref.recursion(
         s.F, s.Q, s.H, s.R, s.P0, measured, definite_noise(s.R))

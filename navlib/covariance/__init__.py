@@ -35,22 +35,18 @@ from navlib.covariance.recursion import (
     kalman_covariance,
     kalman_covariances,
 )
-from navlib.kalman import FactoredNoise, covariance_recursion, symmetrize
 
 __all__ = [
     "CovarianceResult",
-    "FactoredNoise",
     "NormalizedEigenResult",
     "block_in_frame",
     "convergence_time",
     "correlation",
     "covariance_ratio",
-    "covariance_recursion",
     "group_correlation",
     "ins_only_covariance",
     "kalman_covariance",
     "kalman_covariances",
     "normalized_eigen",
     "sigma_in_frame",
-    "symmetrize",
 ]

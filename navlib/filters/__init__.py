@@ -11,8 +11,8 @@ EKF mode — :func:`ekf`
     the model's Jacobians along the estimate, GNSS / attitude / reference-trajectory
     updates, feedback resets).
 
-Consistency helpers: :func:`chi2_bounds` (two-sided bounds of the Monte-Carlo averaged NEES
-or NIS), :meth:`LinearSimulation.consistency`.
+Consistency helpers (in :mod:`navlib.kalman`): :func:`~navlib.kalman.chi2_bounds`
+(two-sided bounds of the Monte-Carlo averaged NEES or NIS), :meth:`LinearSimulation.consistency`.
 
 Modules: :mod:`~navlib.kalman` (gains, Joseph update, NEES), linear mode in
 :mod:`~navlib.filters.linear_preparation` (discretisation, covariance and gains),
@@ -34,33 +34,15 @@ from navlib.filters.linear_preparation import (
     prepare_linear,
 )
 from navlib.filters.simulate import EKFRun, simulate_ekf
-from navlib.kalman import (
-    Gains,
-    chi2_bounds,
-    definite_noise,
-    joseph_update,
-    kalman_gain,
-    kalman_gains,
-    nees_basis,
-    nees_values,
-)
 
 __all__ = [
     "EKFResult",
     "EKFRun",
-    "Gains",
     "LinearFilter",
     "LinearSimulation",
     "LinearSteps",
-    "chi2_bounds",
-    "definite_noise",
     "ekf",
-    "joseph_update",
-    "kalman_gain",
-    "kalman_gains",
     "linear_steps",
-    "nees_basis",
-    "nees_values",
     "prepare_linear",
     "simulate_ekf",
     "simulate_linear",

@@ -23,13 +23,13 @@ from scipy.spatial.transform import Rotation
 
 from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
-from navlib.covariance import symmetrize
 from navlib.errors import NavlibInputError
 from navlib.filters.ekf_loop import compiled_run
 from navlib.filters.ekf_steps import discretize_window
 from navlib.filters.ekf_updates import Epochs, WindowUpdates, update_records
 from navlib.filters.linear_preparation import METHODS
 from navlib.filters.measurements import Measurement, ekf_measurements, epoch_index, imu_arrays
+from navlib.kalman import symmetrize
 from navlib.models.base import ErrorStateModel, Nominal
 from navlib.models.ecef import Ecef21ErrorState
 from navlib.models.launcher import LauncherErrorState

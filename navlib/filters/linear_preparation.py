@@ -4,7 +4,7 @@ covariance and gains, computed once (docs/assumptions.md, launcher.md §6.2; Bea
 
 :func:`linear_steps` discretises a model (Euler as in the paper, or the zero-order-hold
 exponential); :func:`prepare_linear` runs the covariance recursion
-(:func:`navlib.covariance.covariance_recursion`, Joseph form) once and keeps the gains,
+(:func:`navlib.kalman.covariance_recursion`, Joseph form) once and keeps the gains,
 shared by every Monte-Carlo run of :func:`navlib.filters.linear.simulate_linear`.
 """
 
@@ -17,10 +17,18 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from navlib._validation import finite_array
-from navlib.covariance import CovarianceResult, FactoredNoise, covariance_recursion, symmetrize
+from navlib.covariance import CovarianceResult
 from navlib.discretize import discretize_steps
 from navlib.errors import NavlibInputError
-from navlib.kalman import PINV_RTOL, Gains, nees_basis, psd_sqrt
+from navlib.kalman import (
+    PINV_RTOL,
+    FactoredNoise,
+    Gains,
+    covariance_recursion,
+    nees_basis,
+    psd_sqrt,
+    symmetrize,
+)
 from navlib.models.base import DiscreteModel, LinearModel
 
 METHODS = ("euler", "expm")
@@ -269,10 +277,10 @@ def prepare_linear(model, *, method: str = "euler", update_every: int = 1, measu
 def _blockwise_covariance(steps: LinearSteps, mask, block: int = 2048, priors: bool = False):
     """:func:`navlib.covariance.kalman_covariance` and its gains in one recursion.
 
-    The recursion (:func:`navlib.covariance.covariance_recursion`) keeps the gain of each update
+    The recursion (:func:`navlib.kalman.covariance_recursion`) keeps the gain of each update
     (the :func:`navlib.kalman.kalman_gains` of its prior, to the bit) and reads the
     process noise ``block`` epochs at a time; when ``steps.Q`` is None it forms ``Q = L L'``
-    one block at a time (:class:`navlib.covariance.FactoredNoise`), and without ``priors`` it
+    one block at a time (:class:`navlib.kalman.FactoredNoise`), and without ``priors`` it
     keeps no prior covariances. Returns ``(CovarianceResult, Gains)``.
     """
     noise = FactoredNoise(steps.L) if steps.Q is None else steps.Q

@@ -7,7 +7,7 @@ import pytest
 from scipy.linalg import expm
 from scipy.spatial.transform import Rotation
 
-from navlib import NavlibInputError, filters
+from navlib import NavlibInputError, filters, kalman
 from navlib.covariance import kalman_covariance
 from navlib.filters.measurements import GnssPosition
 from navlib.models import ecef21, launcher
@@ -47,12 +47,12 @@ def test_gains_reproduce_joseph_posteriors_with_singular_r(short_launcher):
 
 
 def test_chi2_bounds_known_values():
-    lo, hi = filters.chi2_bounds(3, runs=1)
+    lo, hi = kalman.chi2_bounds(3, runs=1)
     assert lo == pytest.approx(0.2158, abs=1e-4) and hi == pytest.approx(9.348, abs=1e-3)
-    lo, hi = filters.chi2_bounds(3, runs=100)
+    lo, hi = kalman.chi2_bounds(3, runs=100)
     assert lo < 3 < hi and hi - lo < 1.0
     with pytest.raises(NavlibInputError, match="runs"):
-        filters.chi2_bounds(3, runs=0)
+        kalman.chi2_bounds(3, runs=0)
 
 
 @pytest.mark.parametrize("solution,biases", [("ins_gps", "GA"), ("ins_gps_att_rt", "GAP")])
@@ -297,7 +297,7 @@ def test_noise_free_response_matches_a_hand_recursion(short_launcher):
                                atol=1e-15)
     before = resp.nis_t < 12.0
     assert before.any() and np.all(resp.nis[before] == 0.0) and np.all(resp.nis[~before] >= 0)
-    nees, dof = filters.nees_values(resp.error, resp.P)
+    nees, dof = kalman.nees_values(resp.error, resp.P)
     np.testing.assert_array_equal(resp.nees, nees)
     np.testing.assert_array_equal(resp.nees_dof, dof)
     assert prepared.nees_basis(resp.index) is prepared.nees_basis(resp.index)

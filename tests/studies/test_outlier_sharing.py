@@ -113,7 +113,7 @@ def test_recursion_gains_are_those_of_the_priors(flight, update_every):
     """The gains prepare_linear keeps from its covariance recursion are kalman_gains of the
     recorded priors (S^+ at the update epochs: elsewhere it is not kept; two paths, compared
     at ``paths.CROSS_PATH_RTOL``)."""
-    from navlib.filters import kalman_gains
+    from navlib.kalman import kalman_gains
 
     model = launcher("ins_gps_att_rt", "GAP", "markov", flight)   # singular R: pseudo-inverse
     full = prepare_linear(model, update_every=update_every)

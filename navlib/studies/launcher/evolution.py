@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 
 from navlib import cache
-from navlib.covariance import FactoredNoise, covariance_recursion, sigma_in_frame, symmetrize
+from navlib.covariance import sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.filters import linear_steps
-from navlib.kalman import PINV_RTOL
+from navlib.kalman import PINV_RTOL, FactoredNoise, covariance_recursion, symmetrize
 from navlib.models.launcher import ASSUMED, launcher, sensor_values
 from navlib.studies.launcher.assumptions import EVOLUTION_GRID, PAD_CASES, SURVEYED_PAD_M
 from navlib.trajectory import launcher_ascent

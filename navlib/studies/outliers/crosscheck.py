@@ -11,8 +11,9 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from navlib.covariance import sigma_in_frame
-from navlib.filters import nees_values, prepare_linear, simulate_ekf, simulate_linear
+from navlib.filters import prepare_linear, simulate_ekf, simulate_linear
 from navlib.filters.recovery import RecoveryScore, score_recovery
+from navlib.kalman import nees_values
 from navlib.models.launcher import launcher
 from navlib.sensors.faults import Outlier
 from navlib.studies.outliers.response import (
