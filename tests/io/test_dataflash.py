@@ -169,7 +169,7 @@ def test_public_pymavlink_fixture_3x_layout():
 def test_notebook_runs_on_a_dataflash_log(bin4, tmp_path):
     done = subprocess.run(
         [sys.executable, "-m", "navlib", "report", "--quick", "--only", "07_assess_flight",
-         "-p", "bin_path", str(bin4), "-p", "read_options", '{"imu_instance": 1}',
+         "-p", "log_path", str(bin4), "-p", "read_options", '{"imu_instance": 1}',
          "-p", "fit_options", '{"max_bridge_s": 2}', "--output", str(tmp_path / "rep")],
         capture_output=True, text=True, timeout=900, cwd=ROOT)
     assert done.returncode == 0, done.stdout + done.stderr
