@@ -47,9 +47,9 @@ def ekf_sigma_agreement(frame: pd.DataFrame, after_s: float = 1.0) -> pd.DataFra
     Returns
     -------
     DataFrame
-        Index ``axis`` (in the frame's order); ``sigma_ratio_max_dev`` = max |sigma_ekf /
-        sigma_cov - 1| and ``rms_normalised_error`` = RMS of error / sigma_ekf (about 1 for a
-        consistent filter).
+        Index ``axis`` (in the frame's order); ``sigma_ratio_max_dev`` =
+        ``max |sigma_ekf / sigma_cov - 1|`` and ``rms_normalised_error`` = RMS of
+        ``error / sigma_ekf`` (about 1 for a consistent filter).
     """
     late = frame[frame.t > after_s]
     return late.assign(ratio=late.sigma_ekf / late.sigma_cov,
