@@ -25,7 +25,7 @@ from navlib.io.findings import (
 )
 from navlib.units import DEG
 
-__all__ = ["faulty_time", "gnss_faults"]
+__all__ = ["baro_lag", "faulty_time", "gnss_faults"]
 
 _GYRO = ("w_x", "w_y", "w_z")
 _ACCEL = ("f_x", "f_y", "f_z")
@@ -127,18 +127,96 @@ def _baro_offset(d: np.ndarray, height: np.ndarray, max_scale: float) -> np.ndar
     return np.median(d - b * height) + b * height
 
 
-def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]:
+def _baro_record(imu) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(t, alt_m)`` of ``imu.attrs["baro"]`` (finite rows), None without a barometer."""
     baro = imu.attrs.get("baro")
-    t = gnss["t"].to_numpy(dtype=float)
-    bad = np.zeros(t.size, dtype=bool)
     if baro is None:
-        return bad, []
+        return None
     if not isinstance(baro, pd.DataFrame) or not {"t", "alt_m"} <= set(baro.columns):
         raise NavlibInputError("imu.attrs['baro']: expected a DataFrame with columns t, alt_m")
     t_b = baro["t"].to_numpy(dtype=float)
     h_b = baro["alt_m"].to_numpy(dtype=float)
     ok = np.isfinite(t_b) & np.isfinite(h_b)
-    t_b, h_b = t_b[ok], h_b[ok]
+    return t_b[ok], h_b[ok]
+
+
+def _line_misfit(h_g: np.ndarray, h_b: np.ndarray) -> float:
+    """RMS of the GNSS-minus-barometer altitude about its line ``a + b h_b`` (the offset
+    and scale of the barometric model, Q2)."""
+    A = np.column_stack([np.ones_like(h_b), h_b - h_b.mean()])
+    d = h_g - h_b
+    r = d - A @ np.linalg.lstsq(A, d, rcond=None)[0]
+    return float(np.sqrt(np.mean(r**2)))
+
+
+def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None = None
+             ) -> tuple[float, list[dict]]:
+    """The lag of the GNSS fixes behind the barometer (docs/assumptions.md FIT6, Q2).
+
+    A receiver whose fix trails the motion, or a logger that stamps a fix when it arrives,
+    records the altitude of ``lag`` seconds before; under a boost at 250 m/s a 1 s lag puts
+    the fixes 250 m low, and the altitude check would exclude them as disagreeing with the
+    barometer while the fit bent the motion to meet the rest. The lag is the shift of the
+    fix times, scanned over +-``lag_max_s`` in steps of ``lag_step_s`` (the minimum refined
+    by a parabola), that minimises the misfit of the GNSS altitude against the barometric
+    altitude at the shifted times (:func:`_line_misfit`). It counts when it
+    is at least ``lag_min_s`` and lowers the misfit of no lag by ``lag_min_gain``; the
+    barometer is taken as on time.
+
+    Parameters
+    ----------
+    imu : DataFrame
+        The IMU record, with ``attrs["baro"]`` (``t, alt_m``) when the log has a barometer.
+    gnss : DataFrame
+        ``t, x, y, z`` (ECEF, m).
+    thresholds : mapping, optional
+        The ``[gnss]`` section of :func:`load_thresholds`.
+
+    Returns
+    -------
+    lag : float
+        Seconds the fixes trail the barometer (0 without a barometer, vertical motion or a
+        significant lag).
+    findings : list of dict
+        One finding naming the lag and the misfit with and without it, when one was found.
+    """
+    p = dict(thresholds or load_thresholds()["gnss"])
+    record = _baro_record(imu)
+    t = gnss["t"].to_numpy(dtype=float)
+    if record is None or record[0].size < 2:
+        return 0.0, []
+    t_b, h_b = record
+    n = round(p["lag_max_s"] / p["lag_step_s"])
+    lags = p["lag_step_s"] * np.arange(-n, n + 1)
+    inside = (t - lags.max() >= t_b[0]) & (t - lags.min() <= t_b[-1])
+    if np.count_nonzero(inside) < 4:
+        return 0.0, []
+    _, _, h_g = earth.ecef_to_geodetic(gnss[list(_XYZ)].to_numpy(dtype=float)[inside])
+    misfit = np.array([_line_misfit(h_g, np.interp(t[inside] - lag, t_b, h_b))
+                       for lag in lags])
+    i = int(np.argmin(misfit))
+    lag = float(lags[i])
+    if 0 < i < lags.size - 1:
+        curvature = misfit[i - 1] - 2.0 * misfit[i] + misfit[i + 1]
+        if curvature > 0:
+            lag += 0.5 * (misfit[i - 1] - misfit[i + 1]) / curvature * p["lag_step_s"]
+    no_lag = float(misfit[n])
+    if abs(lag) < p["lag_min_s"] or misfit[i] > (1.0 - p["lag_min_gain"]) * no_lag:
+        return 0.0, []
+    row = finding("gnss lag", "time", t, t.size, p["span_join_s"],
+                  f"GNSS fixes trail the barometer by {lag:.2f} s (altitude misfit "
+                  f"{no_lag:.3g} m at their stamps, {misfit[i]:.3g} m moved back by the lag)",
+                  "fixes", "; moved back by the lag")
+    return lag, [row]
+
+
+def _baro(imu, gnss, keep: np.ndarray, p: dict) -> tuple[np.ndarray, list[dict]]:
+    record = _baro_record(imu)
+    t = gnss["t"].to_numpy(dtype=float)
+    bad = np.zeros(t.size, dtype=bool)
+    if record is None:
+        return bad, []
+    t_b, h_b = record
     _, _, h_g_all = earth.ecef_to_geodetic(gnss[list(_XYZ)].to_numpy(dtype=float))
     rows = _baro_coverage(t, t_b, h_g_all, h_b, p)
     inside = keep & (t >= t_b[0]) & (t <= t_b[-1]) if t_b.size >= 2 else np.zeros_like(keep)

@@ -45,7 +45,7 @@ from navlib.io.findings import (
     findings_frame,
     load_thresholds,
 )
-from navlib.io.gnss_faults import faulty_time, gnss_faults
+from navlib.io.gnss_faults import baro_lag, faulty_time, gnss_faults
 from navlib.units import DEG
 
 __all__ = ["FINDING_COLUMNS", "THRESHOLDS_FILE", "QualityCheck", "check_records",
@@ -187,7 +187,9 @@ def _drop(frame: pd.DataFrame, bad: np.ndarray) -> pd.DataFrame:
 def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: float = 5.0,
                   thresholds: Mapping | None = None) -> QualityCheck:
     """Find saturated IMU samples and faulty GNSS fixes, drop them, and refuse a flight
-    with too many (module docstring; assumptions Q1-Q4).
+    with too many (module docstring; assumptions Q1-Q4). Fixes that trail the barometer
+    are first moved back by their lag (:func:`~navlib.io.gnss_faults.baro_lag`, FIT6;
+    ``gnss.attrs["lag_s"]`` and a ``gnss lag`` finding).
 
     Parameters
     ----------
@@ -216,7 +218,13 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
     _refuse_share(saturated, "imu: {} % of the samples are saturated",
                   p["saturation"], "saturation", "max_fraction", sat["message"])
     clean_imu = _drop(imu, saturated)
+    lag, lag_rows = baro_lag(clean_imu, gnss, p["gnss"])
+    if lag:
+        gnss = gnss.assign(t=gnss["t"].to_numpy(dtype=float) - lag)
+        gnss.attrs["lag_s"] = lag
     bad, faults = gnss_faults(clean_imu, gnss, sigma_m, p["gnss"])
+    faults = pd.concat([findings_frame(lag_rows), faults], ignore_index=True) if lag_rows \
+        else faults
     _refuse_faulty_time(gnss, bad, clean_imu, p["gnss"], faults["message"])
     findings = pd.concat([f for f in (sat, faults) if len(f)] or [findings_frame([])],
                          ignore_index=True)

@@ -26,6 +26,16 @@ from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning, check_overlap
 from navlib.trajectory._so3 import SO3Spline
 from navlib.trajectory.base import Trajectory, build_trajectory
+from navlib.trajectory.gnss_lag import (
+    LAG_MIN_GAIN,
+    LAG_ROUNDS,
+    LAG_STEP_S,
+    MIN_GNSS_LAG_S,
+    best_lag,
+    lag_displacement,
+    lag_profile,
+    shifted,
+)
 from navlib.trajectory.initial_attitude import (
     VERTICAL_SIN2,
     accel_bias_sigma,
@@ -36,7 +46,7 @@ from navlib.trajectory.initial_attitude import (
     logged_attitude,
     start_attitude,
 )
-from navlib.trajectory.liftoff import find_liftoff, gnss_still, liftoff_knots
+from navlib.trajectory.liftoff import find_liftoff, gnss_still, liftoff_knots, pad_start
 from navlib.trajectory.position_spline import (
     ATTITUDE_SAMPLES_PER_KNOT,
     MAX_KNOT_SPACING_S,
@@ -89,15 +99,6 @@ MIN_IMU_RATE_HZ = SAMPLES_PER_KNOT / MAX_KNOT_SPACING_S
 """Slowest median IMU rate the fit accepts, Hz (4 Hz): ``SAMPLES_PER_KNOT`` samples per
 knot interval of at most ``MAX_KNOT_SPACING_S``. It is also twice the 1 Hz motion bandwidth
 above (Nyquist), below which the gyro integration aliases the attitude."""
-MIN_GNSS_LAG_S = 0.05
-"""Smallest GNSS lag the fit corrects, s (a quarter of a 5 Hz fix interval; below it the
-lag moves a fix by less than 5 m at 100 m/s)."""
-LAG_MIN_GAIN = 0.25
-"""The fit with the lag must bring the GNSS residual (3-D RMS) down by at least this fraction,
-else the lag is dropped (a slow vehicle's residual moves the estimate without being a lag)."""
-MAX_LAG_FRACTION = 0.8
-"""The lag seen after the refit may be at most this fraction of the first for the
-extrapolation (which then multiplies the first by at most 5)."""
 SCALE_CREDIBLE_SIGMAS = 3.0
 """An accelerometer scale error the fit estimates beyond this many prior sigmas (the
 preset's scale-factor tolerance) is not a calibration but the fit shrinking a motion it
@@ -333,53 +334,29 @@ def fit_flight_data(imu, gnss, **options) -> Trajectory:
         estimated, unknown options.
     """
     p = _options(options)
-    traj, lag = _fit(imu, gnss, p), 0.0
-    first = _gnss_lag(traj, gnss) if p["estimate_gnss_lag"] else 0.0
-    base = traj
-    if first:
-        # each fit follows part of the lag it is given: the lag seen after a refit with the
-        # first estimate gives the fraction, and the fixed point is extrapolated (Aitken)
-        lag = first
-        traj = _fit(imu, _shifted(gnss, lag), p)
-        second = _gnss_lag(traj, _shifted(gnss, lag), minimum=0.0)
-        if second and abs(second) <= MAX_LAG_FRACTION * abs(first) and second * first > 0:
-            lag = first / (1.0 - second / first)
-            traj = _fit(imu, _shifted(gnss, lag), p)
+    traj = _fit(imu, gnss, p)
+    lag = 0.0
+    if p["estimate_gnss_lag"]:
+        # each fit follows part of the lag its fixes carry, so the scan of a refit with the
+        # lag found sees the rest; kept only when the refits lower the GNSS residual enough
+        base = traj
+        profile = base.parameters["fit_residuals"]["gnss_lag_profile"]
+        for k in range(LAG_ROUNDS):
+            found = traj.parameters["fit_residuals"]["gnss_lag_profile"]
+            step = best_lag(found["lag_s"], found["rms_m"],
+                            MIN_GNSS_LAG_S if k == 0 else 0.25 * LAG_STEP_S)
+            if not step:
+                break
+            lag += step
+            traj = _fit(imu, shifted(gnss, lag), p)
         rms = [x.parameters["fit_residuals"]["gnss_position_rms_3d_m"] for x in (base, traj)]
-        if rms[1] > (1.0 - LAG_MIN_GAIN) * rms[0]:     # the lag explains little: not a lag
+        sigma = float(np.median(gnss["sigma"])) if "sigma" in gnss else p["sigma_position_m"]
+        if (abs(lag) < MIN_GNSS_LAG_S or rms[1] > (1.0 - LAG_MIN_GAIN) * rms[0]
+                or lag_displacement(base, gnss["t"].to_numpy(dtype=float), lag) < sigma):
             traj, lag = base, 0.0
+        traj.parameters["fit_residuals"]["gnss_lag_profile"] = profile
     traj.parameters["fit_residuals"]["gnss_lag_s"] = lag
     return traj
-
-
-def _shifted(gnss, lag):
-    out = gnss.copy()
-    out["t"] = gnss["t"].to_numpy(dtype=float) - lag
-    return out
-
-
-def _gnss_lag(traj, gnss, minimum=None) -> float:
-    """The lag of the GNSS fixes behind the fitted motion, s, when the fit's own residuals
-    show one: recorded ``P(t) = P_fit(t - lag)``, so ``P - P_fit ~ -lag V`` at the fixes;
-    the least-squares ``lag`` counts when it exceeds ``minimum`` and three of its standard
-    errors (docs/assumptions.md FIT6), else 0 (``minimum=None``: ``MIN_GNSS_LAG_S``)."""
-    t_g = gnss["t"].to_numpy(dtype=float)
-    keep = (t_g >= traj.t[0]) & (t_g <= traj.t[-1])
-    if keep.sum() < _MIN_GNSS:
-        return 0.0
-    P_g = gnss[["x", "y", "z"]].to_numpy(dtype=float)[keep]
-    P = np.column_stack([np.interp(t_g[keep], traj.t, traj.position[:, i]) for i in range(3)])
-    V = np.column_stack([np.interp(t_g[keep], traj.t, traj.velocity[:, i]) for i in range(3)])
-    d = P_g - P
-    vv = float(np.sum(V * V))
-    if vv == 0.0:
-        return 0.0
-    lag = -float(np.sum(d * V)) / vv
-    sigma = float(np.sqrt(np.mean((d + lag * V) ** 2)))
-    minimum = MIN_GNSS_LAG_S if minimum is None else minimum
-    if abs(lag) < minimum or abs(lag) < 3.0 * sigma / np.sqrt(vv):
-        return 0.0
-    return lag
 
 
 def _fit(imu, gnss, p) -> Trajectory:
@@ -396,7 +373,12 @@ def _fit(imu, gnss, p) -> Trajectory:
     span = check_overlap(imu, gnss, min_overlap_s=2.0 * p["knot_spacing_s"])
 
     t_all = imu_cols["t"]
-    keep = (t_all >= span.t_start) & (t_all <= span.t_end)
+    t_start = span.t_start
+    if p["hold_pad"]:
+        t_start = pad_start(t_all, np.column_stack([imu_cols[c] for c in IMU_COLUMNS[1:]]),
+                            np.array([gnss_cols[c][0] for c in GNSS_COLUMNS[1:]]), t_start,
+                            p["level_tolerance"])
+    keep = (t_all >= t_start) & (t_all <= span.t_end)
     if keep.sum() < _MIN_IMU:
         raise NavlibInputError(
             f"imu: need at least {_MIN_IMU} samples inside the common span, got {keep.sum()}")
@@ -488,17 +470,20 @@ def _fit(imu, gnss, p) -> Trajectory:
     if pad is not None:
         knots = liftoff_knots(knots, t, pad_end)
     resolved = resolved_samples(t, w_b)
-    sigma_sa, scale_note = accel_scale_sigma(p), ""
+    sigma_sa, scale_note = np.full(3, accel_scale_sigma(p)), ""
     while True:
         rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end, resolved)
         correction, corrected, coef = _correct(rows, attitude, f_b, t, p, sigma_sa)
-        worst = float(np.abs(correction.scale).max())
-        if sigma_sa == 0.0 or worst <= SCALE_CREDIBLE_SIGMAS * sigma_sa:
+        beyond = np.abs(correction.scale) > SCALE_CREDIBLE_SIGMAS * sigma_sa
+        if not (beyond & (sigma_sa > 0)).any():
             break
-        scale_note = (f"accelerometer scale error {worst:.3g} found, beyond "
-                      f"{SCALE_CREDIBLE_SIGMAS:g} x its prior {sigma_sa:.3g}: taken as the fit "
-                      "absorbing a motion it does not follow, refitted without a scale")
-        sigma_sa = 0.0
+        scale_note += "".join(
+            f"accelerometer {axis} scale error {correction.scale[i]:.3g} found, beyond "
+            f"{SCALE_CREDIBLE_SIGMAS:g} x its prior {sigma_sa[i]:.3g}: taken as the fit "
+            "absorbing a motion it does not follow, refitted without that scale; "
+            for i, axis in enumerate("xyz") if beyond[i] and sigma_sa[i] > 0)
+        sigma_sa = np.where(beyond, 0.0, sigma_sa)
+    scale_note = scale_note.rstrip("; ")
     attitude = corrected
 
     # 4: smooth attitude on SO(3) --------------------------------------------------------
@@ -520,13 +505,16 @@ def _fit(imu, gnss, p) -> Trajectory:
         events["liftoff"] = pad[0]
     traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events=events, name=str(p["name"]))
     residuals = _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g)
+    if p["estimate_gnss_lag"]:
+        lags, rms = lag_profile(rows, f_e, coef, t_g, P_g, V_g, sigma)
+        residuals["gnss_lag_profile"] = {"lag_s": lags.tolist(), "rms_m": rms.tolist()}
     residuals.update({
         "heading_deg": float(np.degrees(heading_of(attitude_fit[0], C_n_e))),
         "heading_source": source, "initial_attitude_source": kind,
         "initial_attitude_note": note, "n_imu": int(t.size), "n_gnss": int(t_g.size),
         "n_knots": int(knots.size - 2 * SPLINE_DEGREE), "imu_rate_hz": rate,
         "imu_holes": hole_bounds(t, f_b, w_b, holes), "level": level_info,
-        "sigma_specific_force_used_mps2": float(rows.sigma_f),
+        "sigma_specific_force_used_mps2": float(np.median(rows.sigma_f)),
         "accel_bias_mps2": [float(b) for b in correction.bias],
         "accel_scale": [float(1.0 + s) for s in correction.scale],
         "accel_scale_note": scale_note,

@@ -9,6 +9,7 @@ time.
 
 import numpy as np
 
+from navlib import earth
 from navlib.trajectory.position_spline import SAMPLES_PER_KNOT, SPLINE_DEGREE
 from navlib.units import DEG
 
@@ -165,3 +166,35 @@ def gnss_still(t_g, P_g, t_liftoff):
     noise = float(np.sqrt(np.mean((P_g[sel] - offset - np.outer(x, slope)) ** 2)))
     limit = PAD_GNSS_SPEED_MPS + 3.0 * noise * np.sqrt(3.0 / np.sum(x**2))
     return bool(np.linalg.norm(slope) <= limit)
+
+
+def pad_start(t, imu, P0, t_start, tolerance) -> float:
+    """Where a fit starts: ``t_start`` (the records' common span), or the first IMU sample
+    when the record stands on a pad (:func:`find_liftoff`) until after ``t_start``. On the
+    pad the vehicle is where the first fix says, so the IMU before it is kept
+    (docs/assumptions.md FIT4): fixes moved back by a GNSS lag (FIT6) no longer reach the
+    first samples, and the pad must not be lost with them.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU times, s.
+    imu : numpy.ndarray
+        Specific force and angular rate, (N, 6): ``f_x, f_y, f_z`` (m/s^2), ``w_x, w_y,
+        w_z`` (rad/s).
+    P0 : numpy.ndarray
+        ECEF position of the first fix, m (sets local gravity).
+    t_start : float
+        Start of the common span, s.
+    tolerance : float
+        Levelling tolerance, a fraction of gravity (:func:`find_liftoff`).
+
+    Returns
+    -------
+    float
+    """
+    if t[0] >= t_start:
+        return t_start
+    g = float(np.linalg.norm(earth.normal_gravity_ecef(P0)))
+    pad = find_liftoff(t, imu[:, :3], imu[:, 3:], g, tolerance)
+    return float(t[0]) if pad is not None and pad[0] > t_start else t_start

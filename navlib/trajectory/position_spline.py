@@ -11,7 +11,10 @@ and the constant accelerometer bias, eliminated through a Schur complement.
 :func:`place_knots` places the knots of both the position and the attitude spline.
 """
 
+import copy
+
 import numpy as np
+import pandas as pd
 import scipy.sparse as sp
 from scipy.interpolate import BSpline
 from scipy.linalg import solveh_banded
@@ -41,6 +44,20 @@ MAX_TURN_PER_SAMPLE_RAD = np.radians(30.0)
 not resolved by the record's rate: the gyro chain cannot follow a rotation axis that moves
 within a sample (900 deg/s at 10 Hz is 90 deg per sample); the assessment's bound
 ``max_turn_per_sample_deg`` in data/quality.toml [fit] is the same 30 deg."""
+MAX_CONING_PER_SAMPLE_RAD = np.radians(0.1)
+"""A sample whose rotation axis moves against the previous sample's by more than this is not
+resolved either: ``|dtheta_(k-1) x dtheta_k| / 2`` (the coning term of a two-sample attitude
+algorithm, ``dtheta = w dt``) measures the part of the rotation the sampled rates leave to
+interpolation, and 0.1 deg per sample is 1 deg/s of attitude uncertainty at 10 Hz (a
+1 m/s^2 specific-force error at 6 g). On the shared TeleMega flights the 100 Hz ascent
+spinning at 300-500 deg/s stays below 0.003 deg per sample; the 10 Hz descents under drogue
+and main reach 1-2 deg in the median (docs/assumptions.md FIT7)."""
+LOCAL_SCALE_S = 2.0
+"""Window of the local robust spread of the recorded specific force that sets each IMU row's
+sigma (:meth:`PositionRows.robust_weights`), s: long enough for a median over 200 samples at
+100 Hz, short enough to tell a 3 s boost from the coast after it."""
+SCALE_OFF = 1e-9
+"""Prior sigma that holds the scale error of an axis not estimated at zero."""
 UNRESOLVED_WEIGHT = 1e-4
 """Weight factor of the specific-force rows within ``UNRESOLVED_MARGIN_S`` of an unresolved
 sample: their attitude is unknown, so the GNSS carries the position there and they do not
@@ -150,21 +167,17 @@ class PositionRows:
     def __init__(self, knots, t, t_g, P_g, V_g, sigma, p, P_ref, pad_end=None,
                  resolved=None):
         self.P_ref = P_ref
+        self.knots = knots
+        self.t = t
         self.B0, self.B1, self.B2 = (_basis(t, knots, nu) for nu in range(3))
-        self.G0, self.G1 = _basis(t_g, knots, 0), _basis(t_g, knots, 1)
         self.sigma_f = p["sigma_specific_force_mps2"]
+        self.sigma_v = p["sigma_velocity_mps"]
         self.scaled = False
-        w_g2 = 1.0 / sigma**2
-        self.N_gnss = self.G0.T @ (self.G0 * w_g2[:, None])
-        rhs_gnss = self.G0.T @ (w_g2[:, None] * (P_g - P_ref))
-        if V_g is not None:
-            w_v2 = 1.0 / p["sigma_velocity_mps"] ** 2
-            self.N_gnss = self.N_gnss + w_v2 * (self.G1.T @ self.G1)
-            rhs_gnss = rhs_gnss + w_v2 * (self.G1.T @ V_g)
+        self.N_pad = None
         if pad_end is not None:     # standing still on the pad: P' = 0 up to lift-off
             B1 = self.B1[:pad_end + 1]
-            self.N_gnss = self.N_gnss + (B1.T @ B1) / PAD_SIGMA_MPS**2
-        self.rhs_gnss = rhs_gnss
+            self.N_pad = (B1.T @ B1) / PAD_SIGMA_MPS**2
+        self._set_gnss(t_g, P_g, V_g, sigma)
         self.resolved = np.ones(t.size, bool) if resolved is None else resolved
         self.set_weights(np.ones(t.size))
         # first linearisation point: GNSS positions interpolated to the IMU times
@@ -172,19 +185,65 @@ class PositionRows:
         self.V0 = np.column_stack([np.interp(t, t_g, np.gradient(P_g[:, i], t_g))
                                    for i in range(3)])
 
+    def _set_gnss(self, t_g, P_g, V_g, sigma):
+        """The GNSS rows (positions, velocities when given) and the pad rows' normal
+        matrix ``N_gnss`` with its right-hand side ``rhs_gnss``."""
+        self.G0, self.G1 = _basis(t_g, self.knots, 0), _basis(t_g, self.knots, 1)
+        w_g2 = 1.0 / sigma**2
+        N_gnss = self.G0.T @ (self.G0 * w_g2[:, None])
+        if self.N_pad is not None:
+            N_gnss = N_gnss + self.N_pad
+        rhs_gnss = self.G0.T @ (w_g2[:, None] * (P_g - self.P_ref))
+        if V_g is not None:
+            w_v2 = 1.0 / self.sigma_v ** 2
+            N_gnss = N_gnss + w_v2 * (self.G1.T @ self.G1)
+            rhs_gnss = rhs_gnss + w_v2 * (self.G1.T @ V_g)
+        self.N_gnss, self.rhs_gnss = N_gnss, rhs_gnss
+
+    def with_gnss_times(self, t_g, P_g, V_g, sigma):
+        """A copy whose GNSS rows sit at the times ``t_g`` (the same fixes moved in time:
+        the lag scan of :func:`navlib.trajectory.fit.fit_flight_data`); the IMU rows and
+        their weights are shared.
+
+        Parameters
+        ----------
+        t_g : numpy.ndarray
+            Fix times, s, inside the knot span.
+        P_g : numpy.ndarray
+            ECEF positions of the fixes, m, (n, 3).
+        V_g : numpy.ndarray or None
+            ECEF velocities of the fixes, m/s, (n, 3).
+        sigma : numpy.ndarray
+            Position sigma of each fix, m.
+
+        Returns
+        -------
+        PositionRows
+        """
+        out = copy.copy(self)
+        out._set_gnss(t_g, P_g, V_g, sigma)
+        out.N = sp.csr_array(self.N_imu + out.N_gnss)
+        out.ab = _banded(out.N)
+        return out
+
     def set_weights(self, factor):
-        """IMU row weights ``factor / sigma_f^2`` (times ``UNRESOLVED_WEIGHT`` where the
-        rotation is not resolved) and the banded normal matrix."""
+        """IMU row weights ``factor / sigma_f^2`` (``sigma_f`` a scalar or one per row;
+        times ``UNRESOLVED_WEIGHT`` where the rotation is not resolved) and the banded
+        normal matrix."""
         self.w_f2 = factor * np.where(self.resolved, 1.0, UNRESOLVED_WEIGHT) / self.sigma_f**2
-        self.N = sp.csr_array(self.B2.T @ (self.B2 * self.w_f2[:, None]) + self.N_gnss)
+        self.N_imu = self.B2.T @ (self.B2 * self.w_f2[:, None])
+        self.N = sp.csr_array(self.N_imu + self.N_gnss)
         self.ab = _banded(self.N)
 
     def robust_weights(self, coef, f_e, eps):
         """Huber factors from the specific-force residual norms (threshold ``_HUBER`` sigma).
 
-        The first call also raises ``sigma_f`` to the robust scale of the residuals
-        (1.4826 x their median absolute value) when that is larger: vibration then weighs
-        as the noise it is against the GNSS rows.
+        The first call also raises ``sigma_f`` to the local robust spread of the recorded
+        specific force from one sample to the next (1.4826 x the median absolute difference
+        over ``sqrt(2)`` within ``LOCAL_SCALE_S``, per sample) where that is larger:
+        vibration then weighs as the noise it is against the GNSS rows, a stretch that
+        shakes (a boost, a parachute opening) does not set the weight of a quiet one (a
+        coast), and a slow departure of the fit from the records is not taken for noise.
 
         Parameters
         ----------
@@ -199,8 +258,10 @@ class PositionRows:
         r = (f_e + np.cross(eps, f_e) + earth.normal_gravity_ecef(P)
              - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V))
         if not self.scaled:
-            d = np.abs(a - r)[self.resolved] if self.resolved.any() else np.abs(a - r)
-            self.sigma_f = max(self.sigma_f, 1.4826 * float(np.median(d)))
+            # sample-to-sample spread of the records: noise and vibration, not the motion
+            spread = np.abs(np.diff(f_e, axis=0, prepend=f_e[:1])).mean(axis=1) / np.sqrt(2.0)
+            local = local_median(self.t, spread, LOCAL_SCALE_S)
+            self.sigma_f = np.maximum(self.sigma_f, 1.4826 * local)
             self.scaled = True
         size = np.linalg.norm(a - r, axis=1) / (_HUBER * self.sigma_f)
         self.set_weights(1.0 / np.maximum(size, 1.0))
@@ -274,6 +335,8 @@ class AttitudeCorrection:
     """
 
     def __init__(self, t, p, sigma_ba, sigma_sa=0.0):
+        """``sigma_sa``: one prior sigma, or one per body axis (0: that axis' scale error
+        is not estimated)."""
         k = 3
         n_int = max(int(np.ceil((t[-1] - t[0]) / p["correction_knot_spacing_s"] - 1e-9)), 1)
         n_int = min(n_int, MAX_CORRECTION_INTERVALS)
@@ -288,14 +351,16 @@ class AttitudeCorrection:
                     + D.T @ D / (p["attitude_drift_deg_s"] * DEG * step) ** 2)
         # unknowns ordered (axis j, coef i) for eps, then the bias, then the scale errors
         self.n_b = 3 if sigma_ba > 0 else 0              # no bias unknowns without a prior
-        self.n_s = 3 if sigma_sa > 0 else 0
+        sigma_sa = np.broadcast_to(np.asarray(sigma_sa, dtype=float), (3,))
+        self.n_s = 3 if (sigma_sa > 0).any() else 0
         n = 3 * n_c + self.n_b + self.n_s
         self.prior = np.zeros((n, n))
         self.prior[:3 * n_c, :3 * n_c] = np.kron(np.eye(3), per_axis)
         if self.n_b:
             self.prior[3 * n_c:3 * n_c + 3, 3 * n_c:3 * n_c + 3] = np.eye(3) / sigma_ba**2
         if self.n_s:
-            self.prior[n - 3:, n - 3:] = np.eye(3) / sigma_sa**2
+            # an axis without a prior sigma keeps its scale error at 0 (an exact prior)
+            self.prior[n - 3:, n - 3:] = np.diag(1.0 / np.maximum(sigma_sa, SCALE_OFF) ** 2)
         self.n_c = n_c
         self.total = np.zeros(n)                         # sum of the increments applied
 
@@ -352,9 +417,33 @@ class AttitudeCorrection:
                                 for j in range(3)])
 
 
+def local_median(t, x, window_s):
+    """The median of ``x`` over the samples within ``window_s / 2`` of each time ``t``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Increasing times, s.
+    x : numpy.ndarray
+        Values, (N,).
+    window_s : float
+        Window length, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        (N,).
+    """
+    index = pd.to_timedelta(np.asarray(t, dtype=float) - t[0], unit="s")
+    series = pd.Series(np.asarray(x, dtype=float), index=index)
+    return series.rolling(pd.Timedelta(seconds=window_s), center=True,
+                          min_periods=1).median().to_numpy()
+
+
 def resolved_samples(t, w_b):
     """True where no sample within ``UNRESOLVED_MARGIN_S`` turns the body by more than
-    ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one.
+    ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one or moves its rotation axis by more
+    than ``MAX_CONING_PER_SAMPLE_RAD``.
 
     Parameters
     ----------
@@ -369,7 +458,10 @@ def resolved_samples(t, w_b):
         Boolean mask, (N,).
     """
     step = np.diff(t, prepend=t[0])
-    fast = np.linalg.norm(w_b, axis=1) * step > MAX_TURN_PER_SAMPLE_RAD
+    theta = w_b * step[:, None]
+    coning = 0.5 * np.linalg.norm(np.cross(np.r_[theta[:1], theta[:-1]], theta), axis=1)
+    fast = ((np.linalg.norm(theta, axis=1) > MAX_TURN_PER_SAMPLE_RAD)
+            | (coning > MAX_CONING_PER_SAMPLE_RAD))
     c = np.r_[0, np.cumsum(fast)]
     i0 = np.searchsorted(t, t - UNRESOLVED_MARGIN_S, side="left")
     i1 = np.searchsorted(t, t + UNRESOLVED_MARGIN_S, side="right")

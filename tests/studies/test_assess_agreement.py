@@ -4,13 +4,16 @@ follows the records are represented; a tumbling descent logged at 10 Hz, a GNSS 
 held fix are flagged with their cause; the segment table, summary and long frames carry the
 verdict."""
 
+import re
 import warnings
 
 import numpy as np
 import pandas as pd
 import pytest
 from flights import exact_records
+from locations import shared_file
 
+from navlib import io
 from navlib.studies.assess import assess_flight
 from navlib.studies.assess.agreement import (
     AGREEMENT_COLUMNS,
@@ -244,8 +247,9 @@ def test_a_gnss_lag_of_0_2_s_is_recovered(hpr, hpr_records):
 @pytest.mark.parametrize("axis", ["w_x", "w_z"])
 def test_a_reversed_gyro_axis_is_flagged(hpr_records, axis):
     """A gyro axis logged with the wrong sign bends the reference attitude: the boost is not
-    represented. The cause is not identified yet (no check separates a reversed gyro from
-    other attitude errors: the reference is fitted to the reversed rates)."""
+    represented, its reference departing from the recorded specific force or rates. The cause
+    is not identified yet (no check separates a reversed gyro from other attitude errors: the
+    reference is fitted to the reversed rates, and the named cause may be a gyro scale)."""
     imu, gnss = hpr_records
     flipped = imu.copy()
     flipped[axis] *= -1
@@ -253,7 +257,7 @@ def test_a_reversed_gyro_axis_is_flagged(hpr_records, axis):
     table = result.segment_table
     powered = table[table["phase"] == "boost"]
     assert len(powered) == 1 and not powered["represented"].iloc[0]
-    assert "specific force" in powered["fit_reason"].iloc[0]
+    assert re.search("specific force|angular rate", powered["fit_reason"].iloc[0])
     assert any(f"segment {int(powered['segment'].iloc[0])} boost" in m for m in messages)
 
 
@@ -264,3 +268,69 @@ def test_a_pad_must_stand_still_in_the_gnss_too():
     drifting = still + np.outer(t_g, [0.0, 1.0, 0.0])          # 1 m/s: a hover drifting
     assert not gnss_still(t_g, drifting, 9.5)
     assert gnss_still(t_g[:2], drifting[:2], 9.5)               # two fixes say nothing
+
+
+def _with_baro(imu, truth, lag_s=0.0):
+    """``imu`` with a barometer record of ``truth``'s height (100 Hz, on time) attached."""
+    _, _, h = truth.geodetic
+    out = imu.copy()
+    out.attrs = {**imu.attrs, "baro": pd.DataFrame({"t": truth.t, "alt_m": h})}
+    return out
+
+
+def test_a_gnss_lag_of_0_8_s_is_found_against_the_barometer(hpr, hpr_records):
+    """Fixes stamped 0.8 s late: the barometer shows it (FIT6), the fixes are moved back
+    before the quality checks (without it the boost's fixes, 200 m low, disagree with the
+    barometer), and the reference keeps to the truth."""
+    imu, gnss = hpr_records
+    late = gnss.copy()
+    late["t"] += 0.8
+    with_baro = _with_baro(imu, hpr)
+    result, _ = _assess(with_baro, late, t_max=40.0)
+    found = result.quality[result.quality["check"] == "gnss lag"]
+    assert len(found) == 1
+    lag = float(re.search(r"by ([0-9.]+) s", found["message"].iloc[0]).group(1))
+    assert lag + result.trajectory.parameters["fit_residuals"]["gnss_lag_s"] == pytest.approx(
+        0.8, abs=0.05)
+    k = np.searchsorted(hpr.t, _on_log_clock(result, result.trajectory.t))
+    error = np.linalg.norm(result.trajectory.position - hpr.position[k], axis=1).max()
+    clean, _ = _assess(with_baro, gnss, t_max=40.0)
+    assert clean.quality[clean.quality["check"] == "gnss lag"].empty     # on time: no lag
+    k0 = np.searchsorted(hpr.t, _on_log_clock(clean, clean.trajectory.t))
+    assert error < 1.5 * np.linalg.norm(clean.trajectory.position - hpr.position[k0],
+                                        axis=1).max()
+
+
+def test_the_gnss_lag_profile_has_its_minimum_at_the_lag(hpr_records):
+    imu, gnss = hpr_records
+    late = gnss.copy()
+    late["t"] += 0.5
+    result, _ = _assess(imu, late, t_max=40.0)
+    profile = result.trajectory.parameters["fit_residuals"]["gnss_lag_profile"]
+    lags, rms = np.asarray(profile["lag_s"]), np.asarray(profile["rms_m"])
+    assert lags[np.argmin(rms)] > 0.2                 # the first fit follows part of it
+    assert rms[np.argmin(rms)] < 0.75 * rms[np.argmin(np.abs(lags))]
+    assert result.trajectory.parameters["fit_residuals"]["gnss_lag_s"] == pytest.approx(
+        0.5, abs=0.05)
+
+
+@pytest.mark.parametrize("name", ["2018-04-08-serial-1257-flight-0014.csv",
+                                  "2019-05-04-serial-1257-flight-0017.csv",
+                                  "2019-05-26-serial-1257-flight-0018.csv"])
+def test_shared_telemega_fixes_trail_the_barometer_and_the_pad_stands_still(name):
+    """On the shared TeleMega flights the GPS fixes trail the barometer by about half a
+    second (0.5-0.6 s found): moved back, the boost's fixes are kept and the ascent's GNSS
+    residual is a few tens of metres at most (35-77 m RMS in boost before); the pad holds
+    still. Measured here, not tuned: the bounds are loose on purpose."""
+    imu, gnss = io.read_altos(shared_file("altos", name))
+    result, _ = _assess(imu, gnss)
+    found = result.quality[result.quality["check"] == "gnss lag"]
+    assert len(found) == 1
+    lag = float(re.search(r"by ([0-9.]+) s", found["message"].iloc[0]).group(1))
+    assert 0.3 < lag < 1.0
+    table = result.segment_table
+    ascent = table[table["phase"].isin(["boost", "coast", "boost+coast"])]
+    assert (ascent["fit_gnss_rms"] < 30.0).all()
+    traj = result.trajectory
+    pad = traj.t < traj.events["liftoff"]
+    assert pad.any() and np.linalg.norm(traj.velocity[pad], axis=1).max() < 3.0

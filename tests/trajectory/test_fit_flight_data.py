@@ -200,3 +200,43 @@ def test_hole_longer_than_bridge_and_slow_imu_are_named(short_records):
 def test_heading_needs_horizontal_excitation(short_records):
     with pytest.raises(NavlibInputError, match="heading_deg"):
         fit_flight_data(*short_records)
+
+
+def test_a_spin_about_a_fixed_axis_is_resolved_a_tumble_at_10_hz_is_not():
+    """FIT7: a 500 deg/s spin about body x at 100 Hz (5 deg a sample, the axis fixed) is
+    resolved; the same rate at 10 Hz with the axis turning (a tumble under a parachute) is
+    not, though each sample turns by less than 30 deg, because the axis moves within it."""
+    t = np.arange(0.0, 5.0, 0.01)
+    spin = np.column_stack([np.full(t.size, np.radians(500.0)), np.zeros((t.size, 2))])
+    assert position_spline.resolved_samples(t, spin).all()
+    t10 = np.arange(0.0, 5.0, 0.1)
+    phase = 2.0 * np.pi * 0.7 * t10
+    tumble = np.radians(250.0) * np.column_stack([np.cos(phase), np.sin(phase),
+                                                   np.zeros(t10.size)])
+    assert np.degrees(np.linalg.norm(tumble, axis=1) * 0.1).max() < 30.0
+    assert not position_spline.resolved_samples(t10, tumble).any()
+
+
+def test_local_median_follows_each_stretch():
+    t = np.arange(0.0, 10.0, 0.01)
+    x = np.where(t < 5.0, 3.0, 0.1)
+    m = position_spline.local_median(t, x, 2.0)
+    assert np.allclose(m[t < 3.9], 3.0) and np.allclose(m[t > 6.1], 0.1)
+
+
+def test_a_scale_beyond_its_prior_is_dropped_on_that_axis_alone(rocket):
+    """A scale error estimated beyond 3 prior sigmas is not taken as a calibration: that
+    axis' scale is dropped and named, the others are still estimated. With a 2 % error on
+    the thrust axis, a 0.01 prior recovers it; a 0.002 prior drops it (x alone)."""
+    imu, gnss = _records(rocket)
+    imu = imu.copy()
+    imu["f_x"] *= 1.02
+    kept = fit_flight_data(imu, gnss, sigma_accel_scale=0.01, sigma_accel_bias_mps2=0.05)
+    assert kept.parameters["fit_residuals"]["accel_scale"][0] == pytest.approx(1.02, abs=0.003)
+    assert kept.parameters["fit_residuals"]["accel_scale_note"] == ""
+    fit = fit_flight_data(imu, gnss, sigma_accel_scale=0.002, sigma_accel_bias_mps2=0.05)
+    res = fit.parameters["fit_residuals"]
+    assert "accelerometer x scale error" in res["accel_scale_note"]
+    assert "y scale" not in res["accel_scale_note"]
+    assert res["accel_scale"][0] == pytest.approx(1.0, abs=1e-9)
+    assert abs(res["accel_scale"][2] - 1.0) <= 3 * 0.002
