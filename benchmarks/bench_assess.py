@@ -56,7 +56,7 @@ ROCKET_10MIN = {"phase.1.burn_time_s": 6.0, "phase.1.acceleration_m_s2": 90.0,
 _GENERATE = """
 import sys, numpy as np
 sys.path.insert(0, {tests!r})
-from flights import multicopter, records
+from support.flights import multicopter, records
 imu, gnss = records(multicopter({duration}, 250.0, pad_s=20.0), seed=1)
 np.savez({path!r}, imu=imu.to_numpy(), gnss=gnss.to_numpy(),
          imu_cols=list(imu.columns), gnss_cols=list(gnss.columns))
@@ -65,7 +65,7 @@ np.savez({path!r}, imu=imu.to_numpy(), gnss=gnss.to_numpy(),
 _GENERATE_ROCKET = """
 import sys, numpy as np
 sys.path.insert(0, {tests!r})
-from flights import records
+from support.flights import records
 from navlib.trajectory.mission import from_mission, with_values
 truth = from_mission(with_values("hpr_rocket", {changes!r}))
 imu, gnss = records(truth, seed=1)
@@ -166,7 +166,7 @@ def _rocket_case() -> Case:
 def altos_logs() -> list[Path]:
     """The shared AltOS flight logs (none when the shared folder is absent)."""
     sys.path.insert(0, str(ROOT / "tests"))
-    from locations import SHARED_DATA
+    from support.locations import SHARED_DATA
 
     return sorted((SHARED_DATA / "altos").glob("*.csv"))
 

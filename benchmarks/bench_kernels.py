@@ -43,9 +43,8 @@ from _harness import Case
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-import kalman_reference as ref  # noqa: E402
-import linear_reference  # noqa: E402
-import strapdown_reference  # noqa: E402
+from support import kalman_reference as ref  # noqa: E402
+from support import linear_reference, strapdown_reference  # noqa: E402
 
 from navlib import strapdown  # noqa: E402
 from navlib.filters import linear_recursion, prepare_linear  # noqa: E402

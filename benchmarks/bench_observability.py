@@ -39,7 +39,7 @@ from navlib.observability.sliding import block_data, sliding_singular_values
 from navlib.studies.launcher import configurations, table2
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-import sliding_reference
+from support import sliding_reference
 
 _CPU_S: dict[str, float] = {}
 

@@ -25,7 +25,7 @@ def _records():
     import pandas as pd
 
     sys.path.insert(0, str(ROOT / "tests"))
-    from flights import multicopter, records
+    from support.flights import multicopter, records
 
     from navlib import earth, sensors
 

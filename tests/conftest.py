@@ -12,7 +12,7 @@ import os
 
 import matplotlib
 import pytest
-from locations import shared_file
+from support.locations import shared_file
 
 matplotlib.use("Agg")
 os.environ["NAVLIB_NO_CACHE"] = "1"

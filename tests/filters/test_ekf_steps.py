@@ -9,9 +9,9 @@ import importlib
 import tomllib
 from pathlib import Path
 
-import kalman_reference as ref
 import numpy as np
 import pytest
+from support import kalman_reference as ref
 
 from navlib import sensors, strapdown
 from navlib.discretize import discretize_steps

@@ -3,9 +3,9 @@
 replaced (tests/linear_reference.py) on a block of the paper's launcher model: noisy runs,
 a per-run or shared state input, sparse updates."""
 
-import linear_reference as ref
 import numpy as np
 import pytest
+from support import linear_reference as ref
 
 from navlib.filters import linear_recursion, prepare_linear
 from navlib.kalman import psd_sqrt

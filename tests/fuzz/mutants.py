@@ -31,10 +31,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from altos_writer import rocket_rows, write_altos
-from dataflash_writer import write_flight
-from flights import dataflash_flight
-from locations import SHARED_DATA
+from support.altos_writer import rocket_rows, write_altos
+from support.dataflash_writer import write_flight
+from support.flights import dataflash_flight
+from support.locations import SHARED_DATA
 
 from navlib import NavlibInputError, io
 from navlib.earth import ecef_to_geodetic

@@ -4,7 +4,7 @@ of the Table 2 configurations within the measured spread (ranks exactly)."""
 
 import numpy as np
 import pytest
-import sliding_reference as reference
+from support import sliding_reference as reference
 
 from navlib.models.launcher import launcher
 from navlib.observability.local import _model_arrays

@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from flights import exact_records
+from support.flights import exact_records
 
 from navlib.studies.assess import assess_flight
 from navlib.studies.assess.agreement import (

@@ -5,9 +5,9 @@ accumulates."""
 
 import importlib
 
-import kalman_reference as ref
 import numpy as np
 import pytest
+from support import kalman_reference as ref
 
 from navlib import kalman
 from navlib.filters import linear_steps

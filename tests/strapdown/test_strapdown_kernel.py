@@ -5,8 +5,8 @@ rounding accumulates."""
 
 import numpy as np
 import pytest
-import strapdown_reference as ref
 from scipy.spatial.transform import Rotation
+from support import strapdown_reference as ref
 
 from navlib import filters, strapdown
 from navlib.quaternions import quat_from_matrix
