@@ -1,7 +1,7 @@
 """Long-flight assessment in bounded memory.
 
 ``assess.long_flight_<N>s``: :func:`navlib.studies.assess.assess_flight` of a generated
-multicopter flight (``tests/flights.py``: pad, climb, figure-eight survey) of N seconds at
+multicopter flight (``tests/support/flights.py``: pad, climb, figure-eight survey) of N seconds at
 250 Hz with 5 Hz GNSS and the ``pixhawk_mems`` errors. The flight is generated and saved by
 one subprocess; a fresh subprocess loads it and assesses it, and reports its wall time and
 its peak resident memory (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, measured, not
@@ -18,7 +18,7 @@ starts from the 2 s on the pad. Goals: under 20 s and 1 GB.
 (largest relative difference of ``F`` and of each epoch's ``Q`` against every-IMU-step).
 
 ``assess.altos_<flight>`` (issue 37, goal 3 s warm): each shared AltOS rocket flight
-(``../shared/data/altos``, found as ``tests/locations.py`` finds it; no rows when absent)
+(``../shared/data/altos``, found as ``tests/support/locations.py`` finds it; no rows when absent)
 assessed in this process after one warm-up, as the CLI does per flight
 (:func:`navlib.reports.fleet.assess_log`: read, :func:`~navlib.studies.assess.assess_flight`,
 the HTML page); ``time_s`` is the best of 3 of the whole, ``read_s``, ``assess_s`` and

@@ -1,5 +1,5 @@
 """The compiled Kalman kernels (issue 26) equal the NumPy code they replaced
-(tests/kalman_reference.py): one step within 1e-12 relative on random and paper cases, whole
+(tests/support/kalman_reference.py): one step within 1e-12 relative on random and paper cases, whole
 runs (a 30 001-epoch launcher recursion, the 86 s rocket EKF) within the drift rounding
 accumulates."""
 
