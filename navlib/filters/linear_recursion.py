@@ -20,6 +20,10 @@ from navlib.cache import drop_stale_kernel_caches
 from navlib.filters.linear_preparation import LinearFilter, LinearSteps
 from navlib.kalman import kernel_array, psd_sqrt
 
+__all__ = ["CHUNK", "Block", "Work", "compile_recursion_kernels", "filter_block", "filter_kernel",
+           "measure_block", "noise_blocks", "record_block", "run_recursion", "truth_block",
+           "truth_kernel"]
+
 CHUNK = 256
 """Steps per block of :func:`run_recursion`: its noise is drawn a block at a time (this fixes
 the random stream), and the block's truth, measurements and NIS are formed together."""
