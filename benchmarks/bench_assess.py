@@ -1,7 +1,7 @@
 """Long-flight assessment in bounded memory.
 
 ``assess.long_flight_<N>s``: :func:`navlib.studies.assess.assess_flight` of a generated
-multicopter flight (``tests/flights.py``: pad, climb, figure-eight survey) of N seconds at
+multicopter flight (``tests/support/flights.py``: pad, climb, figure-eight survey) of N seconds at
 250 Hz with 5 Hz GNSS and the ``pixhawk_mems`` errors. The flight is generated and saved by
 one subprocess; a fresh subprocess loads it and assesses it, and reports its wall time and
 its peak resident memory (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, measured, not
@@ -18,7 +18,7 @@ starts from the 2 s on the pad. Goals: under 20 s and 1 GB.
 (largest relative difference of ``F`` and of each epoch's ``Q`` against every-IMU-step).
 
 ``assess.altos_<flight>`` (issue 37, goal 3 s warm): each shared AltOS rocket flight
-(``../shared/data/altos``, found as ``tests/locations.py`` finds it; no rows when absent)
+(``../shared/data/altos``, found as ``tests/support/locations.py`` finds it; no rows when absent)
 assessed in this process after one warm-up, as the CLI does per flight
 (:func:`navlib.reports.fleet.assess_log`: read, :func:`~navlib.studies.assess.assess_flight`,
 the HTML page); ``time_s`` is the best of 3 of the whole, ``read_s``, ``assess_s`` and
@@ -56,7 +56,7 @@ ROCKET_10MIN = {"phase.1.burn_time_s": 6.0, "phase.1.acceleration_m_s2": 90.0,
 _GENERATE = """
 import sys, numpy as np
 sys.path.insert(0, {tests!r})
-from flights import multicopter, records
+from support.flights import multicopter, records
 imu, gnss = records(multicopter({duration}, 250.0, pad_s=20.0), seed=1)
 np.savez({path!r}, imu=imu.to_numpy(), gnss=gnss.to_numpy(),
          imu_cols=list(imu.columns), gnss_cols=list(gnss.columns))
@@ -65,7 +65,7 @@ np.savez({path!r}, imu=imu.to_numpy(), gnss=gnss.to_numpy(),
 _GENERATE_ROCKET = """
 import sys, numpy as np
 sys.path.insert(0, {tests!r})
-from flights import records
+from support.flights import records
 from navlib.trajectory.mission import from_mission, with_values
 truth = from_mission(with_values("hpr_rocket", {changes!r}))
 imu, gnss = records(truth, seed=1)
@@ -166,7 +166,7 @@ def _rocket_case() -> Case:
 def altos_logs() -> list[Path]:
     """The shared AltOS flight logs (none when the shared folder is absent)."""
     sys.path.insert(0, str(ROOT / "tests"))
-    from locations import SHARED_DATA
+    from support.locations import SHARED_DATA
 
     return sorted((SHARED_DATA / "altos").glob("*.csv"))
 

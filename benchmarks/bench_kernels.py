@@ -1,5 +1,5 @@
 """Benchmarks of the compiled Kalman kernels (issue 26), each beside the NumPy code it
-replaced (``tests/kalman_reference.py``):
+replaced (``tests/support/kalman_reference.py``):
 
 * ``kernels.riccati_28``: 2000 epochs of the covariance recursion with the Joseph update
   (28 states, 12 measurements at every epoch, the size of the launcher's INS/GPS/att + RT
@@ -11,13 +11,13 @@ replaced (``tests/kalman_reference.py``):
   100 runs, 28-state launcher INS/GPS/att + RT model, update at every step): the true-error
   and filter recursions, compiled (:func:`navlib.filters.linear_recursion.truth_kernel`,
   :func:`navlib.filters.linear_recursion.filter_kernel`) and NumPy (``numpy_linear_block_28``, the
-  block code in ``tests/linear_reference.py``); ``..._4runs`` the same with 4 runs (the size
+  block code in ``tests/support/linear_reference.py``); ``..._4runs`` the same with 4 runs (the size
   of a batch of unit outlier responses). No goal in the issue: 10 us (100 runs) and 2 us
   (4 runs) per step, about a quarter of the NumPy block's time.
 * ``kernels.strapdown_window_21``: 100 EKF feedback windows of the strapdown mechanisation
   (0.1 s at 200 Hz, 21 samples each, along the launcher ascent), compiled
   (:func:`navlib.strapdown._kernel.integrate_kernel` through ``strapdown.propagate``) and
-  NumPy (``numpy_strapdown_window_21``, ``tests/strapdown_reference.py``). No goal in the
+  NumPy (``numpy_strapdown_window_21``, ``tests/support/strapdown_reference.py``). No goal in the
   issue: 1 us per sample.
 * ``kernels.compile_cold`` / ``kernels.compile_warm``: a fresh interpreter that runs
   :func:`navlib.compiled.compile_kernels` (every kernel), with an empty numba cache
@@ -43,9 +43,8 @@ from _harness import Case
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-import kalman_reference as ref  # noqa: E402
-import linear_reference  # noqa: E402
-import strapdown_reference  # noqa: E402
+from support import kalman_reference as ref  # noqa: E402
+from support import linear_reference, strapdown_reference  # noqa: E402
 
 from navlib import strapdown  # noqa: E402
 from navlib.filters import linear_recursion, prepare_linear  # noqa: E402

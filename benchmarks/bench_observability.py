@@ -6,7 +6,7 @@
   (issue 14; it was 5 min in issue 3);
 * the sliding window alone, one 28-state configuration at every step (30 001 steps), as the
   compiled kernel (``navlib.observability.sliding``) and as its NumPy reference
-  (``tests/sliding_reference.py``), single-threaded, transitions included;
+  (``tests/support/sliding_reference.py``), single-threaded, transitions included;
 * one configuration's rank / condition-number curve at 1 Hz (model build included: what a
   widget does on a dropdown change), goal < 1 s.
 
@@ -39,7 +39,7 @@ from navlib.observability.sliding import block_data, sliding_singular_values
 from navlib.studies.launcher import configurations, table2
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-import sliding_reference
+from support import sliding_reference
 
 _CPU_S: dict[str, float] = {}
 
@@ -178,7 +178,7 @@ def cases():
              "30001 steps, 28 states", _cpu_timed("sliding", _sliding(sliding_singular_values)),
              goal_s=5.0, repeat=2, extra=_rate_columns("sliding", local_flops(28, 12, 30001)),
              notes="one thread; transitions included"),
-        Case("observability: sliding window, NumPy reference (tests/sliding_reference.py)",
+        Case("observability: sliding window, NumPy reference (tests/support/sliding_reference.py)",
              "30001 steps, 28 states",
              _cpu_timed("sliding_numpy", _sliding(sliding_reference.sliding_singular_values)),
              goal_s=5.0, repeat=2,

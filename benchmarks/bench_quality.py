@@ -1,7 +1,7 @@
 """Flight-data quality checks on a long flight (saturation, frozen GNSS, barometer).
 
 ``quality.check_records_1800s``: :func:`navlib.io.quality.check_records` (saturation, frozen
-fixes, barometer, jumps) of a generated 30-minute multicopter flight (``tests/flights.py``)
+fixes, barometer, jumps) of a generated 30-minute multicopter flight (``tests/support/flights.py``)
 at 250 Hz with 10 Hz GNSS, the ``pixhawk_mems`` errors and a barometer record; the records
 are generated once, outside the timing. Goal: 5 s, a small part of the assessment's 60 s.
 
@@ -25,7 +25,7 @@ def _records():
     import pandas as pd
 
     sys.path.insert(0, str(ROOT / "tests"))
-    from flights import multicopter, records
+    from support.flights import multicopter, records
 
     from navlib import earth, sensors
 

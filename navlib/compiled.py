@@ -23,6 +23,8 @@ from navlib.filters import ekf_loop, linear_recursion
 from navlib.observability import sliding
 from navlib.sensors import simulation
 
+__all__ = ["compile_kernels", "compile_shared_kernels"]
+
 
 def compile_kernels() -> None:
     """Compile (first run on a machine) or load (afterwards) every kernel of navlib."""

@@ -1,6 +1,8 @@
 """The one exception type user-facing calls raise for bad input, and the one warning category
 of flight data that were accepted with a finding."""
 
+__all__ = ["FlightDataWarning", "NavlibInputError"]
+
 
 class NavlibInputError(ValueError):
     """Bad input to a user-facing navlib call.

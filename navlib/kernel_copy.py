@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numba
 
+__all__ = ["copy_matrix", "copy_vector"]
+
 
 @numba.njit(cache=True, nogil=True)
 def copy_matrix(src, dst):

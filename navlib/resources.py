@@ -14,6 +14,9 @@ from pathlib import Path
 
 from navlib.errors import NavlibInputError
 
+__all__ = ["data_dir", "is_shipped_name", "notebooks_dir", "source_checkout", "toml_names",
+           "toml_path"]
+
 
 def _package_folder(name: str, checkout_folder: str) -> Path:
     """Folder of the (namespace) package ``name``; the checkout's folder when navlib is

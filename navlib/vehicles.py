@@ -11,6 +11,8 @@ import numpy as np
 
 from navlib.errors import NavlibInputError
 
+__all__ = ["MAV_TYPES", "VEHICLES", "VEHICLE_PHASES", "check_vehicle", "vehicle_from_log"]
+
 VEHICLES = ("rocket", "multicopter", "fixed-wing", "ground")
 """Vehicle classes whose phases :func:`navlib.segmentation.segment_flight` names."""
 VEHICLE_PHASES = {

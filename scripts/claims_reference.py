@@ -6,7 +6,7 @@ below, the strings the notebooks show: ``claim_id, ours, verdict, basis, robustn
 sets shared their builds (``--write``); a full-mode comparison takes about a minute, too
 long for the test suite, which compares quick mode (tests/regression/test_claims_golden.py)
 and checks the shared-build paths against the unshared ones on reduced sets
-(tests/studies/test_claims_sharing.py)::
+(tests/studies/claims/test_claims_sharing.py)::
 
     python scripts/claims_reference.py            # compare, exit 1 on any difference
     python scripts/claims_reference.py --write    # (re)write the reference

@@ -4,8 +4,8 @@ Runs :func:`navlib.studies.claims.run_search` for each registered search space (
 claims at every point of its declared assumption set, through :func:`navlib.sweep.sweep`, so
 ``--scheduler`` may be a Dask address) and writes its ``data/`` file (e.g.
 ``data/claims_search_rocket.csv``) with the command line and the navlib version in its
-header. ``tests/studies/test_claims_search.py`` recomputes a random sample of each stored search's
-points; notebook 00 reads them::
+header. ``tests/studies/claims/test_claims_search.py`` recomputes a random sample of each
+stored search's points; notebook 00 reads them::
 
     python scripts/claims_search.py [--study NAME ...] [--scheduler synchronous|processes|tcp://host:8786]
 """

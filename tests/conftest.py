@@ -12,7 +12,7 @@ import os
 
 import matplotlib
 import pytest
-from locations import shared_file
+from support.locations import shared_file
 
 matplotlib.use("Agg")
 os.environ["NAVLIB_NO_CACHE"] = "1"
@@ -20,6 +20,6 @@ os.environ["NAVLIB_NO_CACHE"] = "1"
 
 @pytest.fixture(scope="session")
 def px4_log_path():
-    """Locate a public PX4 sample log (``../shared/data/px4``, :mod:`locations`) by file
-    name; skip with a reason when it is absent."""
+    """Locate a public PX4 sample log (``../shared/data/px4``, :mod:`support.locations`) by
+    file name; skip with a reason when it is absent."""
     return lambda name: shared_file("px4", name)

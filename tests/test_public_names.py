@@ -1,8 +1,11 @@
 """The package's public names: every name in ``navlib.__all__`` resolves, so
-``from navlib import *`` works (a moved module once left ``fleet`` behind in it); every
-``__all__`` of every public module resolves; the modules stay small (600 lines at most)."""
+``from navlib import *`` works (a moved module once left ``fleet`` behind in it); every public
+module defines ``__all__`` (issue 38), a star import of it gives every name it lists, a leaf
+module lists what it defines (not what it imports) and every public function and class it
+defines; the modules stay small (600 lines at most)."""
 
 import importlib
+import inspect
 import pkgutil
 import sys
 from pathlib import Path
@@ -13,24 +16,27 @@ import navlib
 
 ROOT = Path(navlib.__file__).resolve().parent
 MAX_LINES = 600
-# the modules whose public names h38 listed (issue 38); every module under these names has
-# an ``__all__`` naming each public function, class and constant it defines
-WITH_ALL = ("navlib.earth", "navlib.rotations", "navlib.units", "navlib.quaternions",
-            "navlib.discretize", "navlib.observability", "navlib.metrics", "navlib.covariance",
-            "navlib.sensors", "navlib.sweep", "navlib.parallel", "navlib.cache", "navlib.kalman",
-            "navlib.resolution")
 
 
-def _public_modules() -> list[str]:
-    """Every importable module of navlib whose dotted name has no private (``_``) part."""
-    names = ["navlib"]
+def _public_modules() -> dict[str, bool]:
+    """Every importable module of navlib whose dotted name has no private (``_``) part, and
+    whether it is a package."""
+    modules = {"navlib": True}
     for info in pkgutil.walk_packages(navlib.__path__, prefix="navlib."):
         if not any(part.startswith("_") for part in info.name.split(".")):
-            names.append(info.name)
-    return sorted(names)
+            modules[info.name] = info.ispkg
+    return dict(sorted(modules.items()))
 
 
-PUBLIC_MODULES = _public_modules()
+PUBLIC_MODULES = list(_public_modules())
+LEAF_MODULES = [name for name, ispkg in _public_modules().items() if not ispkg]
+AT_THE_LIMIT = ("navlib.io.checks", "navlib.studies.ssac.claims",
+                "navlib.studies.ssac.experiment")
+"""Modules 0-3 lines under :data:`MAX_LINES` that an ``__all__`` (3-7 lines) would push over it:
+they get theirs when they are split by domain (a test below says when)."""
+REEXPORTS = {"navlib.io.quality": {"faulty_time", "gnss_faults", "load_thresholds"}}
+"""Names a leaf module lists though another module defines them: ``navlib.io.quality`` is the
+home of the old ``navlib.quality`` (issue 38), whose callers found these there."""
 
 
 def test_the_walk_finds_the_subpackages_and_leaves():
@@ -44,24 +50,51 @@ def test_every_public_name_resolves():
         assert getattr(navlib, name) is not None, name
 
 
-@pytest.mark.parametrize("module", PUBLIC_MODULES)
-def test_every_all_name_of_every_module_resolves(module):
+@pytest.mark.parametrize("module", [m for m in PUBLIC_MODULES if m not in AT_THE_LIMIT])
+def test_every_module_has_an_all_that_a_star_import_resolves(module):
+    """A star import raises when ``__all__`` names what the module lacks; a package may list
+    its submodules (``navlib.plots``), which the star import imports."""
     mod = importlib.import_module(module)
-    names = getattr(mod, "__all__", ())
+    assert hasattr(mod, "__all__"), f"{module} has no __all__"
+    names = mod.__all__
+    assert all(isinstance(name, str) for name in names), f"{module}.__all__ holds a non-string"
     assert len(set(names)) == len(names), f"{module}.__all__ repeats a name"
-    missing = [name for name in names if not hasattr(mod, name)]
+    namespace: dict = {}
+    exec(f"from {module} import *", namespace)
+    missing = sorted(set(names) - set(namespace))
     assert not missing, f"{module}.__all__ names what it lacks: {missing}"
 
 
-@pytest.mark.parametrize("module", [m for m in PUBLIC_MODULES if m.startswith(WITH_ALL)])
-def test_listed_modules_name_their_public_definitions(module):
+@pytest.mark.parametrize("module", sorted(AT_THE_LIMIT))
+def test_a_module_without_all_is_still_at_the_line_limit(module):
     mod = importlib.import_module(module)
-    assert hasattr(mod, "__all__"), f"{module} has no __all__"
+    lines = len(Path(mod.__file__).read_text(encoding="utf-8").splitlines())
+    assert not hasattr(mod, "__all__"), f"{module} has an __all__ now: drop it from AT_THE_LIMIT"
+    assert lines > MAX_LINES - 5, (f"{module} has {lines} lines, room for an __all__: give it "
+                                   "one and drop it from AT_THE_LIMIT")
+
+
+@pytest.mark.parametrize("module", [m for m in PUBLIC_MODULES if m not in AT_THE_LIMIT])
+def test_every_module_names_its_public_definitions(module):
+    mod = importlib.import_module(module)
     defined = {name for name, value in vars(mod).items()
                if not name.startswith("_") and getattr(value, "__module__", None) == module
                and callable(value)}
     lacking = sorted(defined - set(mod.__all__))
     assert not lacking, f"{module}.__all__ lacks {lacking}"
+
+
+@pytest.mark.parametrize("module", [m for m in LEAF_MODULES if m not in AT_THE_LIMIT])
+def test_a_leaf_module_lists_no_imported_name(module):
+    """One address per name: a function or class of another module is listed where it is
+    defined (or by a package that re-exports it), not by a leaf module that imports it
+    (:data:`REEXPORTS` excepted)."""
+    mod = importlib.import_module(module)
+    imported = {name for name in mod.__all__
+                if (inspect.isclass(value := getattr(mod, name)) or inspect.isroutine(value))
+                and value.__module__ != module}
+    unexpected = sorted(imported - REEXPORTS.get(module, set()))
+    assert not unexpected, f"{module}.__all__ lists imported names: {unexpected}"
 
 
 def test_star_import_works():

@@ -19,7 +19,7 @@ import sys
 
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib.io.logs import LOG_KINDS
 

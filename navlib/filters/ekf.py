@@ -36,6 +36,8 @@ from navlib.models.launcher import LauncherErrorState
 from navlib.quaternions import quat_from_matrix
 from navlib.rotations import log_so3
 
+__all__ = ["FAMILIES", "EKFResult", "EKFSnapshot", "ekf", "error_model"]
+
 _MODELS = {"launcher": LauncherErrorState, "ecef21": Ecef21ErrorState}
 FAMILIES = tuple(_MODELS)
 """Error-model families the EKF runs with: Beaudoin's launcher models

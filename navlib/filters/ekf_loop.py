@@ -42,6 +42,8 @@ from navlib.kalman import PINV_RTOL, fixed_updates_kernel, kernel_array
 from navlib.models.ecef import Ecef21ErrorState, ecef21_jacobians_kernel
 from navlib.quaternions import _matrix_quat_kernel as matrix_quat_kernel
 
+__all__ = ["compile_kernel", "compiled_run"]
+
 _GROUPS = ("bg", "ba", "sg", "sa")
 """The parameter groups of the 21-state model, in the rows of the kernel's ``params``."""
 

@@ -32,6 +32,8 @@ import numpy as np
 from navlib.cache import drop_stale_kernel_caches
 from navlib.discretize import discretize_steps
 
+__all__ = ["TAYLOR_THETA", "discretize_kernel", "discretize_window", "pattern_kernel"]
+
 TAYLOR_THETA = 4.0
 """Largest ``|A dt|`` (infinity norm) summed without scaling: rounding then stays within
 ``e^theta u ~ 1e-14`` of the exponential's norm."""

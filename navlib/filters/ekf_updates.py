@@ -19,6 +19,8 @@ import numpy as np
 from navlib.filters.measurements import FixedDesign
 from navlib.kalman import PINV_RTOL, definite_noise, fixed_updates_kernel, kernel_array
 
+__all__ = ["Epochs", "WindowUpdates", "update_records"]
+
 
 class Epochs:
     """The update epochs of :func:`ekf` and what does not depend on the data.

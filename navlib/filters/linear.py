@@ -39,6 +39,9 @@ from navlib.filters.linear_recursion import run_recursion
 from navlib.kalman import chi2_bounds, nees_values, psd_sqrt
 from navlib.sensors.faults import Outlier, as_outliers, channel_profile, linear_mapping
 
+__all__ = ["MEMORY_BUDGET", "LinearSimulation", "recorded_epochs", "simulate_linear",
+           "unit_responses"]
+
 MEMORY_BUDGET = 100e6
 """Bytes of recorded truth + estimate histories :func:`simulate_linear` aims at when it
 chooses ``record_every`` itself."""

@@ -31,6 +31,8 @@ from navlib.kalman import (
 )
 from navlib.models.base import DiscreteModel, LinearModel
 
+__all__ = ["METHODS", "ONE_THREAD", "LinearFilter", "LinearSteps", "linear_steps", "prepare_linear"]
+
 METHODS = ("euler", "expm")
 
 ONE_THREAD = 1

@@ -5,7 +5,7 @@ kernels (docs/assumptions.md "Compiled kernels").
 per block of :data:`CHUNK` steps the true errors (:func:`truth_kernel`), their
 measurements, the filter (:func:`filter_kernel`) and the recorded epochs, into
 preallocated work arrays (:class:`Work`). The NumPy code the kernels replaced is
-``tests/linear_reference.py``.
+``tests/support/linear_reference.py``.
 """
 
 from __future__ import annotations
@@ -19,6 +19,10 @@ import numpy as np
 from navlib.cache import drop_stale_kernel_caches
 from navlib.filters.linear_preparation import LinearFilter, LinearSteps
 from navlib.kalman import kernel_array, psd_sqrt
+
+__all__ = ["CHUNK", "Block", "Work", "compile_recursion_kernels", "filter_block", "filter_kernel",
+           "measure_block", "noise_blocks", "record_block", "run_recursion", "truth_block",
+           "truth_kernel"]
 
 CHUNK = 256
 """Steps per block of :func:`run_recursion`: its noise is drawn a block at a time (this fixes
@@ -255,7 +259,7 @@ def truth_kernel(x, F, noise, inputs, j0):
     kernels"): ``x[j0+i+1] = x[j0+i] F[i]' (+ noise[i]) (+ inputs[i])`` for each step ``i``
     of ``F`` (s, n, n); ``x`` (., R, n), ``noise`` (s, R, n) or no rows, ``inputs``
     (s, R, n) or (s, 1, n) (the same input for every run) or no rows. The NumPy code it
-    replaced is ``tests/linear_reference.py``.
+    replaced is ``tests/support/linear_reference.py``.
 
     Parameters
     ----------
@@ -367,7 +371,7 @@ def filter_kernel(prior, post, innov, z, H, K, F, update, j0, last):
     ``update[i] = p >= 0``: ``innov[p] = z[p] - x^- H[i]'`` and
     ``x^+ = x^- + innov[p] K[i]'`` into ``post[j]`` (rows are runs); then, while
     ``j < last``, ``x^-_{j+1} = x F[i]'`` into ``prior[j + 1]``. The NumPy code it replaced
-    is ``tests/linear_reference.py``.
+    is ``tests/support/linear_reference.py``.
 
     Parameters
     ----------

@@ -25,6 +25,9 @@ from navlib._validation import finite_array, increasing_times
 from navlib.errors import NavlibInputError
 from navlib.rotations import log_so3
 
+__all__ = ["AttitudeSensor", "FixedDesign", "GnssPosition", "GnssVelocity", "Measurement",
+           "ReferenceAttitude", "ekf_measurements", "epoch_index", "imu_arrays"]
+
 
 class Measurement(ABC):
     """One kind of EKF measurement: its epochs, data and rows of the error model.

@@ -26,6 +26,8 @@ from navlib.quaternions import quat_from_matrix
 from navlib.sensors import ReferenceTrajectory, simulate_attitude_sensor
 from navlib.sensors.faults import as_outliers, inject
 
+__all__ = ["EKFRun", "simulate_ekf"]
+
 _AXES = ("x", "y", "z")
 
 

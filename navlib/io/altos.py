@@ -54,6 +54,9 @@ from navlib.io.checks import (
 )
 from navlib.io.sensor_health import check_imu_alive, dead_magnetometer
 
+__all__ = ["ACCEL_COLUMNS", "FIX_COLUMNS", "GYRO_COLUMNS", "IMU_BLOCK", "MAG_LABELS",
+           "MIN_SATELLITES", "TELEMEGA_RANGE", "looks_like_altos", "read_altos"]
+
 ACCEL_COLUMNS = ("accel_x", "accel_y", "accel_z")
 """AltOS accelerometer columns (m/s^2) on the along, across, through axes."""
 GYRO_COLUMNS = ("gyro_roll", "gyro_pitch", "gyro_yaw")

@@ -44,6 +44,10 @@ from navlib.io._table import (
 from navlib.io.checks import check_times
 from navlib.io.csv_files import _TIME_ALIASES, _TIME_IMPLIED
 
+__all__ = ["ALTITUDE_RANGE_M", "BARO_COLUMNS", "BARO_KEYS", "BARO_SPECS", "ISA_EXPONENT",
+           "ISA_LAPSE_K_M", "ISA_P0_PA", "ISA_T0_K", "PRESSURE_RANGE_PA", "baro_height",
+           "pressure_altitude", "read_baro_csv"]
+
 ISA_P0_PA = 101_325.0
 """Standard sea-level pressure, Pa (ISO 2533)."""
 ISA_T0_K = 288.15

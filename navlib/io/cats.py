@@ -23,6 +23,8 @@ from navlib.io.baro import read_baro_csv
 from navlib.io.csv_files import read_gnss_csv, read_imu_csv
 from navlib.io.firm import header_names
 
+__all__ = ["BARO_FILE", "CATS_IMU_HEADER", "GNSS_FILE", "looks_like_cats", "read_cats"]
+
 CATS_IMU_HEADER = ("ts", "id", "ax", "ay", "az", "gx", "gy", "gz")
 """Normalised header of a CATS ``imu.csv``."""
 BARO_FILE = "baro.csv"

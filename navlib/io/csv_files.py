@@ -69,6 +69,10 @@ from navlib.io.checks import (
 from navlib.io.gnss_rows import SATELLITE_ALIASES, screen_fixes
 from navlib.io.sensor_health import check_imu_alive
 
+__all__ = ["AXES", "DEG_S_MEDIAN_RATE", "F_KEYS", "GNSS_COLUMNS", "GNSS_SPECS", "IMU_COLUMNS",
+           "IMU_KEYS", "IMU_SPECS", "NED_KEYS", "R_KEYS", "V_KEYS", "W_KEYS", "combine_sigma",
+           "read_gnss_csv", "read_imu_csv"]
+
 AXES = ("x", "y", "z")
 F_KEYS = ("f_x", "f_y", "f_z")
 W_KEYS = ("w_x", "w_y", "w_z")

@@ -66,6 +66,8 @@ from navlib.io.checks import (
 from navlib.io.csv_files import R_KEYS, V_KEYS
 from navlib.io.ulog import body_rotation
 
+__all__ = ["read_dataflash"]
+
 _IMU_FIELDS = ("GyrX", "GyrY", "GyrZ", "AccX", "AccY", "AccZ")
 _GPS_FIELDS = ("Lat", "Lng", "Alt")
 _TYPES = ("IMU", "IMU2", "IMU3", "GPS", "GPS2", "ATT", "BARO", "CTUN", "MSG")

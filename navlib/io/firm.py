@@ -16,6 +16,8 @@ from navlib.io._table import existing_file, split_header_name
 from navlib.io.baro import read_baro_csv
 from navlib.io.csv_files import read_imu_csv
 
+__all__ = ["FIRM_BARO_COLUMNS", "FIRM_COLUMNS", "header_names", "looks_like_firm", "read_firm"]
+
 FIRM_COLUMNS = {
     "t": "timestamp_seconds",
     "f_x": "raw_acceleration_x_gs", "f_y": "raw_acceleration_y_gs",

@@ -36,6 +36,8 @@ from navlib.io.dataflash import read_dataflash
 from navlib.io.firm import header_names, looks_like_firm, read_firm
 from navlib.io.ulog import read_ulog
 
+__all__ = ["LOG_KINDS", "parse_log", "read_log", "reader_keywords"]
+
 LOG_KINDS = ("ulog", "dataflash", "altos", "firm", "cats", "csv")
 """The kinds :func:`parse_log` tells apart."""
 

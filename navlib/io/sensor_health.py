@@ -13,6 +13,9 @@ import numpy as np
 from navlib import units
 from navlib.io._table import Source
 
+__all__ = ["ALIVE_ACCEL_M_S2", "MIN_SAMPLES", "MOVING_RATE_RAD_S", "check_imu_alive",
+           "dead_magnetometer"]
+
 MIN_SAMPLES = 100
 """Records shorter than this are not judged (a short rest may legitimately read constant)."""
 ALIVE_ACCEL_M_S2 = 0.5 * units.G0

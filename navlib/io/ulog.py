@@ -55,6 +55,9 @@ from navlib.io.checks import (
 )
 from navlib.io.csv_files import NED_KEYS, R_KEYS, V_KEYS, combine_sigma
 
+__all__ = ["ATTITUDE_TOPIC", "BARO_TOPIC", "BODY_FRAMES", "GPS_TOPICS", "IMU_TOPIC", "READ_BUDGET",
+           "body_rotation", "read_ulog"]
+
 IMU_TOPIC = "sensor_combined"
 ATTITUDE_TOPIC = "vehicle_attitude"
 BARO_TOPIC = "vehicle_air_data"

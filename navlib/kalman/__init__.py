@@ -16,7 +16,7 @@ covariance recursion of :func:`covariance_recursion`), :func:`propagate_kernel`
 propagation to a window's end).
 :func:`kalman_gain` and :func:`joseph_update` keep their NumPy interface (one epoch or a
 batch) around them; :func:`compile_kernels` compiles or loads
-them all. The NumPy code they replaced is kept in ``tests/kalman_reference.py``.
+them all. The NumPy code they replaced is kept in ``tests/support/kalman_reference.py``.
 """
 
 from __future__ import annotations

@@ -32,6 +32,9 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.models.base import DiscreteModel
 
+__all__ = ["AIDINGS", "BARO_PRESSURE_COEFFICIENT", "BARO_SCALE", "BARO_SIGMA_M", "PAD_SPEED_M_S",
+           "ZUPT_SIGMA_M_S", "aided_model", "baro_sigma", "pad_epochs", "without_gnss"]
+
 AIDINGS = ("gnss", "baro", "gnss+baro")
 """What aided a flight: its GNSS receiver, its barometer (with the pad), or both."""
 BARO_SIGMA_M = 1.0

@@ -27,6 +27,9 @@ from navlib.discretize import chain, discretize_steps
 from navlib.errors import NavlibInputError
 from navlib.rotations import exp_so3, skew
 
+__all__ = ["HOLDS", "DiscreteModel", "ErrorState", "ErrorStateModel", "LinearModel",
+           "MeasurementRows", "Nominal", "state_indices"]
+
 HOLDS = ("left", "mean")
 """How a trajectory model's matrices are held over one step (see LinearModel.discretize)."""
 

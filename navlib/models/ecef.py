@@ -27,6 +27,11 @@ from navlib.resources import is_shipped_name
 from navlib.rotations import skew
 from navlib.sensors import DEFAULT_IMU_PRESET, load_preset
 
+__all__ = ["ATTITUDE_ERRORS", "DEFAULT_SENSORS", "NOISE_KEYS", "NOISE_NAMES", "P0_DEFAULTS",
+           "PAPER_IDS", "STATE_GROUPS", "STATE_NAMES", "STREAM_SAMPLES", "Ecef21ErrorState",
+           "ecef21", "ecef21_at_epochs", "ecef21_jacobians", "epoch_samples", "imu_noise_densities",
+           "initial_covariance", "parameter_sigmas"]
+
 STATE_NAMES = (
     "P_x", "P_y", "P_z", "V_x", "V_y", "V_z", "theta_x", "theta_y", "theta_z",
     "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z",

@@ -18,6 +18,11 @@ from navlib.sensors import SensorSpec, load_preset
 from navlib.trajectory import launcher_ascent
 from navlib.units import DEG
 
+__all__ = ["ASSUMED", "BIAS_LETTERS", "BIAS_MODELS", "BIAS_SETS", "DEFAULT_SENSORS", "SOLUTIONS",
+           "SOLUTION_LABELS", "STATE_NAMES", "LauncherErrorState", "LauncherSteps", "launcher",
+           "launcher_steps", "rt_dynamics_matrix", "sensor_values", "simplified_gps_bias",
+           "state_names"]
+
 SOLUTIONS = ("ins_gps", "ins_gps_att", "ins_gps_rt", "ins_gps_att_rt")
 """The four navigation solutions (spec launcher.md §1)."""
 SOLUTION_LABELS = {"ins_gps": "INS/GPS", "ins_gps_att": "INS/GPS/att",

@@ -53,6 +53,10 @@ from navlib.models.base import LinearModel
 from navlib.sensors import SensorSpec, load_preset
 from navlib.units import DEG, DEG_PER_HOUR, MG
 
+__all__ = ["IMU_KEYS", "IMU_PRESET", "P0_VARIANTS", "SIGMA_NU", "SITE_ALT_M", "SITE_LAT_DEG",
+           "SITE_LON_DEG", "STATES_10", "STATES_12", "STATES_15", "STATE_SETS", "display_units",
+           "initial_sigmas", "site_constants", "ssac"]
+
 STATES_15 = ("psiN", "psiE", "psiD", "dvN", "dvE", "dvD", "dL", "dlambda", "dh",
              "bgN", "bgE", "bgD", "baN", "baE", "baD")
 """State order of the 15-state model (ssac.md §2.3)."""

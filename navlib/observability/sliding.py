@@ -22,7 +22,7 @@ works along contiguous memory: a dot product per column, which numba may vectori
 order, a rounding-level change). The kernels use numba's ``error_model="numpy"`` (IEEE
 division, no division-by-zero check to compile: none of their divisors is zero) and allocate
 their scratch once per chunk. The NumPy code it replaced is kept in
-tests/sliding_reference.py to compare against.
+tests/support/sliding_reference.py to compare against.
 """
 
 from __future__ import annotations

@@ -8,6 +8,8 @@ from navlib.errors import NavlibInputError
 from navlib.plots.figure import subplots
 from navlib.sensors.allan import TERMS, allan_model
 
+__all__ = ["allan_figure"]
+
 _SLOPES = {"random_walk": -0.5, "bias_instability": 0.0, "rate_random_walk": 0.5}
 
 

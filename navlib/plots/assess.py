@@ -25,6 +25,9 @@ from navlib.plots.figure import subplots
 from navlib.plots.phases import phase_colour
 from navlib.units import DEG
 
+__all__ = ["estimable_figure", "fit_residuals_figure", "flight_figure", "phases_figure",
+           "reshade_phases", "shade_phases"]
+
 _MAX_POINTS = 20_000
 _LABEL_SHARE = 0.09
 """Segments narrower than this share of the flight are labelled with their number only."""

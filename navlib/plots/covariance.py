@@ -15,6 +15,9 @@ import numpy as np
 from navlib.errors import NavlibInputError
 from navlib.plots.figure import subplots
 
+__all__ = ["TIME_UNITS", "eigenvalues_figure", "eigenvectors_figure", "ratio_figure", "sigma_axes",
+           "sigma_figure"]
+
 TIME_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0}
 
 

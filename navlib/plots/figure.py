@@ -17,6 +17,8 @@ import contextvars
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
+__all__ = ["detached", "figure", "is_detached", "show", "subplots"]
+
 _DETACHED = contextvars.ContextVar("navlib_detached_figures", default=False)
 _SUBPLOT_KEYWORDS = ("sharex", "sharey", "squeeze", "width_ratios", "height_ratios",
                      "subplot_kw", "gridspec_kw")

@@ -15,6 +15,9 @@ from navlib.plots.figure import subplots
 from navlib.plots.trajectory import LAUNCHER_MARKERS, mark_events
 from navlib.studies.launcher import SINGULAR_LOG10
 
+__all__ = ["UNACCEPTABLE_LOG10", "fig1_figure", "mission_figure", "singular_values_figure",
+           "table2_figure"]
+
 UNACCEPTABLE_LOG10 = 10.0
 """cond > 1e10 is unacceptable in double precision (Beaudoin et al., after Judd [37])."""
 

@@ -15,6 +15,9 @@ from navlib.models.launcher import SOLUTION_LABELS
 from navlib.plots.figure import subplots
 from navlib.units import DEG
 
+__all__ = ["consistency_figure", "correlation_figure", "ekf_crosscheck_figure", "ekf_sigma_figure",
+           "induced_figure", "monte_carlo_figure", "response_figure", "roll_sigma_figure"]
+
 _UNITS = {  # watch -> (label, factor applied to SI values)
     "roll": ("urad", 1e6), "pitch": ("urad", 1e6), "yaw": ("urad", 1e6),
     "ref_roll": ("urad", 1e6), "bp": ("m", 1.0),

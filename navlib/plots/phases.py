@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import zlib
 
+__all__ = ["OTHER_COLOURS", "PHASE_COLOURS", "phase_colour", "segment_phases"]
+
 PHASE_COLOURS = {
     # the automatic phases of every vehicle class (navlib.segmentation.VEHICLE_PHASES)
     "rest": "0.55", "powered": "tab:red", "turn": "tab:purple", "free_fall": "tab:cyan",

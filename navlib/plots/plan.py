@@ -8,6 +8,8 @@ from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
 
+__all__ = ["timeline_figure"]
+
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Index runs ``(first, last)`` where ``mask`` holds."""

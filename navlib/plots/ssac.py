@@ -12,6 +12,9 @@ from navlib.plots.covariance import eigenvalues_figure, eigenvectors_figure, sig
 from navlib.plots.figure import subplots
 from navlib.studies.ssac import STATE_GROUPS, SSACStudy
 
+__all__ = ["SIGMA_PANELS", "p0_sensitivity_figure", "ssac_eigenvalues_figure",
+           "ssac_eigenvectors_figure", "ssac_sigma_figure"]
+
 SIGMA_PANELS = {
     "tilt (Fig. 1)": ("psiN", "psiE"),
     "azimuth (Fig. 2)": ("psiD",),

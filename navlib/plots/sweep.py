@@ -17,6 +17,8 @@ from navlib.errors import NavlibInputError
 from navlib.plots.figure import subplots
 from navlib.sweep import pivot
 
+__all__ = ["heatmap", "heatmaps_figure"]
+
 
 def _label(value) -> str:
     if isinstance(value, float):

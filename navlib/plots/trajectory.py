@@ -15,6 +15,10 @@ from navlib import earth
 from navlib.plots.figure import subplots
 from navlib.units import DEG, DEG_PER_HOUR
 
+__all__ = ["LAUNCHER_MARKERS", "ROCKET_MARKERS", "altitude_speed_figure", "axial_imu_figure",
+           "body_x_elevation", "closure_error_figure", "launcher_figure", "mark_events",
+           "stationary_figure"]
+
 ROCKET_MARKERS = ("ignition", "burnout", "free_flight", "despin")
 """Events marked on the Fig. 1 analogue (paper: 18, 46, 60 and 73 s)."""
 LAUNCHER_MARKERS = ("pitchover", "gravity_turn", "stage1_burnout", "stage2_ignition")

@@ -20,6 +20,10 @@ from pathlib import Path
 from navlib.errors import NavlibInputError
 from navlib.resources import notebooks_dir as shipped_notebooks_dir
 
+__all__ = ["NOTEBOOK_PATTERN", "NotebookInfo", "default_notebooks_dir", "dependencies",
+           "list_notebooks", "notebook_format", "parameters_for", "parse_parameter_value",
+           "parse_parameters", "read_notebook", "select_notebooks"]
+
 NOTEBOOK_PATTERN = re.compile(r"^(\d{2})_\w+\.ipynb$")
 """Notebooks taking part in the report: ``NN_name.ipynb`` (two digits, underscore)."""
 

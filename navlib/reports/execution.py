@@ -25,6 +25,10 @@ from navlib.reports.discovery import NotebookInfo, notebook_format, read_noteboo
 from navlib.reports.kernel_watch import KernelWatch, NotebookAborted, execute_notebook
 from navlib.reports.results import CellFailure, NotebookRun
 
+__all__ = ["BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "HIDE_OUTPUT_TAG", "HIDE_TAG",
+           "MALLOC_VARIABLES", "PAGE_CSS", "Kernels", "Settings", "available_cpus", "execute",
+           "kernel_environment"]
+
 DEFAULT_CELL_TIMEOUT_S = 600.0
 """Per-cell time limit of a report run, s: the heaviest full-mode cell takes about a minute
 on an unloaded 2-core machine, so ten minutes only ever stops a runaway cell."""

@@ -32,7 +32,8 @@ from navlib.studies.assess import assess_flight
 from navlib.studies.assess.states import STATES_COLUMNS
 from navlib.studies.plan import plan_mission
 
-__all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "write_fleet"]
+__all__ = ["SUMMARY_COLUMNS", "assess_log", "assess_logs", "plan_missions", "summary_row",
+           "write_fleet"]
 
 SUMMARY_COLUMNS = ("log", "status", "error", "vehicle", "duration_s", "t_ignition",
                    "n_segments", "phases", "events", "excitable", "sensible", "aiding",

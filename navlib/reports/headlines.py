@@ -17,6 +17,8 @@ from __future__ import annotations
 import html
 import re
 
+__all__ = ["HEADLINE_TAG", "headline", "question"]
+
 HEADLINE_TAG = "headline"
 """Cell tag: the cell's outputs are the page's headline on ``index.html``."""
 

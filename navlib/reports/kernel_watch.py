@@ -43,6 +43,10 @@ import psutil
 from navlib.cache import memoized
 from navlib.reports.discovery import notebook_format
 
+__all__ = ["ENGINE_NAME", "IDLE_WITHOUT_REPLY_S", "KERNEL_NAME", "LOST_WAKEUP_WAIT_S",
+           "NOT_STARTED_S", "POLL_SLICE_S", "KernelWatch", "NotebookAborted", "execute_notebook",
+           "kernel_manager_class", "kill_all_kernels"]
+
 POLL_SLICE_S = 0.25
 """Longest wait on a kernel socket before it is polled again, s."""
 

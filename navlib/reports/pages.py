@@ -19,6 +19,8 @@ import pandas as pd
 from navlib.studies.assess.states import EXCITABLE_MARK, SENSIBLE_MARK, how_well
 from navlib.studies.plan import plan_beside_flight
 
+__all__ = ["figure_png", "flight_page", "log_title", "plan_page"]
+
 _STYLE = ("body{font-family:sans-serif;font-size:16px;line-height:1.4;max-width:1200px;"
           "margin:auto;padding:0 1em} "
           "table{border-collapse:collapse;font-size:14px} "

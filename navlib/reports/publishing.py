@@ -38,6 +38,9 @@ from navlib.reports.results import NotebookRun
 from navlib.reports.signals import signals_deferred
 from navlib.resources import source_checkout
 
+__all__ = ["INDEX", "MANIFEST", "check_output_dir", "default_output_dir", "load_manifest",
+           "publish", "remove_orphaned_staging", "staging_folder"]
+
 MANIFEST = "manifest.json"
 INDEX = "index.html"
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+__all__ = ["CellFailure", "NotebookRun", "Progress", "ReportError"]
+
 
 @dataclass(frozen=True)
 class CellFailure:

@@ -45,6 +45,8 @@ from navlib.reports.publishing import (
 from navlib.reports.results import CellFailure, NotebookRun, Progress, ReportError
 from navlib.reports.signals import ReportInterrupted, signals_interrupt
 
+__all__ = ["queue_order", "run_reports"]
+
 _EVENT_WAIT_S = 0.25  # the main thread's wait for worker events (signals are handled between)
 
 

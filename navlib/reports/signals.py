@@ -11,6 +11,8 @@ import contextlib
 import signal
 import threading
 
+__all__ = ["ReportInterrupted", "signals_deferred", "signals_interrupt"]
+
 
 class ReportInterrupted(BaseException):
     """The run was interrupted (Ctrl-C or SIGTERM; a BaseException, like KeyboardInterrupt,

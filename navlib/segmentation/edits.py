@@ -16,6 +16,8 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.segmentation.phases import SEGMENT_COLUMNS, TIME_TOL_S, Segmentation
 
+__all__ = ["segments_table"]
+
 
 def _entry(item, k: int) -> tuple[str | None, float, float]:
     """One segment entry: a mapping, ``(t_start, t_end)`` or ``(phase, t_start, t_end)``."""

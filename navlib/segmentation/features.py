@@ -15,6 +15,8 @@ from navlib import earth
 from navlib.errors import NavlibInputError
 from navlib.units import DEG
 
+__all__ = ["FEATURES", "flight_features", "trajectory_arrays", "window_means"]
+
 FEATURES = ("speed", "accel", "f_norm", "gravity", "f_along", "f_lateral", "rate",
              "rate_across", "path_rate", "v_up", "v_h", "a_up", "height", "sideslip")
 

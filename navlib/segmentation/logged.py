@@ -17,6 +17,8 @@ import pandas as pd
 
 from navlib.errors import NavlibInputError
 
+__all__ = ["EVENTS", "LOGGED_WORDS", "flight_events", "logged_segments"]
+
 LOGGED_WORDS = {"startup": "pad", "idle": "pad", "pad": "pad", "boost": "boost",
                 "fast": "coast", "coast": "coast", "drogue": "drogue", "main": "main",
                 "landed": "landed"}

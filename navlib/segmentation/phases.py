@@ -20,6 +20,9 @@ from navlib.segmentation.logged import flight_events, logged_segments
 from navlib.units import DEG
 from navlib.vehicles import VEHICLE_PHASES, check_vehicle
 
+__all__ = ["PHASES", "SEGMENT_COLUMNS", "SEGMENT_DEFAULTS", "TIME_TOL_S", "Segmentation",
+           "clock_time", "frame_on_clock", "segment_flight"]
+
 PHASES = ("rest", "powered", "turn", "free_fall", "coast", "cruise")
 """Phase labels in priority order (module docstring)."""
 

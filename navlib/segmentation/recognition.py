@@ -9,6 +9,8 @@ from navlib.segmentation.features import flight_features, window_means
 from navlib.segmentation.phases import SEGMENT_DEFAULTS
 from navlib.units import DEG
 
+__all__ = ["RECOGNITION_DEFAULTS", "recognise_vehicle"]
+
 RECOGNITION_DEFAULTS = {
     "rocket_accel_m_s2": 30.0,
     "rocket_speed_m_s": 20.0,

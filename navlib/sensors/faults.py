@@ -16,7 +16,7 @@ magnitude and shape. The same object drives both filter modes of :mod:`navlib.fi
   0.002 rad/s roll-gyro outlier held over one 5 ms step adds ``-T_B^E [1e-5, 0, 0]'`` rad to
   the ECEF attitude error; an accelerometer error enters ``dv`` through ``+T_B^E``. The
   mapping sign is the sign of the noise column relative to the matching bias column
-  (:data:`LINEAR_NAMES`), checked in ``tests/studies/test_outliers.py``.
+  (:data:`LINEAR_NAMES`), checked in ``tests/studies/outliers/test_outliers.py``.
 
 How well a filter recovers from them is scored by :mod:`navlib.filters.recovery`.
 

@@ -435,7 +435,7 @@ def integrate(t, f_b, w_ib_b, position0, velocity0, attitude0) -> StrapdownResul
     Fourth-order scheme described in the module docstring (docs/assumptions.md,
     excitability.md Eq. 1, A2, A5). Closure on the exact IMU of
     ``navlib.trajectory.sounding_rocket()`` (100 Hz) is
-    checked by ``tests/test_strapdown.py``.
+    checked by ``tests/strapdown/test_strapdown.py``.
     """
     t = increasing_times(t, "t")
     n = t.size

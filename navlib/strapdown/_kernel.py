@@ -8,7 +8,7 @@ increments by the same log-depth prefix product, the specific force rotated to E
 samples and mid-steps, and the translation with the exact Coriolis substitution, Simpson's
 rule and gravity at the solution's own points by fixed-point iteration over
 :data:`WINDOW_S` windows. Every formula is written out in the order of the NumPy code it
-replaced (``tests/strapdown_reference.py``), so results agree to rounding; each interval
+replaced (``tests/support/strapdown_reference.py``), so results agree to rounding; each interval
 costs a few hundred floating-point operations instead of a few hundred NumPy calls per
 block, which made the EKF's 0.1 s windows Python-bound.
 

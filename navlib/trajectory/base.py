@@ -22,6 +22,8 @@ from scipy.spatial.transform import Rotation
 from navlib import earth
 from navlib._validation import finite_array, increasing_times
 
+__all__ = ["Trajectory", "build_trajectory", "exact_imu"]
+
 
 @dataclass(frozen=True, eq=False)
 class Trajectory:

@@ -60,6 +60,10 @@ from navlib.trajectory.position_spline import (
 )
 from navlib.units import DEG
 
+__all__ = ["FIT_DEFAULTS", "GNSS_COLUMNS", "GNSS_VELOCITY_COLUMNS", "HOLE_FACTOR", "IMU_COLUMNS",
+           "MIN_IMU_RATE_HZ", "SCALE_CREDIBLE_SIGMAS", "fit_flight_data", "hole_bounds",
+           "rate_and_holes"]
+
 FIT_DEFAULTS = {
     "knot_spacing_s": 0.1,
     "attitude_knot_spacing_s": None,

@@ -19,6 +19,11 @@ from navlib.errors import NavlibInputError
 from navlib.sensors import DEFAULT_IMU_PRESET, ImuSpec, load_preset
 from navlib.units import DEG, G0
 
+__all__ = ["MIN_LEVEL_SAMPLES", "REST_ACCEL_MPS2", "REST_RATE_DEG_S", "TURN_ON_FALLBACK",
+           "VERTICAL_SIN2", "accel_bias_sigma", "accel_scale_sigma", "coarse_heading",
+           "gyro_drift_deg_s", "heading_of", "level_attitude", "logged_attitude", "min_level_s",
+           "quiet_window", "start_attitude"]
+
 VERTICAL_SIN2 = np.sin(1.0 * DEG) ** 2   # body x within 1 deg of the vertical below this
 _MIN_HORIZONTAL_F = 0.3     # m/s^2, RMS needed to estimate the heading
 REST_ACCEL_MPS2 = 0.5

@@ -66,6 +66,8 @@ from navlib.trajectory._flight import (
 from navlib.trajectory.base import Trajectory
 from navlib.units import DEG
 
+__all__ = ["LATERAL_SOURCES", "LAUNCHER_DEFAULTS", "launch_azimuth", "launcher_ascent"]
+
 LAUNCHER_DEFAULTS = {
     "lat_deg": 58.73,              # Churchill Rocket Research Range (assumed coordinates)
     "lon_deg": -93.82,

@@ -13,6 +13,10 @@ from navlib import earth
 from navlib.trajectory.position_spline import SAMPLES_PER_KNOT, SPLINE_DEGREE
 from navlib.units import DEG
 
+__all__ = ["LIFTOFF_ACCEL_MPS2", "LIFTOFF_HOLD_S", "LIFTOFF_KNOTS_S", "LIFTOFF_SMOOTH_S",
+           "MIN_PAD_SAMPLES", "PAD_ACCEL_MPS2", "PAD_GNSS_SPEED_MPS", "PAD_RATE_DEG_S",
+           "find_liftoff", "gnss_still", "liftoff_knots", "moving_average", "pad_start"]
+
 LIFTOFF_ACCEL_MPS2 = 2.0
 """Specific force above gravity that marks a powered lift-off when it lasts
 ``LIFTOFF_HOLD_S`` (the segmentation's ``powered_accel_m_s2``)."""

@@ -23,6 +23,12 @@ from navlib import earth
 from navlib.trajectory._so3 import basis
 from navlib.units import DEG
 
+__all__ = ["ATTITUDE_SAMPLES_PER_KNOT", "LOCAL_SCALE_S", "MAX_CONING_PER_SAMPLE_RAD",
+           "MAX_CORRECTION_INTERVALS", "MAX_KNOT_SPACING_S", "MAX_TURN_PER_KNOT_RAD",
+           "MAX_TURN_PER_SAMPLE_RAD", "PAD_SIGMA_MPS", "SAMPLES_PER_KNOT", "SCALE_OFF",
+           "SPLINE_DEGREE", "UNRESOLVED_MARGIN_S", "UNRESOLVED_WEIGHT", "AttitudeCorrection",
+           "PositionRows", "local_median", "place_knots", "resolved_samples", "thin"]
+
 SPLINE_DEGREE = 5           # quintic splines: C^4 position, C^2 specific force
 _HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
 SAMPLES_PER_KNOT = 2

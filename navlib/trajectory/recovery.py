@@ -39,6 +39,9 @@ from navlib.errors import NavlibInputError
 from navlib.trajectory._attitude import smoothstep
 from navlib.trajectory._flight import step
 
+__all__ = ["APOGEE_TURN_LIMIT", "RECOVERY_DEFAULTS", "Canopy", "check_recovery", "deployments",
+           "recovering", "recovery_frame"]
+
 RECOVERY_DEFAULTS = {
     "drogue_rate_mps": 0.0,       # 0: no recovery, the flight ends at end_s
     "drogue_delay_s": 0.0,        # after apogee

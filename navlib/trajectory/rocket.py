@@ -63,6 +63,8 @@ from navlib.trajectory.recovery import (
 )
 from navlib.units import DEG
 
+__all__ = ["ROCKET_DEFAULTS", "sounding_rocket"]
+
 ROCKET_DEFAULTS = {
     "lat_deg": -5.92,            # Barreira do Inferno launch centre (assumed site)
     "lon_deg": -35.16,

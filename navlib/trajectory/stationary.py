@@ -15,6 +15,8 @@ from navlib.trajectory._flight import output_times
 from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.units import DEG
 
+__all__ = ["stationary"]
+
 
 def stationary(lat_deg=-23.213056, lon_deg=-45.860556, alt_m=629.0, duration_s=3600.0,
                rate_hz=100.0) -> Trajectory:

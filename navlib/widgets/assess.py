@@ -31,6 +31,8 @@ from navlib.plots.metrics import (
 )
 from navlib.widgets.base import Blitter, Panel, look
 
+__all__ = ["AssessPanel", "assess_panel", "boundaries_text", "parse_boundaries"]
+
 
 def parse_boundaries(text: str):
     """``"18, 46.5"`` -> ``[18.0, 46.5]``; ``"auto"`` or blank -> ``"auto"``."""

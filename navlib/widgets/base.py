@@ -43,6 +43,9 @@ from matplotlib.patches import Rectangle
 from navlib.errors import NavlibInputError
 from navlib.plots.figure import detached
 
+__all__ = ["LOOK", "Blitter", "KeptFigures", "Panel", "error_html", "layout_key", "look",
+           "render_png", "table_html"]
+
 LOOK = {"style": {"description_width": "9em"}}
 """Common look of the controls (label width); panels add their own ``layout`` width."""
 

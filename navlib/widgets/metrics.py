@@ -35,6 +35,8 @@ from navlib.studies import rocket
 from navlib.widgets.base import Blitter, Panel, look
 from navlib.widgets.static import TIMING_CLASS
 
+__all__ = ["ExcitabilityPanel", "SensabilityPanel"]
+
 
 def _timing(start: float, computed: float, rendered: float) -> dict:
     done = time.perf_counter()

@@ -33,6 +33,8 @@ from navlib.plots.observability import mission_figure, singular_values_figure
 from navlib.studies.launcher import describe_direction
 from navlib.widgets.base import Blitter, Panel, look
 
+__all__ = ["ObservabilityPanel", "observability_panel"]
+
 _MODEL = ("solution", "biases", "bias_model", "variant")
 
 

@@ -32,6 +32,8 @@ from navlib.studies.outliers import (
 )
 from navlib.widgets.base import Panel, look
 
+__all__ = ["MonteCarloPanel", "OutlierPanel"]
+
 
 class OutlierPanel(Panel):
     """Controls + status + figures; ``update()`` reruns the outlier response and redraws.

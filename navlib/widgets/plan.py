@@ -11,6 +11,8 @@ from navlib.sensors import list_presets
 from navlib.studies.plan import plan_mission
 from navlib.widgets.base import Panel, look
 
+__all__ = ["PlanPanel", "plan_panel"]
+
 
 class PlanPanel(Panel):
     """Controls of a mission plan; ``update()`` re-plans only for what changed, and a

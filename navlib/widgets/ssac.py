@@ -16,6 +16,8 @@ from navlib.plots.ssac import ssac_eigenvalues_figure, ssac_sigma_figure
 from navlib.studies.ssac import closed_form_limits, covariance_run, pair_structure
 from navlib.widgets.base import Panel, look, table_html
 
+__all__ = ["SSACPanel", "ssac_panel"]
+
 
 class SSACPanel(Panel):
     """Controls + status line + figures and tables; ``update()`` reruns the study and redraws.

@@ -25,6 +25,8 @@ from __future__ import annotations
 import html
 import re
 
+__all__ = ["TIMING_CLASS", "WIDGET_STATE", "WIDGET_VIEW", "freeze_widgets", "widget_html"]
+
 WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 WIDGET_STATE = "application/vnd.jupyter.widget-state+json"
 _BOXES = {"VBoxModel": "column", "HBoxModel": "row", "BoxModel": "column",

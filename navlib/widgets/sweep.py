@@ -19,6 +19,8 @@ from navlib.plots.sweep import heatmap
 from navlib.sweep import AGGREGATES, parameter_columns
 from navlib.widgets.base import Panel, look
 
+__all__ = ["ALL", "SweepPanel", "sweep_panel"]
+
 ALL = "all"
 """Choice of a parameter dropdown that leaves the parameter combined over its values."""
 

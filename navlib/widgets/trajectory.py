@@ -17,6 +17,8 @@ from navlib.studies.rocket import rocket_profile_claims
 from navlib.trajectory import sounding_rocket
 from navlib.widgets.base import Panel, look
 
+__all__ = ["SITES", "RocketPanel", "rocket_panel"]
+
 SITES = {
     "Barreira do Inferno, Natal (default)": {"lat_deg": -5.92, "lon_deg": -35.16, "alt_m": 30.0},
     "Alcântara": {"lat_deg": -2.316, "lon_deg": -44.368, "alt_m": 50.0},

@@ -9,9 +9,9 @@ import importlib
 import tomllib
 from pathlib import Path
 
-import kalman_reference as ref
 import numpy as np
 import pytest
+from support import kalman_reference as ref
 
 from navlib import sensors, strapdown
 from navlib.discretize import discretize_steps
@@ -148,7 +148,7 @@ def _ekf_tolerances():
 def test_rocket_ekf_equals_numpy_steps(rocket, monkeypatch):
     """The 86 s rocket EKF with the compiled sparse discretisation and propagation against
     the same loop with NumPy's (:func:`navlib.discretize.discretize_steps` and the NumPy
-    propagation and update of tests/kalman_reference.py): the final errors (position,
+    propagation and update of tests/support/kalman_reference.py): the final errors (position,
     velocity, attitude, relative to the largest of each group) and the mean NIS within the
     golden tolerances, which hold across BLAS kernels; sigmas within 1e-6 relative."""
     spec = sensors.load_preset("motionpak_tactical")

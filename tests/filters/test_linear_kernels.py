@@ -1,11 +1,11 @@
 """The compiled linear-simulation kernels (:func:`navlib.filters.linear_recursion.truth_kernel`,
 :func:`navlib.filters.linear_recursion.filter_kernel`, issue 26) equal the NumPy block code they
-replaced (tests/linear_reference.py) on a block of the paper's launcher model: noisy runs,
+replaced (tests/support/linear_reference.py) on a block of the paper's launcher model: noisy runs,
 a per-run or shared state input, sparse updates."""
 
-import linear_reference as ref
 import numpy as np
 import pytest
+from support import linear_reference as ref
 
 from navlib.filters import linear_recursion, prepare_linear
 from navlib.kalman import psd_sqrt

@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from paths import assert_same_numbers
+from support.paths import assert_same_numbers
 
 from navlib.filters import linear, linear_preparation, prepare_linear, simulate_linear
 from navlib.kalman import psd_sqrt

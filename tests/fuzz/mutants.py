@@ -4,12 +4,13 @@ limit (the fuzz tests of ``test_fuzz_assess.py``).
 
 Kinds (:data:`navlib.io.LOG_KINDS`): an ``imu.csv,gnss.csv`` pair, an ``imu.csv,baro.csv``
 pair (no GNSS: the barometric altitude of the GNSS heights) and a DataFlash ``.bin`` of a
-simulated 24 s multicopter flight (``tests/flights.py``, ``tests/dataflash_writer.py``),
-AltOS exports of both header generations and an EasyMega export without GPS (1 s on the pad:
-a flight without GNSS is levelled on at least 0.5 s; ``tests/altos_writer.py``) and, when the shared
-logs are present (``tests/locations.py``), a PX4 ULog cut from a public sample log to its
-first seconds. :func:`real_originals` adds the shared logs themselves (read at run time,
-never copied into the repository).
+simulated 24 s multicopter flight (``tests/support/flights.py``,
+``tests/support/dataflash_writer.py``), AltOS exports of both header generations and an
+EasyMega export without GPS (1 s on the pad: a flight without GNSS is levelled on at least
+0.5 s; ``tests/support/altos_writer.py``) and, when the shared logs are present
+(``tests/support/locations.py``), a PX4 ULog cut from a public sample log to its first
+seconds. :func:`real_originals` adds the shared logs themselves (read at run time, never
+copied into the repository).
 
 A mutant is one seeded damage of one file: cut, flipped or zeroed bytes, a deleted,
 duplicated or moved block; for text files also deleted, duplicated or swapped rows, a
@@ -31,10 +32,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from altos_writer import rocket_rows, write_altos
-from dataflash_writer import write_flight
-from flights import dataflash_flight
-from locations import SHARED_DATA
+from support.altos_writer import rocket_rows, write_altos
+from support.dataflash_writer import write_flight
+from support.flights import dataflash_flight
+from support.locations import SHARED_DATA
 
 from navlib import NavlibInputError, io
 from navlib.earth import ecef_to_geodetic

@@ -18,7 +18,7 @@ import mutants
 import numpy as np
 import pandas as pd
 import pytest
-from flights import multicopter, records
+from support.flights import multicopter, records
 
 from navlib.reports import fleet
 

@@ -5,8 +5,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from altos_writer import IMU, rocket_rows, write_altos
-from locations import shared_file
+from support.altos_writer import IMU, rocket_rows, write_altos
+from support.locations import shared_file
 
 from navlib import NavlibInputError, earth, io, units
 from navlib.io.altos import TELEMEGA_RANGE, looks_like_altos

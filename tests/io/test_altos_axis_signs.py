@@ -8,8 +8,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from locations import shared_file
 from scipy.spatial.transform import Rotation
+from support.locations import shared_file
 
 from navlib import io
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib import NavlibInputError, io
 from navlib.io.baro import pressure_altitude, read_baro_csv
@@ -227,7 +227,7 @@ def test_dead_imu_is_refused_by_name(tmp_path):
 
 
 def test_altos_dead_imu_is_named_and_an_empty_tilt_column_ignored(tmp_path):
-    from altos_writer import rocket_rows, write_altos
+    from support.altos_writer import rocket_rows, write_altos
 
     rows = rocket_rows()
     path = tmp_path / "empty_tilt.csv"

@@ -7,10 +7,10 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from dataflash_writer import write_flight
-from flights import dataflash_flight
-from locations import REPO, shared_file
 from scipy.spatial.transform import Rotation
+from support.dataflash_writer import write_flight
+from support.flights import dataflash_flight
+from support.locations import REPO, shared_file
 
 from navlib import NavlibInputError, earth, io
 from navlib.studies.assess import assess_flight
@@ -206,7 +206,7 @@ def test_timems_log_reads_like_timeus(flight, tmp_path, bin4):
 
 def test_gps_time_of_week_is_not_taken_for_boot_time(flight, tmp_path):
     """Without T, a GPS TimeMS beside Week is GPS time: refused, naming the fields."""
-    from dataflash_writer import LAYOUTS
+    from support.dataflash_writer import LAYOUTS
     _, imu_in, _, geo, _ = flight
     saved = LAYOUTS["TimeMS"]["GPS"]
     LAYOUTS["TimeMS"]["GPS"] = ("BIHBLLe", "Status,TimeMS,Week,NSats,Lat,Lng,Alt")
@@ -249,7 +249,7 @@ def test_public_legacy_timems_log():
 
 def test_field_declared_as_text_is_refused(flight, tmp_path):
     """A damaged FMT that declares GPS Status as char[4] holding text: named, no TypeError."""
-    from dataflash_writer import LAYOUTS
+    from support.dataflash_writer import LAYOUTS
     _, imu_in, _, geo, _ = flight
     saved = LAYOUTS["4.x"]["GPS"]
     LAYOUTS["4.x"]["GPS"] = ("QBnLLeffff", saved[1])

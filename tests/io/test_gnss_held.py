@@ -11,7 +11,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from flights import multicopter, records
+from support.flights import multicopter, records
 
 from navlib import NavlibInputError, io
 from navlib.io import quality

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-import vehicles
-from flights import multicopter, records
+from support import vehicles
+from support.flights import multicopter, records
 
 from navlib import earth, sensors
 from navlib.errors import NavlibInputError

@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 import pytest
-from altos_writer import rocket_rows, write_altos
-from dataflash_writer import write_flight
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support.altos_writer import rocket_rows, write_altos
+from support.dataflash_writer import write_flight
 
 from navlib import NavlibInputError, io
 

@@ -1,10 +1,10 @@
 """The compiled sliding window of navlib.observability.sliding against its NumPy reference
-(tests/sliding_reference.py): each reduction and one window within 1e-12 relative, whole runs
-of the Table 2 configurations within the measured spread (ranks exactly)."""
+(tests/support/sliding_reference.py): each reduction and one window within 1e-12 relative,
+whole runs of the Table 2 configurations within the measured spread (ranks exactly)."""
 
 import numpy as np
 import pytest
-import sliding_reference as reference
+from support import sliding_reference as reference
 
 from navlib.models.launcher import launcher
 from navlib.observability.local import _model_arrays

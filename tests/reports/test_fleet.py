@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pandas as pd
 import pytest
-from locations import REPO, shared_file
+from support.locations import REPO, shared_file
 
 from navlib import NavlibInputError, io
 from navlib.__main__ import main
@@ -32,7 +32,7 @@ def test_parse_log_rejects(spec):
 @pytest.mark.parametrize("generation", ["version", "legacy"])
 @pytest.mark.parametrize("name", ["flight.csv", "flight-18.txt"])
 def test_altos_export_is_one_log_by_its_header(tmp_path, generation, name):
-    from altos_writer import rocket_rows, write_altos
+    from support.altos_writer import rocket_rows, write_altos
 
     path = tmp_path / name
     write_altos(path, rocket_rows(), generation=generation)

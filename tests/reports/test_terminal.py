@@ -8,7 +8,7 @@ import subprocess
 import sys
 import warnings
 
-from locations import REPO
+from support.locations import REPO
 
 from navlib.io import FlightDataWarning
 from navlib.reports.terminal import warning_line, warning_lines

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-import vehicles
+from support import vehicles
 
 from navlib.errors import NavlibInputError
 from navlib.segmentation import segment_flight

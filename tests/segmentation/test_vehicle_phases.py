@@ -7,7 +7,7 @@ import types
 import numpy as np
 import pandas as pd
 import pytest
-import vehicles
+from support import vehicles
 
 from navlib.errors import NavlibInputError
 from navlib.segmentation import (
@@ -70,7 +70,7 @@ def test_recognised_from_kinematics(make, expected, request):
 
 
 def test_sounding_rocket_and_figure_eight_drone_recognised(rocket):
-    import flights
+    from support import flights
 
     assert recognise_vehicle(rocket)[0] == "rocket"
     vehicle, reason = recognise_vehicle(flights.multicopter(duration_s=60.0))

@@ -12,9 +12,9 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from flights import exact_records
 from scipy.interpolate import make_interp_spline
 from scipy.spatial.transform import Rotation
+from support.flights import exact_records
 
 from navlib import NavlibInputError, earth, strapdown
 from navlib.studies.assess import assess_flight

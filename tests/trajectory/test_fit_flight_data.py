@@ -7,8 +7,8 @@ bad input must raise NavlibInputError naming the problem.
 
 import numpy as np
 import pytest
-from flights import exact_records
 from scipy.spatial.transform import Rotation
+from support.flights import exact_records
 
 from navlib import NavlibInputError, strapdown
 from navlib.trajectory import fit_flight_data, position_spline, sounding_rocket, stationary

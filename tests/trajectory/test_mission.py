@@ -105,7 +105,7 @@ def test_waypoint_attitude_increments_match_gyro(waypoint_traj):
 
 def test_waypoint_strapdown_closure(waypoint_traj):
     """The ECEF strapdown integrating the mission's own IMU at 50 Hz reproduces it (the
-    closure of tests/test_strapdown.py; measured 1.2 mm, 1.9 mm and 0.4 um)."""
+    closure of tests/strapdown/test_strapdown.py; measured 1.2 mm, 1.9 mm and 0.4 um)."""
     _, traj = waypoint_traj
     err = strapdown.closure_error(traj)
     assert err.position_m < 0.01

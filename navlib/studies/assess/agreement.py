@@ -20,6 +20,9 @@ from navlib.metrics import in_segment
 from navlib.trajectory.liftoff import moving_average
 from navlib.units import DEG
 
+__all__ = ["AGREEMENT_COLUMNS", "AXES", "POWERED_PHASES", "axis_regression", "fit_bounds",
+           "fit_calibration", "segment_agreement", "smoothed_residuals"]
+
 AXES = "xyz"
 POWERED_PHASES = ("powered", "boost")
 """Phases whose specific-force bound is ``specific_force_powered_mps2`` (thrust transients

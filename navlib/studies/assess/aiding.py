@@ -24,6 +24,9 @@ from navlib.models.baro import BARO_SCALE, BARO_SIGMA_M, baro_sigma
 from navlib.trajectory.fit import FIT_DEFAULTS
 from navlib.trajectory.initial_attitude import level_attitude
 
+__all__ = ["GAP_S", "LAUNCH_ACCEL_M_S2", "MIN_LEVEL_S", "ROW_RATE_HZ", "SITE_DEG", "SPEED_WINDOW_S",
+           "aiding_of", "aiding_records", "baro_reference_rows", "ned_sigmas", "sigma_note"]
+
 SITE_DEG = (45.0, 0.0)
 """Latitude and longitude assumed for a flight without GNSS, deg (B5): normal gravity
 differs by at most 0.27 % between it and any site, and the Earth rate's components by the

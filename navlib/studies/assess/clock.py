@@ -26,6 +26,8 @@ from dataclasses import replace
 from navlib.segmentation import segments_table
 from navlib.segmentation.phases import clock_time, frame_on_clock
 
+__all__ = ["on_clock", "time_zero"]
+
 _TIMES = ("t", "t_first", "t_last")
 """Time columns of the input summary, the residual frames and the logged channels."""
 

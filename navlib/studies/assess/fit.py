@@ -21,6 +21,8 @@ from navlib.studies.assess.agreement import (
 from navlib.studies.assess.inputs import GNSS_KEYS, IMU_KEYS, check_frame
 from navlib.trajectory import fit_flight_data
 
+__all__ = ["fit_notes", "fit_records", "fit_report", "fit_residuals"]
+
 
 def fit_report(trajectory, preset=None, gnss_sigma_m: float | None = None) -> pd.DataFrame:
     """The fit residuals of :func:`navlib.trajectory.fit_flight_data` as a tidy table.

@@ -15,6 +15,10 @@ from navlib.io.checks import R_MAX_M, R_MIN_M
 from navlib.io.sensor_health import ALIVE_ACCEL_M_S2
 from navlib.trajectory.fit import MIN_IMU_RATE_HZ
 
+__all__ = ["GNSS_KEYS", "IMU_KEYS", "MIN_DURATION_S", "MIN_GNSS_EPOCHS", "MIN_IMU_SAMPLES",
+           "MIN_PEAK_ACCEL_G", "check_frame", "check_gnss_record", "check_imu_record",
+           "describe_inputs", "median_rate", "validate_records"]
+
 MIN_DURATION_S = 2.0
 """Shortest common IMU/GNSS span accepted, s."""
 MIN_GNSS_EPOCHS = 4

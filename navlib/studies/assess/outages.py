@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+__all__ = ["OUTAGE_COLUMNS", "gnss_outages", "measured_epochs", "outage_note"]
+
 OUTAGE_COLUMNS = ("t_start", "t_end", "duration")
 """Columns of :func:`gnss_outages`: the last kept fix before the outage and the first after
 it (or the span's start or end), s, and their difference, s."""

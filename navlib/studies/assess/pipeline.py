@@ -53,6 +53,9 @@ from navlib.studies.assess.result import (
 from navlib.studies.assess.settings import AssessmentSettings
 from navlib.trajectory.fit import FIT_DEFAULTS
 
+__all__ = ["AUTOPILOT_PRESETS", "DEFAULT_PRESET", "LOGGED_CHANNELS", "MODEL_STEP_S",
+           "assess_flight", "choose_preset"]
+
 
 def _gnss_sigma(gnss: pd.DataFrame, spec) -> float:
     if "sigma" in gnss.columns:

@@ -20,6 +20,8 @@ from navlib.segmentation import (
 from navlib.studies.assess import states
 from navlib.studies.assess.agreement import AGREEMENT_COLUMNS, segment_agreement
 
+__all__ = ["FlightAssessment", "automatic_segment_table", "segment_pairs", "with_agreement"]
+
 _GROUP_OF = {name: group for group, names in STATE_GROUPS.items() for name in names}
 
 

@@ -44,6 +44,9 @@ import pandas as pd
 from navlib import earth, units
 from navlib.errors import NavlibInputError
 
+__all__ = ["EXCITABLE_MARK", "NOT_REPRESENTED", "SENSIBLE_MARK", "STATES_COLUMNS", "UNITS",
+           "how_well", "navigation_state_names", "navigation_transforms", "states_table"]
+
 UNITS = {"position": ("m", 1.0), "velocity": ("m/s", 1.0), "attitude": ("deg", units.DEG),
          "gyro_bias": ("deg/h", units.DEG_PER_HOUR), "acc_bias": ("mg", units.MG),
          "gyro_scale": ("ppm", units.PPM), "acc_scale": ("ppm", units.PPM)}

@@ -12,6 +12,9 @@ import pandas as pd
 
 from navlib.errors import NavlibInputError
 
+__all__ = ["BASES", "NOT_EVALUATED", "OPS", "STATUSES", "VERDICTS", "Check", "ClaimResult", "check",
+           "claim", "claims_frame", "fmt", "not_evaluated", "verdict_of", "with_failed_headline"]
+
 VERDICTS = ("reproduced", "partly", "not reproduced")
 """The verdicts of :func:`verdict_of`."""
 NOT_EVALUATED = "not evaluated"

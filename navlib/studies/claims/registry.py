@@ -19,6 +19,9 @@ from navlib.studies.claims.robustness import (
     robustness_over,
 )
 
+__all__ = ["COLUMNS", "STUDY_MODULES", "Study", "factorial_search", "register", "studies",
+           "study_frame", "study_robustness"]
+
 
 @dataclass(frozen=True)
 class Study:

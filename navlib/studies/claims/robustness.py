@@ -14,6 +14,9 @@ import pandas as pd
 from navlib.errors import NavlibInputError
 from navlib.studies.claims.records import NOT_EVALUATED, Check, ClaimResult, fmt
 
+__all__ = ["CAUSES", "KINDS", "JointSearch", "Robustness", "cause_of", "changed_points", "explain",
+           "joint_search", "robustness_over"]
+
 
 @dataclass(frozen=True)
 class Robustness:

@@ -26,6 +26,9 @@ from navlib.studies.claims.registry import factorial_search, studies
 from navlib.studies.claims.robustness import joint_search
 from navlib.sweep import sweep
 
+__all__ = ["SEARCH_SPACES", "SearchSpace", "SearchTable", "factorial_points", "joint_searches",
+           "paper_joint_summary", "register_search", "run_search", "search_space", "stored_search"]
+
 
 @dataclass(frozen=True)
 class SearchSpace:

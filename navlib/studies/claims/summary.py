@@ -11,6 +11,8 @@ import pandas as pd
 from navlib.studies.claims.records import NOT_EVALUATED, STATUSES, ClaimResult
 from navlib.studies.claims.robustness import CAUSES
 
+__all__ = ["counts", "full_text", "paper_summary", "reading_markdown", "summary_markdown"]
+
 
 def counts(table: pd.DataFrame) -> pd.DataFrame:
     """Claims per paper by verdict and basis (for the summary page)."""

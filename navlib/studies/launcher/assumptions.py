@@ -6,6 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["BARELY", "COND_TOL", "CP_MISSION_BASELINE", "CP_MISSION_SET", "EVOLUTION_BASELINE",
+           "EVOLUTION_DEPENDS", "EVOLUTION_GRID", "HIGH_LOG10", "IDENTICAL", "LATERAL_BASELINE",
+           "LATERAL_LEVELS", "LEVEL_STRIDE", "LOW_LOG10", "NO_PITCH_KICK_DEG", "PAD_CASES",
+           "RESOLVED_LOG10", "SINGULAR_LOG10", "STRONG", "SURVEYED_PAD_M", "TABLE2_BASELINE",
+           "TABLE2_GRID", "TABLE2_RANK_RTOLS", "TABLE2_STRIDE", "TOLERANCES", "log10_cond_text"]
+
 SINGULAR_LOG10 = 16.0
 """log10 cond at or above which a matrix counts as numerically singular (double precision;
 two such values are equal for the match column: their digits are rounding noise)."""

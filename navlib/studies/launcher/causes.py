@@ -13,6 +13,8 @@ from navlib.studies.launcher.covariance_claims import EvolutionTable
 from navlib.studies.launcher.evolution import EVOLUTION_CASES, covariance_evolution
 from navlib.trajectory import launcher_ascent
 
+__all__ = ["NO_PITCH_CASES", "cp_mission_sigmas", "evolution_causes"]
+
 NO_PITCH_CASES = ("gps/none", "ins-only/none", "ideal-gps/none")
 """The Fig. 2 cases rerun on the ascent without a pitch programme."""
 

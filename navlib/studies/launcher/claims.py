@@ -20,6 +20,12 @@ from navlib.studies.launcher.assumptions import (
 )
 from navlib.studies.launcher.fig1 import fig1_data
 
+__all__ = ["c1_bp_claim", "c3_rt_claim", "conclusion_claims", "cond_match", "f1_cp_mission_claim",
+           "f1_full_rank_claim", "f1_proportional_claim", "fig1_claims", "match_counts",
+           "t2_att_no_rt_claim", "t2_att_rt_claim", "t2_bp_dr_claim", "t2_ins_gps_claim",
+           "t2_markov_claim", "t2_rank_constant_claim", "t2_rw_p_claim", "t2_table_claim",
+           "t2_threshold_claim", "table2_claim_results"]
+
 
 def cond_match(ours: np.ndarray, paper: np.ndarray, tol: float) -> np.ndarray:
     """Whether our log10 cond matches the paper's within ``tol`` decades (two numerically

@@ -21,6 +21,10 @@ from navlib.studies.launcher.assumptions import (
     SURVEYED_PAD_M,
 )
 
+__all__ = ["EvolutionTable", "c2_att_claim", "c4_models_claim", "evolution_claims",
+           "f2_ideal_claim", "f2_roll_claim", "f3_bp_claim", "f5_barely_claim", "f5_ins_only_claim",
+           "f5_model_claim", "f6_x1000_claim", "r38_claim"]
+
 
 class EvolutionTable:
     """A :func:`~navlib.studies.launcher.covariance_evolution` table read by case: the end

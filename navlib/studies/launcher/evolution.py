@@ -18,6 +18,8 @@ from navlib.models.launcher import ASSUMED, launcher, sensor_values
 from navlib.studies.launcher.assumptions import EVOLUTION_GRID, PAD_CASES, SURVEYED_PAD_M
 from navlib.trajectory import launcher_ascent
 
+__all__ = ["EVOLUTION_CASES", "covariance_evolution", "evolution_grid", "evolution_tables"]
+
 EVOLUTION_CASES = {
     "gps/none": ("ins_gps", "", "none", "kf", 1.0),
     "ins-only/none": ("ins_gps", "", "none", "ins_only", 1.0),

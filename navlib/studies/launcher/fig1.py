@@ -9,6 +9,8 @@ import pandas as pd
 from navlib.models.launcher import simplified_gps_bias
 from navlib.observability import analyze, observability_matrix
 
+__all__ = ["fig1_data"]
+
 
 def fig1_data(c_p=None, s_t: float = 0.005, rtol: float | None = None) -> pd.DataFrame:
     """Condition number of the simplified model's observability matrix vs ``c_p`` (Fig. 1).

@@ -7,6 +7,8 @@ from navlib.studies import claims as engine
 from navlib.studies.launcher.covariance_claims import evolution_claims
 from navlib.studies.launcher.table2 import Table2Result
 
+__all__ = ["reading_markdown"]
+
 
 def reading_markdown(result: Table2Result | None = None, fig1=None, evolution=None) -> str:
     """The notebook's generated reading: Fig. 1, Table 2 and covariance-evolution claims with

@@ -43,6 +43,10 @@ from navlib.studies.launcher.evolution import evolution_grid
 from navlib.studies.launcher.table2 import Table2Result, table2
 from navlib.trajectory import launcher_ascent
 
+__all__ = ["COVARIANCE_KINDS", "baseline_evolution_claims", "baseline_fig1_claims",
+           "baseline_table2_claims", "evolution_robustness", "evolution_variants",
+           "fig1_robustness", "lateral_match_counts", "table2_result", "table2_robustness"]
+
 COVARIANCE_KINDS = {"sigma0_att_deg": "unstated", "sigma0_pos_m": "unstated", "c_g": "unstated",
                     "c_p": "ours", "kick_deg": "fitted", "gust_mps": "ours"}
 """Kinds of the covariance claims' assumptions (their set, cause experiments and joint

@@ -25,6 +25,9 @@ from navlib.studies.launcher.evolution import evolution_tables
 from navlib.sweep import Evaluation, register
 from navlib.trajectory import launcher_ascent
 
+__all__ = ["SEARCH", "SEARCH_BASELINE", "SEARCH_CLAIMS", "SEARCH_GRID", "SEARCH_PARAMETERS",
+           "search_points"]
+
 SEARCH_GRID = {
     "gust_mps": (0.0, LATERAL_BASELINE),
     "kick_deg": (NO_PITCH_KICK_DEG, 2.5),

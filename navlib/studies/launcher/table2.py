@@ -30,6 +30,10 @@ from navlib.studies.launcher.assumptions import COND_TOL, TABLE2_RANK_RTOLS, TOL
 from navlib.studies.launcher.claims import cond_match, match_counts, table2_claim_results
 from navlib.trajectory import launcher_ascent
 
+__all__ = ["DATA_DIR", "RANK_COLUMNS", "TABLE2_CSV", "Table2Result", "configurations",
+           "describe_direction", "inspect_step", "mission_observability", "paper_table2", "table2",
+           "variant_comparison"]
+
 DATA_DIR = data_dir()
 TABLE2_CSV = DATA_DIR / "beaudoin2018_table2.csv"
 

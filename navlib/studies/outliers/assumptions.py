@@ -24,6 +24,8 @@ from navlib.studies.outliers.response import (
     default_trajectory,
 )
 
+__all__ = ["ROBUSTNESS_GRID", "study_claims"]
+
 ROBUSTNESS_GRID = {"window": (30.0, 50.0, 100.0), "a1_sign": (1.0, -1.0)}
 """The declared assumption set of T1-T4, F7, F10, F11 (full factorial, 6 points): the
 recovery window the paper leaves open (30 s to the 100 s left of the mission) and the sign

@@ -13,6 +13,10 @@ from navlib.studies.claims import Check, ClaimResult, check, claim
 from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.studies.outliers.response import OutlierResponse, OutlierStudy
 
+__all__ = ["AFFECTED", "SAME_RANGE", "claim_c1_outlier", "claim_c3_outlier", "claim_f10",
+           "claim_r424", "claim_roll_sigma", "claim_t4_detail", "claim_t4_time", "claim_test",
+           "conclusion_claims", "covariance_claims", "explained", "explained_f7", "outlier_claims"]
+
 
 def _fmt(r: OutlierResponse) -> str:
     s = r.score

@@ -28,6 +28,9 @@ from navlib.studies.outliers.response import (
     watch_rows,
 )
 
+__all__ = ["EKFCrossCheck", "MonteCarloOutlier", "ekf_crosscheck", "ekf_vs_covariance",
+           "monte_carlo_outlier"]
+
 
 @dataclass(frozen=True, eq=False)
 class MonteCarloOutlier:

@@ -14,6 +14,8 @@ from navlib.studies.outliers.response import FilterCache, outlier_response
 from navlib.sweep import Evaluation, register
 from navlib.trajectory import launcher_ascent
 
+__all__: list[str] = []  # nothing to import: importing the module registers its evaluations
+
 _LAUNCHER = {"solution": "ins_gps_att", "biases": "GAP", "bias_model": "markov",
              "duration_s": 150.0, "rate_hz": 200.0}
 

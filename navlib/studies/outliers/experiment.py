@@ -27,6 +27,9 @@ from navlib.studies.outliers.response import (
     record_stride,
 )
 
+__all__ = ["CONCLUSION_RUNS", "correlation_fig10", "paper_tests", "rescore", "roll_sigma",
+           "sigma_ratios"]
+
 CONCLUSION_RUNS = {("C1", "ins_gps"): ("T1", "bp"), ("C1", "ins_gps_rt"): ("T1", "bp"),
                    ("C1", "ins_gps_att_rt"): ("T1", "bp"), ("C3", "ins_gps_att_rt"): ("T3", "roll")}
 """Spike runs beyond T1-T4: ``(run, solution) -> (test whose outlier is injected, watched

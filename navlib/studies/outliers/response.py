@@ -21,6 +21,10 @@ from navlib.studies.claims import claims_frame
 from navlib.studies.outliers.paper import PAPER_TESTS
 from navlib.trajectory import launcher_ascent
 
+__all__ = ["DEFAULTS", "RT_ONLY_OPTIONS", "WATCHES", "CovarianceSummary", "FilterCache",
+           "OutlierResponse", "OutlierStudy", "UnitResponse", "adopt_filters", "default_trajectory",
+           "effective_bias_model", "outlier_response", "record_stride", "watch_rows"]
+
 WATCHES = ("roll", "pitch", "yaw", "bp", "ref_roll")
 """Watched quantities: body-axis attitude errors (``T_E^B psi``), the GPS position bias
 (3 ECEF components, scored by their norm) and the launcher divergence roll ``psi_ref_x``."""

@@ -15,6 +15,8 @@ from navlib.studies.outliers.response import (
     default_trajectory,
 )
 
+__all__ = ["assumption_sensitivity"]
+
 
 def assumption_sensitivity(variants: dict, trajectory=None, *,
                            tests: Sequence[str] = ("T1", "T2", "T3", "T4"),

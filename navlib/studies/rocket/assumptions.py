@@ -24,6 +24,9 @@ from navlib.studies.rocket.experiment import excitability_study, quiet_gyro_anal
 from navlib.studies.rocket.flight import BASELINE
 from navlib.studies.rocket.sensitivity import P0_SETS
 
+__all__ = ["QUICK_ROBUSTNESS_GRID", "ROBUSTNESS_BASELINE", "ROBUSTNESS_GRID", "SEARCH",
+           "SEARCH_PARAMETERS", "robustness_variants", "search_points"]
+
 ROBUSTNESS_GRID = {
     "eta": (1e-2, 1e-3, 1e-4),
     "nu": (0.98, 0.985, 0.99),

@@ -37,6 +37,12 @@ from navlib.studies.rocket.flight import (
     TRANSIENT_S,
 )
 
+__all__ = ["BASELINE_BASIS", "CLAIM_IDS", "EXCITABILITY_CLAIMS", "OTHER_PARAMETERS",
+           "SENSABILITY_CLAIMS", "claim_s1", "claim_s2", "claim_s3", "claim_s4", "claim_s5",
+           "claim_s6", "claim_s7", "claim_s8", "claim_x1", "claim_x2", "claim_x3", "claim_x4",
+           "claim_x5", "claim_x6", "claim_x7", "claim_xrank", "claims_table", "excitability_claims",
+           "sensability_claims", "sensible_time"]
+
 
 def _require_three(analysis: RocketAnalysis) -> None:
     if len(analysis.segments) != 3:

@@ -33,6 +33,8 @@ from navlib.studies.rocket.flight import (
 )
 from navlib.sweep import Evaluation, register
 
+__all__: list[str] = []  # nothing to import: importing the module registers its evaluations
+
 _ROCKET_SHARED = {"spin_hz": 2.0, "coning_deg": 0.0, "coning_hz": 0.5,
                   "preset": "motionpak_tactical", "imu_grade": 1.0, "gnss_rate_hz": 1.0,
                   "attitude_error": "ecef"}

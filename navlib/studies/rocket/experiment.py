@@ -28,6 +28,9 @@ from navlib.studies.rocket.flight import (
     rocket_trajectory,
 )
 
+__all__ = ["RocketAnalysis", "direction_sensability", "excitability_study", "heading_direction",
+           "quiet_gyro_analysis", "tangent_projections"]
+
 
 class RocketAnalysis(metrics.SegmentedAnalysis):
     """Excitability per segment and sensability per epoch on the rocket flight.

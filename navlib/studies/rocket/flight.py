@@ -22,6 +22,11 @@ from navlib.models.ecef import (
 from navlib.trajectory import build_trajectory, sounding_rocket
 from navlib.trajectory._attitude import smoothstep
 
+__all__ = ["ATTITUDE", "BASELINE", "BRIEF_S", "CONING_KEYS", "EXCITABILITY_DEPENDS", "FUTILE",
+           "GYRO_NOISE_KEYS", "IN_SO", "LOW", "NOT_IMPROVED", "ONLY_AFTER", "PARAMETERS",
+           "QUIET_GYRO_SCALE", "SEGMENTS", "SEGMENT_LABELS", "SENSABILITY_DEPENDS", "SENSIBLE",
+           "TRANSIENT_S", "add_coning", "rocket_chain", "rocket_trajectory"]
+
 SEGMENTS = ((0.0, 19.0), (19.0, 60.0), (60.0, 86.0))
 """The paper's segments tau1 (pad), tau2 (powered flight and spin), tau3 (free fall), s."""
 SEGMENT_LABELS = ("tau1", "tau2", "tau3")

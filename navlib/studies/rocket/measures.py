@@ -12,6 +12,8 @@ from navlib.studies.rocket.claims import sensible_time
 from navlib.studies.rocket.experiment import RocketAnalysis
 from navlib.studies.rocket.flight import IN_SO, SENSIBLE, TRANSIENT_S
 
+__all__ = ["DISAGREEMENT_REASONS", "RATIO_ESTIMATED", "measure_comparison", "measure_disagreements"]
+
 RATIO_ESTIMATED = 2.0
 """Covariance ratio sigma_0/sigma_end above which the PSINS measure calls a state estimated."""
 

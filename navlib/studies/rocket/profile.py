@@ -24,6 +24,8 @@ from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult, check, claim
 from navlib.studies.rocket.flight import rocket_trajectory
 
+__all__ = ["PAPER", "STILL_SPEED", "rocket_profile_claims"]
+
 PAPER = {"ignition_s": 18.0, "burnout_s": 46.0, "free_flight_s": 60.0, "despin_s": 73.0,
          "end_s": 86.0, "peak_f_x": 110.0, "free_flight_f": 0.5, "free_flight_alt_m": 40e3,
          "despin_factor": 0.5, "rate_hz": 100.0}

@@ -8,6 +8,8 @@ from navlib.studies.rocket.claims import excitability_claims, sensability_claims
 from navlib.studies.rocket.experiment import RocketAnalysis, tangent_projections
 from navlib.studies.rocket.sensitivity import sweep_pass_rates, tension_findings
 
+__all__ = ["reading_markdown"]
+
 
 def reading_markdown(analysis: RocketAnalysis, which: str = "all", sweep=None,
                      tension=None) -> str:

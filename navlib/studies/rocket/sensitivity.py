@@ -24,6 +24,9 @@ from navlib.studies.rocket.claims import (
 from navlib.studies.rocket.experiment import excitability_study, quiet_gyro_analysis
 from navlib.studies.rocket.flight import TRANSIENT_S
 
+__all__ = ["P0_SETS", "QUICK_GRID", "SWEEP_BASELINE", "SWEEP_GRID", "TENSION_VARIANTS",
+           "sensitivity_sweep", "sweep_pass_rates", "tension_findings", "tension_table"]
+
 TENSION_VARIANTS = {
     "baseline (2 Hz spin, 5000 ppm)": {},
     "spin 1 Hz": {"spin_hz": 1.0},

@@ -14,6 +14,10 @@ from navlib.studies.ssac.experiment import (
 )
 from navlib.studies.ssac.observability import RANK_RTOL
 
+__all__ = ["ARW_READINGS", "BASELINE_POINT", "HEADING_PRIORS", "NOISE_SCALES", "ORIENTATIONS",
+           "QUICK_DURATION_S", "ROBUSTNESS_GRID", "RUN_DEPS", "TIME_DEPS", "X0_BASELINE",
+           "sigma_nu"]
+
 RUN_DEPS = ("P0", "attitude_scale", "arw_reading", "noise_scale")
 """Assumptions every claim read from the covariance run depends on."""
 TIME_DEPS = (*RUN_DEPS, "convergence")

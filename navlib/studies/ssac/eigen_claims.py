@@ -20,6 +20,10 @@ from navlib.studies.ssac.experiment import (
     x_shape_events,
 )
 
+__all__ = ["X_EXCHANGE_MIN", "bgd_eigen_claim", "eig6_claim", "nine_claim", "order_claim",
+           "orientation_claim", "p0_claim", "pairs_claim", "position_eigen_claim", "short_run_text",
+           "x_shape_claim"]
+
 
 def short_run_text(study: SSACStudy) -> str:
     """Why a 30-60 min claim is not evaluated on a short run."""

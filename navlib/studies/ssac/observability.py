@@ -15,6 +15,10 @@ from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, STATES_15, ssac
 from navlib.observability import analyze, observability_matrix
 from navlib.resolution import format_resolved, relative_resolution
 
+__all__ = ["GROUP_THRESHOLD", "PAPER_GROUPS", "PAPER_RANKS", "RANK_RTOL", "analytic_null_vectors",
+           "equivalence_scale", "grouping_table", "null_space_table", "observability_summary",
+           "observability_table", "set_text"]
+
 PAPER_GROUPS = (("psiN", "baE"), ("psiE", "baN"), ("psiD", "bgE"), ("bgN", "bgD", "dL"),
                 ("baD", "dh"), ("dlambda",))
 """Unobservable subspaces (34)–(39) as inferred in ssac.md §3.3."""

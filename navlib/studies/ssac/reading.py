@@ -5,6 +5,8 @@ from __future__ import annotations
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
 
+__all__ = ["reading_markdown"]
+
 
 def reading_markdown(results: list[ClaimResult]) -> str:
     """The notebook's generated reading of :func:`~navlib.studies.ssac.ssac_claims` results

@@ -35,6 +35,8 @@ from navlib.studies.ssac.experiment import (
 )
 from navlib.studies.ssac.observability import RANK_RTOL
 
+__all__ = ["baseline_claims", "grid_claims", "heading_prior_p0", "robustness_claims"]
+
 
 def heading_prior_p0(factor: float) -> np.ndarray:
     """The matched P0 of the 15-state model with its initial psiD sigma times ``factor``

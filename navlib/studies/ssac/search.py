@@ -44,6 +44,9 @@ from navlib.studies.ssac.experiment import (
 from navlib.studies.ssac.observability import RANK_RTOL
 from navlib.sweep import Evaluation, register
 
+__all__ = ["CLAIM_IDS", "DURATION_S", "SEARCH", "SEARCH_GRID", "SEARCH_PARAMETERS", "SEARCH_X0",
+           "SHARED", "search_points"]
+
 SEARCH_X0 = 2
 """Draws of x0 from N(0, P0) searched beside the baseline x0 (the first of the robustness
 set's :data:`~navlib.studies.ssac.X0_DRAWS`; x0 enters SSAC-actual only)."""

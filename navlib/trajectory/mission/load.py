@@ -21,6 +21,8 @@ from navlib.trajectory.mission.rockets import rocket_keywords, rocket_trajectory
 from navlib.trajectory.mission.waypoints import waypoint_flight, waypoint_plan
 from navlib.vehicles import VEHICLES
 
+__all__ = ["from_mission", "load_mission", "waypoint_trajectory"]
+
 _TOP_KEYS = {"name", "description", "vehicle", "rate_hz", "sensors", "site", "gnss",
              "rocket", "phase", "limits", "waypoint"}
 _SITE_KEYS = {"lat_deg", "lon_deg", "alt_m"}

@@ -18,6 +18,9 @@ from navlib._validation import finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.resources import data_dir, toml_names, toml_path
 
+__all__ = ["MISSION_DIR", "Mission", "checked_number", "checked_outages", "list_missions",
+           "mission_path", "read_mission", "sub_table", "with_values"]
+
 MISSION_DIR = data_dir() / "missions"
 """Folder of the example missions (``data/missions/*.toml``, shipped in the wheel)."""
 

@@ -16,6 +16,8 @@ from navlib.trajectory.base import Trajectory
 from navlib.trajectory.mission.reading import Mission, checked_number, sub_table
 from navlib.trajectory.rocket import ROCKET_DEFAULTS, sounding_rocket
 
+__all__ = ["DESCENT_CAP_S", "ROCKET_BODY", "ROCKET_PHASES", "rocket_keywords", "rocket_trajectory"]
+
 ROCKET_BODY = {"mass_initial_kg": "mass_initial_kg", "mass_burnout_kg": "mass_burnout_kg",
                "drag_area_m2": "drag_area_m2", "scale_height_m": "scale_height_m",
                "spin_hz": "spin_hz", "spin_speed_m_s": "spin_speed_mps",

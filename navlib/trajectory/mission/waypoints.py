@@ -23,6 +23,8 @@ from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.trajectory.mission.reading import Mission, checked_number, sub_table
 from navlib.units import DEG, G0
 
+__all__ = ["LIMIT_DEFAULTS", "WAYPOINT_KEYS", "waypoint_flight", "waypoint_plan"]
+
 WAYPOINT_KEYS = {
     "multicopter": {"hover_s"},
     "ground": {"hold_s"},

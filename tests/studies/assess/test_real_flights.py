@@ -11,10 +11,10 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from flights import logged_attitude, multicopter, records
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
+from support.flights import logged_attitude, multicopter, records
 
 from navlib import NavlibInputError, io
 from navlib.studies.assess import assess_flight, choose_preset, describe_inputs

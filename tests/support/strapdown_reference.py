@@ -1,7 +1,7 @@
 """NumPy reference of the compiled strapdown kernel
 (:func:`navlib.strapdown._kernel.integrate_kernel`): the vectorised mechanisation
 :func:`navlib.strapdown.integrate` ran before the kernel, kept here (not in the library) to
-compare against (tests/test_strapdown_kernel.py) and to time against
+compare against (tests/strapdown/test_strapdown_kernel.py) and to time against
 (benchmarks/bench_kernels.py).
 """
 

@@ -5,7 +5,7 @@ the command line and the trade-study evaluation."""
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib import NavlibInputError
 from navlib.__main__ import main

@@ -1,13 +1,13 @@
 """The compiled Kalman kernels (issue 26) equal the NumPy code they replaced
-(tests/kalman_reference.py): one step within 1e-12 relative on random and paper cases, whole
+(tests/support/kalman_reference.py): one step within 1e-12 relative on random and paper cases, whole
 runs (a 30 001-epoch launcher recursion, the 86 s rocket EKF) within the drift rounding
 accumulates."""
 
 import importlib
 
-import kalman_reference as ref
 import numpy as np
 import pytest
+from support import kalman_reference as ref
 
 from navlib import kalman
 from navlib.filters import linear_steps

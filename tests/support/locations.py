@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 """The repository's root (the folder holding ``navlib/``, ``data/``, ``notebooks/``)."""
 
 SHARED_DATA = Path(os.environ.get("NAVLIB_SHARED_DIR") or REPO.parent / "shared") / "data"

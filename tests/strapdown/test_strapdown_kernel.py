@@ -1,12 +1,12 @@
 """The compiled strapdown mechanisation (:func:`navlib.strapdown._kernel.integrate_kernel`)
-equals the vectorised NumPy code it replaced (tests/strapdown_reference.py): one EKF window
+equals the vectorised NumPy code it replaced (tests/support/strapdown_reference.py): one EKF window
 and one interval within 1e-12 relative, the 86 s sounding-rocket flight within the drift
 rounding accumulates."""
 
 import numpy as np
 import pytest
-import strapdown_reference as ref
 from scipy.spatial.transform import Rotation
+from support import strapdown_reference as ref
 
 from navlib import filters, strapdown
 from navlib.quaternions import quat_from_matrix

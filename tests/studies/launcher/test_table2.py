@@ -5,7 +5,7 @@ import csv
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib import NavlibInputError
 from navlib.models.launcher import launcher

@@ -4,7 +4,7 @@ kept responses and covariance summaries, and the EKF run resumed from a snapshot
 
 import numpy as np
 import pytest
-from paths import assert_same_numbers
+from support.paths import assert_same_numbers
 
 from navlib import NavlibInputError
 from navlib.filters import linear, linear_preparation, prepare_linear, simulate_ekf, simulate_linear

@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib import NavlibInputError, io
 from navlib.io import quality

@@ -7,7 +7,7 @@ import tomllib
 
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib import NavlibInputError
 from navlib.__main__ import main

@@ -11,8 +11,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
-from flights import multicopter, records
-from locations import shared_file
+from support.flights import multicopter, records
+from support.locations import shared_file
 
 from navlib import earth, io
 from navlib.errors import NavlibInputError

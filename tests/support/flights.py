@@ -113,7 +113,7 @@ def exact_records(traj, *, sigma_f=0.0, sigma_w=0.0, sigma_p=0.0, gnss_hz=1.0,
 
 
 def dataflash_flight():
-    """The multicopter flight the DataFlash tests write (tests/dataflash_writer.py): its
+    """The multicopter flight the DataFlash tests write (tests/support/dataflash_writer.py): its
     truth, IMU and GNSS records, the GNSS as geodetic fixes with NED velocity (``geo``) and
     the attitude as the autopilot logs it (``att``, yaw/pitch/roll in degrees)."""
     truth = multicopter(24.0, 50.0, pad_s=6.0)

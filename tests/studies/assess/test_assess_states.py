@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from locations import shared_file
+from support.locations import shared_file
 
 from navlib import sensors, units
 from navlib.__main__ import main

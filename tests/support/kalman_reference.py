@@ -1,6 +1,6 @@
 """NumPy reference of the compiled Kalman kernels (issue 26): the step-by-step NumPy code the
 kernels of :mod:`navlib.kalman` and :mod:`navlib.filters.ekf` replaced, kept here
-(not in the library) to compare against (tests/test_kalman.py) and to time against
+(not in the library) to compare against (tests/kalman/test_kalman.py) and to time against
 (benchmarks/bench_kernels.py).
 """
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pandas as pd
 import pytest
-from flights import records
-from locations import REPO
+from support.flights import records
+from support.locations import REPO
 
 from navlib.__main__ import main
 from navlib.earth import ecef_to_geodetic

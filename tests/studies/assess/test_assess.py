@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO
+from support.locations import REPO
 
 from navlib import io, sensors
 from navlib.errors import NavlibInputError

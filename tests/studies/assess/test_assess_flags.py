@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from locations import REPO, shared_file
+from support.locations import REPO, shared_file
 
 from navlib import io
 from navlib.__main__ import _negative_angles, _parser, assess_options, main

@@ -10,8 +10,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from flights import exact_records
-from locations import shared_file
+from support.flights import exact_records
+from support.locations import shared_file
 
 from navlib import io
 from navlib.studies.assess import assess_flight
