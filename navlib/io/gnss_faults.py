@@ -25,7 +25,7 @@ from navlib.io.findings import (
 )
 from navlib.units import DEG
 
-__all__ = ["baro_lag", "faulty_time", "gnss_faults"]
+__all__ = ["baro_lag", "faulty_time", "gnss_faults", "grid_minimum"]
 
 _GYRO = ("w_x", "w_y", "w_z")
 _ACCEL = ("f_x", "f_y", "f_z")
@@ -149,6 +149,31 @@ def _line_misfit(h_g: np.ndarray, h_b: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r**2)))
 
 
+def grid_minimum(x: np.ndarray, y: np.ndarray) -> float:
+    """Where ``y``, sampled on the regular grid ``x``, is smallest: the grid point of its
+    minimum, moved to the vertex of the parabola through it and its neighbours when the
+    minimum is inside the grid and the parabola opens upwards.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Regular grid, increasing.
+    y : numpy.ndarray
+        Values on the grid, finite.
+
+    Returns
+    -------
+    float
+    """
+    i = int(np.argmin(y))
+    at = float(x[i])
+    if 0 < i < x.size - 1:
+        curvature = y[i - 1] - 2.0 * y[i] + y[i + 1]
+        if curvature > 0:
+            at += 0.5 * (y[i - 1] - y[i + 1]) / curvature * float(x[1] - x[0])
+    return at
+
+
 def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None = None
              ) -> tuple[float, list[dict]]:
     """The lag of the GNSS fixes behind the barometer (docs/assumptions.md FIT6, Q2).
@@ -194,18 +219,13 @@ def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None =
     _, _, h_g = earth.ecef_to_geodetic(gnss[list(_XYZ)].to_numpy(dtype=float)[inside])
     misfit = np.array([_line_misfit(h_g, np.interp(t[inside] - lag, t_b, h_b))
                        for lag in lags])
-    i = int(np.argmin(misfit))
-    lag = float(lags[i])
-    if 0 < i < lags.size - 1:
-        curvature = misfit[i - 1] - 2.0 * misfit[i] + misfit[i + 1]
-        if curvature > 0:
-            lag += 0.5 * (misfit[i - 1] - misfit[i + 1]) / curvature * p["lag_step_s"]
-    no_lag = float(misfit[n])
-    if abs(lag) < p["lag_min_s"] or misfit[i] > (1.0 - p["lag_min_gain"]) * no_lag:
+    lag = grid_minimum(lags, misfit)
+    no_lag, least = float(misfit[n]), float(misfit.min())
+    if abs(lag) < p["lag_min_s"] or least > (1.0 - p["lag_min_gain"]) * no_lag:
         return 0.0, []
     row = finding("gnss lag", "time", t, t.size, p["span_join_s"],
                   f"GNSS fixes trail the barometer by {lag:.2f} s (altitude misfit "
-                  f"{no_lag:.3g} m at their stamps, {misfit[i]:.3g} m moved back by the lag)",
+                  f"{no_lag:.3g} m at their stamps, {least:.3g} m moved back by the lag)",
                   "fixes", "; moved back by the lag")
     return lag, [row]
 

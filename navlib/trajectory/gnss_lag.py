@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from navlib.io.gnss_faults import grid_minimum
+
 __all__ = ["LAG_MIN_GAIN", "LAG_ROUNDS", "LAG_STEP_S", "MAX_GNSS_LAG_S", "MIN_GNSS_LAG_S",
            "best_lag", "lag_displacement", "lag_profile", "shifted"]
 
@@ -108,13 +110,7 @@ def best_lag(lags, rms, minimum=MIN_GNSS_LAG_S) -> float:
     lags, rms = np.asarray(lags, float), np.asarray(rms, float)
     if not np.isfinite(rms).all():
         return 0.0
-    i = int(np.argmin(rms))
-    lag = float(lags[i])
-    if 0 < i < lags.size - 1:
-        a, b, c = rms[i - 1], rms[i], rms[i + 1]
-        curvature = a - 2.0 * b + c
-        if curvature > 0:
-            lag += 0.5 * (a - c) / curvature * (lags[1] - lags[0])
+    lag = grid_minimum(lags, rms)
     return lag if abs(lag) >= minimum else 0.0
 
 

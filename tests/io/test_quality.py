@@ -8,11 +8,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from support import vehicles
 from support.flights import multicopter, records
 
 from navlib import earth, sensors
 from navlib.errors import NavlibInputError
+from navlib.io.gnss_faults import grid_minimum
 from navlib.io.quality import (
     check_records,
     gnss_faults,
@@ -328,3 +331,16 @@ def test_the_old_faulty_share_key_is_read_under_its_new_name():
         p = load_thresholds({"gnss": {"max_excluded_fraction": 0.7}})
     assert p["gnss"]["max_faulty_time_fraction"] == 0.7
     assert "max_excluded_fraction" not in p["gnss"]
+
+
+@given(st.floats(-1.9, 1.9), st.floats(0.1, 100.0))
+def test_grid_minimum_is_the_vertex_of_a_parabola(c, k):
+    """On a quadratic the parabola through the grid minimum and its neighbours is the
+    quadratic itself: its vertex is found exactly, wherever it lies between grid points."""
+    x = 0.05 * np.arange(-40, 41)
+    assert grid_minimum(x, k * (x - c) ** 2 + 3.0) == pytest.approx(c, abs=1e-9)
+
+
+def test_grid_minimum_at_an_edge_is_the_edge():
+    x = np.linspace(-2.0, 2.0, 41)
+    assert grid_minimum(x, x) == -2.0
