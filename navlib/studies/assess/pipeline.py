@@ -335,11 +335,15 @@ def _assess_span(imu, gnss, settings: AssessmentSettings) -> FlightAssessment:
                                   s.outage_report_s)
     if s.aiding != "gnss":                     # the model as recorded: its outages included
         notes.append(sigma_note(model, trajectory, s.aiding))
-    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, s.t_record)
+    liftoff = trajectory.events.get("liftoff")
+    t_zero, zero = clock.time_zero(automatic, model, trajectory.t, vehicle, s.t_record, liftoff)
     moved = clock.on_clock(t_zero, trajectory=trajectory, model=model, automatic=automatic,
                            inputs=inputs, gnss_residuals=gnss_res, imu_residuals=imu_res,
                            gnss_outages=outages, logged=_logged(imu, trajectory.t))
-    trajectory, model, automatic = moved["trajectory"], moved["model"], moved["automatic"]
+    trajectory, model = moved["trajectory"], moved["model"]
+    automatic = moved["automatic"]
+    if zero == "ignition" and liftoff is not None and t_zero == liftoff:   # from the records
+        automatic = clock.at_ignition(automatic)
     inputs, gnss_res, imu_res = moved["inputs"], moved["gnss_residuals"], moved["imu_residuals"]
     outages, logged_channels = moved["gnss_outages"], moved["logged"]
     notes.append(f"times are seconds since the {zero}, at {t_zero:.6g} s on the log's clock"
