@@ -25,9 +25,10 @@ from navlib.units import DEG
 
 __all__ = ["ATTITUDE_SAMPLES_PER_KNOT", "LOCAL_SCALE_S", "MAX_CONING_PER_SAMPLE_RAD",
            "MAX_CORRECTION_INTERVALS", "MAX_KNOT_SPACING_S", "MAX_TURN_PER_KNOT_RAD",
-           "MAX_TURN_PER_SAMPLE_RAD", "PAD_SIGMA_MPS", "SAMPLES_PER_KNOT", "SCALE_OFF",
-           "SPLINE_DEGREE", "UNRESOLVED_MARGIN_S", "UNRESOLVED_WEIGHT", "AttitudeCorrection",
-           "PositionRows", "local_median", "place_knots", "resolved_samples", "thin"]
+           "MAX_TURN_PER_SAMPLE_RAD", "MIN_RELATIVE_WEIGHT", "PAD_SIGMA_MPS", "SAMPLES_PER_KNOT",
+           "SCALE_OFF", "SPLINE_DEGREE", "UNRESOLVED_MARGIN_S", "UNRESOLVED_WEIGHT",
+           "AttitudeCorrection", "PositionRows", "coning_per_sample", "local_median", "place_knots",
+           "resolved_samples", "thin"]
 
 SPLINE_DEGREE = 5           # quintic splines: C^4 position, C^2 specific force
 _HUBER = 4.0                # specific-force rows beyond this many sigma are down-weighted
@@ -64,6 +65,10 @@ sigma (:meth:`PositionRows.robust_weights`), s: long enough for a median over 20
 100 Hz, short enough to tell a 3 s boost from the coast after it."""
 SCALE_OFF = 1e-9
 """Prior sigma that holds the scale error of an axis not estimated at zero."""
+MIN_RELATIVE_WEIGHT = 1e-4
+"""Floor of a specific-force row's weight, relative to the median row's
+(:meth:`PositionRows.set_weights`): the unresolved rows' factor times a vibration sigma 100
+times the median reaches below it."""
 UNRESOLVED_WEIGHT = 1e-4
 """Weight factor of the specific-force rows within ``UNRESOLVED_MARGIN_S`` of an unresolved
 sample: their attitude is unknown, so the GNSS carries the position there and they do not
@@ -236,7 +241,12 @@ class PositionRows:
         """IMU row weights ``factor / sigma_f^2`` (``sigma_f`` a scalar or one per row;
         times ``UNRESOLVED_WEIGHT`` where the rotation is not resolved) and the banded
         normal matrix."""
-        self.w_f2 = factor * np.where(self.resolved, 1.0, UNRESOLVED_WEIGHT) / self.sigma_f**2
+        w_f2 = factor * np.where(self.resolved, 1.0, UNRESOLVED_WEIGHT) / self.sigma_f**2
+        # no row weighs less than MIN_RELATIVE_WEIGHT of the median row: across a GNSS
+        # outage the rows alone hold the spline, and a range of weights beyond what the
+        # banded factorisation resolves leaves it free to swing (a parachute opening at
+        # 1750 deg/s drove a reference to 460 m/s)
+        self.w_f2 = np.maximum(w_f2, MIN_RELATIVE_WEIGHT * float(np.median(w_f2)))
         self.N_imu = self.B2.T @ (self.B2 * self.w_f2[:, None])
         self.N = sp.csr_array(self.N_imu + self.N_gnss)
         self.ab = _banded(self.N)
@@ -446,6 +456,27 @@ def local_median(t, x, window_s):
                           min_periods=1).median().to_numpy()
 
 
+def coning_per_sample(t, w_b):
+    """How far each sample's rotation axis moves against the previous sample's, rad:
+    ``|dtheta_(k-1) x dtheta_k| / 2`` with ``dtheta = w dt`` (the coning term of a
+    two-sample attitude algorithm; 0 for the first sample and a rotation about a fixed axis).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times, s.
+    w_b : numpy.ndarray
+        Angular rate, rad/s, (N, 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        (N,).
+    """
+    theta = np.asarray(w_b, dtype=float) * np.diff(t, prepend=t[0])[:, None]
+    return 0.5 * np.linalg.norm(np.cross(np.r_[theta[:1], theta[:-1]], theta), axis=1)
+
+
 def resolved_samples(t, w_b):
     """True where no sample within ``UNRESOLVED_MARGIN_S`` turns the body by more than
     ``MAX_TURN_PER_SAMPLE_RAD`` since the previous one or moves its rotation axis by more
@@ -464,10 +495,8 @@ def resolved_samples(t, w_b):
         Boolean mask, (N,).
     """
     step = np.diff(t, prepend=t[0])
-    theta = w_b * step[:, None]
-    coning = 0.5 * np.linalg.norm(np.cross(np.r_[theta[:1], theta[:-1]], theta), axis=1)
-    fast = ((np.linalg.norm(theta, axis=1) > MAX_TURN_PER_SAMPLE_RAD)
-            | (coning > MAX_CONING_PER_SAMPLE_RAD))
+    fast = ((np.linalg.norm(w_b, axis=1) * step > MAX_TURN_PER_SAMPLE_RAD)
+            | (coning_per_sample(t, w_b) > MAX_CONING_PER_SAMPLE_RAD))
     c = np.r_[0, np.cumsum(fast)]
     i0 = np.searchsorted(t, t - UNRESOLVED_MARGIN_S, side="left")
     i1 = np.searchsorted(t, t + UNRESOLVED_MARGIN_S, side="right")

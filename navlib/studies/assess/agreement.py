@@ -129,6 +129,9 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
     df = imu_residuals[[f"df_{a}_avg" for a in AXES]].to_numpy(dtype=float)
     dw = imu_residuals[[f"dw_{a}_avg" for a in AXES]].to_numpy(dtype=float)
     turn = imu_residuals["turn_deg"].to_numpy(dtype=float)
+    coning = (imu_residuals["coning_deg"].to_numpy(dtype=float),
+              imu_residuals["resolved"].to_numpy(dtype=bool)) \
+        if "resolved" in imu_residuals else (np.zeros_like(turn), np.ones(turn.size, bool))
     t_g = gnss_residuals["t"].to_numpy(dtype=float)
     d_g = gnss_residuals[[f"d{a}" for a in AXES]].to_numpy(dtype=float)
     rows, messages = [], []
@@ -154,8 +157,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         unresolved = fast > bounds["turn_fraction"]
         reason = ""
         if outside or unresolved:
-            causes = _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g,
-                             bounds, (f_rms > f_bound, w_rms > w_bound))
+            causes = _causes(sel, sel_g, fast, (turn, coning), t, df, dw, trajectory, t_g,
+                             d_g, bounds, (f_rms > f_bound, w_rms > w_bound))
             shown = "; ".join(outside) if outside else "residuals within bounds"
             reason = f"{shown}; likely cause: {'; '.join(causes)}"
             messages.append(f"segment {int(row.segment)} {row.phase} {row.t_start:.6g}-"
@@ -166,15 +169,24 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
     return pd.DataFrame(rows, columns=list(AGREEMENT_COLUMNS)), messages
 
 
-def _causes(sel, sel_g, fast, turn, t, df, dw, trajectory, t_g, d_g, bounds, imu_out):
+def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, t_g, d_g, bounds, imu_out):
     """Likely causes of one segment's disagreement, in words (module docstring); the axis
-    regressions only for the sensor (accelerometer, gyro) outside its bound, ``imu_out``."""
+    regressions only for the sensor (accelerometer, gyro) outside its bound, ``imu_out``;
+    ``rotation``: the recorded turn and coning per sample, deg."""
     causes = []
+    turn, (coning, resolved) = rotation
+    rate = 1.0 / float(np.median(np.diff(t[sel]))) if sel.sum() > 1 else np.nan
     if fast > bounds["turn_fraction"]:
-        rate = 1.0 / float(np.median(np.diff(t[sel]))) if sel.sum() > 1 else np.nan
         causes.append(f"rotation per sample beyond what the log rate resolves ({fast:.0%} of "
                       f"its samples turn by more than {bounds['max_turn_per_sample_deg']:g} deg,"
                       f" up to {np.max(turn[sel]):.0f} deg, at {rate:.3g} Hz)")
+    moving = ~resolved[sel]
+    if any(imu_out) and moving.any():
+        t_moving = t[sel][moving]
+        causes.append(f"a rotation the fit does not resolve ({moving.sum()} of its "
+                      f"samples, {t_moving[0]:.6g}-{t_moving[-1]:.6g} s, its axis moving by up "
+                      f"to {np.max(coning[sel]):.2g} deg within a sample at {rate:.3g} Hz): "
+                      "the reference does not follow the IMU there (FIT7)")
     window = bounds["moving_average_s"]
     for name, label, d_avg, ref, out in (
             ("accel", "accelerometer", df, trajectory.specific_force, imu_out[0]),

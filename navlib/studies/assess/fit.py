@@ -20,6 +20,7 @@ from navlib.studies.assess.agreement import (
 )
 from navlib.studies.assess.inputs import GNSS_KEYS, IMU_KEYS, check_frame
 from navlib.trajectory import fit_flight_data
+from navlib.trajectory.position_spline import coning_per_sample, resolved_samples
 
 __all__ = ["fit_notes", "fit_records", "fit_report", "fit_residuals"]
 
@@ -103,7 +104,11 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
         (angular rate, rad/s) and the norms ``df``, ``dw``; ``df_x_avg ... dw_z_avg``: the
         same after the fit's IMU calibration and a moving average
         (:func:`~navlib.studies.assess.agreement.smoothed_residuals`); ``turn_deg``: the
-        recorded rotation since the previous sample, deg.
+        recorded rotation since the previous sample, deg; ``coning_deg``: how far its axis
+        moved against the previous sample's, deg
+        (:func:`navlib.trajectory.position_spline.coning_per_sample`); ``resolved``: whether
+        the fit took the sample's rotation as resolved
+        (:func:`navlib.trajectory.position_spline.resolved_samples`).
     """
     check_frame(imu, "imu", IMU_KEYS)
     check_frame(gnss, "gnss", GNSS_KEYS)
@@ -147,6 +152,8 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
         imu_out[f"dw_{axis}_avg"] = dw_avg[:, i]
     step = np.diff(t, prepend=t[0] - (t[1] - t[0] if t.size > 1 else 0.0))
     imu_out["turn_deg"] = np.degrees(np.linalg.norm(w_rec, axis=1) * step)
+    imu_out["coning_deg"] = np.degrees(coning_per_sample(t, w_rec))
+    imu_out["resolved"] = resolved_samples(t, w_rec)
     return pd.DataFrame(out), pd.DataFrame(imu_out)
 
 
