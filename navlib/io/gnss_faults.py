@@ -174,8 +174,8 @@ def grid_minimum(x: np.ndarray, y: np.ndarray) -> float:
     return at
 
 
-def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None = None
-             ) -> tuple[float, list[dict]]:
+def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None = None,
+             sigma_m: float = 0.0) -> tuple[float, list[dict]]:
     """The lag of the GNSS fixes behind the barometer (docs/assumptions.md FIT6, Q2).
 
     A receiver whose fix trails the motion, or a logger that stamps a fix when it arrives,
@@ -184,8 +184,10 @@ def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None =
     barometer while the fit bent the motion to meet the rest. The lag is the shift of the
     fix times, scanned over +-``lag_max_s`` in steps of ``lag_step_s`` (the minimum refined
     by a parabola), that minimises the misfit of the GNSS altitude against the barometric
-    altitude at the shifted times (:func:`_line_misfit`). It counts when it
-    is at least ``lag_min_s`` and lowers the misfit of no lag by ``lag_min_gain``; the
+    altitude at the shifted times (:func:`_line_misfit`). It counts when it is at least
+    ``lag_min_s``, lowers the misfit of no lag by ``lag_min_gain`` and moves the fixes'
+    altitude by more than ``sigma_m`` (``|lag|`` times the RMS barometric climb rate at the
+    fixes: a hovering vehicle's sub-metre misfit can fall with a lag that is not there); the
     barometer is taken as on time.
 
     Parameters
@@ -196,6 +198,8 @@ def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None =
         ``t, x, y, z`` (ECEF, m).
     thresholds : mapping, optional
         The ``[gnss]`` section of :func:`load_thresholds`.
+    sigma_m : float, optional
+        GNSS position sigma, m: the least altitude change the lag must make.
 
     Returns
     -------
@@ -221,7 +225,10 @@ def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None =
                        for lag in lags])
     lag = grid_minimum(lags, misfit)
     no_lag, least = float(misfit[n]), float(misfit.min())
-    if abs(lag) < p["lag_min_s"] or least > (1.0 - p["lag_min_gain"]) * no_lag:
+    climb = np.interp(t[inside], t_b, np.gradient(h_b, t_b))
+    moved = abs(lag) * float(np.sqrt(np.mean(climb**2)))
+    if (abs(lag) < p["lag_min_s"] or least > (1.0 - p["lag_min_gain"]) * no_lag
+            or moved <= sigma_m):
         return 0.0, []
     row = finding("gnss lag", "time", t, t.size, p["span_join_s"],
                   f"GNSS fixes trail the barometer by {lag:.2f} s (altitude misfit "

@@ -218,7 +218,7 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
     _refuse_share(saturated, "imu: {} % of the samples are saturated",
                   p["saturation"], "saturation", "max_fraction", sat["message"])
     clean_imu = _drop(imu, saturated)
-    lag, lag_rows = baro_lag(clean_imu, gnss, p["gnss"])
+    lag, lag_rows = baro_lag(clean_imu, gnss, p["gnss"], sigma_m)
     if lag:
         gnss = gnss.assign(t=gnss["t"].to_numpy(dtype=float) - lag)
         gnss.attrs["lag_s"] = lag

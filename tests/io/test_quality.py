@@ -15,7 +15,7 @@ from support.flights import multicopter, records
 
 from navlib import earth, sensors
 from navlib.errors import NavlibInputError
-from navlib.io.gnss_faults import grid_minimum
+from navlib.io.gnss_faults import baro_lag, grid_minimum
 from navlib.io.quality import (
     check_records,
     gnss_faults,
@@ -344,3 +344,20 @@ def test_grid_minimum_is_the_vertex_of_a_parabola(c, k):
 def test_grid_minimum_at_an_edge_is_the_edge():
     x = np.linspace(-2.0, 2.0, 41)
     assert grid_minimum(x, x) == -2.0
+
+
+@pytest.mark.parametrize("lag_s", [0.0, 1.5])
+def test_a_slow_vehicle_shows_no_gnss_lag_against_its_barometer(truth, recs, lag_s):
+    """A multicopter survey (climbs of a few m/s): its GNSS altitude against the barometer
+    is noise; moved back by any lag within the scan it changes by less than the GNSS sigma,
+    so no lag is read into it, stamped late or not (FIT6)."""
+    imu, gnss = recs
+    rng = np.random.default_rng(3)
+    _, _, h = truth.geodetic
+    imu = imu.copy()
+    imu.attrs = {**imu.attrs, "baro": pd.DataFrame({"t": truth.t, "alt_m": h + rng.normal(
+        0.0, 0.3, h.size)})}
+    late = gnss.assign(t=gnss["t"] + lag_s)
+    lag, rows = baro_lag(imu, late, sigma_m=5.0)
+    assert lag == 0.0 and rows == []
+
