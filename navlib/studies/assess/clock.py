@@ -125,11 +125,10 @@ def on_clock(t_zero: float, *, trajectory, model, automatic, inputs, gnss_residu
 
 def at_ignition(automatic):
     """For a zero at the records' thrust onset: the segmentation on the assessment's clock
-    with the boundary between the segment
-    before the first ``boost`` and the boost at 0 s, the ignition (module docstring), and the
-    detected ignition of its events at 0 s (the thrust onset is what the records detect);
-    the boundary is unchanged when the boost starts the record or lies more than
-    ``IGNITION_MATCH_S`` away.
+    with the boundary between the segment before the first ``boost`` and the boost at 0 s,
+    the ignition (module docstring), and the detected ignition of its events at 0 s (the
+    thrust onset is what the records detect); the boundary is unchanged when the boost
+    starts the record or lies more than ``IGNITION_MATCH_S`` away.
 
     Parameters
     ----------
