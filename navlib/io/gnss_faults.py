@@ -186,8 +186,9 @@ def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None =
     by a parabola), that minimises the misfit of the GNSS altitude against the barometric
     altitude at the shifted times (:func:`_line_misfit`). It counts when it is at least
     ``lag_min_s``, lowers the misfit of no lag by ``lag_min_gain`` and moves the fixes'
-    altitude by more than ``sigma_m`` (``|lag|`` times the RMS barometric climb rate at the
-    fixes: a hovering vehicle's sub-metre misfit can fall with a lag that is not there); the
+    altitude by more than ``sigma_m`` (``|lag|`` times the RMS barometric climb rate over a
+    second about the fixes: a hovering vehicle's sub-metre misfit can fall with a lag that is
+    not there); the
     barometer is taken as on time.
 
     Parameters
@@ -225,7 +226,9 @@ def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None =
                        for lag in lags])
     lag = grid_minimum(lags, misfit)
     no_lag, least = float(misfit[n]), float(misfit.min())
-    climb = np.interp(t[inside], t_b, np.gradient(h_b, t_b))
+    # the barometric climb rate over a second about each fix (its noise differentiated at
+    # the barometer's own rate would pass for motion)
+    climb = np.interp(t[inside] + 0.5, t_b, h_b) - np.interp(t[inside] - 0.5, t_b, h_b)
     moved = abs(lag) * float(np.sqrt(np.mean(climb**2)))
     if (abs(lag) < p["lag_min_s"] or least > (1.0 - p["lag_min_gain"]) * no_lag
             or moved <= sigma_m):
