@@ -299,6 +299,32 @@ class KeptFigures:
         return png
 
 
+    def kept_blitter(self, name: str, dynamic, dpi: float) -> Blitter | None:
+        """A :class:`Blitter` of the kept figure of part ``name`` that redraws only
+        ``dynamic(kept_figure)``, for a panel that changes those artists in place; None
+        while no figure is kept for the part.
+
+        Parameters
+        ----------
+        name : str
+            Part name.
+        dynamic : callable
+            Returns the changing artists of a figure.
+        dpi : float
+            Resolution, dots per inch.
+
+        Returns
+        -------
+        Blitter or None
+        """
+        kept = self._kept.get(name)
+        if kept is None:
+            return None
+        blitter = self._blitters.get(name)
+        if blitter is None:
+            blitter = self._blitters[name] = Blitter(kept[1], dynamic(kept[1]), dpi)
+        return blitter
+
     def blitted(self, name: str, fig: Figure, dynamic, dpi: float) -> Blitter | None:
         """The kept figure of part ``name`` with ``fig``'s data, as a :class:`Blitter` that
         redraws only ``dynamic(kept_figure)`` (the artists a panel knows to have changed) on
@@ -324,9 +350,7 @@ class KeptFigures:
         if kept is None or kept[0] != layout_key(fig) or _artists(fig) != _artists(kept[1]) \
                 or any(a[-1] for a in _artists(fig)):
             return None
-        blitter = self._blitters.get(name)
-        if blitter is None:
-            blitter = self._blitters[name] = Blitter(kept[1], dynamic(kept[1]), dpi)
+        blitter = self.kept_blitter(name, dynamic, dpi)
         _transplant(fig, kept[1])
         return blitter
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import ipywidgets as widgets
 
 from navlib.metrics import nu_range
-from navlib.plots.plan import timeline_figure
+from navlib.plots.plan import timeline_figure, update_timeline
 from navlib.sensors import list_presets
 from navlib.studies.plan import plan_mission
 from navlib.widgets.base import Panel, look
@@ -90,10 +90,13 @@ class PlanPanel(Panel):
         plan = plan.with_settings(e_threshold=c["e_threshold"], s_threshold=c["s_threshold"],
                                   nu=c["nu"])
         self.plan = plan
-        fig = timeline_figure(plan)
-        blitter = None if replanned else self.figures.blitted("timeline", fig, _threshold_artists,
-                                                             self.dpi)
-        self.show("timeline", fig if blitter is None else blitter)
+        blitter = None if replanned else self.figures.kept_blitter("timeline", _threshold_artists,
+                                                                  self.dpi)
+        if blitter is None:
+            self.show("timeline", timeline_figure(plan))
+        else:                    # the same model: the thresholds' bars and legend in place
+            update_timeline(blitter.fig, plan)
+            self.show("timeline", blitter)
         summary = plan.summary()
         self.show("summary", summary[["segment", "phase", "t_start", "t_end", "n_excitable",
                                       "n_sensible", "sensible"]])
