@@ -35,15 +35,15 @@ LAG_ROUNDS = 3
 """Scans of :func:`navlib.trajectory.fit.fit_flight_data`: the first fit's, then those of
 the refits with the lag found so far (each fit follows part of the lag its fixes carry);
 after the first, steps down to a quarter of :data:`LAG_STEP_S` count."""
-PROFILE_ITERATIONS = 2
-"""Gravity and Coriolis relinearisations of each refit of the scan."""
 
 
 def lag_profile(rows, f_e, coef, t_g, P_g, V_g, sigma):
     """The fit's GNSS residual (3-D RMS, m) with the fixes moved back by each lag of the grid.
 
     Each lag refits the position spline of ``rows`` (its IMU rows and weights, the specific
-    force ``f_e`` of the first fit's attitude) with the fixes at ``t_g - lag``; the residual
+    force ``f_e`` of the first fit's attitude, gravity and Coriolis at the first fit's motion:
+    a lag moves the positions by metres, gravity by a millionth) with the fixes at
+    ``t_g - lag``; the residual
     is taken over the fixes that stay inside the spline's span at every lag, so every lag is
     judged on the same fixes.
 
@@ -78,13 +78,12 @@ def lag_profile(rows, f_e, coef, t_g, P_g, V_g, sigma):
     rms = np.full(lags.size, np.nan)
     if common.sum() < 4:
         return lags, rms
+    imu_rhs = rows.imu_rhs(f_e, coef)      # gravity and Coriolis at the first fit's motion
     for k, lag in enumerate(lags):
         inside = (t_g - lag >= t0) & (t_g - lag <= t1)
         moved = rows.with_gnss_times(t_g[inside] - lag, P_g[inside],
                                      None if V_g is None else V_g[inside], sigma[inside])
-        c = coef
-        for _ in range(PROFILE_ITERATIONS):
-            c, _ = moved.solve(f_e, c)
+        c = moved.solve_rhs(imu_rhs)
         judged = common[inside]
         d = P_g[common] - (rows.P_ref + moved.G0[judged] @ c)
         rms[k] = float(np.sqrt(np.mean(np.sum(d**2, axis=1))))

@@ -289,6 +289,42 @@ class PositionRows:
     def evaluate(self, coef):
         return self.P_ref + self.B0 @ coef, self.B1 @ coef, self.B2 @ coef
 
+    def imu_rhs(self, f_e, coef):
+        """The specific-force rows' right-hand side ``B2' W (f_e + gamma - 2 Omega x V)``,
+        linearised at the coefficients ``coef`` (what :meth:`solve` adds the GNSS rows' to).
+
+        Parameters
+        ----------
+        f_e : numpy.ndarray
+            Specific force in ECEF, m/s^2, (N, 3).
+        coef : numpy.ndarray
+            Spline coefficients of the linearisation, (m, 3).
+
+        Returns
+        -------
+        numpy.ndarray
+            (m, 3).
+        """
+        P, V, _ = self.evaluate(coef)
+        r = f_e + earth.normal_gravity_ecef(P) - 2.0 * np.cross(earth.EARTH_RATE_ECEF, V)
+        return self.B2.T @ (self.w_f2[:, None] * r)
+
+    def solve_rhs(self, imu_rhs):
+        """The coefficients for the specific-force rows' ``imu_rhs`` (:meth:`imu_rhs`) and
+        this object's GNSS rows, without an attitude correction.
+
+        Parameters
+        ----------
+        imu_rhs : numpy.ndarray
+            (m, 3).
+
+        Returns
+        -------
+        numpy.ndarray
+            (m, 3).
+        """
+        return self._solve(imu_rhs + self.rhs_gnss)
+
     def solve(self, f_e, coef, correction=None, C=None, f_b=None):
         """Coefficients (m, 3) and the attitude correction rotation vectors (N, 3).
 
