@@ -25,7 +25,7 @@ from navlib.io.findings import (
 )
 from navlib.units import DEG
 
-__all__ = ["baro_lag", "faulty_time", "gnss_faults", "grid_minimum"]
+__all__ = ["baro_lag", "faulty_time", "gnss_faults", "grid_minimum", "shifted"]
 
 _GYRO = ("w_x", "w_y", "w_z")
 _ACCEL = ("f_x", "f_y", "f_z")
@@ -172,6 +172,25 @@ def grid_minimum(x: np.ndarray, y: np.ndarray) -> float:
         if curvature > 0:
             at += 0.5 * (y[i - 1] - y[i + 1]) / curvature * float(x[1] - x[0])
     return at
+
+
+def shifted(gnss, lag):
+    """A copy of the GNSS record with its fix times moved back by ``lag``, s.
+
+    Parameters
+    ----------
+    gnss : pandas.DataFrame
+        The record (``t`` and the fix columns).
+    lag : float
+        The lag, s.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    out = gnss.copy()
+    out["t"] = gnss["t"].to_numpy(dtype=float) - lag
+    return out
 
 
 def baro_lag(imu: pd.DataFrame, gnss: pd.DataFrame, thresholds: Mapping | None = None,

@@ -45,7 +45,7 @@ from navlib.io.findings import (
     findings_frame,
     load_thresholds,
 )
-from navlib.io.gnss_faults import baro_lag, faulty_time, gnss_faults
+from navlib.io.gnss_faults import baro_lag, faulty_time, gnss_faults, shifted
 from navlib.units import DEG
 
 __all__ = ["FINDING_COLUMNS", "THRESHOLDS_FILE", "QualityCheck", "check_records",
@@ -220,7 +220,7 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
     clean_imu = _drop(imu, saturated)
     lag, lag_rows = baro_lag(clean_imu, gnss, p["gnss"], sigma_m)
     if lag:
-        gnss = gnss.assign(t=gnss["t"].to_numpy(dtype=float) - lag)
+        gnss = shifted(gnss, lag)
         gnss.attrs["lag_s"] = lag
     bad, faults = gnss_faults(clean_imu, gnss, sigma_m, p["gnss"])
     faults = pd.concat([findings_frame(lag_rows), faults], ignore_index=True) if lag_rows \

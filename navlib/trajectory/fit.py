@@ -24,6 +24,7 @@ from navlib import earth, strapdown
 from navlib._validation import finite_array, finite_scalar, increasing_times, reject_unknown
 from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning, check_overlap
+from navlib.io.gnss_faults import shifted
 from navlib.trajectory._so3 import SO3Spline
 from navlib.trajectory.base import Trajectory, build_trajectory
 from navlib.trajectory.gnss_lag import (
@@ -34,7 +35,6 @@ from navlib.trajectory.gnss_lag import (
     best_lag,
     lag_displacement,
     lag_profile,
-    shifted,
 )
 from navlib.trajectory.initial_attitude import (
     VERTICAL_SIN2,

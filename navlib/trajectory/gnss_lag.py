@@ -18,7 +18,7 @@ import numpy as np
 from navlib.io.gnss_faults import grid_minimum
 
 __all__ = ["LAG_MIN_GAIN", "LAG_ROUNDS", "LAG_STEP_S", "MAX_GNSS_LAG_S", "MIN_GNSS_LAG_S",
-           "best_lag", "lag_displacement", "lag_profile", "shifted"]
+           "best_lag", "lag_displacement", "lag_profile"]
 
 MAX_GNSS_LAG_S = 2.0
 """Largest lag scanned, either sign, s (two fix intervals of a 1 Hz receiver)."""
@@ -139,21 +139,3 @@ def lag_displacement(trajectory, t_g, lag) -> float:
                          for i in range(3)])
     return abs(lag) * float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
 
-
-def shifted(gnss, lag):
-    """A copy of the GNSS record with its fix times moved back by ``lag``, s.
-
-    Parameters
-    ----------
-    gnss : pandas.DataFrame
-        The record (``t`` and the fix columns).
-    lag : float
-        The lag, s.
-
-    Returns
-    -------
-    pandas.DataFrame
-    """
-    out = gnss.copy()
-    out["t"] = gnss["t"].to_numpy(dtype=float) - lag
-    return out
