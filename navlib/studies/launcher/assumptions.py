@@ -52,9 +52,10 @@ IDENTICAL = 0.1
 """Relative difference under which two sigmas are "identical" / "negligibly" different."""
 STRONG = 1.5
 """Ratio beyond which (or below whose inverse) an effect is "strong"."""
-EVOLUTION_DEPENDS = ("sigma0_att_deg",)
-"""The assumption the covariance-evolution ratios depend on that the study varies
-(:data:`EVOLUTION_GRID`); the sensor table is the paper's."""
+EVOLUTION_DEPENDS = ("sigma0_att_deg", "gust_mps")
+"""The assumptions every covariance-evolution ratio depends on that the study varies
+(:data:`EVOLUTION_GRID`): the initial attitude sigma and the ascent's lateral level; the
+sensor table is the paper's."""
 
 TABLE2_STRIDE = 1
 """Evaluation stride of the Table 2 claims in :func:`navlib.studies.all_claims`: every
@@ -102,14 +103,18 @@ GPS-bias claims (docs/assumptions.md, A-F3-pad); the model's assumed value is 3 
 (``navlib.models.launcher.ASSUMED``)."""
 PAD_CASES = ("att/GAP/markov", "att/GAP/random_walk")
 """The Fig. 3 cases rerun with the launch position known to :data:`SURVEYED_PAD_M`."""
-EVOLUTION_GRID = {"sigma0_att_deg": (0.03, 0.1, 0.3), "sigma0_pos_m": (SURVEYED_PAD_M, 3.0)}
+EVOLUTION_GRID = {"sigma0_att_deg": (0.03, 0.1, 0.3), "sigma0_pos_m": (SURVEYED_PAD_M, 3.0),
+                  "gust_mps": LATERAL_LEVELS}
 """Declared assumption set of the covariance-evolution claims, one at a time: the initial
 attitude sigma, which the paper does not give (:data:`navlib.models.launcher.ASSUMED`:
 0.1 deg) and against which every "GPS improves / barely improves" ratio is read (quick mode:
-the baseline only), and the initial position sigma (not given either: our 3 m, or a surveyed
-pad's 0.1 m, A-F3-pad), which F3-bp and F5-model read on the :data:`PAD_CASES` runs."""
-EVOLUTION_BASELINE = {"sigma0_att_deg": 0.1, "sigma0_pos_m": 3.0}
-"""The baseline point of :data:`EVOLUTION_GRID` (``navlib.models.launcher.ASSUMED``)."""
+the baseline only), the initial position sigma (not given either: our 3 m, or a surveyed
+pad's 0.1 m, A-F3-pad), which F3-bp and F5-model read on the :data:`PAD_CASES` runs, and the
+level of the ascent's lateral motion (:data:`LATERAL_LEVELS`, A-launcher-lateral: every case
+rerun on the ascent at each level; quick mode: the baseline only)."""
+EVOLUTION_BASELINE = {"sigma0_att_deg": 0.1, "sigma0_pos_m": 3.0, "gust_mps": LATERAL_BASELINE}
+"""The baseline point of :data:`EVOLUTION_GRID` (``navlib.models.launcher.ASSUMED`` and
+:func:`navlib.trajectory.launcher_ascent`'s default gust)."""
 
 CP_MISSION_SET = (100.0, 300.0, 1000.0)
 """GPS-bias time constants c_p (s) of the end-of-§4.1 claim's set: the paper's 100 s and the
