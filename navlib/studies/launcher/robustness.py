@@ -21,6 +21,7 @@ from navlib.studies.launcher.assumptions import (
     CP_MISSION_SET,
     EVOLUTION_BASELINE,
     EVOLUTION_GRID,
+    LATE_S,
     LATERAL_BASELINE,
     LATERAL_LEVELS,
     LEVEL_STRIDE,
@@ -90,18 +91,23 @@ def _level_table2(quick: bool, gust_mps: float) -> Table2Result:
 
 
 def lateral_match_counts(quick: bool = False) -> pd.DataFrame:
-    """Matching Table 2 cells per lateral level (:data:`LATERAL_LEVELS`) and tolerance, and
-    the INS/GPS rows' log10 cond range: how far the level of the lateral motion moves the
-    table (notebook 00)."""
+    """Matching Table 2 cells per lateral level (:data:`LATERAL_LEVELS`) and tolerance, the
+    full-rank INS/GPS rows' log10 cond range over the mission and from
+    :data:`~navlib.studies.launcher.assumptions.LATE_S` on, and the no-bias row's worst step
+    and late order: how far the level of the lateral motion moves the table (notebook 00)."""
     rows = []
     for level in LATERAL_LEVELS:
         result = table2_result(quick, gust_mps=level)
         ins_gps = result.frame[(result.frame.solution == "ins_gps")
                                & (result.frame.n_unobservable == 0)]
+        no_bias = ins_gps[ins_gps.biases == ""]
         rows.append({"gust_mps": level, "stride": result.stride,
                      **{f"match at {tol:g}": int(n) for tol, n in
                         result.match_counts().items()},
-                     "INS/GPS log10 cond": log10_cond_text(ins_gps.log10_cond)})
+                     "INS/GPS log10 cond": log10_cond_text(ins_gps.log10_cond),
+                     f"INS/GPS from {LATE_S:g} s": log10_cond_text(ins_gps.log10_cond_late),
+                     "no-bias worst step (s)": float(no_bias.t_worst_s.iloc[0]),
+                     f"no-bias from {LATE_S:g} s": float(no_bias.log10_cond_late.iloc[0])})
     return pd.DataFrame(rows).set_index("gust_mps")
 
 

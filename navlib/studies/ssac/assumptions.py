@@ -48,8 +48,8 @@ heading prior SSAC-eq44 hinges on: the matched P0's is the classic limit b_gE / 
 itself (ssac.md §4.4), so the factor is the prior in multiples of the classic limit; the paper
 gives no P0, and with the Bayesian (44) the filter follows, the final psiD sigma is
 ``classic / sqrt(1 + (classic / prior)^2)``, 1/sqrt(2) of the classic limit at the matched
-prior; "matches within 10 %" needs a prior of at least 2.06 times it. The generic P0's 1 deg
-is already 24 times the classic limit, and the factor multiplies it too (A-SSAC-eq44-prior)."""
+prior; "matches within 10 %" needs a prior of at least 2.06 times it. The factor multiplies
+the generic P0's 1 deg too (0.48 of the classic limit at our site and gyro, A-SSAC-eq44-prior)."""
 ROBUSTNESS_GRID = {
     "P0": ("matched", "generic"), "attitude_scale": (0.5, 1.0, 2.0),
     "heading_prior": HEADING_PRIORS,

@@ -199,6 +199,30 @@ def test_table2_claims_depend_on_the_lateral_level():
     assert list(counts.index) == list(LATERAL_LEVELS)
 
 
+def test_ins_gps_rows_report_where_their_worst_step_is():
+    """T2-ins-gps says with measurements why the lateral level cannot bring the INS/GPS rows
+    to the paper's orders (A-launcher-lateral): the time of the worst step and the largest
+    order from LATE_S on, read off the same local observability test."""
+    from navlib.models.launcher import launcher_steps
+    from navlib.observability import local_observability
+    from navlib.studies.launcher.assumptions import LATE_S
+    from navlib.studies.launcher.table2 import table2
+
+    traj = launcher_ascent(duration_s=45.0)
+    result = table2(traj, stride=400, solutions=("ins_gps",))
+    row = result.frame[result.frame.biases == ""].iloc[0]
+    res = local_observability(launcher_steps("ins_gps", "", "none", trajectory=traj),
+                              stride=400)
+    late = res.t - traj.t[0] >= LATE_S
+    assert row.t_worst_s == pytest.approx(res.t[np.argmax(res.cond)] - traj.t[0])
+    assert row.log10_cond_late == pytest.approx(np.log10(res.cond[late].max()))
+    assert row.log10_cond_late <= row.log10_cond
+    claim = _by_id(result.claims())["T2-ins-gps"]
+    assert f"from {LATE_S:g} s on its log10 cond is at most {row.log10_cond_late:.1f}" in \
+        claim.explanation
+    assert f"worst step is {row.t_worst_s:.1f} s after lift-off" in claim.explanation
+
+
 def test_table2_condition_claims_move_with_their_inputs(table2_claims):
     """T2-threshold and C3-RT move with the rank tolerance; a numerically singular row below
     1/eps fails T2-threshold (the reading of A-T2-1e17)."""
