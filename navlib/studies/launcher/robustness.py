@@ -100,14 +100,14 @@ def lateral_match_counts(quick: bool = False) -> pd.DataFrame:
         result = table2_result(quick, gust_mps=level)
         ins_gps = result.frame[(result.frame.solution == "ins_gps")
                                & (result.frame.n_unobservable == 0)]
-        no_bias = ins_gps[ins_gps.biases == ""]
+        no_bias = ins_gps[ins_gps.biases == ""].iloc[0]
         rows.append({"gust_mps": level, "stride": result.stride,
                      **{f"match at {tol:g}": int(n) for tol, n in
                         result.match_counts().items()},
                      "INS/GPS log10 cond": log10_cond_text(ins_gps.log10_cond),
                      f"INS/GPS from {LATE_S:g} s": log10_cond_text(ins_gps.log10_cond_late),
-                     "no-bias worst step (s)": float(no_bias.t_worst_s.iloc[0]),
-                     f"no-bias from {LATE_S:g} s": float(no_bias.log10_cond_late.iloc[0])})
+                     "no-bias worst step (s)": round(float(no_bias.t_worst_s), 2),
+                     f"no-bias from {LATE_S:g} s": round(float(no_bias.log10_cond_late), 1)})
     return pd.DataFrame(rows).set_index("gust_mps")
 
 
