@@ -12,6 +12,7 @@ from navlib.studies.claims import ClaimResult, check, claim
 from navlib.studies.launcher.assumptions import (
     COND_TOL,
     IDENTICAL,
+    LATE_S,
     LOW_LOG10,
     RESOLVED_LOG10,
     SINGULAR_LOG10,
@@ -391,7 +392,23 @@ def t2_ins_gps_claim(frame: pd.DataFrame, cond_tol: float) -> ClaimResult:
             f"the no-bias row's weakest direction is body roll ({weakest}), which n steps of "
             "5 ms see only through lateral specific force and the turn of the body axes "
             "(§3.8): the paper's order 3 for that row fits neither its own roll argument nor "
-            "our ascent (spec §10c calls these rows trajectory-dependent)"))
+            "our ascent (spec §10c calls these rows trajectory-dependent)"
+            + _lift_off_text(ins[ins.biases == ""])))
+
+
+def _lift_off_text(no_bias: pd.DataFrame) -> str:
+    """Where the no-bias INS/GPS row's worst step is and its largest condition order from
+    :data:`~navlib.studies.launcher.assumptions.LATE_S` on (A-launcher-lateral), or ""."""
+    if not len(no_bias) or "t_worst_s" not in no_bias or \
+            not np.isfinite(no_bias.log10_cond_late.iloc[0]):
+        return ""
+    row = no_bias.iloc[0]
+    return (f"; its worst step is {row.t_worst_s:.1f} s after lift-off, and from {LATE_S:g} s "
+            f"on its log10 cond is at most {row.log10_cond_late:.1f} (the mission's maximum "
+            f"{row.log10_cond:.1f}): the maximum sits in the first seconds of the climb, where "
+            "the airspeed and so the gusts' normal force (rho V w) are small, and the level of "
+            "the lateral motion moves the later steps (A-launcher-lateral; per level: "
+            "lateral_match_counts)")
 
 
 def table2_claim_results(frame: pd.DataFrame, cond_tol: float = COND_TOL,

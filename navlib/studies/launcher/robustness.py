@@ -21,6 +21,7 @@ from navlib.studies.launcher.assumptions import (
     CP_MISSION_SET,
     EVOLUTION_BASELINE,
     EVOLUTION_GRID,
+    LATE_S,
     LATERAL_BASELINE,
     LATERAL_LEVELS,
     LEVEL_STRIDE,
@@ -39,7 +40,7 @@ from navlib.studies.launcher.covariance_claims import (
     f3_bp_claim,
     f5_model_claim,
 )
-from navlib.studies.launcher.evolution import evolution_grid
+from navlib.studies.launcher.evolution import covariance_evolution, evolution_grid
 from navlib.studies.launcher.table2 import Table2Result, table2
 from navlib.trajectory import launcher_ascent
 
@@ -90,18 +91,23 @@ def _level_table2(quick: bool, gust_mps: float) -> Table2Result:
 
 
 def lateral_match_counts(quick: bool = False) -> pd.DataFrame:
-    """Matching Table 2 cells per lateral level (:data:`LATERAL_LEVELS`) and tolerance, and
-    the INS/GPS rows' log10 cond range: how far the level of the lateral motion moves the
-    table (notebook 00)."""
+    """Matching Table 2 cells per lateral level (:data:`LATERAL_LEVELS`) and tolerance, the
+    full-rank INS/GPS rows' log10 cond range over the mission and from
+    :data:`~navlib.studies.launcher.assumptions.LATE_S` on, and the no-bias row's worst step
+    and late order: how far the level of the lateral motion moves the table (notebook 00)."""
     rows = []
     for level in LATERAL_LEVELS:
         result = table2_result(quick, gust_mps=level)
         ins_gps = result.frame[(result.frame.solution == "ins_gps")
                                & (result.frame.n_unobservable == 0)]
+        no_bias = ins_gps[ins_gps.biases == ""].iloc[0]
         rows.append({"gust_mps": level, "stride": result.stride,
                      **{f"match at {tol:g}": int(n) for tol, n in
                         result.match_counts().items()},
-                     "INS/GPS log10 cond": log10_cond_text(ins_gps.log10_cond)})
+                     "INS/GPS log10 cond": log10_cond_text(ins_gps.log10_cond),
+                     f"INS/GPS from {LATE_S:g} s": log10_cond_text(ins_gps.log10_cond_late),
+                     "no-bias worst step (s)": round(float(no_bias.t_worst_s), 2),
+                     f"no-bias from {LATE_S:g} s": round(float(no_bias.log10_cond_late), 1)})
     return pd.DataFrame(rows).set_index("gust_mps")
 
 
@@ -141,15 +147,26 @@ def baseline_evolution_claims(quick: bool = False) -> list[ClaimResult]:
     return next(v for k, v in evolution_variants(quick).items() if np.isclose(k, base))
 
 
+@cache.memoized(maxsize=2)
+def _level_evolution(gust_mps: float) -> pd.DataFrame:
+    """The covariance-evolution table (every case, the model's initial sigmas) on the ascent
+    at lateral level ``gust_mps`` (kept in the process, and on disk by
+    :func:`~navlib.studies.launcher.covariance_evolution`)."""
+    return covariance_evolution(launcher_ascent(gust_mps=gust_mps))
+
+
 def evolution_robustness(quick: bool = False) -> list:
     """``(point, claims)`` over :data:`~navlib.studies.launcher.EVOLUTION_GRID`: each initial
-    attitude sigma's table, and F3-bp and F5-model on the surveyed-pad runs of the cause
-    experiment (the :data:`~navlib.studies.launcher.assumptions.PAD_CASES` they read)."""
+    attitude sigma's table, F3-bp and F5-model on the surveyed-pad runs of the cause
+    experiment (the :data:`~navlib.studies.launcher.assumptions.PAD_CASES` they read), and
+    (full mode) every case on the ascent at each other lateral level (A-launcher-lateral)."""
     base = EVOLUTION_BASELINE["sigma0_att_deg"]
     pad = evolution_causes(quick)["surveyed_pad"]
+    levels = () if quick else [g for g in LATERAL_LEVELS if g != LATERAL_BASELINE]
     return [*(({"sigma0_att_deg": base if np.isclose(k, base) else k}, v)
               for k, v in evolution_variants(quick).items()),
-            ({"sigma0_pos_m": SURVEYED_PAD_M}, [f3_bp_claim(pad), f5_model_claim(pad)])]
+            ({"sigma0_pos_m": SURVEYED_PAD_M}, [f3_bp_claim(pad), f5_model_claim(pad)]),
+            *(({"gust_mps": g}, evolution_claims(_level_evolution(g))) for g in levels)]
 
 
 engine.register(engine.Study("fig1", "Beaudoin et al. (2018)", baseline_fig1_claims,
@@ -164,7 +181,8 @@ engine.register(engine.Study(
     kinds={"cond_tol": "ours", "rank_rtol": "ours", "gust_mps": "ours"}))
 engine.register(engine.Study("covariance", "Beaudoin et al. (2018)", baseline_evolution_claims,
                              EVOLUTION_GRID, evolution_robustness,
-                             "one covariance-evolution table per initial attitude sigma; "
-                             "the sigmas' recursions stacked per case",
+                             "one at a time: one covariance-evolution table per initial "
+                             "attitude sigma (the sigmas' recursions stacked per case), the "
+                             "surveyed pad's runs, one table per other lateral level",
                              order=2, baseline_point=EVOLUTION_BASELINE,
                              kinds=COVARIANCE_KINDS))

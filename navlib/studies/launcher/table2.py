@@ -26,7 +26,12 @@ from navlib.observability import analyze, local_matrix, local_observability
 from navlib.parallel import map_tasks
 from navlib.resources import data_dir
 from navlib.studies.claims import ClaimResult
-from navlib.studies.launcher.assumptions import COND_TOL, TABLE2_RANK_RTOLS, TOLERANCES
+from navlib.studies.launcher.assumptions import (
+    COND_TOL,
+    LATE_S,
+    TABLE2_RANK_RTOLS,
+    TOLERANCES,
+)
 from navlib.studies.launcher.claims import cond_match, match_counts, table2_claim_results
 from navlib.trajectory import launcher_ascent
 
@@ -145,11 +150,13 @@ class Table2Result:
     ----------
     frame : pandas.DataFrame
         One row per configuration: ``solution, biases, bias_model, n_states,
-        n_unobservable, log10_cond, rank_constant, groups, weakest`` (ours; at the middle
-        of the mission: ``groups`` = coupled unobservable states, ``weakest`` = largest
-        components of the least observable direction, attitude in body axes),
-        ``paper_unobservable,
-        paper_log10_cond``, ``match_unobservable``, ``match_cond`` and ``match``.
+        n_unobservable, log10_cond, rank_constant, t_worst_s, log10_cond_late, groups,
+        weakest`` (ours; ``t_worst_s`` = time after lift-off of the largest condition number,
+        ``log10_cond_late`` = the largest from :data:`~navlib.studies.launcher.assumptions.
+        LATE_S` on; at the middle of the mission: ``groups`` = coupled unobservable states,
+        ``weakest`` = largest components of the least observable direction, attitude in body
+        axes), ``paper_unobservable, paper_log10_cond``, ``match_unobservable``,
+        ``match_cond`` and ``match``.
     variant, method : str
         Local-matrix reading (``time_varying`` = eq. (6), ``frozen`` = PWCS) and
         discretisation (``euler`` = the paper's ``I + s_t F``).
@@ -243,6 +250,8 @@ def _model_row(config, model, trajectory, *, window, variant, stride, rtol, meth
     row = {"solution": solution, "biases": biases, "bias_model": bias_model,
            "n_states": model.n, "n_unobservable": res.n_unobservable,
            "log10_cond": res.log10_max_cond, "rank_constant": res.rank_constant,
+           "t_worst_s": float(res.t[int(np.argmax(res.cond))] - trajectory.t[0]),
+           "log10_cond_late": _late_log10_cond(res, trajectory.t[0]),
            **_mid_step_analysis(model, res, trajectory, window, variant, method, rtol,
                                 rank_rtols)}
     for tol in rank_rtols:
@@ -250,6 +259,13 @@ def _model_row(config, model, trajectory, *, window, variant, stride, rtol, meth
         row[f"n_unobservable@{tol:g}"] = other.n_unobservable
         row[f"rank_constant@{tol:g}"] = other.rank_constant
     return row
+
+
+def _late_log10_cond(res, t0: float) -> float:
+    """log10 of the largest condition number at the evaluated steps from :data:`LATE_S` after
+    lift-off ``t0`` on (NaN when none is that late)."""
+    late = res.t - t0 >= LATE_S
+    return float(np.log10(res.cond[late].max())) if late.any() else float("nan")
 
 
 def _config_row(config, trajectory, *, model_kw, **options) -> dict:

@@ -331,7 +331,7 @@ def eq44_claim(study: SSACStudy) -> ClaimResult:
         assumption="(44) read as Jekeli's classic azimuth limit (the Bayesian form is an "
                    "identity of the filter, ssac.md §3.5); 'matches' = within 10 %; the "
                    "initial heading sigma (not given) sets the ratio (A-SSAC-eq44-prior)",
-        depends_on=(*RUN_DEPS, "heading_prior"),
+        depends_on=RUN_DEPS,
         explanation=_eq44_explanation(psid))
 
 

@@ -9,10 +9,8 @@ robustness.
 
 from __future__ import annotations
 
-import numpy as np
-
 from navlib import cache
-from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG, ssac
+from navlib.models.ssac import SITE_ALT_M, SITE_LAT_DEG
 from navlib.studies import claims as engine
 from navlib.studies.claims import ClaimResult
 from navlib.studies.ssac.assumptions import (
@@ -20,9 +18,10 @@ from navlib.studies.ssac.assumptions import (
     BASELINE_POINT,
     QUICK_DURATION_S,
     ROBUSTNESS_GRID,
+    initial_covariance,
     sigma_nu,
 )
-from navlib.studies.ssac.claims import actual_claim, eq44_claim, ssac_claims, static_tables
+from navlib.studies.ssac.claims import actual_claim, ssac_claims, static_tables
 from navlib.studies.ssac.eigen_claims import orientation_claim
 from navlib.studies.ssac.experiment import (
     CONVERGENCE_DEFAULT,
@@ -35,17 +34,7 @@ from navlib.studies.ssac.experiment import (
 )
 from navlib.studies.ssac.observability import RANK_RTOL
 
-__all__ = ["baseline_claims", "grid_claims", "heading_prior_p0", "robustness_claims"]
-
-
-def heading_prior_p0(factor: float) -> np.ndarray:
-    """The matched P0 of the 15-state model with its initial psiD sigma times ``factor``
-    (:data:`~navlib.studies.ssac.assumptions.HEADING_PRIORS`)."""
-    model = ssac(15, SITE_LAT_DEG, SITE_ALT_M, P0="matched")
-    P0 = np.array(model.P0, dtype=float)
-    i = model.state_names.index("psiD")
-    P0[i, i] *= factor**2
-    return P0
+__all__ = ["baseline_claims", "grid_claims", "robustness_claims"]
 
 
 def _depending(results: list[ClaimResult], name: str) -> list[ClaimResult]:
@@ -72,7 +61,8 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
     rerun, the same for every point: :func:`~navlib.studies.ssac.modified_run`) are three
     stacked recursions (:func:`~navlib.studies.ssac.p0_runs`); the convergence,
     rank-tolerance and x0 points re-judge the baseline run, a heading-prior point is one more
-    stacked 15-state recursion judged by SSAC-eq44, an IMU orientation point reruns the
+    P0 in each stacked recursion (:func:`~navlib.studies.ssac.assumptions.initial_covariance`)
+    judging every claim read from the run, an IMU orientation point reruns the
     orientation table. Kept in the process for the last mode asked."""
     duration = QUICK_DURATION_S if quick else 3600.0
     tables = static_tables(SITE_LAT_DEG, SITE_ALT_M, duration)
@@ -82,10 +72,13 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
     priors = [k for k in ROBUSTNESS_GRID["heading_prior"]
               if k != BASELINE_POINT["heading_prior"]]
     runs = p0_runs([*points, ("matched", P0_MODIFIED_ATTITUDE_SCALE),
-                    *((heading_prior_p0(k), 1.0) for k in priors)], duration, track=False)
+                    *(initial_covariance("matched", 1.0, k) for k in priors)], duration,
+                   track=False)
     full, modified, headings = runs[:len(points)], runs[len(points)], runs[len(points) + 1:]
-    reduced = p0_runs(points, duration, n_states=12, track=False)
-    reduced10 = p0_runs(points, duration, n_states=10, track=False)
+    small = {n: p0_runs([*points, *(initial_covariance("matched", 1.0, k, n) for k in priors)],
+                        duration, n_states=n, track=False) for n in (12, 10)}
+    reduced, heading12 = small[12][:len(points)], small[12][len(points):]
+    reduced10, heading10 = small[10][:len(points)], small[10][len(points):]
     out, base = [], None
     for (p0, scale), study, r12, r10 in zip(points, full, reduced, reduced10, strict=True):
         kw = {"reduced": r12, "reduced10": r10,
@@ -98,8 +91,10 @@ def grid_claims(quick: bool) -> list[tuple[dict, list[ClaimResult]]]:
     # the convergence and rank-tolerance points keep only the claims depending on them; the
     # reduced filters' claims do not (RUN_DEPS), so their truth-model runs are not re-read
     judged = {**kw, "reduced": None, "reduced10": None}
-    for k, run in zip(priors, headings, strict=True):
-        out.append(({"heading_prior": k}, [eq44_claim(run)]))
+    for k, run, r12, r10 in zip(priors, headings, heading12, heading10, strict=True):
+        out.append(({"heading_prior": k}, _depending(ssac_claims(
+            run, tables=tables, reduced=r12, reduced10=r10,
+            p0_table=p0_sensitivity(run, modified=modified)), "heading_prior")))
     for reading in ROBUSTNESS_GRID["convergence"]:
         if reading != CONVERGENCE_DEFAULT:
             out.append(({"convergence": reading}, _depending(

@@ -4,7 +4,8 @@ as :data:`SEARCH` (docs/assumptions.md, A-SSAC-set; stored in
 ``data/claims_search_ssac.csv`` by ``scripts/claims_search.py --study ssac``).
 
 A point is one value of each declared assumption (:data:`SEARCH_GRID`). The covariance runs
-depend on the P0, its attitude scale, the gyro random-walk unit and the ZVU noise only
+depend on the P0, its attitude scale and heading prior, the gyro random-walk unit and the ZVU
+noise only
 (:data:`SHARED`, the shared input of a point, built once per distinct set: the 15-, 12- and
 10-state runs and the P0-sensitivity rerun); the convergence reading, the rank tolerance and
 the truth x0 re-judge those runs.
@@ -22,6 +23,7 @@ from navlib.studies.ssac.assumptions import (
     ARW_READINGS,
     BASELINE_POINT,
     ROBUSTNESS_GRID,
+    initial_covariance,
     sigma_nu,
 )
 from navlib.studies.ssac.claims import (
@@ -50,7 +52,7 @@ __all__ = ["CLAIM_IDS", "DURATION_S", "SEARCH", "SEARCH_GRID", "SEARCH_PARAMETER
 SEARCH_X0 = 2
 """Draws of x0 from N(0, P0) searched beside the baseline x0 (the first of the robustness
 set's :data:`~navlib.studies.ssac.X0_DRAWS`; x0 enters SSAC-actual only)."""
-SHARED = ("P0", "attitude_scale", "arw_reading", "noise_scale")
+SHARED = ("P0", "attitude_scale", "heading_prior", "arw_reading", "noise_scale")
 """The assumptions of a point's covariance runs (the sweep's shared input)."""
 SEARCH_GRID = {**{k: ROBUSTNESS_GRID[k] for k in (*SHARED, "convergence", "rank_rtol")},
                "x0": ROBUSTNESS_GRID["x0"][:1 + SEARCH_X0]}
@@ -83,17 +85,19 @@ def search_points(grid: dict | None = None) -> pd.DataFrame:
     return points
 
 
-def _prepare(P0, attitude_scale, arw_reading, noise_scale):
+def _prepare(P0, attitude_scale, heading_prior, arw_reading, noise_scale):
     """The runs of a point's covariance assumptions and the claims judged on them at the
     baseline convergence reading, rank tolerance and x0: the 15-state run with its 12- and
-    10-state counterparts and the P0-sensitivity rerun."""
+    10-state counterparts (each with the point's heading prior,
+    :func:`~navlib.studies.ssac.assumptions.initial_covariance`) and the P0-sensitivity
+    rerun."""
     arw = ARW_READINGS[arw_reading]
     runs = {"track": False, "imu": None if arw is None else {"gyro_arw": arw},
             "sigma_nu": sigma_nu(noise_scale)}
-    study, modified = p0_runs([(P0, attitude_scale), ("matched", P0_MODIFIED_ATTITUDE_SCALE)],
-                              DURATION_S, **runs)
-    reduced = {n: p0_runs([(P0, attitude_scale)], DURATION_S, n_states=n, **runs)[0]
-               for n in (12, 10)}
+    study, modified = p0_runs([initial_covariance(P0, attitude_scale, heading_prior),
+                               ("matched", P0_MODIFIED_ATTITUDE_SCALE)], DURATION_S, **runs)
+    reduced = {n: p0_runs([initial_covariance(P0, attitude_scale, heading_prior, n)],
+                          DURATION_S, n_states=n, **runs)[0] for n in (12, 10)}
     orientation = static_tables(SITE_LAT_DEG, SITE_ALT_M, DURATION_S)[2]
     claims = ssac_claims(study, tables=static_tables(SITE_LAT_DEG, SITE_ALT_M, DURATION_S,
                                                      RANK_RTOL, orientation),
@@ -104,8 +108,8 @@ def _prepare(P0, attitude_scale, arw_reading, noise_scale):
             "claims": {c.claim_id: c for c in claims}}
 
 
-def _claims_run(prepared, P0, attitude_scale, arw_reading, noise_scale, convergence,
-                rank_rtol, x0):
+def _claims_run(prepared, P0, attitude_scale, heading_prior, arw_reading, noise_scale,
+                convergence, rank_rtol, x0):
     """One boolean per claim of :data:`CLAIM_IDS` (True = reproduced) and their count: the
     prepared claims with those reading the convergence reading, the rank tolerance or x0
     judged again at this point (as :func:`~navlib.studies.ssac.ssac_claims` judges them)."""

@@ -20,8 +20,8 @@ def _by_id(claims):
     return {c.claim_id: c for c in claims}
 
 
-def _evolution(cases, kick_deg=2.5, **model_kw):
-    traj = launcher_ascent(duration_s=80.0, rate_hz=20.0, kick_deg=kick_deg)
+def _evolution(cases, kick_deg=2.5, gust_mps=9.0, **model_kw):
+    traj = launcher_ascent(duration_s=80.0, rate_hz=20.0, kick_deg=kick_deg, gust_mps=gust_mps)
     table = launcher.covariance_evolution(traj, {k: EVOLUTION_CASES[k] for k in cases},
                                           **model_kw)
     return _by_id(launcher.evolution_claims(table))
@@ -64,6 +64,38 @@ def test_roll_claims_move_with_the_pitch_programme():
     for cid in ("F2-roll", "F2-ideal", "R-3.8"):
         assert level[cid].checks[0].value > turn[cid].checks[0].value
         assert (turn[cid].verdict, level[cid].verdict) == ("not reproduced", "reproduced")
+
+
+def test_covariance_claims_depend_on_the_lateral_level(monkeypatch):
+    """Every covariance-evolution claim read from the ascent declares its lateral level
+    (A-launcher-lateral), the covariance set varies it at every level of the Table 2 set
+    (full mode: one table per other level), and the level moves the roll ratios."""
+    from navlib.studies.launcher import robustness
+    from navlib.studies.launcher.assumptions import LATERAL_LEVELS
+
+    study = engine.studies()["covariance"]
+    assert study.grid["gust_mps"] == LATERAL_LEVELS and study.kinds["gust_mps"] == "ours"
+    assert study.baseline_at(False)["gust_mps"] == 9.0
+    cases = ("gps/none", "ins-only/none", "ideal-gps/none")
+    calm, windy = _evolution(cases, gust_mps=0.0), _evolution(cases, gust_mps=18.0)
+    for cid in ("F2-roll", "F2-ideal", "R-3.8"):
+        assert "gust_mps" in calm[cid].depends_on
+        assert calm[cid].headline_values() != windy[cid].headline_values()
+    measured = [c for c in calm.values() if c.basis == "measured"]
+    assert all("gust_mps" in c.depends_on for c in measured)
+    # the full-mode set's wiring, on short tables: one point per other level
+    short = launcher.covariance_evolution(quick=True)
+    monkeypatch.setattr(robustness, "evolution_variants",
+                        lambda quick: {0.1: launcher.evolution_claims(short)})
+    monkeypatch.setattr(robustness, "evolution_causes",
+                        lambda quick: {"surveyed_pad": launcher.EvolutionTable(short)})
+    levels = []
+    monkeypatch.setattr(robustness, "_level_evolution",
+                        lambda g: levels.append(g) or short)
+    points = [p for p, _ in robustness.evolution_robustness(False)]
+    assert levels == [0.0, 18.0]
+    assert {"gust_mps": 0.0} in points and {"gust_mps": 18.0} in points
+    assert not any("gust_mps" in p for p, _ in robustness.evolution_robustness(True))
 
 
 def test_gps_bias_claims_move_with_the_initial_position():
@@ -165,6 +197,30 @@ def test_table2_claims_depend_on_the_lateral_level():
     assert (windy.log10_cond[full_rank] < calm.log10_cond[full_rank]).mean() > 0.5
     counts = launcher.lateral_match_counts(True)
     assert list(counts.index) == list(LATERAL_LEVELS)
+
+
+def test_ins_gps_rows_report_where_their_worst_step_is():
+    """T2-ins-gps says with measurements why the lateral level cannot bring the INS/GPS rows
+    to the paper's orders (A-launcher-lateral): the time of the worst step and the largest
+    order from LATE_S on, read off the same local observability test."""
+    from navlib.models.launcher import launcher_steps
+    from navlib.observability import local_observability
+    from navlib.studies.launcher.assumptions import LATE_S
+    from navlib.studies.launcher.table2 import table2
+
+    traj = launcher_ascent(duration_s=45.0)
+    result = table2(traj, stride=400, solutions=("ins_gps",))
+    row = result.frame[result.frame.biases == ""].iloc[0]
+    res = local_observability(launcher_steps("ins_gps", "", "none", trajectory=traj),
+                              stride=400)
+    late = res.t - traj.t[0] >= LATE_S
+    assert row.t_worst_s == pytest.approx(res.t[np.argmax(res.cond)] - traj.t[0])
+    assert row.log10_cond_late == pytest.approx(np.log10(res.cond[late].max()))
+    assert row.log10_cond_late <= row.log10_cond
+    claim = _by_id(result.claims())["T2-ins-gps"]
+    assert f"from {LATE_S:g} s on its log10 cond is at most {row.log10_cond_late:.1f}" in \
+        claim.explanation
+    assert f"worst step is {row.t_worst_s:.1f} s after lift-off" in claim.explanation
 
 
 def test_table2_condition_claims_move_with_their_inputs(table2_claims):

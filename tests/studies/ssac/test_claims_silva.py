@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import navlib.studies  # noqa: F401 - registers the SSAC search space
+from navlib.models.ssac import ssac as ssac_model
 from navlib.studies import claims as engine
 from navlib.studies import ssac as S
 from navlib.studies.ssac import search
@@ -166,27 +167,42 @@ def test_noise_scale_is_in_the_declared_set():
         S.covariance_run(600.0, track=False)) if "P0" in c.depends_on)
 
 
+def _heading_p0(n_states, P0, attitude_scale, factor):
+    """The named P0 with its psiD sigma times ``factor``, built here from the model."""
+    model = ssac_model(n_states, S.SITE_LAT_DEG, S.SITE_ALT_M, P0=P0,
+                       attitude_scale=attitude_scale)
+    scale = np.ones(model.n)
+    scale[model.state_names.index("psiD")] = factor
+    return np.asarray(model.P0) * np.outer(scale, scale)
+
+
 def test_search_point_judges_as_ssac_claims():
-    """A non-baseline point of the joint search gives the verdicts of ssac_claims."""
-    point = dict(P0="generic", attitude_scale=2.0, arw_reading="deg/sqrt(h)",
-                 noise_scale=0.5, convergence="t99", rank_rtol=1e-6,
-                 x0=S.ROBUSTNESS_GRID["x0"][2])
+    """A non-baseline point of the joint search, with a heading prior on the generic P0 (the
+    factor multiplies its psiD sigma too, A-SSAC-eq44-prior), gives the verdicts of
+    ssac_claims on runs from that P0."""
+    point = dict(P0="generic", attitude_scale=2.0, heading_prior=2.0,
+                 arw_reading="deg/sqrt(h)", noise_scale=0.5, convergence="t99",
+                 rank_rtol=1e-6, x0=S.ROBUSTNESS_GRID["x0"][2])
     prepared = search._prepare(*(point[k] for k in search.SHARED))
     row = search._claims_run(prepared, **point)
     study = prepared["study"]
+    np.testing.assert_allclose(study.model.P0, _heading_p0(15, "generic", 2.0, 2.0))
+    psid = study.model.state_names.index("psiD")
+    assert np.degrees(np.sqrt(study.model.P0[psid, psid])) == pytest.approx(4.0)
+    reduced = {n: S.covariance_run(DURATION_S, n_states=n, P0=_heading_p0(n, "generic", 2.0,
+                                                                         2.0),
+                                   sigma_nu=0.005, track=False) for n in (12, 10)}
     ref = _claims(study, convergence="t99", rank_rtol=1e-6, tables=S.static_tables(
         S.SITE_LAT_DEG, S.SITE_ALT_M, DURATION_S, 1e-6),
-        reduced=S.covariance_run(DURATION_S, n_states=12, P0="generic", attitude_scale=2.0,
-                                 sigma_nu=0.005, track=False),
-        reduced10=S.covariance_run(DURATION_S, n_states=10, P0="generic",
-                                   attitude_scale=2.0, sigma_nu=0.005, track=False),
+        reduced=reduced[12], reduced10=reduced[10],
         p0_table=S.p0_sensitivity(study, modified=S.covariance_run(
             DURATION_S, attitude_scale=S.P0_MODIFIED_ATTITUDE_SCALE, sigma_nu=0.005,
             track=False)))
     ref["SSAC-actual"] = S.actual_claim(study, S.x0_draws(study)[1])
     assert {cid: row[cid] for cid in search.CLAIM_IDS} == \
         {cid: ref[cid].verdict == "reproduced" for cid in search.CLAIM_IDS}
-    assert len(S.search_points()) == 2 * 3 * 2 * 3 * 4 * 4 * (1 + search.SEARCH_X0)
+    assert len(S.search_points()) == 2 * 3 * 3 * 2 * 3 * 4 * 4 * (1 + search.SEARCH_X0)
+    assert "heading_prior" in search.SHARED
 
 
 def test_eq44_explanation_predicts_where_the_verdict_flips():
@@ -204,7 +220,7 @@ def test_eq44_moves_through_the_declared_heading_prior():
     """SSAC-eq44 declares the initial heading sigma it hinges on (A-SSAC-eq44-prior): the
     matched prior gives 1/sqrt(2) of the classic limit, x3 the limit within 10 %."""
     from navlib.studies.ssac.assumptions import BASELINE_POINT, HEADING_PRIORS
-    from navlib.studies.ssac.robustness import grid_claims
+    from navlib.studies.ssac.robustness import baseline_claims, grid_claims
 
     assert BASELINE_POINT["heading_prior"] == 1.0 and 3.0 in HEADING_PRIORS
     eq44 = {p.get("heading_prior", 1.0): r for p, rs in grid_claims(True) for r in rs
@@ -217,6 +233,16 @@ def test_eq44_moves_through_the_declared_heading_prior():
     assert eq44[3.0].headline_values()[0] == pytest.approx(3.0 / np.sqrt(10.0), rel=1e-3)
     rob = engine.study_robustness(engine.studies()["ssac"], quick=True)["SSAC-eq44"]
     assert "heading_prior" in rob.varied
+    # the prior is part of P0: every claim read from the run declares it, and it moves the
+    # fitted 45 deg pairs (SSAC-pairs) and the actual-error ratio off their verdicts
+    heads = {p["heading_prior"]: {r.claim_id: r for r in rs} for p, rs in grid_claims(True)
+             if set(p) == {"heading_prior"}}
+    base = {r.claim_id: r for r in baseline_claims(True)}
+    assert set(heads[2.0]) == {cid for cid, r in base.items() if "P0" in r.depends_on}
+    pairs = [base["SSAC-pairs"], heads[2.0]["SSAC-pairs"]]
+    assert pairs[1].headline_values()[0] > 10.0 > pairs[0].headline_values()[0]
+    assert [r.verdict for r in pairs] == ["reproduced", "not reproduced"]
+    assert heads[3.0]["SSAC-actual"].verdict == "not reproduced"
     frame = engine.study_frame(engine.studies()["ssac"], quick=True)
     assert frame.set_index("claim_id").at["SSAC-eq44", "cause"] == "unstated"
 
