@@ -290,6 +290,7 @@ def normalized_eigen(P, P0=None, *, order: float | None = None, scale: str = "di
         for b, (c, mine) in enumerate(members):
             new[:, mine] = cur[:, c] @ polar[b, :c.size, :c.size]
         tracked_V[k] = new
-    tracked_w = np.einsum("kil,kij,kjl->kl", tracked_V, Pn, tracked_V)
+    # the sorted vectors' own Rayleigh quotients are the sorted eigenvalues
+    tracked_w = np.einsum("kij,kij->kj", tracked_V, Pn @ tracked_V) if track else w.copy()
     t = np.arange(count, dtype=float) if t is None else finite_array(t, "t", shape=(count,))
     return NormalizedEigenResult(t, w, V, tracked_w, tracked_V, order, state_labels(state_names, n))

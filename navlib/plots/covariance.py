@@ -16,7 +16,7 @@ from navlib.errors import NavlibInputError
 from navlib.plots.figure import subplots
 
 __all__ = ["TIME_UNITS", "eigenvalues_figure", "eigenvectors_figure", "ratio_figure", "sigma_axes",
-           "sigma_figure"]
+           "sigma_figure", "update_eigenvalues_figure", "update_sigma_figure"]
 
 TIME_UNITS = {"s": 1.0, "min": 60.0, "h": 3600.0}
 
@@ -25,6 +25,14 @@ def _time(t, unit: str):
     if unit not in TIME_UNITS:
         raise NavlibInputError(f"time_unit: expected one of {list(TIME_UNITS)}, got {unit!r}")
     return np.asarray(t) / TIME_UNITS[unit]
+
+
+def _sigma_curves(result, states, units, time_unit: str, prior: bool = False):
+    """Times and sigma(t) of each state in its display unit."""
+    sigma = result.sigma_prior if prior else result.sigma
+    idx = result.index(list(states))
+    return _time(result.t, time_unit), [sigma[:, i] * (units or {}).get(name, ("", 1.0))[1]
+                                        for name, i in zip(states, idx, strict=True)]
 
 
 def sigma_axes(ax, result, states: Sequence[str], units: Mapping | None = None,
@@ -48,14 +56,10 @@ def sigma_axes(ax, result, states: Sequence[str], units: Mapping | None = None,
     prior : bool, optional
         Draw the prior instead of the posterior sigma.
     """
-    idx = result.index(list(states))
-    sigma = result.sigma_prior if prior else result.sigma
-    t = _time(result.t, time_unit)
-    labels = set()
-    for name, i in zip(states, idx, strict=True):
-        label, factor = (units or {}).get(name, ("", 1.0))
-        labels.add(label)
-        ax.plot(t, sigma[:, i] * factor, label=name)
+    t, curves = _sigma_curves(result, states, units, time_unit, prior)
+    labels = {(units or {}).get(name, ("", 1.0))[0] for name in states}
+    for name, curve in zip(states, curves, strict=True):
+        ax.plot(t, curve, label=name)
     if log:
         ax.set_yscale("log")
     ax.set_xlabel(f"t [{time_unit}]")
@@ -90,6 +94,52 @@ def sigma_figure(result, groups: Mapping[str, Sequence[str]], units: Mapping | N
     return fig
 
 
+def update_sigma_figure(fig, result, groups: Mapping[str, Sequence[str]],
+                        units: Mapping | None = None, time_unit: str = "min") -> None:
+    """Give a :func:`sigma_figure` of the same groups the sigma(t) of ``result``, in place
+    (lines only: a panel's kept figure; the caller rescales the axes).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure :func:`sigma_figure` built with ``groups``.
+    result : CovarianceResult
+        The new covariance history.
+    groups, units, time_unit
+        As given to :func:`sigma_figure`.
+    """
+    for ax, states in zip(fig.axes, groups.values(), strict=False):
+        t, curves = _sigma_curves(result, states, units, time_unit)
+        for line, curve in zip(ax.lines, curves, strict=False):
+            line.set_data(t, curve)
+
+
+def _eigenvalue_curves(eig, modes, time_unit: str, tracked: bool):
+    values = eig.tracked_values if tracked else eig.eigenvalues
+    modes = list(range(1, eig.n + 1)) if modes is None else list(modes)
+    return modes, _time(eig.t, time_unit), [np.clip(values[:, m - 1], 1e-12, None)
+                                            for m in modes]
+
+
+def update_eigenvalues_figure(fig, eig, modes: Sequence[int] | None = None,
+                              time_unit: str = "min", tracked: bool = False) -> None:
+    """Give an :func:`eigenvalues_figure` of the same modes the eigenvalues of ``eig``, in
+    place (lines only: a panel's kept figure; the caller rescales the axes).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure :func:`eigenvalues_figure` built with ``modes``.
+    eig : NormalizedEigenResult
+        The new eigen-analysis.
+    modes, time_unit, tracked
+        As given to :func:`eigenvalues_figure`.
+    """
+    _, t, curves = _eigenvalue_curves(eig, modes, time_unit, tracked)
+    for line, curve in zip(fig.axes[0].lines, curves, strict=True):
+        line.set_data(t, curve)
+
+
 def eigenvalues_figure(eig, modes: Sequence[int] | None = None, time_unit: str = "min",
                        log: bool = True, tracked: bool = False, title: str | None = None):
     """Normalised eigenvalues over time (Silva et al. Fig. 7 analogue), modes 1-based.
@@ -113,13 +163,10 @@ def eigenvalues_figure(eig, modes: Sequence[int] | None = None, time_unit: str =
     -------
     matplotlib.figure.Figure
     """
-    values = eig.tracked_values if tracked else eig.eigenvalues
-    modes = list(range(1, eig.n + 1)) if modes is None else list(modes)
-    t = _time(eig.t, time_unit)
+    modes, t, curves = _eigenvalue_curves(eig, modes, time_unit, tracked)
     fig, ax = subplots(figsize=(8, 4), constrained_layout=True)
-    for m in modes:
-        ax.plot(t, np.clip(values[:, m - 1], 1e-12, None), label=f"λ{m}",
-                linewidth=1.6 if m <= 6 else 0.9)
+    for m, curve in zip(modes, curves, strict=True):
+        ax.plot(t, curve, label=f"λ{m}", linewidth=1.6 if m <= 6 else 0.9)
     if log:
         ax.set_yscale("log")
     ax.set_xlabel(f"t [{time_unit}]")

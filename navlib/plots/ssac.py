@@ -1,19 +1,27 @@
 """Figures of the SSAC study (Silva et al. 2017; notebook 06).
 
 Thin wrappers over :mod:`navlib.plots.covariance` with the paper's groupings and display
-units, plus the P0-sensitivity bar chart. Every builder returns a new Figure.
+units, plus the P0-sensitivity bar chart. Every builder returns a new Figure; the
+``update_*`` functions give a panel's kept figure new data in place.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from navlib.plots.covariance import eigenvalues_figure, eigenvectors_figure, sigma_figure
+from navlib.plots.covariance import (
+    eigenvalues_figure,
+    eigenvectors_figure,
+    sigma_figure,
+    update_eigenvalues_figure,
+    update_sigma_figure,
+)
 from navlib.plots.figure import subplots
 from navlib.studies.ssac import STATE_GROUPS, SSACStudy
 
 __all__ = ["SIGMA_PANELS", "p0_sensitivity_figure", "ssac_eigenvalues_figure",
-           "ssac_eigenvectors_figure", "ssac_sigma_figure"]
+           "ssac_eigenvectors_figure", "ssac_sigma_figure", "update_ssac_eigenvalues_figure",
+           "update_ssac_sigma_figure"]
 
 SIGMA_PANELS = {
     "tilt (Fig. 1)": ("psiN", "psiE"),
@@ -44,28 +52,75 @@ def ssac_sigma_figure(study: SSACStudy, limits=None):
     -------
     matplotlib.figure.Figure
     """
-    names = set(study.state_names)
-    panels = {k: tuple(s for s in v if s in names) for k, v in SIGMA_PANELS.items()}
-    panels = {k: v for k, v in panels.items() if v}
+    panels = _sigma_panels(study)
     fig = sigma_figure(study.covariance, panels, study.model.parameters["display_units"],
                        log_groups=("velocity", "gyro bias (Fig. 5)",
                                    "accelerometer bias (Fig. 6)"),
                        title=f"SSAC {study.model.n}-state filter: standard deviations")
-    if limits is not None:
-        lim = limits.set_index("state")
-        for ax, key, states in zip(fig.axes, panels, panels.values(), strict=False):
-            if key.startswith(("tilt", "azimuth")):
-                value = lim.loc[states[0], "eq44"]
-                ax.axhline(value, color="k", linestyle="--", linewidth=0.8,
-                           label=f"eq. (44) {value:.4g}")
-                ax.legend(fontsize=8)
+    for ax, value in _eq44_limits(panels, limits, fig.axes):
+        ax.axhline(value, color="k", linestyle="--", linewidth=0.8, label=_eq44_label(value))
+        ax.legend(fontsize=8)
     return fig
+
+
+def update_ssac_sigma_figure(fig, study: SSACStudy, limits=None) -> None:
+    """Give a :func:`ssac_sigma_figure` of a study of the same states the sigma(t) and
+    eq. (44) limits of ``study``, in place (a panel's kept figure).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure :func:`ssac_sigma_figure` built, with limits when ``limits`` is given.
+    study : SSACStudy
+        The new covariance run.
+    limits : pandas.DataFrame or None, optional
+        Closed-form limits (:func:`navlib.studies.ssac.closed_form_limits`).
+    """
+    panels = _sigma_panels(study)
+    update_sigma_figure(fig, study.covariance, panels,
+                        study.model.parameters["display_units"])
+    for ax, value in _eq44_limits(panels, limits, fig.axes):
+        ax.lines[-1].set_ydata([value, value])
+        ax.get_legend().get_texts()[-1].set_text(_eq44_label(value))
+
+
+def _sigma_panels(study: SSACStudy) -> dict:
+    names = set(study.state_names)
+    panels = {k: tuple(s for s in v if s in names) for k, v in SIGMA_PANELS.items()}
+    return {k: v for k, v in panels.items() if v}
+
+
+def _eq44_limits(panels: dict, limits, axes) -> list:
+    """(axes, eq. (44) limit) of the tilt and azimuth panels; none without limits."""
+    if limits is None:
+        return []
+    lim = limits.set_index("state")
+    return [(ax, lim.loc[states[0], "eq44"])
+            for ax, key, states in zip(axes, panels, panels.values(), strict=False)
+            if key.startswith(("tilt", "azimuth"))]
+
+
+def _eq44_label(value: float) -> str:
+    return f"eq. (44) {value:.4g}"
 
 
 def ssac_eigenvalues_figure(study: SSACStudy):
     """Normalised eigenvalues over time (Fig. 7 analogue), sorted, log scale."""
     return eigenvalues_figure(study.eigen, title="Ham–Brown normalised eigenvalues "
                               "(sorted, descending)")
+
+
+def update_ssac_eigenvalues_figure(fig, study: SSACStudy) -> None:
+    """Give a :func:`ssac_eigenvalues_figure` the eigenvalues of ``study``, in place.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure :func:`ssac_eigenvalues_figure` built for a study of as many states.
+    study : SSACStudy
+        The new covariance run.
+    """
+    update_eigenvalues_figure(fig, study.eigen)
 
 
 def ssac_eigenvectors_figure(study: SSACStudy, tracked: bool = False):

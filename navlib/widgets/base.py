@@ -27,21 +27,19 @@ from __future__ import annotations
 
 import functools
 import html
-import io
 import re
 import time
 from collections.abc import Iterable, Mapping
 
 import ipywidgets as widgets
-import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from navlib.errors import NavlibInputError
 from navlib.plots.figure import detached
+from navlib.widgets.layers import LayeredFigure, agg_canvas, encode_png
 
 __all__ = ["LOOK", "Blitter", "KeptFigures", "Panel", "error_html", "layout_key", "look",
            "render_png", "table_html"]
@@ -53,21 +51,6 @@ LOOK = {"style": {"description_width": "9em"}}
 def look(width: str = "34em") -> dict:
     """Keyword arguments giving a control the common label width and ``width``."""
     return {**LOOK, "layout": widgets.Layout(width=width)}
-
-
-def _encode(rgba) -> bytes:
-    """PNG bytes of an Agg RGBA buffer: RGB only (figures are opaque) and light zlib
-    compression, which halves the encoding time of the default settings."""
-    from PIL import Image  # pillow ships with matplotlib
-
-    buffer = io.BytesIO()
-    rgb = np.ascontiguousarray(np.asarray(rgba)[..., :3])
-    Image.fromarray(rgb).save(buffer, format="png", compress_level=1)
-    return buffer.getvalue()
-
-
-def _agg_canvas(fig: Figure) -> FigureCanvasAgg:
-    return fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
 
 
 def render_png(fig: Figure, dpi: float = 72.0) -> bytes:
@@ -88,9 +71,9 @@ def render_png(fig: Figure, dpi: float = 72.0) -> bytes:
     bytes
     """
     fig.set_dpi(dpi)
-    canvas = _agg_canvas(fig)
+    canvas = agg_canvas(fig)
     canvas.draw()
-    return _encode(canvas.buffer_rgba())
+    return encode_png(canvas.buffer_rgba())
 
 
 class Blitter:
@@ -114,7 +97,7 @@ class Blitter:
         self.fig = fig
         self.dynamic: list = []
         fig.set_dpi(dpi)
-        self.canvas = _agg_canvas(fig)
+        self.canvas = agg_canvas(fig)
         self.set_dynamic(dynamic, redraw_background=False)
         self.canvas.draw()  # runs the layout once, then it is frozen
         if fig.get_layout_engine() is not None:
@@ -145,7 +128,7 @@ class Blitter:
         for artist in self.dynamic:
             if artist.figure is not None:  # removed artists are skipped
                 self.fig.draw_artist(artist)
-        return _encode(self.canvas.buffer_rgba())
+        return encode_png(self.canvas.buffer_rgba())
 
 
 _SUPER_TEXTS = ("_suptitle", "_supxlabel", "_supylabel")
@@ -224,8 +207,9 @@ def _transplant(new: Figure, kept: Figure) -> None:
             b.set_major_formatter(a.get_major_formatter())
             b.set_minor_locator(a.get_minor_locator())
             b.set_minor_formatter(a.get_minor_formatter())
-        dst.set_xlim(src.get_xlim())
-        dst.set_ylim(src.get_ylim())
+        dst.dataLim.set(src.dataLim)  # what the kept figure's limits snap to
+        dst.set_xlim(src.get_xlim(), auto=src.get_autoscalex_on())
+        dst.set_ylim(src.get_ylim(), auto=src.get_autoscaley_on())
 
 
 class KeptFigures:
@@ -249,6 +233,7 @@ class KeptFigures:
     def __init__(self):
         self._kept: dict = {}
         self._blitters: dict = {}
+        self._layers: dict = {}
 
     def figure(self, name: str) -> Figure | None:
         """The figure on show as part ``name`` (the kept one after a transplant), or None
@@ -258,7 +243,8 @@ class KeptFigures:
 
     def render(self, name: str, fig: Figure, dpi: float) -> bytes:
         """PNG bytes of ``fig`` shown as part ``name``, reusing the kept figure's layout
-        (and axes) when it fits.
+        (and axes) when it fits, and its axes' frames where they did not change
+        (:class:`~navlib.widgets.layers.LayeredFigure`).
 
         Parameters
         ----------
@@ -283,21 +269,38 @@ class KeptFigures:
             old = kept[1]
             if _artists(fig) == _artists(old) and not any(a[-1] for a in _artists(fig)):
                 _transplant(fig, old)
-                return render_png(old, dpi)
+                return self._layers[name].png()
             fig.set_layout_engine("none")
             for ax, position in zip(fig.axes, old.axes, strict=True):
                 ax.set_position(position.get_position())
             for text in _SUPER_TEXTS:
                 if getattr(fig, text, None) is not None:
                     getattr(fig, text).set_position(getattr(old, text).get_position())
-            self._kept[name] = (key, fig)
+        elif fig.get_layout_engine() is None:
             return render_png(fig, dpi)
-        png = render_png(fig, dpi)
-        if fig.get_layout_engine() is not None:
-            fig.set_layout_engine("none")
-            self._kept[name] = (key, fig)
-        return png
+        self._kept[name] = (key, fig)
+        self._layers[name] = LayeredFigure(fig, dpi)
+        return self._layers[name].png()
 
+    def redrawn(self, name: str) -> bytes:
+        """PNG bytes of the kept figure of part ``name`` after a panel gave it new data in
+        place (an ``update_*`` function of :mod:`navlib.plots`): its autoscaled axes
+        rescaled to the data and snapped to their ticks, only the frames that changed
+        drawn again.
+
+        Parameters
+        ----------
+        name : str
+            Part name; a figure must be kept for it (:meth:`figure`).
+
+        Returns
+        -------
+        bytes
+        """
+        for ax in self._kept[name][1].axes:
+            ax.relim()
+            ax.autoscale_view()
+        return self._layers[name].png()
 
     def kept_blitter(self, name: str, dynamic, dpi: float) -> Blitter | None:
         """A :class:`Blitter` of the kept figure of part ``name`` that redraws only

@@ -12,7 +12,12 @@ from __future__ import annotations
 import ipywidgets as widgets
 
 from navlib.models.ssac import SITE_LAT_DEG
-from navlib.plots.ssac import ssac_eigenvalues_figure, ssac_sigma_figure
+from navlib.plots.ssac import (
+    ssac_eigenvalues_figure,
+    ssac_sigma_figure,
+    update_ssac_eigenvalues_figure,
+    update_ssac_sigma_figure,
+)
 from navlib.studies.ssac import closed_form_limits, covariance_run, pair_structure
 from navlib.widgets.base import Panel, look, table_html
 
@@ -68,8 +73,15 @@ class SSACPanel(Panel):
         self.status.value = (f"ok: {study.t.size} epochs; six largest normalised eigenvalues "
                              f"sum to {lam[:6].sum():.3f}, 7th = {lam[6]:.1e}")
         limits = closed_form_limits(study)
-        self.show("sigma", ssac_sigma_figure(study, limits))
-        self.show("eigenvalues", ssac_eigenvalues_figure(study))
+        kept = self.figures.figure("sigma"), self.figures.figure("eigenvalues")
+        if None in kept:
+            self.show("sigma", ssac_sigma_figure(study, limits))
+            self.show("eigenvalues", ssac_eigenvalues_figure(study))
+        else:  # the controls change numbers, not states: new data in the kept figures
+            update_ssac_sigma_figure(kept[0], study, limits)
+            update_ssac_eigenvalues_figure(kept[1], study)
+            self.show("sigma", self.figures.redrawn("sigma"))
+            self.show("eigenvalues", self.figures.redrawn("eigenvalues"))
         self.show("pairs", table_html(pair_structure(study.eigen).round(4), index=True))
         self.show("limits", table_html(limits.round(5), index=True))
 

@@ -17,7 +17,7 @@ from matplotlib.layout_engine import ConstrainedLayoutEngine
 from navlib.errors import NavlibInputError
 from navlib.plots import figure as figure_mod
 from navlib.plots.metrics import reshade_segments
-from navlib.widgets import base
+from navlib.widgets import base, layers
 from navlib.widgets.base import Blitter, Panel, render_png
 from navlib.widgets.static import WIDGET_STATE, WIDGET_VIEW, freeze_widgets
 
@@ -111,9 +111,10 @@ def test_panel_updates_never_open_a_pyplot_figure_even_from_another_thread(monke
     JupyterLab's kernel subshells), pyplot never holds a figure a hook could redraw."""
     plt.close("all")
     seen = []
-    encode = base._encode
-    monkeypatch.setattr(base, "_encode", lambda rgba: (seen.append(len(Gcf.figs)),
-                                                       encode(rgba))[1])
+    encode = layers.encode_png
+    for module in (base, layers):  # figures and their layers are encoded in both
+        monkeypatch.setattr(module, "encode_png", lambda rgba: (seen.append(len(Gcf.figs)),
+                                                                encode(rgba))[1])
     panel = _LinePanel(dpi=30)
     stop = threading.Event()
     open_figures = []
@@ -237,9 +238,14 @@ def _pixels(png: bytes):
 
 
 def _in_layout_of(fig, kept_fig, dpi: float) -> bytes:
+    """``fig`` drawn in full as the panel shows it: in the kept layout, its autoscaled limits
+    snapped to their ticks, its legends where the kept ones are."""
     fig.set_layout_engine("none")
     for ax, old in zip(fig.axes, kept_fig.axes, strict=True):
         ax.set_position(old.get_position())
+        if ax.get_legend() is not None:
+            ax.get_legend().set_loc(old.get_legend()._get_loc())
+    layers.snap_limits(fig)  # with the ticks of the kept layout
     fig._suptitle.set_position(kept_fig._suptitle.get_position())
     return render_png(fig, dpi)
 

@@ -1,0 +1,116 @@
+"""Layered drawing of kept panel figures (navlib.widgets.layers): the image equals a full
+draw, frames are drawn again only where they changed, limits snap to ticks, legends avoid
+the data."""
+
+from io import BytesIO
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from PIL import Image
+
+from navlib.plots.figure import detached, subplots
+from navlib.widgets.base import render_png
+from navlib.widgets.layers import LayeredFigure, place_legend, snap_limits
+
+
+def _pixels(png: bytes) -> np.ndarray:
+    return np.asarray(Image.open(BytesIO(png)).convert("RGB")).astype(int)
+
+
+def _figure():
+    fig, axes = subplots(2, 2, figsize=(9, 6), constrained_layout=True)
+    t = np.linspace(0.0, 10.0, 200)
+    for k, ax in enumerate(axes.flat):
+        ax.plot(t, np.exp(-t) + 0.1 * k, label="decay")
+        ax.plot(t, 0.5 + 0.1 * np.sin(t), label="wave")
+        ax.set_title(f"panel {k}")
+        ax.set_xlabel("t [s]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[1, 0].set_yscale("log")
+    axes[0, 1].fill_between(t, 0.0, 0.2, alpha=0.3)  # under the grid: part of the frame
+    axes[1, 1].axhline(0.3, color="k", linestyle="--")
+    fig.suptitle("layers")
+    return fig
+
+
+def _move(fig, scale: float, stretch: float) -> None:
+    """New data in place, as a panel's update function gives it."""
+    for k, ax in enumerate(fig.axes):
+        first, second = ax.lines[0], ax.lines[1]
+        t = first.get_xdata() * stretch
+        first.set_data(t, scale * np.exp(-t / stretch) + 0.1 * k)
+        second.set_data(t, 0.5 * scale + 0.1 * np.sin(t))
+        ax.relim()
+        ax.autoscale_view()
+    snap_limits(fig)
+
+
+@settings(max_examples=12, deadline=None)
+@given(moves=st.lists(st.tuples(st.sampled_from([0.5, 1.0, 1.02, 3.0]),
+                                st.sampled_from([1.0, 1.1, 2.0])), min_size=1, max_size=4))
+def test_layered_image_equals_a_full_draw(moves):
+    with detached():
+        fig = _figure()
+        layered = LayeredFigure(fig, dpi=50)
+        layered.png()
+        for scale, stretch in moves:
+            _move(fig, scale, stretch)
+            got = _pixels(layered.png())
+            assert np.array_equal(got, _pixels(render_png(fig, 50)))
+        assert layered._layered() and layered.full_draws == 1  # the frames were kept
+
+
+def test_data_within_the_ticks_draws_no_frame_and_new_limits_draw_only_their_axes():
+    with detached():
+        fig = _figure()
+        layered = LayeredFigure(fig, dpi=50)
+        layered.png()
+        assert (layered.full_draws, layered.frame_draws) == (1, 0)
+        line = fig.axes[3].lines[1]
+        line.set_ydata(line.get_ydata() + 1e-3)  # inside the snapped limits
+        layered.png()
+        assert (layered.full_draws, layered.frame_draws) == (1, 0)
+        fig.axes[3].set_ylim(-1.0, 3.0)
+        layered.png()
+        assert layered.full_draws == 1 and 1 <= layered.frame_draws < len(fig.axes)
+        fig.suptitle("another title")  # a figure text: everything again
+        layered.png()
+        assert layered.full_draws == 2
+
+
+def test_snap_limits_rounds_the_data_span_outward_to_ticks_and_keeps_set_limits():
+    with detached():
+        fig, (free, fixed, log) = subplots(1, 3)
+        free.plot([0.0, 23.0], [0.0200, 0.0287])
+        fixed.plot([0.0, 1.0], [0.0, 1.0])
+        fixed.set_ylim(-0.05, 1.05)
+        log.plot([1.0, 2.0], [2e-11, 15.0])
+        log.set_yscale("log")
+        snap_limits(fig)
+        for (low, high), ticks, data in ((free.get_xlim(), free.get_xticks(), (0.0, 23.0)),
+                                         (free.get_ylim(), free.get_yticks(), (0.0200, 0.0287))):
+            step = np.diff(ticks)[0]
+            assert np.isclose(ticks, low).any() and np.isclose(ticks, high).any()
+            assert low <= data[0] < low + step and high - step < data[1] <= high
+        assert fixed.get_ylim() == pytest.approx((-0.05, 1.05))
+        assert log.get_ylim() == pytest.approx((1e-12, 1e2))
+
+
+def test_a_legend_goes_where_no_data_is_and_says_whether_it_is_clear():
+    with detached():
+        fig, ax = subplots(figsize=(4, 3))
+        t = np.linspace(0.0, 1.0, 500)
+        ax.plot(t, 1.0 - t, label="down")  # the lower left and upper right corners are free
+        legend = ax.legend(fontsize=7)
+        renderer = LayeredFigure(fig).canvas.get_renderer()
+        assert place_legend(legend, renderer)
+        assert legend._get_loc() in (1, 3)  # upper right (first), lower left
+        ax.plot(t, np.full_like(t, 0.95), label="top")
+        ax.plot(t, np.full_like(t, 0.05), label="bottom")
+        ax.plot(np.full_like(t, 0.5), t, label="middle")
+        ax.plot(t, np.full_like(t, 0.5), label="level")
+        legend = ax.legend(fontsize=7)
+        assert not place_legend(legend, renderer)  # no place without data
