@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.collections import PolyCollection
+from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.patches import Patch
 
 from navlib.plots.figure import subplots
 
-__all__ = ["timeline_bars", "timeline_figure", "timeline_labels", "update_timeline"]
+__all__ = ["OUTAGE_GREY", "timeline_bars", "timeline_figure", "timeline_fits", "timeline_labels",
+           "update_timeline"]
+
+OUTAGE_GREY = "0.85"
+"""Fill of the GNSS outage windows (and of their legend entry)."""
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -58,23 +62,66 @@ def timeline_labels(plan) -> tuple[str, str]:
             f"sensible (s ≥ {plan.settings['s_threshold']:.3g})")
 
 
+def _outage_spans(plan) -> list:
+    """Vertices of the outage windows, full height (x in data, y in axes coordinates)."""
+    return [[(a, 0.0), (a, 1.0), (b, 1.0), (b, 0.0)] for a, b in plan.outages]
+
+
+def _segment_starts(plan) -> list:
+    """Full-height segments at the segment starts (x in data, y in axes coordinates)."""
+    return [[(t, 0.0), (t, 1.0)] for t in plan.segment_table["t_start"]]
+
+
+def _legend(ax, plan) -> None:
+    e_label, s_label = timeline_labels(plan)
+    handles = [Patch(color="tab:orange", alpha=0.35, label=e_label),
+               Patch(color="tab:blue", label=s_label)]
+    if plan.outages:
+        handles.append(Patch(color=OUTAGE_GREY, label="GNSS outage"))
+    handles.append(Patch(facecolor="none", edgecolor="0.6", hatch="//",
+                         label="start-up transient"))
+    ax.legend(handles=handles, fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 1.0),
+              ncol=4, frameon=False)
+
+
+def timeline_fits(fig, plan) -> bool:
+    """Whether ``fig`` (a :func:`timeline_figure`) shows the rows and time span of ``plan``,
+    so that :func:`update_timeline` can give it the plan's data.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    plan : navlib.studies.plan.MissionPlan
+
+    Returns
+    -------
+    bool
+    """
+    ax = fig.axes[0]
+    rows = [label.get_text() for label in ax.get_yticklabels()]
+    span = (float(plan.trajectory.t[0]), float(plan.trajectory.t[-1]))
+    return rows == list(plan.state_names) and ax.get_xlim() == span
+
+
 def update_timeline(fig, plan) -> None:
-    """Redraw nothing, but give a :func:`timeline_figure` of the same mission and model the
-    bars and legend entries of ``plan`` (other thresholds): what a threshold changes.
+    """Give a :func:`timeline_figure` of the same rows and time span (:func:`timeline_fits`)
+    the data of ``plan``: bars, outages, segment starts and legend, in place (a panel's kept
+    figure after new thresholds or a re-plan).
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
         A figure :func:`timeline_figure` drew.
     plan : navlib.studies.plan.MissionPlan
-        The same plan with its new thresholds.
+        The new plan.
     """
     ax = fig.axes[0]
-    for collection, verts in zip(ax.collections[:2], timeline_bars(plan), strict=True):
+    outages, excitable, sensible, starts = ax.collections
+    outages.set_verts(_outage_spans(plan))
+    for collection, verts in zip((excitable, sensible), timeline_bars(plan), strict=True):
         collection.set_verts(verts)
-    for text, label in zip(ax.get_legend().get_texts()[:2], timeline_labels(plan),
-                           strict=True):
-        text.set_text(label)
+    starts.set_segments(_segment_starts(plan))
+    _legend(ax, plan)
 
 
 def timeline_figure(plan, transient_s: float | None = None):
@@ -87,29 +134,24 @@ def timeline_figure(plan, transient_s: float | None = None):
     names = list(plan.state_names)
     t = plan.sensability.t
     fig, ax = subplots(1, 1, figsize=(11, 0.28 * len(names) + 1.6), layout="constrained")
-    for a, b in plan.outages:
-        ax.axvspan(a, b, color="0.85", zorder=0)
+    span = ax.get_xaxis_transform()  # x in data, y in axes coordinates
+    # one collection per kind, every time (a panel gives them new data in place)
+    # over the axes' ticks (z-order 1.5; there is no grid): data a panel redraws alone
+    ax.add_collection(PolyCollection(_outage_spans(plan), color=OUTAGE_GREY, linewidth=0,
+                                     zorder=1.6, transform=span))
     ax.axvspan(t[0], t[0] + transient_s, facecolor="none", edgecolor="0.6", hatch="//",
-               linewidth=0, zorder=0)
-    # one collection per kind (two artists, not two per state: a threshold redraws them)
+               linewidth=0, zorder=1.6)
     excitable, sensible = timeline_bars(plan)
-    ax.add_collection(PolyCollection(excitable, color="tab:orange", alpha=0.35, linewidth=0))
-    ax.add_collection(PolyCollection(sensible, color="tab:blue", linewidth=0))
-    for r in plan.segment_table.itertuples(index=False):
-        ax.axvline(r.t_start, color="0.5", linewidth=0.5, linestyle="--")
+    ax.add_collection(PolyCollection(excitable, color="tab:orange", alpha=0.35, linewidth=0,
+                                     zorder=1.7))
+    ax.add_collection(PolyCollection(sensible, color="tab:blue", linewidth=0, zorder=1.8))
+    ax.add_collection(LineCollection(_segment_starts(plan), colors="0.5", linewidths=0.5,
+                                     linestyles="--", zorder=2, transform=span))
     ax.set_yticks(np.arange(len(names)), names, fontsize=7)
     ax.set_ylim(len(names) - 0.5, -0.5)
     ax.set_xlim(float(plan.trajectory.t[0]), float(plan.trajectory.t[-1]))
     ax.set_xlabel("t [s]")
-    e_label, s_label = timeline_labels(plan)
-    handles = [Patch(color="tab:orange", alpha=0.35, label=e_label),
-               Patch(color="tab:blue", label=s_label)]
-    if plan.outages:
-        handles.append(Patch(color="0.85", label="GNSS outage"))
-    handles.append(Patch(facecolor="none", edgecolor="0.6", hatch="//",
-                         label="start-up transient"))
-    ax.legend(handles=handles, fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 1.0),
-              ncol=4, frameon=False)
+    _legend(ax, plan)
     fig.suptitle(f"{plan.mission.name}: when each state becomes excitable and sensible "
                  "(dashed: segment starts)", fontsize=10)
     return fig

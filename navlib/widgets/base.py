@@ -232,7 +232,6 @@ class KeptFigures:
 
     def __init__(self):
         self._kept: dict = {}
-        self._blitters: dict = {}
         self._layers: dict = {}
 
     def figure(self, name: str) -> Figure | None:
@@ -259,10 +258,6 @@ class KeptFigures:
         -------
         bytes
         """
-        blitter = self._blitters.pop(name, None)
-        if blitter is not None:  # its dynamic artists back to the full draw
-            for artist in blitter.dynamic:
-                artist.set_animated(False)
         key = layout_key(fig)
         kept = self._kept.get(name)
         if kept is not None and kept[0] == key:
@@ -301,61 +296,6 @@ class KeptFigures:
             ax.relim()
             ax.autoscale_view()
         return self._layers[name].png()
-
-    def kept_blitter(self, name: str, dynamic, dpi: float) -> Blitter | None:
-        """A :class:`Blitter` of the kept figure of part ``name`` that redraws only
-        ``dynamic(kept_figure)``, for a panel that changes those artists in place; None
-        while no figure is kept for the part.
-
-        Parameters
-        ----------
-        name : str
-            Part name.
-        dynamic : callable
-            Returns the changing artists of a figure.
-        dpi : float
-            Resolution, dots per inch.
-
-        Returns
-        -------
-        Blitter or None
-        """
-        kept = self._kept.get(name)
-        if kept is None:
-            return None
-        blitter = self._blitters.get(name)
-        if blitter is None:
-            blitter = self._blitters[name] = Blitter(kept[1], dynamic(kept[1]), dpi)
-        return blitter
-
-    def blitted(self, name: str, fig: Figure, dynamic, dpi: float) -> Blitter | None:
-        """The kept figure of part ``name`` with ``fig``'s data, as a :class:`Blitter` that
-        redraws only ``dynamic(kept_figure)`` (the artists a panel knows to have changed) on
-        the kept background; None when ``fig`` cannot move into it (another layout key or
-        other artists: show ``fig`` instead).
-
-        Parameters
-        ----------
-        name : str
-            Part name.
-        fig : matplotlib.figure.Figure
-            Detached figure.
-        dynamic : callable
-            Returns the changing artists of a figure.
-        dpi : float
-            Resolution, dots per inch.
-
-        Returns
-        -------
-        Blitter or None
-        """
-        kept = self._kept.get(name)
-        if kept is None or kept[0] != layout_key(fig) or _artists(fig) != _artists(kept[1]) \
-                or any(a[-1] for a in _artists(fig)):
-            return None
-        blitter = self.kept_blitter(name, dynamic, dpi)
-        _transplant(fig, kept[1])
-        return blitter
 
 
 def table_html(frame: pd.DataFrame, index: bool = False) -> str:

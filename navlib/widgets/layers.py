@@ -151,7 +151,9 @@ def _ticker(ticker):
 
 def _data_zorder(ax) -> float:
     """The z-order from which an axes' artists are data: above its x and y axes (ticks,
-    grid, tick labels), which a full draw puts under the lines (``axes.axisbelow``)."""
+    grid, tick labels), which a full draw puts under the lines (``axes.axisbelow``). Even
+    without a grid, an artist under the axes is frame: the tick marks start on the plot
+    area's edge pixels."""
     return max(ax.xaxis.get_zorder(), ax.yaxis.get_zorder())
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import ipywidgets as widgets
 
 from navlib.metrics import nu_range
-from navlib.plots.plan import timeline_figure, update_timeline
+from navlib.plots.plan import timeline_figure, timeline_fits, update_timeline
 from navlib.sensors import list_presets
 from navlib.studies.plan import plan_mission
 from navlib.widgets.base import Panel, look
@@ -15,9 +15,9 @@ __all__ = ["PlanPanel", "plan_panel"]
 
 
 class PlanPanel(Panel):
-    """Controls of a mission plan; ``update()`` re-plans only for what changed, and a
-    threshold redraws only the timeline's bars and legend on its kept background
-    (:meth:`~navlib.widgets.base.KeptFigures.blitted`).
+    """Controls of a mission plan; ``update()`` re-plans only for what changed and gives the
+    kept timeline the new bars, outages, segment starts and legend in place, its frame kept
+    (:meth:`~navlib.widgets.base.KeptFigures.redrawn`).
 
     Attributes
     ----------
@@ -90,28 +90,18 @@ class PlanPanel(Panel):
         plan = plan.with_settings(e_threshold=c["e_threshold"], s_threshold=c["s_threshold"],
                                   nu=c["nu"])
         self.plan = plan
-        blitter = None if replanned else self.figures.kept_blitter("timeline", _threshold_artists,
-                                                                  self.dpi)
-        if blitter is None:
+        kept = self.figures.figure("timeline")
+        if kept is not None and timeline_fits(kept, plan):
+            update_timeline(kept, plan)
+            self.show("timeline", self.figures.redrawn("timeline"))
+        else:
             self.show("timeline", timeline_figure(plan))
-        else:                    # the same model: the thresholds' bars and legend in place
-            update_timeline(blitter.fig, plan)
-            self.show("timeline", blitter)
         summary = plan.summary()
         self.show("summary", summary[["segment", "phase", "t_start", "t_end", "n_excitable",
                                       "n_sensible", "sensible"]])
         self.status.value = (f"ok: {plan.mission.name}, preset {plan.options['preset']}, "
                              f"outages {list(plan.outages) or 'none'}; sensible states per "
                              f"segment: {summary['n_sensible'].tolist()}")
-
-
-def _threshold_artists(fig) -> list:
-    """What a threshold changes in :func:`~navlib.plots.plan.timeline_figure`: the
-    excitable and sensible bars (one collection each per state) and the legend that names
-    the thresholds; with them the segment-start lines and the spines drawn over the bars,
-    in the order of a full draw. Outages, transient, ticks and labels stay."""
-    ax = fig.axes[0]
-    return [*ax.collections, *ax.lines, *ax.spines.values(), ax.get_legend()]
 
 
 def plan_panel(plan) -> PlanPanel:

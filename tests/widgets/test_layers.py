@@ -32,6 +32,7 @@ def _figure():
     axes[1, 0].set_yscale("log")
     axes[0, 1].fill_between(t, 0.0, 0.2, alpha=0.3)  # under the grid: part of the frame
     axes[1, 1].axhline(0.3, color="k", linestyle="--")
+    axes[1, 1].axvspan(2.0, 3.0, color="0.85", zorder=0)  # under the grid: frame
     fig.suptitle("layers")
     return fig
 
@@ -45,6 +46,7 @@ def _move(fig, scale: float, stretch: float) -> None:
         second.set_data(t, 0.5 * scale + 0.1 * np.sin(t))
         ax.relim()
         ax.autoscale_view()
+    fig.axes[3].patches[0].set_x(2.0 * stretch)
     snap_limits(fig)
 
 
