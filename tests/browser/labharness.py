@@ -183,7 +183,11 @@ class LabServer:
                "JUPYTER_RUNTIME_DIR": str(home / "runtime"),
                "IPYTHONDIR": str(home / "ipython"),
                "MPLBACKEND": "module://matplotlib_inline.backend_inline",
-               "PYDEVD_DISABLE_FILE_VALIDATION": "1"}
+               "PYDEVD_DISABLE_FILE_VALIDATION": "1",
+               # the kernels cache builders on disk as a user's do, in a folder of their
+               # own that starts empty (the test suite's NAVLIB_NO_CACHE isolates its tests)
+               "NAVLIB_CACHE_DIR": str(home / "navlib-cache")}
+        env.pop("NAVLIB_NO_CACHE", None)
         cmd = [self.python, "-m", "jupyter", "lab", "--no-browser",
                "--ServerApp.ip=127.0.0.1", f"--ServerApp.port={self.port}",
                "--ServerApp.port_retries=0", f"--IdentityProvider.token={self.token}",
