@@ -4,8 +4,9 @@ The reference ``tests/regression/data/claims_reference.csv`` holds, per claim of
 below, the strings the notebooks show: ``claim_id, ours, verdict, basis, robustness, checks``
 (robustness as ``repr`` of the float). It was written at the commit before the robustness
 sets shared their builds (``--write``) and rewritten when a declared set grew (issue 36: the
-lateral level in the covariance set, the heading prior in SSAC's, robustness only); a full-mode comparison takes about a minute, too
-long for the test suite, which compares quick mode (tests/regression/test_claims_golden.py)
+lateral level in the covariance set, the heading prior in SSAC's, robustness only); a
+full-mode comparison takes about a minute, too long for the test suite, which compares
+quick mode (tests/regression/test_claims_golden.py)
 and checks the shared-build paths against the unshared ones on reduced sets
 (tests/studies/claims/test_claims_sharing.py)::
 

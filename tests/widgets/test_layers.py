@@ -2,21 +2,15 @@
 draw, frames are drawn again only where they changed, limits snap to ticks, legends avoid
 the data."""
 
-from io import BytesIO
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from PIL import Image
+from support.images import pixels
 
 from navlib.plots.figure import detached, subplots
 from navlib.widgets.base import render_png
 from navlib.widgets.layers import LayeredFigure, place_legend, snap_limits
-
-
-def _pixels(png: bytes) -> np.ndarray:
-    return np.asarray(Image.open(BytesIO(png)).convert("RGB")).astype(int)
 
 
 def _figure():
@@ -60,8 +54,8 @@ def test_layered_image_equals_a_full_draw(moves):
         layered.png()
         for scale, stretch in moves:
             _move(fig, scale, stretch)
-            got = _pixels(layered.png())
-            assert np.array_equal(got, _pixels(render_png(fig, 50)))
+            got = pixels(layered.png())
+            assert np.array_equal(got, pixels(render_png(fig, 50)))
         assert layered._layered() and layered.full_draws == 1  # the frames were kept
 
 

@@ -1,20 +1,14 @@
 """The plan panel (navlib.widgets.plan): thresholds and re-plans give the kept timeline
 new data in place, the same picture as the timeline drawn in full."""
 
-from io import BytesIO
-
 import numpy as np
-from PIL import Image
+from support.images import pixels
 
 from navlib.plots.figure import detached
 from navlib.plots.plan import timeline_figure
 from navlib.studies.plan import plan_mission
 from navlib.widgets.base import render_png
 from navlib.widgets.plan import plan_panel
-
-
-def _pixels(png: bytes) -> np.ndarray:
-    return np.asarray(Image.open(BytesIO(png)).convert("RGB")).astype(int)
 
 
 def test_every_move_shows_the_timeline_drawn_in_full():
@@ -33,7 +27,7 @@ def test_every_move_shows_the_timeline_drawn_in_full():
             full.set_layout_engine("none")
             full.axes[0].set_position(kept.axes[0].get_position())
             full._suptitle.set_position(kept._suptitle.get_position())
-            want = _pixels(render_png(full, panel.dpi))
-            assert np.array_equal(_pixels(panel.parts["timeline"].value), want), name
+            want = pixels(render_png(full, panel.dpi))
+            assert np.array_equal(pixels(panel.parts["timeline"].value), want), name
             assert panel.parts["timeline"].value != before, name
         assert "GNSS outage" not in [t.get_text() for t in kept.axes[0].get_legend().get_texts()]

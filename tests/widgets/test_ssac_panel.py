@@ -1,11 +1,9 @@
 """The SSAC panel (notebook 06) updates its kept figures in place: the image equals the
 figures built anew for the same study and drawn in full in the panel's form."""
 
-from io import BytesIO
-
 import numpy as np
 import pytest
-from PIL import Image
+from support.images import pixels
 
 from navlib.plots.figure import detached
 from navlib.plots.ssac import ssac_eigenvalues_figure, ssac_sigma_figure
@@ -13,10 +11,6 @@ from navlib.studies.ssac import closed_form_limits
 from navlib.widgets.base import render_png
 from navlib.widgets.layers import snap_limits
 from navlib.widgets.ssac import ssac_panel
-
-
-def _pixels(png: bytes) -> np.ndarray:
-    return np.asarray(Image.open(BytesIO(png)).convert("RGB")).astype(int)
 
 
 def _as_kept(fig, kept, dpi: float) -> np.ndarray:
@@ -33,7 +27,7 @@ def _as_kept(fig, kept, dpi: float) -> np.ndarray:
     if fig._suptitle is not None:
         fig._suptitle.set_position(kept._suptitle.get_position())
     snap_limits(fig)  # with the ticks of the kept layout
-    return _pixels(render_png(fig, dpi))
+    return pixels(render_png(fig, dpi))
 
 
 @pytest.mark.parametrize(("control", "value"), [("lat_deg", 40.0), ("duration_min", 7.0),
@@ -49,5 +43,5 @@ def test_moved_control_shows_the_new_study_as_new_figures_would(control, value):
         want = {"sigma": _as_kept(ssac_sigma_figure(study, closed_form_limits(study)),
                                   kept[0], panel.dpi),
                 "eigenvalues": _as_kept(ssac_eigenvalues_figure(study), kept[1], panel.dpi)}
-    for part, pixels in want.items():
-        assert np.array_equal(_pixels(panel.parts[part].value), pixels), part
+    for part, drawn in want.items():
+        assert np.array_equal(pixels(panel.parts[part].value), drawn), part

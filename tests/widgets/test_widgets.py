@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from matplotlib._pylab_helpers import Gcf
 from matplotlib.layout_engine import ConstrainedLayoutEngine
+from support.images import pixels
 
 from navlib.errors import NavlibInputError
 from navlib.plots import figure as figure_mod
@@ -197,12 +198,9 @@ def test_ink_of_blank_figure_is_lower_than_drawn():
         ax.plot([0, 1], [0, 1])
         ax.set_title("title")
         blank, _ = figure_mod.subplots(figsize=(3, 2))
-    from io import BytesIO
-
-    from PIL import Image
 
     def ink(fig):
-        rgb = np.asarray(Image.open(BytesIO(render_png(fig, 40))).convert("RGB")).astype(int)
+        rgb = pixels(render_png(fig, 40))
         grey = (rgb.max(axis=2) - rgb.min(axis=2) < 24) & (rgb.sum(axis=2) < 420)
         return grey.mean()
 
@@ -229,14 +227,6 @@ def _two_axes_figure(scale: float, label: str = "y", band: bool = False,
     return fig
 
 
-def _pixels(png: bytes):
-    from io import BytesIO
-
-    from PIL import Image
-
-    return np.asarray(Image.open(BytesIO(png)).convert("RGB")).astype(int)
-
-
 def _in_layout_of(fig, kept_fig, dpi: float) -> bytes:
     """``fig`` drawn in full as the panel shows it: in the kept layout, its autoscaled limits
     snapped to their ticks, its legends where the kept ones are."""
@@ -259,7 +249,7 @@ def test_kept_figure_redrawn_with_new_data_equals_a_new_figure_in_its_layout():
         png = kept.render("part", _two_axes_figure(7.5, band=True), 50)
         assert kept._kept["part"][1] is kept_fig  # the data moved into the kept figure
         reference = _in_layout_of(_two_axes_figure(7.5, band=True), kept_fig, 50)
-    assert np.array_equal(_pixels(png), _pixels(reference))
+    assert np.array_equal(pixels(png), pixels(reference))
     assert kept_fig.axes[0].get_title() == "scale 7.5"
     assert kept_fig.axes[0].get_legend().get_texts()[0].get_text() == "line 7.5"
 
