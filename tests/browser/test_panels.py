@@ -73,6 +73,7 @@ def test_panels_move_in_jupyterlab(lab, browser, name):
         assert nb.console_errors == [], f"{name}: browser console errors"
     finally:
         nb.page.close()
+        lab.shutdown_kernels()
 
 
 def _move_manual_panel(nb: NotebookPage, index: int, controls: list) -> list[str]:
