@@ -282,10 +282,9 @@ def place_legend(legend, renderer) -> bool:
     legend.set_loc(code)
     if inside or ax.patches or ax.collections:
         return False
-    place = place.padded(renderer.points_to_pixels(EDGE_ROOM_PT))
-    if not ax.bbox.padded(-renderer.points_to_pixels(EDGE_ROOM_PT)).contains(place.x0, place.y0) \
-            or not ax.bbox.padded(-renderer.points_to_pixels(EDGE_ROOM_PT)).contains(place.x1,
-                                                                                       place.y1):
+    room = renderer.points_to_pixels(EDGE_ROOM_PT)
+    place, inner = place.padded(room), ax.bbox.padded(-room)
+    if not (inner.contains(place.x0, place.y0) and inner.contains(place.x1, place.y1)):
         return False  # it would meet the spines, drawn over the frame
     return not any(line.get_visible() and line.get_transform().transform_path(
         line.get_path()).intersects_bbox(place, filled=False) for line in ax.lines)
@@ -312,10 +311,10 @@ def freeze_decorations(fig: Figure) -> None:
     """Keep the titles and x-axis labels of a drawn figure where they are.
 
     matplotlib places them at every draw from the tick labels' extents (the x label under
-    the tallest, the title over any top decoration): a third of the time to draw the
-    frames of the SSAC sigma figure. In a kept figure (frozen layout, same fonts) their
-    places do not change, unless an axes has its x ticks or label on top (then left to
-    matplotlib). The y labels stay automatic: tick labels change width with the limits.
+    the tallest, the title over any top decoration): about a quarter of the time to draw
+    the SSAC sigma figure (38 of 161 ms). In a kept figure (frozen layout, same fonts)
+    their places do not change, unless an axes has its x ticks or label on top (then left
+    to matplotlib). The y labels stay automatic: tick labels change width with the limits.
 
     Parameters
     ----------
