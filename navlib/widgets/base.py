@@ -11,8 +11,10 @@ live figure:
 * its figures are built inside :func:`navlib.plots.figure.detached`, so pyplot never holds
   them and no hook can find them;
 * each figure is rasterised by Agg to PNG bytes shown in an :class:`ipywidgets.Image`
-  (:func:`render_png`); a figure a panel keeps for in-place updates is redrawn by Agg
-  blitting (:class:`Blitter`: the static background once, the changing artists on top);
+  (:func:`render_png`); a figure a panel keeps (:class:`KeptFigures`) is drawn in layers,
+  its axes' frames kept between updates (:class:`~navlib.widgets.layers.LayeredFigure`),
+  and a panel that knows which artists change blits them (:class:`Blitter`: the static
+  background once, the changing artists on top);
 * tables and notes are HTML widgets. No ``Output`` widget, no ``display`` of a figure.
 
 A panel subclass names its controls and implements :meth:`Panel.refresh`, which gets the
@@ -220,14 +222,15 @@ class KeptFigures:
     :func:`layout_key`:
 
     * hands its data to the kept figure (:func:`_transplant`) when both hold the same
-      artists without images or collections other than polygons, and the kept figure is
-      redrawn: its axes and
-      ticks already exist, about half the cost of drawing a new figure;
-    * otherwise gets the kept figure's axes and title positions and is drawn without a
-      layout engine (and kept in its place).
+      artists without images or collections other than polygons: its axes and ticks
+      already exist;
+    * otherwise gets the kept figure's axes and title positions and is kept in its place.
 
-    The layout engine measures every tick label of every axis: without it a rebuilt
-    figure draws in about half the time (docs/assumptions.md, "Panel figures").
+    A panel may also give the kept figure new data itself (an ``update_*`` function of
+    :mod:`navlib.plots`) and show :meth:`redrawn`. Every kept figure is drawn by a
+    :class:`~navlib.widgets.layers.LayeredFigure`: only the axes' frames that changed are
+    drawn again. The layout engine measures every tick label of every axis: without it a
+    rebuilt figure draws in about half the time (docs/assumptions.md, "Panel figures").
     """
 
     def __init__(self):

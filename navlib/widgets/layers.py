@@ -157,11 +157,20 @@ def _data_zorder(ax) -> float:
     return max(ax.xaxis.get_zorder(), ax.yaxis.get_zorder())
 
 
-def _frame_artists(ax) -> list:
+def _layered_children(ax) -> list:
+    """The artists of ``ax`` that are frame or data: all but its patch, its x and y axes
+    and its titles (always frame)."""
     titles = {ax.title, ax._left_title, ax._right_title}
     return [a for a in ax.get_children()
-            if a is not ax.patch and not isinstance(a, Axis) and a not in titles
-            and a.get_zorder() <= _data_zorder(ax) and a not in ax.spines.values()]
+            if a is not ax.patch and not isinstance(a, Axis) and a not in titles]
+
+
+def _is_data(ax, artist) -> bool:
+    return artist.get_zorder() > _data_zorder(ax) or artist in ax.spines.values()
+
+
+def _frame_artists(ax) -> list:
+    return [a for a in _layered_children(ax) if not _is_data(ax, a)]
 
 
 def data_artists(ax, framed=()) -> list:
@@ -178,11 +187,7 @@ def data_artists(ax, framed=()) -> list:
     -------
     list of matplotlib.artist.Artist
     """
-    titles = {ax.title, ax._left_title, ax._right_title}
-    found = [a for a in ax.get_children()
-             if a is not ax.patch and not isinstance(a, Axis) and a not in titles
-             and a not in framed
-             and (a.get_zorder() > _data_zorder(ax) or a in ax.spines.values())]
+    found = [a for a in _layered_children(ax) if a not in framed and _is_data(ax, a)]
     return sorted(found, key=lambda a: a.get_zorder())
 
 
@@ -364,11 +369,10 @@ class LayeredFigure:
                              and ax.get_legend()._get_loc() == 0]  # 0: "best"
         self.framed: set = set()
 
-    def _hide_data(self, hidden: bool) -> list:
-        artists = [a for ax in self.fig.axes for a in data_artists(ax, self.framed)]
-        for artist in artists:
-            artist.set_animated(hidden)
-        return artists
+    def _hide_data(self, hidden: bool) -> None:
+        for ax in self.fig.axes:
+            for artist in data_artists(ax, self.framed):
+                artist.set_animated(hidden)
 
     def _region(self, ax, renderer) -> Bbox:
         ticks = [t for axis in (ax.xaxis, ax.yaxis) for t in (*axis.majorTicks[:1],
@@ -470,15 +474,15 @@ class LayeredFigure:
         snap_limits(self.fig)  # with the ticks of the laid-out axes
         self.framed = {legend for legend in self.best_legends if place_legend(legend, renderer)}
         keys = [frame_key(ax, self.framed) for ax in self.fig.axes]
-        if (self.background is None or _figure_key(self.fig) != self.figure_key
+        figure_key = _figure_key(self.fig)
+        if (self.background is None or figure_key != self.figure_key
                 or len(keys) != len(self.keys)):
             self._draw_all_frames()
         else:
             changed = [i for i, (a, b) in enumerate(zip(keys, self.keys, strict=True)) if a != b]
             if changed and not self._draw_changed_frames(changed):
                 self._draw_all_frames()
-        self.keys = keys
-        self.figure_key = _figure_key(self.fig)
+        self.keys, self.figure_key = keys, figure_key
         if not self._layered():  # a full draw interleaves the axes' frames and data
             self.canvas.draw()
             return encode_png(self.canvas.buffer_rgba())

@@ -2,12 +2,11 @@
 new data in place, the same picture as the timeline drawn in full."""
 
 import numpy as np
-from support.images import pixels
+from support.images import drawn_as_kept, pixels
 
 from navlib.plots.figure import detached
 from navlib.plots.plan import timeline_figure
 from navlib.studies.plan import plan_mission
-from navlib.widgets.base import render_png
 from navlib.widgets.plan import plan_panel
 
 
@@ -23,11 +22,7 @@ def test_every_move_shows_the_timeline_drawn_in_full():
             panel.controls[name].value = value
             assert "ok:" in panel.status.value, name
             assert panel.figures.figure("timeline") is kept  # new data, same figure
-            full = timeline_figure(panel.plan)
-            full.set_layout_engine("none")
-            full.axes[0].set_position(kept.axes[0].get_position())
-            full._suptitle.set_position(kept._suptitle.get_position())
-            want = pixels(render_png(full, panel.dpi))
+            want = drawn_as_kept(timeline_figure(panel.plan), kept, panel.dpi)
             assert np.array_equal(pixels(panel.parts["timeline"].value), want), name
             assert panel.parts["timeline"].value != before, name
         assert "GNSS outage" not in [t.get_text() for t in kept.axes[0].get_legend().get_texts()]

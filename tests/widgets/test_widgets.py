@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from matplotlib._pylab_helpers import Gcf
 from matplotlib.layout_engine import ConstrainedLayoutEngine
-from support.images import pixels
+from support.images import drawn_as_kept, pixels
 
 from navlib.errors import NavlibInputError
 from navlib.plots import figure as figure_mod
@@ -227,19 +227,6 @@ def _two_axes_figure(scale: float, label: str = "y", band: bool = False,
     return fig
 
 
-def _in_layout_of(fig, kept_fig, dpi: float) -> bytes:
-    """``fig`` drawn in full as the panel shows it: in the kept layout, its autoscaled limits
-    snapped to their ticks, its legends where the kept ones are."""
-    fig.set_layout_engine("none")
-    for ax, old in zip(fig.axes, kept_fig.axes, strict=True):
-        ax.set_position(old.get_position())
-        if ax.get_legend() is not None:
-            ax.get_legend().set_loc(old.get_legend()._get_loc())
-    layers.snap_limits(fig)  # with the ticks of the kept layout
-    fig._suptitle.set_position(kept_fig._suptitle.get_position())
-    return render_png(fig, dpi)
-
-
 def test_kept_figure_redrawn_with_new_data_equals_a_new_figure_in_its_layout():
     kept = base.KeptFigures()
     with figure_mod.detached():
@@ -248,8 +235,8 @@ def test_kept_figure_redrawn_with_new_data_equals_a_new_figure_in_its_layout():
         assert not isinstance(kept_fig.get_layout_engine(), ConstrainedLayoutEngine)
         png = kept.render("part", _two_axes_figure(7.5, band=True), 50)
         assert kept._kept["part"][1] is kept_fig  # the data moved into the kept figure
-        reference = _in_layout_of(_two_axes_figure(7.5, band=True), kept_fig, 50)
-    assert np.array_equal(pixels(png), pixels(reference))
+        reference = drawn_as_kept(_two_axes_figure(7.5, band=True), kept_fig, 50)
+    assert np.array_equal(pixels(png), reference)
     assert kept_fig.axes[0].get_title() == "scale 7.5"
     assert kept_fig.axes[0].get_legend().get_texts()[0].get_text() == "line 7.5"
 
