@@ -34,6 +34,7 @@ Construction
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import brentq
@@ -141,62 +142,40 @@ def _check(p):
     return out
 
 
-@cache.cached
-def sounding_rocket(**overrides) -> Trajectory:
-    """VS30-like sounding-rocket flight, 0..86 s, exact 100 Hz IMU (docs/assumptions.md,
-    excitability.md §3-4).
+SPIN_KEYS = frozenset({"spin_hz", "spin_speed_mps", "roll0_deg", "despin_s",
+                       "despin_duration_s", "despin_factor", "free_flight_s", "rate_hz"})
+"""Keywords of :func:`sounding_rocket` that leave the flight path as it is: the roll about
+the body x axis (the thrust and the drag act along it, so the spin does not steer), event
+markers and the output rate. A panel moving them reuses the integrated path
+(:func:`_flight_path`)."""
 
-    Parameters
-    ----------
-    **overrides
-        Any of the assumed values below (defaults in ``ROCKET_DEFAULTS``); angles in
-        degrees at this edge only.
 
-        * site: ``lat_deg=-5.92``, ``lon_deg=-35.16``, ``alt_m=30`` (Barreira do Inferno);
-        * rail: ``rail_elevation_deg=84``, ``rail_azimuth_deg=100``, ``rail_length_m=10``,
-          ``rail_fade_m=2`` (tip-off distance over which the rail reaction fades);
-        * timing, s: ``ignition_s=18`` (paper), ``ignition_ramp_s=0.3``, ``burnout_s=46``
-          (paper: thrust ends), ``tailoff_s=1``, ``free_flight_s=60`` (paper, marker only),
-          ``despin_s=73`` (paper, step centre), ``despin_duration_s=0.5``,
-          ``despin_factor=0.5`` (paper: halves the axial rate), ``end_s=86`` (paper),
-          ``rate_hz=100`` (paper);
-        * vehicle: ``mass_initial_kg=1500``, ``mass_burnout_kg=650``,
-          ``thrust_n=81510`` (= 1.14 x 110 m/s^2 x 650 kg so the axial specific force peaks
-          near 110 m/s^2 at burnout), ``drag_area_m2=0.07`` (C_D A),
-          ``scale_height_m=7200``, ``density_sea_level=1.225``; propellant flow is
-          proportional to thrust;
-        * spin: ``spin_hz=2`` (aerodynamic spin at high speed), ``spin_speed_mps=400``,
-          ``roll0_deg=0``;
-        * recovery (assumption M7 of ``docs/assumptions.md``; off by default):
-          ``drogue_rate_mps=0`` (a positive descent rate adds apogee, drogue, optional main
-          and touchdown; the flight then ends at touchdown or ``end_s``),
-          ``drogue_delay_s=0`` (after apogee), ``drogue_tau_s=1`` (time constant of the
-          approach to the descent rate), ``drogue_inflation_s=0.5``, ``main_height_m=0``
-          (above the site), ``main_rate_mps=0`` (0: no main), ``main_tau_s=1``,
-          ``main_inflation_s=1``, ``canopy_spin_hz=0`` (roll rate about the riser),
-          ``canopy_swing_deg=0`` and ``canopy_swing_period_s=3`` (pendulum swing);
-        * numerics: ``grid_step_s=0.02`` (spline nodes on the ODE solution).
+@dataclass(frozen=True, eq=False)
+class _FlightPath:
+    """The integrated translational motion of :func:`sounding_rocket` (no roll)."""
 
-    Returns
-    -------
-    Trajectory
-        ``events``: ``ignition``, ``liftoff`` (thrust exceeds the weight along the rail),
-        ``rail_exit``, ``burnout``, ``free_flight``, ``despin``, ``end``, and with a drogue
-        ``apogee``, ``drogue``, ``main`` and ``landing`` (those reached before ``end_s``).
-        ``parameters`` holds every keyword used plus derived values.
+    P0: np.ndarray
+    C_L_e: np.ndarray
+    r_hat: np.ndarray
+    canopy: Canopy
+    grid: np.ndarray
+    P_grid: np.ndarray
+    V_grid: np.ndarray
+    displacement: RestStartSpline
+    t_lift: float
+    m_lift: float
+    v_exhaust: float
+    t_final: float
+    recovery_events: dict
 
-    Raises
-    ------
-    NavlibInputError
-        Unknown keyword, non-finite or out-of-range value, impossible timing.
 
-    Notes
-    -----
-    Before lift-off ``V = 0`` exactly, ``f^b = -C_e^b gamma`` and ``omega_ib^b = C_e^b
-    Omega``. Position is C^4 after lift-off and C^2 across it; the attitude is C^3.
-    """
-    reject_unknown(overrides, ROCKET_DEFAULTS, "sounding_rocket")
-    p = _check({**ROCKET_DEFAULTS, **overrides})
+@cache.memoized(maxsize=4)
+def _flight_path(key: tuple) -> _FlightPath:
+    """The path of the checked keywords ``key`` (sorted ``(name, value)`` pairs without
+    :data:`SPIN_KEYS`): the rail, thrust, drag and gravity ODE integrated on the spline grid
+    (and the recovery under canopy), kept in the process so that a new spin, de-spin or
+    rate does not integrate it again."""
+    p = dict(key)
 
     lat, lon = p["lat_deg"] * DEG, p["lon_deg"] * DEG
     P0 = earth.geodetic_to_ecef(lat, lon, p["alt_m"])
@@ -263,6 +242,74 @@ def sounding_rocket(**overrides) -> Trajectory:
     P_grid, V_grid = y_grid[:, :3], y_grid[:, 3:6]
     acc_end = rhs(grid[-1], y_grid[-1])[3:6]
     displacement = RestStartSpline(grid, P_grid - P0, V_grid[-1], acc_end)
+    return _FlightPath(P0, C_L_e, r_hat, canopy, grid, P_grid, V_grid, displacement,
+                       float(t_lift), float(m_lift), float(v_exhaust), t_final,
+                       recovery_events)
+
+
+@cache.cached
+def sounding_rocket(**overrides) -> Trajectory:
+    """VS30-like sounding-rocket flight, 0..86 s, exact 100 Hz IMU (docs/assumptions.md,
+    excitability.md §3-4).
+
+    Parameters
+    ----------
+    **overrides
+        Any of the assumed values below (defaults in ``ROCKET_DEFAULTS``); angles in
+        degrees at this edge only.
+
+        * site: ``lat_deg=-5.92``, ``lon_deg=-35.16``, ``alt_m=30`` (Barreira do Inferno);
+        * rail: ``rail_elevation_deg=84``, ``rail_azimuth_deg=100``, ``rail_length_m=10``,
+          ``rail_fade_m=2`` (tip-off distance over which the rail reaction fades);
+        * timing, s: ``ignition_s=18`` (paper), ``ignition_ramp_s=0.3``, ``burnout_s=46``
+          (paper: thrust ends), ``tailoff_s=1``, ``free_flight_s=60`` (paper, marker only),
+          ``despin_s=73`` (paper, step centre), ``despin_duration_s=0.5``,
+          ``despin_factor=0.5`` (paper: halves the axial rate), ``end_s=86`` (paper),
+          ``rate_hz=100`` (paper);
+        * vehicle: ``mass_initial_kg=1500``, ``mass_burnout_kg=650``,
+          ``thrust_n=81510`` (= 1.14 x 110 m/s^2 x 650 kg so the axial specific force peaks
+          near 110 m/s^2 at burnout), ``drag_area_m2=0.07`` (C_D A),
+          ``scale_height_m=7200``, ``density_sea_level=1.225``; propellant flow is
+          proportional to thrust;
+        * spin: ``spin_hz=2`` (aerodynamic spin at high speed), ``spin_speed_mps=400``,
+          ``roll0_deg=0``;
+        * recovery (assumption M7 of ``docs/assumptions.md``; off by default):
+          ``drogue_rate_mps=0`` (a positive descent rate adds apogee, drogue, optional main
+          and touchdown; the flight then ends at touchdown or ``end_s``),
+          ``drogue_delay_s=0`` (after apogee), ``drogue_tau_s=1`` (time constant of the
+          approach to the descent rate), ``drogue_inflation_s=0.5``, ``main_height_m=0``
+          (above the site), ``main_rate_mps=0`` (0: no main), ``main_tau_s=1``,
+          ``main_inflation_s=1``, ``canopy_spin_hz=0`` (roll rate about the riser),
+          ``canopy_swing_deg=0`` and ``canopy_swing_period_s=3`` (pendulum swing);
+        * numerics: ``grid_step_s=0.02`` (spline nodes on the ODE solution).
+
+    Returns
+    -------
+    Trajectory
+        ``events``: ``ignition``, ``liftoff`` (thrust exceeds the weight along the rail),
+        ``rail_exit``, ``burnout``, ``free_flight``, ``despin``, ``end``, and with a drogue
+        ``apogee``, ``drogue``, ``main`` and ``landing`` (those reached before ``end_s``).
+        ``parameters`` holds every keyword used plus derived values.
+
+    Raises
+    ------
+    NavlibInputError
+        Unknown keyword, non-finite or out-of-range value, impossible timing.
+
+    Notes
+    -----
+    Before lift-off ``V = 0`` exactly, ``f^b = -C_e^b gamma`` and ``omega_ib^b = C_e^b
+    Omega``. Position is C^4 after lift-off and C^2 across it; the attitude is C^3.
+    """
+    reject_unknown(overrides, ROCKET_DEFAULTS, "sounding_rocket")
+    p = _check({**ROCKET_DEFAULTS, **overrides})
+    path = _flight_path(tuple(sorted((k, v) for k, v in p.items() if k not in SPIN_KEYS)))
+    lat, lon = p["lat_deg"] * DEG, p["lon_deg"] * DEG
+    P0, C_L_e, r_hat, canopy = path.P0, path.C_L_e, path.r_hat, path.canopy
+    grid, P_grid, V_grid = path.grid, path.P_grid, path.V_grid
+    displacement, t_lift, t_final = path.displacement, path.t_lift, path.t_final
+    fade_start, fade_len = p["rail_length_m"] - p["rail_fade_m"], p["rail_fade_m"]
+    t_ign, t_bo = p["ignition_s"], p["burnout_s"]
 
     # spin: aerodynamic spin-up with speed, then a smooth de-spin step
     speed_grid = np.linalg.norm(V_grid, axis=1)
@@ -300,13 +347,13 @@ def sounding_rocket(**overrides) -> Trajectory:
     t_exit = float(np.interp(p["rail_length_m"], x_grid, grid))
     events = {
         "ignition": t_ign, "liftoff": float(t_lift), "rail_exit": t_exit, "burnout": t_bo,
-        "free_flight": p["free_flight_s"], "despin": p["despin_s"], **recovery_events,
+        "free_flight": p["free_flight_s"], "despin": p["despin_s"], **path.recovery_events,
         "end": float(t_out[-1]) if recovering(p) else p["end_s"],
     }
     frame, turn = C_L_e, None
     if recovering(p):
         frame, turn = recovery_frame(lat, lon, p["rail_azimuth_deg"] * DEG), canopy.turn
-    parameters = {**p, "exhaust_velocity_mps": float(v_exhaust),
-                  "liftoff_mass_kg": float(m_lift)}
+    parameters = {**p, "exhaust_velocity_mps": path.v_exhaust,
+                  "liftoff_mass_kg": path.m_lift}
     return assemble(t_out, P0, displacement, pointing, frame, roll, turn=turn, events=events,
                     name="sounding rocket (VS30-like)", parameters=parameters)

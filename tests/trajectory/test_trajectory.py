@@ -113,6 +113,29 @@ def test_rocket_spin_ramps_with_speed(rocket):
     assert w_x[_at(rocket, 19.0)] < 0.2 * w_x[_at(rocket, 40.0)]
 
 
+def test_rocket_spin_does_not_steer_the_flight_path(monkeypatch):
+    """The spin, de-spin and output rate leave the integrated path as it is (SPIN_KEYS):
+    a new spin reuses it, and gives the same trajectory as a path integrated afresh,
+    bit for bit; a keyword outside SPIN_KEYS (the site) integrates a new one."""
+    from navlib.trajectory import rocket as rocket_module
+
+    monkeypatch.setenv("NAVLIB_NO_CACHE", "1")  # every call builds (no disk cache)
+    path = rocket_module._flight_path
+    sounding_rocket()
+    before = path.cache_info()
+    spun = sounding_rocket(spin_hz=3.1, despin_s=74.0, rate_hz=50.0)
+    after = path.cache_info()
+    assert (after.hits, after.misses) == (before.hits + 1, before.misses)
+    path.cache_clear()
+    fresh = sounding_rocket(spin_hz=3.1, despin_s=74.0, rate_hz=50.0)
+    sounding_rocket(alt_m=629.0)
+    assert path.cache_info().misses == 2
+    for name in ("t", "position", "velocity", "specific_force", "angular_rate"):
+        assert np.array_equal(getattr(spun, name), getattr(fresh, name)), name
+    assert np.array_equal(spun.attitude.as_quat(), fresh.attitude.as_quat())
+    assert spun.events == fresh.events
+
+
 def test_rocket_lateral_specific_force_small_in_flight(rocket):
     flight = rocket.t > rocket.events["rail_exit"] + 1.0
     assert np.abs(rocket.specific_force[flight, 1:]).max() < 0.05
