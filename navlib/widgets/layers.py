@@ -20,6 +20,7 @@ import hashlib
 import io
 
 import numpy as np
+from matplotlib.axes._secondary_axes import SecondaryAxis
 from matplotlib.axis import Axis
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import Collection
@@ -136,6 +137,10 @@ def _artist_key(artist):
         return (*common, artist.get_text(), artist.get_position(), artist.get_color())
     if isinstance(artist, AxesImage):
         return (*common, _digest(artist.get_array()), artist.get_extent())
+    if isinstance(artist, SecondaryAxis):  # placed on its parent, its limits follow theirs
+        tickers = (t for axis in (artist.xaxis, artist.yaxis)
+                   for t in (axis.get_major_locator(), axis.get_major_formatter()))
+        return (*common, artist.get_xlabel(), artist.get_ylabel(), *map(_ticker, tickers))
     return object()
 
 
@@ -381,6 +386,10 @@ class LayeredFigure:
         boxes = [ax.bbox.padded(renderer.points_to_pixels(outside))]
         if ax.axison:
             boxes += [box for axis in (ax.xaxis, ax.yaxis) for box in _axis_boxes(axis, renderer)]
+        for child in ax.child_axes:  # a secondary axis' ticks and labels (part of the frame)
+            if child.get_visible() and child.axison:
+                boxes += [box for axis in (child.xaxis, child.yaxis)
+                          for box in _axis_boxes(axis, renderer)]
         boxes += [t.get_window_extent(renderer) for t in (ax.title, ax._left_title,
                                                           ax._right_title) if t.get_text()]
         if ax.get_legend() in self.framed:

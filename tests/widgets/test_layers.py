@@ -77,6 +77,29 @@ def test_data_within_the_ticks_draws_no_frame_and_new_limits_draw_only_their_axe
         assert layered.full_draws == 2
 
 
+def test_a_secondary_axis_is_kept_with_its_parent_frame():
+    """A secondary y axis (panel 01's rev/s scale) is part of its parent's frame, keyed by
+    its labels and tickers (its limits follow the parent's): new data inside the limits
+    draws no frame, new parent limits draw it again, and each image equals a full draw."""
+    with detached():
+        fig, ax = subplots(figsize=(6, 4), constrained_layout=True)
+        t = np.linspace(0.0, 10.0, 200)
+        line, = ax.plot(t, 12.0 * np.tanh(t))
+        hz = ax.secondary_yaxis("right", functions=(lambda w: w / 6.0, lambda h: h * 6.0))
+        hz.set_ylabel("[rev/s]")
+        layered = LayeredFigure(fig, dpi=50)
+        layered.png()
+        line.set_ydata(12.1 * np.tanh(t))
+        assert np.array_equal(pixels(layered.png()), pixels(render_png(fig, 50)))
+        assert (layered.full_draws, layered.frame_draws) == (1, 0)
+        line.set_ydata(30.0 * np.tanh(t))
+        ax.relim()
+        ax.autoscale_view()
+        snap_limits(fig)
+        assert np.array_equal(pixels(layered.png()), pixels(render_png(fig, 50)))
+        assert (layered.full_draws, layered.frame_draws) == (1, 1)
+
+
 def test_snap_limits_rounds_the_data_span_outward_to_ticks_and_keeps_set_limits():
     with detached():
         fig, (free, fixed, log) = subplots(1, 3)
