@@ -36,32 +36,71 @@ _TAYLOR_THETA = 0.5
 _SERIES_ORDER = 4
 
 
-def _taylor_degree(norm: float) -> int:
+_TAYLOR_BOUND = _TAYLOR_THETA ** (_TAYLOR_DEGREE + 1) / math.factorial(_TAYLOR_DEGREE + 1)
+_TAYLOR_REACH = np.array([(_TAYLOR_BOUND * math.factorial(m + 1)) ** (1.0 / (m + 1))
+                          for m in range(1, _TAYLOR_DEGREE)])
+"""Largest norm whose degree-``m`` truncation bound ``norm^(m+1)/(m+1)!`` is within
+``_TAYLOR_BOUND`` (``m = 1 .. 11``: increasing)."""
+
+
+def _taylor_degree(norm):
     """The lowest Taylor degree ``m`` whose truncation bound ``norm^(m+1)/(m+1)!`` is within
-    that of degree 12 at the scaling limit (``0.5^13/13!``): short steps need fewer terms
-    (the 21-state model at 50 Hz, ``|A dt|_1 ~ 0.03``: degree 6) at no loss of accuracy."""
-    bound = _TAYLOR_THETA ** (_TAYLOR_DEGREE + 1) / math.factorial(_TAYLOR_DEGREE + 1)
-    for degree in range(1, _TAYLOR_DEGREE):
-        if norm ** (degree + 1) / math.factorial(degree + 1) <= bound:
-            return degree
-    return _TAYLOR_DEGREE
+    that of degree 12 at the scaling limit (``0.5^13/13!``), per norm: short steps need fewer
+    terms (the 21-state model at 50 Hz, ``|A dt|_1 ~ 0.03``: degree 6) at no loss of
+    accuracy."""
+    return 1 + np.searchsorted(_TAYLOR_REACH, norm, side="left")
 
 
 def expm_taylor(X) -> np.ndarray:
     """Batched matrix exponential of ``X`` (K, n, n) by Taylor series with scaling and squaring.
 
-    All matrices share one scaling ``2^-s`` that brings the largest 1-norm below 0.5; the
-    Taylor polynomial of degree 12, or of the lowest degree with the same bound when the
+    Each matrix gets the scaling ``2^-s`` that brings its 1-norm below 0.5; the Taylor
+    polynomial of degree 12, or of the lowest degree with the same bound when the scaled
     norm is smaller (:func:`_taylor_degree`), then has a truncation error below
-    ``0.5^13/13! ~ 2e-14`` relative, and ``s`` squarings follow. For the 21-state model at 100 Hz
-    (``|A dt|_1 <= 1.6``) this is 14 batched products, about 20x faster than
-    :func:`scipy.linalg.expm` on the stack.
+    ``0.5^13/13! ~ 2e-14`` relative, and ``s`` squarings follow. The matrices that share a
+    scaling and a degree go through the products together (batched), so a stack whose norms
+    spread (a rocket's pad, boost and coast steps: 0.03-3.2) pays for each matrix's own
+    terms, not the largest's (4300 steps of the 21-state model: 50 000 matrix products
+    instead of 64 500). For the 21-state model at 100 Hz (``|A dt|_1 <= 1.6``) this is at
+    most 14 products a matrix, about 20x faster than :func:`scipy.linalg.expm` on the stack.
     """
     X = np.asarray(X, dtype=float)
-    norm = float(np.max(np.sum(np.abs(X), axis=-2))) if X.size else 0.0
-    squarings = max(0, int(np.ceil(np.log2(norm / _TAYLOR_THETA)))) if norm > 0 else 0
+    if X.ndim == 2 or X.size == 0:
+        return _expm_scaled(X, _scaling(_one_norm(X)))
+    norms = _one_norm(X).ravel()
+    stack = X.reshape(-1, *X.shape[-2:])
+    squarings = _scaling(norms)
+    degrees = _taylor_degree(norms / 2.0**squarings)
+    groups = np.unique(np.stack([squarings, degrees], axis=1), axis=0)
+    if len(groups) == 1:
+        return _expm_scaled(X, int(groups[0, 0]), int(groups[0, 1]))
+    E = np.empty_like(stack)
+    for s, degree in groups:
+        members = np.flatnonzero((squarings == s) & (degrees == degree))
+        E[members] = _expm_scaled(stack[members], int(s), int(degree))
+    return E.reshape(X.shape)
+
+
+def _one_norm(X) -> np.ndarray:
+    """1-norm (largest column sum) of each matrix of ``X``."""
+    return np.max(np.sum(np.abs(X), axis=-2), axis=-1) if X.size else np.zeros(X.shape[:-2])
+
+
+def _scaling(norm):
+    """Squarings ``s >= 0`` that bring ``norm`` to :data:`_TAYLOR_THETA` or below."""
+    norm = np.asarray(norm, dtype=float)
+    with np.errstate(divide="ignore"):
+        s = np.ceil(np.log2(norm / _TAYLOR_THETA))
+    return np.where(norm > 0, np.maximum(s, 0), 0).astype(int)
+
+
+def _expm_scaled(X, squarings, degree=None) -> np.ndarray:
+    """``expm(X)`` by the Taylor polynomial of ``X / 2^squarings`` (Horner) and
+    ``squarings`` squarings: one scaling and degree for the whole stack."""
+    squarings = int(np.max(squarings)) if np.ndim(squarings) else int(squarings)
     X = X / 2.0**squarings
-    degree = _taylor_degree(norm / 2.0**squarings)
+    if degree is None:
+        degree = int(_taylor_degree(float(np.max(_one_norm(X))) if X.size else 0.0))
     diag = np.arange(X.shape[-1])
     E = X / degree
     E[..., diag, diag] += 1.0

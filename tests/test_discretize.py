@@ -112,3 +112,23 @@ def test_batched_taylor_expm_matches_scipy():
         ref = expm(X[k])
         np.testing.assert_allclose(E[k], ref, rtol=1e-11, atol=1e-12 * np.abs(ref).max())
     np.testing.assert_array_equal(expm_taylor(np.zeros((2, 3, 3))), [np.eye(3)] * 2)
+
+
+def test_taylor_expm_of_a_stack_is_each_matrix_on_its_own():
+    """Each matrix of a stack gets its own scaling and degree (a stack of small and large
+    norms): the stack's exponentials are those of each matrix alone, bit for bit, and the
+    lowest degree within the bound is read from the table as the bound's loop finds it."""
+    import math
+
+    from navlib.discretize import _TAYLOR_BOUND, _taylor_degree
+
+    rng = np.random.default_rng(5)
+    scales = np.repeat([1e-4, 0.02, 0.2, 0.45, 1.5, 6.0], 3)
+    X = rng.normal(size=(scales.size, 9, 9)) * scales[:, None, None] / 9.0
+    E = expm_taylor(X)
+    for k in range(scales.size):
+        np.testing.assert_array_equal(E[k], expm_taylor(X[k:k + 1])[0])
+    for norm in np.geomspace(1e-8, 0.5, 400):
+        loop = next((m for m in range(1, 12)
+                     if norm ** (m + 1) / math.factorial(m + 1) <= _TAYLOR_BOUND), 12)
+        assert _taylor_degree(norm) == loop
