@@ -18,7 +18,7 @@ first use.
 
 import numpy as np
 
-from navlib import kalman, strapdown
+from navlib import kalman, sparse_discretize, strapdown
 from navlib.filters import ekf_loop, linear_recursion
 from navlib.observability import sliding
 from navlib.sensors import simulation
@@ -36,8 +36,10 @@ def compile_kernels() -> None:
 def compile_shared_kernels() -> None:
     """The kernels several notebooks of a report use: the Kalman algebra
     (:func:`navlib.kalman.compile_kernels`), the linear simulation, the strapdown
-    mechanisation and the sensor errors' Gauss-Markov recursion."""
+    mechanisation, the sensor errors' Gauss-Markov recursion and the sparse model steps
+    (the 21-state model of every rocket notebook)."""
     kalman.compile_kernels()
     linear_recursion.compile_recursion_kernels()
     strapdown.compile_kernel()
+    sparse_discretize.compile_kernel()
     simulation.first_order_recursion(np.ones(1), np.ones((2, 1)), np.empty((2, 1)))

@@ -13,7 +13,7 @@ LAYERS = (
                 "navlib.resources", "navlib.earth", "navlib.rotations", "navlib.quaternions",
                 "navlib.cache", "navlib.vehicles")),
     ("numerics", ("navlib.kalman", "navlib.kernel_copy", "navlib.discretize",
-                  "navlib.parallel")),
+                  "navlib.sparse_discretize", "navlib.parallel")),
     ("world", ("navlib.strapdown", "navlib.io",
                "navlib.sensors", "navlib.models", "navlib.trajectory")),
     ("analysis", ("navlib.covariance", "navlib.observability", "navlib.metrics",

@@ -25,7 +25,6 @@ from navlib import strapdown
 from navlib._validation import finite_array, finite_scalar
 from navlib.errors import NavlibInputError
 from navlib.filters.ekf_loop import compiled_run
-from navlib.filters.ekf_steps import discretize_window
 from navlib.filters.ekf_updates import Epochs, WindowUpdates, update_records
 from navlib.filters.linear_preparation import METHODS
 from navlib.filters.measurements import Measurement, ekf_measurements, epoch_index, imu_arrays
@@ -35,6 +34,7 @@ from navlib.models.ecef import Ecef21ErrorState
 from navlib.models.launcher import LauncherErrorState
 from navlib.quaternions import quat_from_matrix
 from navlib.rotations import log_so3
+from navlib.sparse_discretize import discretize_window
 
 __all__ = ["FAMILIES", "EKFResult", "EKFSnapshot", "ekf", "error_model"]
 

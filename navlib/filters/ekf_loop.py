@@ -9,7 +9,7 @@ such a run in one call: the parameter estimates decayed along the window and the
 compensated with them (:meth:`navlib.models.base.ErrorState.compensate`), the strapdown
 mechanisation (:func:`navlib.strapdown.propagate`), the attitude matrices of its
 quaternions, the Jacobians (:meth:`navlib.models.ecef.Ecef21ErrorState.jacobians`), the
-sparse discretisation (:func:`navlib.filters.ekf_steps.discretize_kernel`), the runs of
+sparse discretisation (:func:`navlib.sparse_discretize.discretize_kernel`), the runs of
 updates and the propagation (:func:`navlib.kalman.fixed_updates_kernel`, the same runs as
 :class:`navlib.filters.ekf_updates.WindowUpdates`), the correction of the nominal state at
 each update and the feedback and reset at the window's end
@@ -35,12 +35,12 @@ import pandas as pd
 
 from navlib import earth, strapdown, units
 from navlib.cache import drop_stale_kernel_caches
-from navlib.filters.ekf_steps import discretize_kernel, pattern_kernel
 from navlib.filters.ekf_updates import Epochs
 from navlib.filters.measurements import GnssPosition, GnssVelocity, ekf_measurements
 from navlib.kalman import PINV_RTOL, fixed_updates_kernel, kernel_array
 from navlib.models.ecef import Ecef21ErrorState, ecef21_jacobians_kernel
 from navlib.quaternions import _matrix_quat_kernel as matrix_quat_kernel
+from navlib.sparse_discretize import discretize_kernel, pattern_kernel
 
 __all__ = ["compile_kernel", "compiled_run"]
 
@@ -255,7 +255,7 @@ def _loop_kernel(t, f_meas, w_meas, bounds, clock_idx, clock_weights, clock_eart
 def _model_pattern(es):
     """The non-zero entries of the model's ``A``, ``G`` (any window's: the Jacobians of a
     nominal state with no zero component) and ``Qc``, as
-    :func:`navlib.filters.ekf_steps.pattern_kernel` gives them. An entry that is zero in a
+    :func:`navlib.sparse_discretize.pattern_kernel` gives them. An entry that is zero in a
     window adds zeros to the discretisation's sums, which leaves them as they are."""
     rng = np.random.default_rng(0)
     position = np.array([[4.0e6, 1.0e6, 4.5e6]]) + rng.uniform(1.0, 2.0, (2, 3))

@@ -6,7 +6,7 @@
 A5) into buffers the EKF reuses over its windows: the NumPy function builds about thirty
 (N, 21, 21) temporaries a window, which made it a sixth of the EKF's time per sample
 (issue 37). Every entry is the same formula, so the two agree to rounding
-(``tests/filters/test_ekf_steps.py``). Element loops only (no array expressions), which
+(``tests/test_sparse_discretize.py``). Element loops only (no array expressions), which
 keeps the first compile short.
 """
 

@@ -1,7 +1,9 @@
-"""Per-step discretisation of the EKF's error model, compiled and sparse
-(:func:`navlib.filters.ekf.ekf`; docs/assumptions.md "Compiled kernels").
+"""Per-step discretisation of the sparse error models, compiled
+(docs/assumptions.md "Compiled kernels"): the EKF's windows (:func:`navlib.filters.ekf.ekf`)
+and the 21-state model's steps between GNSS epochs
+(:func:`navlib.models.ecef.ecef21_at_epochs`).
 
-The error models of the EKF are sparse and block triangular: in the 21-state ECEF model 58
+The error models are sparse and block triangular: in the 21-state ECEF model 58
 of the 441 entries of ``A`` are non-zero in the rocket's windows and only the nine
 navigation rows have any (the twelve IMU parameters are random walks); the launcher models
 add diagonal Markov decays. :func:`discretize_kernel` computes what
@@ -10,14 +12,16 @@ and Van Loan's integral of ``W = G Qc G'`` by its order-4 Taylor series) one ste
 time, with products over the non-zero entries of ``A``, ``G`` and ``Qc`` only (the Euler
 steps of the launcher models stay NumPy's: two batched operations, and no compile in the
 notebooks that run only those); the covariance prediction (:func:`navlib.kalman.predict_sparse`)
-multiplies only the rows of ``F`` that are not diagonal.
+multiplies only the rows of ``F`` that are not diagonal. On the sounding rocket's 4300 model
+steps of 0.02 s (notebook 09) the steps take 46 ms against 132 ms for the batched NumPy
+code.
 
 The exponential is the Taylor series ``sum_k (A dt)^k / k!`` summed until a term is below
 ``2^-53`` (infinity norm), without scaling while ``|A dt| <=`` :data:`TAYLOR_THETA` (the
 rocket's steps reach 1.6, dominated by nilpotent specific-force couplings: the sixth term
 is below ``1e-22``), after one scaling by ``2^-s`` and ``s`` squarings above. It differs
 from :func:`~navlib.discretize.expm_taylor` (degree 12 after scaling to 0.5) by rounding,
-not truncation (``tests/filters/test_ekf_steps.py``: within 1e-12 of the largest entry per
+not truncation (``tests/test_sparse_discretize.py``: within 1e-12 of the largest entry per
 step, and the whole rocket EKF within the golden tolerances measured across BLAS kernels).
 
 Helpers are inlined into the one cached kernel and the sparsity patterns are found with
@@ -32,7 +36,8 @@ import numpy as np
 from navlib.cache import drop_stale_kernel_caches
 from navlib.discretize import discretize_steps
 
-__all__ = ["TAYLOR_THETA", "discretize_kernel", "discretize_window", "pattern_kernel"]
+__all__ = ["TAYLOR_THETA", "compile_kernel", "discretize_kernel", "discretize_window",
+           "pattern_kernel"]
 
 TAYLOR_THETA = 4.0
 """Largest ``|A dt|`` (infinity norm) summed without scaling: rounding then stays within
@@ -336,6 +341,14 @@ def discretize_window(A, G, Qc, dt, method: str, out=None):
     discretize_kernel(A, G, np.ascontiguousarray(dt, dtype=float),
                       _pattern(A, G, np.asarray(Qc, dtype=float)), F, Q)
     return F, Q
+
+
+def compile_kernel() -> None:
+    """Run :func:`discretize_kernel` once on a one-step two-state model: compiles it (about
+    3 CPU-s) on the first run on a machine, loads it from numba's disk cache afterwards
+    (README "Compiled kernels")."""
+    discretize_window(np.zeros((1, 2, 2)), np.zeros((1, 2, 1)), np.eye(1), np.ones(1),
+                      "series")
 
 
 drop_stale_kernel_caches(__name__, globals())  # numba checks only this file (numba #1833)

@@ -1,4 +1,4 @@
-"""The EKF's compiled sparse steps (navlib.filters.ekf_steps, navlib.kalman.predict_sparse)
+"""The EKF's compiled sparse steps (navlib.sparse_discretize, navlib.kalman.predict_sparse)
 and the 21-state model's compiled Jacobians (navlib.models._ecef21_kernel) against the NumPy
 code: per step within 1e-12 of each matrix's largest entry (rounding only;
 the NumPy products go through whichever BLAS kernel is loaded), and the whole 86 s rocket
@@ -16,10 +16,10 @@ from support import kalman_reference as ref
 from navlib import sensors, strapdown
 from navlib.discretize import discretize_steps
 from navlib.filters import ekf
-from navlib.filters.ekf_steps import _PATTERNS, TAYLOR_THETA, _pattern, discretize_window
 from navlib.kalman import predict_sparse
 from navlib.models.base import Nominal
 from navlib.models.ecef import Ecef21ErrorState, ecef21_jacobians
+from navlib.sparse_discretize import _PATTERNS, TAYLOR_THETA, _pattern, discretize_window
 from navlib.trajectory import sounding_rocket
 
 STEP_RTOL = 1e-12
@@ -101,6 +101,34 @@ def test_rocket_steps_equal_discretize_steps(rocket):
     assert rel(Q, Q_ref) < STEP_RTOL
 
 
+@pytest.mark.parametrize("hold, max_step_s", [("mean", None), ("mean", 0.05), ("left", 0.03)])
+def test_epoch_model_steps_equal_the_numpy_steps(rocket, hold, max_step_s, monkeypatch):
+    """:func:`ecef21_at_epochs` with the compiled sparse steps equals the same chain of
+    NumPy steps whose noise is built as before (``G`` averaged over one IMU step; over a
+    decimated step the mean of the two ends' ``W``, here carried as ``[G_0, G_1]`` with
+    ``Qc / 2``): F and Q per 1 Hz epoch within 1e-12 of each matrix's largest entry."""
+    from navlib.models import ecef
+
+    monkeypatch.setenv("NAVLIB_NO_CACHE", "1")
+    model = ecef.ecef21_at_epochs(rocket, 1.0, hold=hold, max_step_s=max_step_s)
+    Qc = ecef._constant_parts(None, "ecef", 5.0, {})["Qc"]
+
+    def numpy_steps(A, G, Qc_held, dt, method):
+        q = Qc.shape[0]
+        if G.shape[2] == 2 * q:  # decimated: the mean of the two ends' W, as before
+            W = 0.5 * sum(g @ Qc @ np.swapaxes(g, 1, 2) for g in (G[..., :q], G[..., q:]))
+        else:
+            W = G @ Qc_held @ np.swapaxes(G, 1, 2)
+        return discretize_steps(A, None, None, dt, "series", W=W)
+
+    monkeypatch.setattr(ecef, "discretize_window", numpy_steps)
+    ecef._cached_chain.cache_clear()
+    reference = ecef.ecef21_at_epochs(rocket, 1.0, hold=hold, max_step_s=max_step_s)
+    ecef._cached_chain.cache_clear()
+    assert rel(model.F, reference.F) < STEP_RTOL
+    assert rel(model.Q, reference.Q) < STEP_RTOL
+
+
 @pytest.mark.parametrize("scale", [1.0, 10.0 * TAYLOR_THETA])
 @pytest.mark.parametrize("decay", [True, False])
 def test_block_model_steps_equal_discretize_steps(scale, decay):
@@ -139,7 +167,7 @@ def test_predict_sparse_equals_numpy():
 
 
 def _ekf_tolerances():
-    path = Path(__file__).resolve().parents[1] / "regression" / "tolerances.toml"
+    path = Path(__file__).resolve().parent / "regression" / "tolerances.toml"
     entry = tomllib.loads(path.read_text())["ekf"]
     return {group: entry[group]["tolerance"] for group in ("position", "velocity", "attitude",
                                                            "nis")}
