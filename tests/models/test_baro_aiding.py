@@ -5,8 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from navlib import NavlibInputError, earth
-from navlib.models.baro import aided_model, baro_sigma, pad_epochs
+from navlib import NavlibInputError, earth, units
+from navlib.models.baro import (
+    BARO_PRESSURE_COEFFICIENT,
+    aided_model,
+    baro_sigma,
+    mach_number,
+    pad_epochs,
+    static_pressure_error_m,
+)
 from navlib.models.ecef import ecef21_at_epochs
 from navlib.studies.assess.aiding import ned_sigmas
 from navlib.trajectory import sounding_rocket
@@ -37,9 +44,10 @@ def test_baro_rows_measure_height_and_the_pad_only(rocket):
     np.testing.assert_allclose(aided.H[k, 0, :3], up, atol=1e-12)
     assert np.all(aided.H[k, 0, 3:] == 0.0)
     h0 = earth.ecef_to_geodetic(traj.position[0])[2]
-    speed = abs(traj.velocity[i] @ up)
+    speed = abs(traj.velocity[i] @ up)     # without GNSS: the reference's climb rate (B7)
     assert speed > 100.0                   # the dynamic-pressure term matters here
-    assert aided.R[k, 0, 0] == pytest.approx(baro_sigma(h - h0, speed_m_s=speed) ** 2)
+    assert aided.R[k, 0, 0] == pytest.approx(
+        baro_sigma(h - h0, speed_m_s=speed, altitude_m=h) ** 2)
     assert aided.R[k, 0, 0] > baro_sigma(h - h0) ** 2
     pad = pad_epochs(model.t, traj.t, traj.velocity)
     assert pad[0] and not pad[-1]          # the rocket rests on its rail until ignition
@@ -47,6 +55,38 @@ def test_baro_rows_measure_height_and_the_pad_only(rocket):
     assert np.all(aided.H[~pad, 1:] == 0.0)
     both = aided_model(model, traj, "gnss+baro")
     assert both.measurement_names[:3] == ("gnss_n", "gnss_e", "baro_h")
+    # with GNSS the horizontal velocity is measured: the whole speed weighs the barometer
+    full = np.linalg.norm(traj.velocity[i])
+    assert both.R[k, 2, 2] == pytest.approx(
+        baro_sigma(h - h0, speed_m_s=full, altitude_m=h) ** 2)
+
+
+def test_static_pressure_error_grows_through_the_transonic_range():
+    """B7: ``C_P q_c / (rho g0)`` with the Prandtl-Glauert factor held from Mach 0.8 to
+    1.17: the low-speed ``C_P v^2 / (2 g0)``, growing up to Mach 1.17, continuous at Mach 1,
+    larger than the incompressible term from Mach 0.5 to 1.5."""
+    low = static_pressure_error_m(30.0)
+    assert low == pytest.approx(BARO_PRESSURE_COEFFICIENT * 30.0**2 / (2 * units.G0), rel=0.01)
+    a0 = 30.0 / mach_number(30.0)
+    assert a0 == pytest.approx(340.3, abs=0.2)                  # ISA sea level
+    assert mach_number(a0, 5000.0) > 1.0                        # colder aloft
+    mach = np.linspace(0.05, 2.5, 400)
+    e = static_pressure_error_m(mach * a0)
+    incompressible = BARO_PRESSURE_COEFFICIENT * (mach * a0) ** 2 / (2 * units.G0)
+    assert np.all(np.diff(e[mach <= 1.17]) > 0)          # beyond, 1/sqrt(M^2 - 1) falls
+    transonic = (mach >= 0.5) & (mach <= 1.5)
+    assert np.all(e[transonic] > incompressible[transonic])
+    below, above = static_pressure_error_m(a0 * np.array([0.999999, 1.000001]))
+    assert above == pytest.approx(below, rel=1e-4)              # q_c continuous at Mach 1
+    # the Prandtl-Glauert factor: 1/sqrt(1 - M^2) at Mach 0.6, held at 1/0.6 at Mach 1
+    qc = (1.0 + 0.2 * 0.36) ** 3.5 - 1.0
+    assert static_pressure_error_m(0.6 * a0) == pytest.approx(
+        BARO_PRESSURE_COEFFICIENT / 0.8 * qc * 287.053 * 288.15 / units.G0, rel=1e-6)
+    at_one = static_pressure_error_m(a0)
+    assert at_one == pytest.approx(
+        BARO_PRESSURE_COEFFICIENT / 0.6 * (1.2**3.5 - 1.0) * 287.053 * 288.15 / units.G0,
+        rel=1e-6)
+    assert baro_sigma(0.0, speed_m_s=a0) == pytest.approx(np.hypot(1.0, at_one))
 
 
 def test_without_gnss_the_horizontal_sigma_grows_and_the_vertical_stays(rocket):

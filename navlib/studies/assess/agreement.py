@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from navlib import earth
 from navlib.io import quality
 from navlib.metrics import in_segment
 from navlib.trajectory.liftoff import moving_average
@@ -110,7 +111,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         The reference motion.
     imu_residuals, gnss_residuals : DataFrame
         Of :func:`navlib.studies.assess.fit_residuals`: ``df_x_avg ... dw_z_avg`` (after the
-        fit's calibration), ``turn_deg``; ``dx, dy, dz`` at the GNSS epochs.
+        fit's calibration), ``turn_deg``; ``dx, dy, dz`` at the GNSS epochs and, for
+        barometric rows, ``baro_dynamic_m`` (their expected static-pressure error, B7).
     bounds : dict
         :func:`fit_bounds`.
 
@@ -134,6 +136,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         if "resolved" in imu_residuals else (np.zeros_like(turn), np.ones(turn.size, bool))
     t_g = gnss_residuals["t"].to_numpy(dtype=float)
     d_g = gnss_residuals[[f"d{a}" for a in AXES]].to_numpy(dtype=float)
+    q_err = (gnss_residuals["baro_dynamic_m"].to_numpy(dtype=float)
+             if "baro_dynamic_m" in gnss_residuals else None)
     rows, messages = [], []
     for row in table.itertuples(index=False):
         sel = in_segment(t, row.t_start, row.t_end)
@@ -157,8 +161,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         unresolved = fast > bounds["turn_fraction"]
         reason = ""
         if outside or unresolved:
-            causes = _causes(sel, sel_g, fast, (turn, coning), t, df, dw, trajectory, t_g,
-                             d_g, bounds, (f_rms > f_bound, w_rms > w_bound))
+            causes = _causes(sel, sel_g, fast, (turn, coning), t, df, dw, trajectory,
+                             (t_g, d_g, q_err), bounds, (f_rms > f_bound, w_rms > w_bound))
             shown = "; ".join(outside) if outside else "residuals within bounds"
             reason = f"{shown}; likely cause: {'; '.join(causes)}"
             messages.append(f"segment {int(row.segment)} {row.phase} {row.t_start:.6g}-"
@@ -169,11 +173,14 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
     return pd.DataFrame(rows, columns=list(AGREEMENT_COLUMNS)), messages
 
 
-def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, t_g, d_g, bounds, imu_out):
+def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, rows, bounds, imu_out):
     """Likely causes of one segment's disagreement, in words (module docstring); the axis
     regressions only for the sensor (accelerometer, gyro) outside its bound, ``imu_out``;
-    ``rotation``: the recorded turn and coning per sample, deg."""
-    causes = []
+    ``rotation``: the recorded turn and coning per sample, deg; ``rows``: the position rows'
+    times, residuals and expected static-pressure error (None for GNSS rows)."""
+    t_g, d_g, q_err = rows
+    causes = [] if q_err is None else _high_dynamic_pressure(sel_g, t_g, d_g, q_err,
+                                                             trajectory, bounds)
     turn, (coning, resolved) = rotation
     rate = 1.0 / float(np.median(np.diff(t[sel]))) if sel.sum() > 1 else np.nan
     if fast > bounds["turn_fraction"]:
@@ -242,3 +249,27 @@ def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, t_g, d_g, bounds,
                           "reference moves)")
     return causes or ["not identified (no fast rotation, axis sign, calibration, GNSS "
                       "outage, GNSS lag or held fix explains it)"]
+
+
+def _high_dynamic_pressure(sel_g, t_g, d_g, q_err, trajectory, bounds) -> list[str]:
+    """The cause "barometer at high dynamic pressure" (docs/assumptions.md B7, FIT3): the
+    segment's barometric rows whose expected static-pressure error ``q_err`` exceeds the
+    position bound carry, in their vertical residual alone, at least half of the segment's
+    squared position residual (the barometer explains no horizontal residual)."""
+    if not sel_g.any():
+        return []
+    t_s, d_s = t_g[sel_g], d_g[sel_g]
+    d2 = np.sum(d_s**2, axis=1)
+    P = np.column_stack([np.interp(t_s, trajectory.t, trajectory.position[:, i])
+                         for i in range(3)])
+    lat, lon, _ = earth.ecef_to_geodetic(P)
+    up = -earth.ned_to_ecef_matrix(lat, lon)[..., 2].reshape(-1, 3)
+    d_up = np.einsum("ki,ki->k", d_s, up)
+    high = q_err[sel_g] > bounds["gnss_m"]
+    if not high.any() or np.sum(d_up[high] ** 2) < 0.5 * d2.sum():
+        return []
+    return [f"barometer at high dynamic pressure (the barometric rows at {t_s[high][0]:.6g}-"
+            f"{t_s[high][-1]:.6g} s, where the reference's speed makes a static-pressure error "
+            f"of up to {q_err[sel_g].max():.3g} m expected (B7), carry "
+            f"{np.sum(d_up[high] ** 2) / d2.sum():.0%} of the segment's squared position "
+            f"residual in their height, up to {np.max(np.abs(d_up[high])):.3g} m)"]

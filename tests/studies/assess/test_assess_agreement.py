@@ -270,6 +270,33 @@ def test_a_pad_must_stand_still_in_the_gnss_too():
     assert gnss_still(t_g[:2], drifting[:2], 9.5)               # two fixes say nothing
 
 
+def test_barometer_at_high_dynamic_pressure_is_named_for_its_height_residual_only():
+    """B7, FIT3: barometric rows expected to carry a static-pressure error beyond the
+    position bound are named when their height residual is most of the segment's; a
+    horizontal residual of the same rows is not the barometer's."""
+    t = np.arange(0.0, 20.0, 0.01)
+    t_g = np.arange(0.0, 20.0, 0.5)
+    ref = _Line(t, 0.0)                      # at (6.4e6, 0, 0): up is +x
+    q_err = np.where((t_g >= 10.0) & (t_g < 13.0), 60.0, 1.0)
+    d = np.zeros((t_g.size, 3))
+    d[q_err > 10.0, 0] = -50.0               # the rows read 50 m low there
+    imu, gnss = _residual_frames(t, t_g, d)
+    gnss["baro_dynamic_m"] = q_err
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert cols["represented"].tolist() == [True, False]
+    assert "likely cause: barometer at high dynamic pressure (the barometric rows at 10-12.5 s"\
+        in cols["fit_reason"][1]
+    assert "up to 60 m expected" in cols["fit_reason"][1]
+    d = np.roll(d, 1, axis=1)                # the same residual across the track: not it
+    imu, gnss = _residual_frames(t, t_g, d)
+    gnss["baro_dynamic_m"] = q_err
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert not cols["represented"][1] and "barometer" not in cols["fit_reason"][1]
+    gnss = gnss.drop(columns="baro_dynamic_m")   # GNSS rows: never the barometer
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert "barometer" not in cols["fit_reason"][1]
+
+
 def _with_baro(imu, truth, lag_s=0.0):
     """``imu`` with a barometer record of ``truth``'s height (100 Hz, on time) attached."""
     _, _, h = truth.geodetic
