@@ -7,7 +7,7 @@ fit's IMU calibration (:func:`fit_calibration`, one scale and bias per axis), av
 ``moving_average_s``; :func:`segment_agreement` reduces them per segment (the worst axis)
 and checks them against the bounds of ``data/quality.toml`` ``[fit]``
 (:func:`fit_bounds`), naming a likely cause for every segment outside them
-(docs/assumptions.md FIT1-FIT3).
+(docs/assumptions.md FIT1-FIT3, FIT8, B7).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from navlib import earth
+from navlib import earth, units
 from navlib.io import quality
 from navlib.metrics import in_segment
 from navlib.trajectory.liftoff import moving_average
@@ -247,8 +247,41 @@ def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, rows, bounds, imu
             n = int(np.count_nonzero(same & (moved > bounds["held_fix_motion_m"])))
             causes.append(f"a held GNSS fix ({n} fix(es) repeat the previous one while the "
                           "reference moves)")
+    if q_err is None and not imu_out[0]:
+        causes += _receiver_dynamics(sel_g, t_g, d_g, trajectory, bounds)
     return causes or ["not identified (no fast rotation, axis sign, calibration, GNSS "
-                      "outage, GNSS lag or held fix explains it)"]
+                      "outage, GNSS lag, held fix or receiver dynamics explains it)"]
+
+
+def _receiver_dynamics(sel_g, t_g, d_g, trajectory, bounds) -> list[str]:
+    """The cause "GNSS receiver error at high dynamics" (docs/assumptions.md FIT8): the fixes
+    taken while the reference accelerates beyond ``receiver_accel_g``, or within
+    ``receiver_recovery_s`` after, carry at least half of the segment's squared GNSS
+    residual (called only where the specific force agrees with the IMU, so the motion the
+    fixes disagree with is the one the accelerometers recorded)."""
+    if not sel_g.any():
+        return []
+    t = np.asarray(trajectory.t, dtype=float)
+    accel = np.linalg.norm(np.gradient(np.asarray(trajectory.velocity, dtype=float), t,
+                                       axis=0), axis=1)
+    limit = bounds["receiver_accel_g"] * units.G0
+    t_high = t[accel > limit]
+    if t_high.size == 0:
+        return []
+    t_s = t_g[sel_g]
+    last = np.searchsorted(t_high, t_s, side="right") - 1
+    since = np.where(last >= 0, t_s - t_high[np.maximum(last, 0)], np.inf)
+    near = since <= bounds["receiver_recovery_s"]
+    d2 = np.sum(d_g[sel_g] ** 2, axis=1)
+    if not near.any() or d2[near].sum() < 0.5 * d2.sum():
+        return []
+    return [f"GNSS receiver error at high dynamics (the fixes at {t_s[near][0]:.6g}-"
+            f"{t_s[near][-1]:.6g} s, taken while or within "
+            f"{bounds['receiver_recovery_s']:g} s after the reference accelerated beyond "
+            f"{bounds['receiver_accel_g']:g} g, up to {accel.max() / units.G0:.3g} g, carry "
+            f"{d2[near].sum() / d2.sum():.0%} of the segment's squared GNSS residual, up to "
+            f"{np.sqrt(d2[near].max()):.3g} m, where the reference follows the recorded "
+            "specific force: the receiver's navigation filter beyond its dynamic model)"]
 
 
 def _high_dynamic_pressure(sel_g, t_g, d_g, q_err, trajectory, bounds) -> list[str]:
