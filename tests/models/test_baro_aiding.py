@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from navlib import NavlibInputError, earth, units
@@ -15,7 +16,12 @@ from navlib.models.baro import (
     static_pressure_error_m,
 )
 from navlib.models.ecef import ecef21_at_epochs
-from navlib.studies.assess.aiding import ned_sigmas
+from navlib.studies.assess.aiding import (
+    baro_rows_weighted,
+    ned_sigmas,
+    reference_speed,
+    row_dynamic_error,
+)
 from navlib.trajectory import sounding_rocket
 
 
@@ -101,3 +107,28 @@ def test_without_gnss_the_horizontal_sigma_grows_and_the_vertical_stays(rocket):
     # horizontal: not measured after the pad, so larger than at its start and than with GNSS
     assert np.all(p[-1, :2] > p[0, :2]) and np.all(p[-1, :2] > 3 * gnss["position_m"][-1, :2])
     assert np.all(v[-1, :2] > 2 * v[-1, 2])
+
+
+def test_barometer_rows_take_the_reference_climb_rate_not_their_own(rocket):
+    """B7: :func:`baro_rows_weighted` weighs each row at the climb rate of the fitted
+    reference (its horizontal velocity is dead reckoning without GNSS); rows outside the
+    reference keep the sigma at rest."""
+    traj, _ = rocket
+    t = np.r_[traj.t[::200], traj.t[-1] + 1.0]
+    P = np.vstack([traj.position[::200], traj.position[-1]])
+    rows = pd.DataFrame({"t": t, "x": P[:, 0], "y": P[:, 1], "z": P[:, 2],
+                         "sigma": 1.0})
+    rows.attrs["height_source"] = "baro"
+    out = baro_rows_weighted(rows, traj)
+    assert out.attrs == rows.attrs and out["sigma"].iloc[-1] == pytest.approx(
+        baro_sigma(earth.ecef_to_geodetic(P[-1])[2] - earth.ecef_to_geodetic(P[0])[2]))
+    climb = reference_speed(t, traj, "baro")
+    speed = reference_speed(t, traj, "gnss+baro")
+    k = int(np.argmax(climb))
+    assert climb[k] > 100.0 and climb[-1] == 0.0
+    assert np.all(speed >= climb - 1e-9)
+    _, _, h = earth.ecef_to_geodetic(P)
+    assert out["sigma"].iloc[k] == pytest.approx(
+        baro_sigma(h[k] - h[0], speed_m_s=climb[k], altitude_m=h[k]))
+    assert row_dynamic_error(t, traj, "baro")[k] == pytest.approx(
+        static_pressure_error_m(climb[k], h[k]), rel=1e-6)
