@@ -237,7 +237,10 @@ def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, rows, bounds, imu
             lag = -float(np.sum(d * v)) / vv       # recorded P(t) = P(t - lag)
             left = float(np.sum((d + lag * v) ** 2))
             if abs(lag) > bounds["gnss_lag_s"] and left <= 0.5 * float(np.sum(d**2)):
-                causes.append(f"GNSS lag ({lag:.2g} s: the fixes trail the reference motion)")
+                causes.append(f"GNSS lag ({lag:.2g} s: the fixes trail the reference motion)"
+                              if q_err is None else
+                              f"a lag of the position rows ({lag:.2g} s: the rows, whose "
+                              "height is the barometer's, trail the reference motion)")
         reference = np.column_stack([np.interp(t_g[sel_g], trajectory.t,
                                                trajectory.position[:, i]) for i in range(3)])
         moved = np.linalg.norm(np.diff(reference, axis=0), axis=1)

@@ -354,6 +354,15 @@ def test_barometer_at_high_dynamic_pressure_is_named_for_its_height_residual_onl
     gnss = gnss.drop(columns="baro_dynamic_m")   # GNSS rows: never the barometer
     cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
     assert "barometer" not in cols["fit_reason"][1]
+    # rows trailing the motion: a lag of the rows, not of a GNSS receiver they do not have
+    moving = _Line(t, 200.0)
+    d = np.zeros((t_g.size, 3))
+    d[:, 0] = -0.3 * 200.0
+    imu, gnss = _residual_frames(t, t_g, d)
+    gnss["baro_dynamic_m"] = 1.0
+    cols, _ = segment_agreement(TABLE, moving, imu, gnss, fit_bounds())
+    assert cols["fit_reason"].str.contains(r"a lag of the position rows \(0.3 s").all()
+    assert not cols["fit_reason"].str.contains("GNSS lag").any()
 
 
 def _with_baro(imu, truth, lag_s=0.0):
