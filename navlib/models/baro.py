@@ -33,7 +33,8 @@ from navlib.errors import NavlibInputError
 from navlib.models.base import DiscreteModel
 
 __all__ = ["AIDINGS", "BARO_PRESSURE_COEFFICIENT", "BARO_SCALE", "BARO_SIGMA_M", "PAD_SPEED_M_S",
-           "ZUPT_SIGMA_M_S", "aided_model", "baro_sigma", "pad_epochs", "without_gnss"]
+           "PRANDTL_GLAUERT_MACH", "ZUPT_SIGMA_M_S", "aided_model", "baro_sigma", "mach_number",
+           "pad_epochs", "static_pressure_error_m", "without_gnss"]
 
 AIDINGS = ("gnss", "baro", "gnss+baro")
 """What aided a flight: its GNSS receiver, its barometer (with the pad), or both."""
@@ -45,9 +46,21 @@ BARO_SCALE = 0.01
 differs from the day's by about 0.35 % per kelvin of mean temperature, so 1 % covers a day
 3 K off standard."""
 BARO_PRESSURE_COEFFICIENT = 0.02
-"""Static-port pressure error as a fraction of the dynamic pressure (B2, assumed): a
-vehicle's own airflow shifts the static pressure by ``C_P q``, an altitude error of
-``C_P v^2 / (2 g0)`` (about 40 m at 200 m/s); 0.02 is a well-placed port below Mach 0.8."""
+"""Static-port pressure error as a fraction of the impact pressure at low Mach number (B2,
+assumed): a vehicle's own airflow shifts the static pressure by ``C_P q_c``, an altitude
+error of ``C_P v^2 / (2 g0)`` at low speed (about 40 m at 200 m/s); 0.02 is a well-placed
+port, chosen before any shared log was looked at. Its growth with Mach number is
+:func:`static_pressure_error_m` (B7)."""
+PRANDTL_GLAUERT_MACH = 0.8
+"""Mach number up to which the Prandtl-Glauert rule scales the pressure coefficient,
+``C_P / sqrt(|1 - M^2|)`` (B7: linearised compressible flow, Anderson, *Modern Compressible
+Flow*, ch. 9; it diverges at Mach 1 and fails in the transonic range). From it to Mach 1.17,
+where the supersonic ``1 / sqrt(M^2 - 1)`` comes back to the same value, the factor is held
+at 1 / 0.6."""
+_GAMMA_AIR = 1.4
+_R_AIR = 287.053            # J/(kg K), the ISA's specific gas constant
+_ISA_T0_K = 288.15          # the ISA troposphere of B1 (navlib.io.baro)
+_ISA_LAPSE_K_M = 0.0065
 ZUPT_SIGMA_M_S = 0.05
 """Sigma of the zero-velocity rows on the pad, m/s (B3, assumed: a rocket on its rail moves
 by millimetres; the sigma also covers the model's linearisation)."""
@@ -56,11 +69,73 @@ PAD_SPEED_M_S = 1.0
 the pad ends at the first epoch the fitted speed exceeds it."""
 
 
+def mach_number(speed_m_s, altitude_m=0.0) -> np.ndarray:
+    """Mach number of ``speed_m_s`` at the ISA troposphere's temperature at ``altitude_m``
+    (B1, B7; the day's temperature moves the speed of sound by about 0.2 % per kelvin).
+
+    Parameters
+    ----------
+    speed_m_s : array_like
+        Airspeed, m/s (the reference's speed over ground: no wind).
+    altitude_m : array_like, optional
+        Pressure altitude, m.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    temperature = _ISA_T0_K - _ISA_LAPSE_K_M * np.clip(np.asarray(altitude_m, float), -500.0,
+                                                         11_000.0)
+    return np.abs(np.asarray(speed_m_s, dtype=float)) / np.sqrt(_GAMMA_AIR * _R_AIR * temperature)
+
+
+def static_pressure_error_m(speed_m_s, altitude_m=0.0,
+                            pressure_coefficient: float = BARO_PRESSURE_COEFFICIENT
+                            ) -> np.ndarray:
+    """The altitude error a static port's pressure error ``C_P(M) q_c`` makes (B2, B7).
+
+    ``q_c`` is the impact pressure (isentropic below Mach 1, the Rayleigh pitot formula
+    above: behind the normal shock), ``C_P(M)`` the low-speed coefficient scaled by the
+    Prandtl-Glauert factor ``1 / sqrt(|1 - M^2|)``, held at its value at
+    :data:`PRANDTL_GLAUERT_MACH` through the transonic range where linear theory fails. The
+    altitude error is ``C_P(M) q_c / (rho g0)``, with ``p / rho = a^2 / gamma``; at low speed
+    it is ``C_P v^2 / (2 g0)``.
+
+    Parameters
+    ----------
+    speed_m_s : array_like
+        Airspeed, m/s.
+    altitude_m : array_like, optional
+        Pressure altitude, m (the speed of sound, :func:`mach_number`).
+    pressure_coefficient : float, optional
+        Low-speed pressure coefficient ``C_P`` of the static port.
+
+    Returns
+    -------
+    numpy.ndarray
+        Altitude error, m (a magnitude: the sign depends on where the port sits).
+    """
+    mach = mach_number(speed_m_s, altitude_m)
+    m2 = mach**2
+    subsonic = (1.0 + 0.2 * m2) ** 3.5 - 1.0                     # q_c / p, isentropic
+    m2s = np.maximum(m2, 1.0)
+    supersonic = ((5.76 * m2s / (5.6 * m2s - 0.8)) ** 3.5 * (2.8 * m2s - 0.4) / 2.4 - 1.0)
+    qc_over_p = np.where(mach < 1.0, subsonic, supersonic)
+    beta = np.sqrt(np.maximum(np.abs(1.0 - m2), 1.0 - PRANDTL_GLAUERT_MACH**2))
+    temperature = _ISA_T0_K - _ISA_LAPSE_K_M * np.clip(np.asarray(altitude_m, float), -500.0,
+                                                         11_000.0)
+    p_over_rho_g = _R_AIR * temperature / units.G0             # the pressure scale height, m
+    return pressure_coefficient / beta * qc_over_p * p_over_rho_g
+
+
 def baro_sigma(height_change_m, sigma_m: float = BARO_SIGMA_M,
                scale: float = BARO_SCALE, speed_m_s=0.0,
-               pressure_coefficient: float = BARO_PRESSURE_COEFFICIENT) -> np.ndarray:
-    """``sqrt(sigma_m^2 + (scale dh)^2 + (C_P v^2 / (2 g0))^2)``: the sigma of a barometric
-    altitude ``dh`` metres above the pad, read at airspeed ``v`` (B2).
+               pressure_coefficient: float = BARO_PRESSURE_COEFFICIENT,
+               altitude_m=0.0) -> np.ndarray:
+    """``sqrt(sigma_m^2 + (scale dh)^2 + e_q^2)``: the sigma of a barometric altitude ``dh``
+    metres above the pad, read at airspeed ``v`` (B2), with ``e_q`` the static-pressure
+    error of :func:`static_pressure_error_m` (``C_P v^2 / (2 g0)`` at low speed, growing
+    through the transonic range, B7).
 
     Parameters
     ----------
@@ -71,9 +146,12 @@ def baro_sigma(height_change_m, sigma_m: float = BARO_SIGMA_M,
     scale : float, optional
         Scale error, fraction of the height.
     speed_m_s : array_like, optional
-        Airspeed, m/s.
+        Airspeed, m/s: the reference's speed, never the barometer's own climb rate (a
+        static-pressure error corrupts that too, B7).
     pressure_coefficient : float, optional
-        Pressure coefficient ``C_P`` of the static port.
+        Low-speed pressure coefficient ``C_P`` of the static port.
+    altitude_m : array_like, optional
+        Pressure altitude, m (the speed of sound).
 
     Returns
     -------
@@ -81,8 +159,7 @@ def baro_sigma(height_change_m, sigma_m: float = BARO_SIGMA_M,
         Sigma, m.
     """
     dh = np.asarray(height_change_m, dtype=float)
-    v = np.asarray(speed_m_s, dtype=float)
-    dynamic = pressure_coefficient * v**2 / (2.0 * units.G0)
+    dynamic = static_pressure_error_m(speed_m_s, altitude_m, pressure_coefficient)
     return np.sqrt(sigma_m**2 + (scale * dh) ** 2 + dynamic**2)
 
 
@@ -123,8 +200,9 @@ def aided_model(model: DiscreteModel, trajectory, aiding: str, *,
         From :func:`navlib.models.ecef.ecef21_at_epochs` along ``trajectory``.
     trajectory : Trajectory
         The reference motion: positions give the up/north/east directions and the height
-        above the first epoch, velocities the pad epochs (:func:`pad_epochs`) and the climb
-        rate of the barometer's dynamic-pressure sigma (:func:`baro_sigma`).
+        above the first epoch, velocities the pad epochs (:func:`pad_epochs`) and the speed
+        of the barometer's static-pressure sigma (:func:`baro_sigma`, B7: the speed with
+        GNSS, the climb rate without, whose horizontal velocity is dead reckoning, B5).
     aiding : str
         ``gnss`` returns ``model`` unchanged.
     gnss_sigma_m, baro_sigma_m, baro_scale, zupt_sigma_m_s : float
@@ -164,11 +242,13 @@ def aided_model(model: DiscreteModel, trajectory, aiding: str, *,
     row[:, 0:3] = -C_n_e[:, :, 2]                              # up = -down
     names.append("baro_h")
     H_rows.append(row)
-    # the climb rate stands for the airspeed: large speeds of a rocket are mostly vertical,
-    # and the horizontal reference velocity of a flight without GNSS is dead reckoning (B5)
-    climb = np.abs(np.einsum("ki,ki->k", np.asarray(trajectory.velocity, dtype=float)[index],
-                             -C_n_e[:, :, 2]))
-    sigmas.append(baro_sigma(height - height[0], sig["baro_sigma_m"], baro_scale, climb))
+    # the reference's speed stands for the airspeed (no wind; B2, B7); without GNSS only its
+    # climb rate, since its horizontal velocity is dead reckoning (B5)
+    velocity = np.asarray(trajectory.velocity, dtype=float)[index]
+    speed = (np.linalg.norm(velocity, axis=1) if aiding == "gnss+baro" else
+             np.abs(np.einsum("ki,ki->k", velocity, -C_n_e[:, :, 2])))
+    sigmas.append(baro_sigma(height - height[0], sig["baro_sigma_m"], baro_scale, speed,
+                             altitude_m=height))
     pad = pad_epochs(model.t, t, trajectory.velocity)
     for axis, name in enumerate(("zupt_x", "zupt_y", "zupt_z")):
         row = np.zeros((n_ep, 21))

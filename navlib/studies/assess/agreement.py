@@ -7,7 +7,7 @@ fit's IMU calibration (:func:`fit_calibration`, one scale and bias per axis), av
 ``moving_average_s``; :func:`segment_agreement` reduces them per segment (the worst axis)
 and checks them against the bounds of ``data/quality.toml`` ``[fit]``
 (:func:`fit_bounds`), naming a likely cause for every segment outside them
-(docs/assumptions.md FIT1-FIT3).
+(docs/assumptions.md FIT1-FIT3, FIT8, B7).
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from navlib import earth, units
 from navlib.io import quality
 from navlib.metrics import in_segment
 from navlib.trajectory.liftoff import moving_average
@@ -110,7 +111,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         The reference motion.
     imu_residuals, gnss_residuals : DataFrame
         Of :func:`navlib.studies.assess.fit_residuals`: ``df_x_avg ... dw_z_avg`` (after the
-        fit's calibration), ``turn_deg``; ``dx, dy, dz`` at the GNSS epochs.
+        fit's calibration), ``turn_deg``; ``dx, dy, dz`` at the GNSS epochs and, for
+        barometric rows, ``baro_dynamic_m`` (their expected static-pressure error, B7).
     bounds : dict
         :func:`fit_bounds`.
 
@@ -134,6 +136,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         if "resolved" in imu_residuals else (np.zeros_like(turn), np.ones(turn.size, bool))
     t_g = gnss_residuals["t"].to_numpy(dtype=float)
     d_g = gnss_residuals[[f"d{a}" for a in AXES]].to_numpy(dtype=float)
+    q_err = (gnss_residuals["baro_dynamic_m"].to_numpy(dtype=float)
+             if "baro_dynamic_m" in gnss_residuals else None)
     rows, messages = [], []
     for row in table.itertuples(index=False):
         sel = in_segment(t, row.t_start, row.t_end)
@@ -157,8 +161,8 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
         unresolved = fast > bounds["turn_fraction"]
         reason = ""
         if outside or unresolved:
-            causes = _causes(sel, sel_g, fast, (turn, coning), t, df, dw, trajectory, t_g,
-                             d_g, bounds, (f_rms > f_bound, w_rms > w_bound))
+            causes = _causes(sel, sel_g, fast, (turn, coning), t, df, dw, trajectory,
+                             (t_g, d_g, q_err), bounds, (f_rms > f_bound, w_rms > w_bound))
             shown = "; ".join(outside) if outside else "residuals within bounds"
             reason = f"{shown}; likely cause: {'; '.join(causes)}"
             messages.append(f"segment {int(row.segment)} {row.phase} {row.t_start:.6g}-"
@@ -169,11 +173,14 @@ def segment_agreement(table, trajectory, imu_residuals, gnss_residuals, bounds):
     return pd.DataFrame(rows, columns=list(AGREEMENT_COLUMNS)), messages
 
 
-def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, t_g, d_g, bounds, imu_out):
+def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, rows, bounds, imu_out):
     """Likely causes of one segment's disagreement, in words (module docstring); the axis
     regressions only for the sensor (accelerometer, gyro) outside its bound, ``imu_out``;
-    ``rotation``: the recorded turn and coning per sample, deg."""
-    causes = []
+    ``rotation``: the recorded turn and coning per sample, deg; ``rows``: the position rows'
+    times, residuals and expected static-pressure error (None for GNSS rows)."""
+    t_g, d_g, q_err = rows
+    causes = [] if q_err is None else _high_dynamic_pressure(sel_g, t_g, d_g, q_err,
+                                                             trajectory, bounds)
     turn, (coning, resolved) = rotation
     rate = 1.0 / float(np.median(np.diff(t[sel]))) if sel.sum() > 1 else np.nan
     if fast > bounds["turn_fraction"]:
@@ -230,7 +237,10 @@ def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, t_g, d_g, bounds,
             lag = -float(np.sum(d * v)) / vv       # recorded P(t) = P(t - lag)
             left = float(np.sum((d + lag * v) ** 2))
             if abs(lag) > bounds["gnss_lag_s"] and left <= 0.5 * float(np.sum(d**2)):
-                causes.append(f"GNSS lag ({lag:.2g} s: the fixes trail the reference motion)")
+                causes.append(f"GNSS lag ({lag:.2g} s: the fixes trail the reference motion)"
+                              if q_err is None else
+                              f"a lag of the position rows ({lag:.2g} s: the rows, whose "
+                              "height is the barometer's, trail the reference motion)")
         reference = np.column_stack([np.interp(t_g[sel_g], trajectory.t,
                                                trajectory.position[:, i]) for i in range(3)])
         moved = np.linalg.norm(np.diff(reference, axis=0), axis=1)
@@ -240,5 +250,62 @@ def _causes(sel, sel_g, fast, rotation, t, df, dw, trajectory, t_g, d_g, bounds,
             n = int(np.count_nonzero(same & (moved > bounds["held_fix_motion_m"])))
             causes.append(f"a held GNSS fix ({n} fix(es) repeat the previous one while the "
                           "reference moves)")
+    if q_err is None and not imu_out[0]:
+        causes += _receiver_dynamics(sel_g, t_g, d_g, trajectory, bounds)
     return causes or ["not identified (no fast rotation, axis sign, calibration, GNSS "
-                      "outage, GNSS lag or held fix explains it)"]
+                      "outage, GNSS lag, held fix or receiver dynamics explains it)"]
+
+
+def _receiver_dynamics(sel_g, t_g, d_g, trajectory, bounds) -> list[str]:
+    """The cause "GNSS receiver error at high dynamics" (docs/assumptions.md FIT8): the fixes
+    taken while the reference accelerates beyond ``receiver_accel_g``, or within
+    ``receiver_recovery_s`` after, carry at least half of the segment's squared GNSS
+    residual (called only where the specific force agrees with the IMU, so the motion the
+    fixes disagree with is the one the accelerometers recorded)."""
+    if not sel_g.any():
+        return []
+    t = np.asarray(trajectory.t, dtype=float)
+    accel = np.linalg.norm(np.gradient(np.asarray(trajectory.velocity, dtype=float), t,
+                                       axis=0), axis=1)
+    limit = bounds["receiver_accel_g"] * units.G0
+    t_high = t[accel > limit]
+    if t_high.size == 0:
+        return []
+    t_s = t_g[sel_g]
+    last = np.searchsorted(t_high, t_s, side="right") - 1
+    since = np.where(last >= 0, t_s - t_high[np.maximum(last, 0)], np.inf)
+    near = since <= bounds["receiver_recovery_s"]
+    d2 = np.sum(d_g[sel_g] ** 2, axis=1)
+    if not near.any() or d2[near].sum() < 0.5 * d2.sum():
+        return []
+    return [f"GNSS receiver error at high dynamics (the fixes at {t_s[near][0]:.6g}-"
+            f"{t_s[near][-1]:.6g} s, taken while or within "
+            f"{bounds['receiver_recovery_s']:g} s after the reference accelerated beyond "
+            f"{bounds['receiver_accel_g']:g} g, up to {accel.max() / units.G0:.3g} g, carry "
+            f"{d2[near].sum() / d2.sum():.0%} of the segment's squared GNSS residual, up to "
+            f"{np.sqrt(d2[near].max()):.3g} m, where the reference follows the recorded "
+            "specific force: the receiver's navigation filter beyond its dynamic model)"]
+
+
+def _high_dynamic_pressure(sel_g, t_g, d_g, q_err, trajectory, bounds) -> list[str]:
+    """The cause "barometer at high dynamic pressure" (docs/assumptions.md B7, FIT3): the
+    segment's barometric rows whose expected static-pressure error ``q_err`` exceeds the
+    position bound carry, in their vertical residual alone, at least half of the segment's
+    squared position residual (the barometer explains no horizontal residual)."""
+    if not sel_g.any():
+        return []
+    t_s, d_s = t_g[sel_g], d_g[sel_g]
+    d2 = np.sum(d_s**2, axis=1)
+    P = np.column_stack([np.interp(t_s, trajectory.t, trajectory.position[:, i])
+                         for i in range(3)])
+    lat, lon, _ = earth.ecef_to_geodetic(P)
+    up = -earth.ned_to_ecef_matrix(lat, lon)[..., 2].reshape(-1, 3)
+    d_up = np.einsum("ki,ki->k", d_s, up)
+    high = q_err[sel_g] > bounds["gnss_m"]
+    if not high.any() or np.sum(d_up[high] ** 2) < 0.5 * d2.sum():
+        return []
+    return [f"barometer at high dynamic pressure (the barometric rows at {t_s[high][0]:.6g}-"
+            f"{t_s[high][-1]:.6g} s, where the reference's speed makes a static-pressure error "
+            f"of up to {q_err[sel_g].max():.3g} m expected (B7), carry "
+            f"{np.sum(d_up[high] ** 2) / d2.sum():.0%} of the segment's squared position "
+            f"residual in their height, up to {np.max(np.abs(d_up[high])):.3g} m)"]

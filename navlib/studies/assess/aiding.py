@@ -20,12 +20,13 @@ from navlib import earth, strapdown, units
 from navlib.covariance import kalman_covariance, sigma_in_frame
 from navlib.errors import NavlibInputError
 from navlib.io.baro import baro_height
-from navlib.models.baro import BARO_SCALE, BARO_SIGMA_M, baro_sigma
+from navlib.models.baro import BARO_SCALE, BARO_SIGMA_M, baro_sigma, static_pressure_error_m
 from navlib.trajectory.fit import FIT_DEFAULTS
 from navlib.trajectory.initial_attitude import level_attitude
 
-__all__ = ["GAP_S", "LAUNCH_ACCEL_M_S2", "MIN_LEVEL_S", "ROW_RATE_HZ", "SITE_DEG", "SPEED_WINDOW_S",
-           "aiding_of", "aiding_records", "baro_reference_rows", "ned_sigmas", "sigma_note"]
+__all__ = ["GAP_S", "LAUNCH_ACCEL_M_S2", "MIN_LEVEL_S", "ROW_RATE_HZ", "SITE_DEG",
+           "aiding_of", "aiding_records", "baro_reference_rows", "baro_rows_weighted",
+           "ned_sigmas", "reference_speed", "row_dynamic_error", "sigma_note"]
 
 SITE_DEG = (45.0, 0.0)
 """Latitude and longitude assumed for a flight without GNSS, deg (B5): normal gravity
@@ -39,9 +40,6 @@ LAUNCH_ACCEL_M_S2 = 3.0
 construction: above a rail's vibration, well below any motor's thrust)."""
 MIN_LEVEL_S = 0.5
 """Shortest rest before launch to level the IMU on, s."""
-SPEED_WINDOW_S = 1.0
-"""Smoothing window of the barometric climb speed, s (by construction: above the sensor's
-noise, below a boost's length)."""
 GAP_S = FIT_DEFAULTS["max_bridge_s"]
 """IMU holes longer than this (the fit's longest bridged hole, s) start a new piece whose
 reference rows are built on their own: a pre-launch buffer logged long before the flight."""
@@ -142,7 +140,11 @@ def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
     :data:`MIN_LEVEL_S`; heading north by construction), its attitude integrated with the
     gyros and its specific force twice with the pad's gravity (no Coriolis: these rows only
     seed the fit); the horizontal part of that position, at ``site_deg``, gets the
-    barometric height change above the pad. ``sigma`` is :func:`navlib.models.baro.baro_sigma`.
+    barometric height change above the pad. ``sigma`` is :func:`navlib.models.baro.baro_sigma`
+    at rest: its static-pressure term needs the vehicle's speed, which neither the
+    barometer's own climb rate (corrupted by the error it should weigh) nor this dead
+    reckoning (it diverges in a tumbling descent) gives; :func:`baro_rows_weighted` adds it
+    with the speed of a fit to these rows (B7).
 
     Parameters
     ----------
@@ -196,9 +198,8 @@ def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
     lat, lon, _ = earth.ecef_to_geodetic(P_h)
     dh = baro_height(baro, grid) - h_pad
     r_e = earth.geodetic_to_ecef(lat, lon, h_pad + dh)
-    speed = _climb_speed(grid, dh)
     rows = pd.DataFrame({"t": grid, "x": r_e[:, 0], "y": r_e[:, 1], "z": r_e[:, 2],
-                         "sigma": baro_sigma(dh, BARO_SIGMA_M, BARO_SCALE, speed)})
+                         "sigma": baro_sigma(dh, BARO_SIGMA_M, BARO_SCALE)})
     rows.attrs.update(source="barometer + IMU dead reckoning", height_source="baro")
     note = (f"aiding baro: no GNSS; the reference motion is fitted to {len(rows)} rows at "
             f"{ROW_RATE_HZ:g} Hz whose height is the barometer's ({dh.max():.0f} m above the "
@@ -209,13 +210,94 @@ def baro_reference_rows(imu: pd.DataFrame, baro: pd.DataFrame,
     return rows, note
 
 
-def _climb_speed(t, dh) -> np.ndarray:
-    """|dh/dt| of the barometric height, smoothed over :data:`SPEED_WINDOW_S` (the airspeed
-    of the barometer sigma's dynamic-pressure term, B2: a rocket's speed is mostly vertical
-    while it is large)."""
-    n = max(round(SPEED_WINDOW_S * ROW_RATE_HZ), 1)
-    smooth = np.convolve(dh, np.ones(n) / n, mode="same")
-    return np.abs(np.gradient(smooth, t)) if t.size > 1 else np.zeros_like(dh)
+def row_dynamic_error(t, trajectory, aiding: str) -> np.ndarray:
+    """The static-pressure altitude error expected of a barometric row at the times ``t``:
+    :func:`navlib.models.baro.static_pressure_error_m` at the speed (:func:`reference_speed`)
+    and height of ``trajectory`` there (B7), m; 0 outside the trajectory's span.
+
+    Parameters
+    ----------
+    t : array_like
+        Row times, s, on the trajectory's clock.
+    trajectory : Trajectory
+        The reference motion.
+    aiding : str
+        ``"baro"`` or ``"gnss+baro"``.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    t = np.asarray(t, dtype=float)
+    P = np.column_stack([np.interp(t, trajectory.t, trajectory.position[:, i])
+                         for i in range(3)])
+    _, _, h = earth.ecef_to_geodetic(P)
+    return static_pressure_error_m(reference_speed(t, trajectory, aiding), h)
+
+
+def reference_speed(t, trajectory, aiding: str) -> np.ndarray:
+    """The airspeed a barometric row at the times ``t`` is read at (B7), m/s: the speed of
+    ``trajectory`` (no wind) with GNSS (``aiding == "gnss+baro"``), its climb rate without
+    (``"baro"``: its horizontal velocity is dead reckoning, B5, and a rocket's large speeds
+    are mostly vertical); 0 outside its span.
+
+    Parameters
+    ----------
+    t : array_like
+        Times, s.
+    trajectory : Trajectory
+        The reference motion.
+    aiding : str
+        ``"baro"`` or ``"gnss+baro"``.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    t = np.asarray(t, dtype=float)
+    inside = (t >= trajectory.t[0]) & (t <= trajectory.t[-1])
+    P, V = (np.column_stack([np.interp(t, trajectory.t, x[:, i]) for i in range(3)])
+            for x in (trajectory.position, trajectory.velocity))
+    if aiding == "gnss+baro":
+        speed = np.linalg.norm(V, axis=1)
+    else:
+        lat, lon, _ = earth.ecef_to_geodetic(P)
+        up = -earth.ned_to_ecef_matrix(lat, lon)[..., 2]
+        speed = np.abs(np.einsum("ki,ki->k", V, up.reshape(-1, 3)))
+    return np.where(inside, speed, 0.0)
+
+
+def baro_rows_weighted(rows: pd.DataFrame, trajectory) -> pd.DataFrame:
+    """The barometer's reference rows (:func:`baro_reference_rows`) with a ``sigma`` taken at
+    the speed of a fit to them (B7).
+
+    A barometer's static-pressure error grows with the dynamic pressure and through the
+    transonic range (:func:`navlib.models.baro.static_pressure_error_m`); it also corrupts
+    the barometric climb rate, so the speed that weighs a row is the reference's climb rate
+    (:func:`reference_speed`). ``sigma`` is :func:`navlib.models.baro.baro_sigma` of the
+    row's height above the first row at that speed. Rows of a GNSS record whose height is
+    the barometer's (``gnss+baro``) are not reweighted: the fit weighs each row's three axes
+    alike, and a sigma that covers the barometer at high dynamic pressure would also take
+    the weight of its horizontal GNSS (B7).
+
+    Parameters
+    ----------
+    rows : pandas.DataFrame
+        Rows of :func:`baro_reference_rows` (``t, x, y, z, sigma``, ECEF).
+    trajectory : Trajectory
+        A first fit to ``rows``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy of ``rows`` with the new ``sigma`` (``attrs`` kept).
+    """
+    speed = reference_speed(rows["t"], trajectory, "baro")
+    _, _, h = earth.ecef_to_geodetic(rows[["x", "y", "z"]].to_numpy(dtype=float))
+    out = rows.assign(sigma=baro_sigma(h - h[0], BARO_SIGMA_M, BARO_SCALE, speed,
+                                       altitude_m=h))
+    out.attrs = dict(rows.attrs)
+    return out
 
 
 def _launch_index(t, f_b) -> int:

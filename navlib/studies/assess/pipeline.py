@@ -31,7 +31,12 @@ from navlib.segmentation import (
 )
 from navlib.studies.assess import clock
 from navlib.studies.assess.agreement import fit_bounds
-from navlib.studies.assess.aiding import aiding_records, sigma_note
+from navlib.studies.assess.aiding import (
+    aiding_records,
+    baro_rows_weighted,
+    row_dynamic_error,
+    sigma_note,
+)
 from navlib.studies.assess.fit import fit_notes, fit_records, fit_report, fit_residuals
 from navlib.studies.assess.inputs import (
     GNSS_KEYS,
@@ -233,7 +238,9 @@ def assess_flight(imu: pd.DataFrame, gnss: pd.DataFrame, preset: str | None = No
     gnss = gnss.drop(columns="segment", errors="ignore")   # GNSS gaps: bridged by the IMU
     preset, preset_reason = choose_preset(imu, preset)
     spec = sensors.load_preset(preset)  # unknown names fail here, before the fit
-    fit_options = {"preset": preset, **dict(fit_options or {})}
+    # rows of the barometer alone: it is taken as on time, no lag scanned (FIT6, B7)
+    no_lag = {"estimate_gnss_lag": False} if aiding == "baro" else {}
+    fit_options = {"preset": preset, **no_lag, **dict(fit_options or {})}
     segment_options = dict(segment_options or {})
     reject_unknown(segment_options, SEGMENT_DEFAULTS, "segment_options")
     model_options = dict(model_options or {})
@@ -311,12 +318,23 @@ def _assess_span(imu, gnss, settings: AssessmentSettings) -> FlightAssessment:
     sigma = _gnss_sigma(gnss, s.spec) if s.gnss_sigma_m is None else s.gnss_sigma_m
     sigma = finite_scalar(sigma, "gnss_sigma_m", 0.0, low_open=True)
 
-    trajectory, notes = fit_records(imu, gnss, s.fit_options, s.heading_fallback_deg)
+    if s.aiding != "baro":
+        trajectory, notes = fit_records(imu, gnss, s.fit_options, s.heading_fallback_deg)
+    else:
+        # the barometer's rows weighed at the climb rate of a first fit, the fit redone (B7)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FlightDataWarning)
+            first, _ = fit_records(imu, gnss, s.fit_options, s.heading_fallback_deg)
+        gnss = baro_rows_weighted(gnss, first)
+        trajectory, notes = fit_records(imu, gnss, s.fit_options, s.heading_fallback_deg)
     gnss_rate_hz = min(gnss_rate_hz, trajectory.rate_hz)
     notes = [f"sensor preset {s.preset!r}: {s.preset_reason}", *s.aiding_notes, *notes,
              *fit_notes(trajectory), *_outlier_notes(imu)]
     fit = fit_report(trajectory, s.preset, sigma)
     gnss_res, imu_res = fit_residuals(trajectory, imu, gnss, s.bounds)
+    if s.aiding != "gnss":
+        gnss_res["baro_dynamic_m"] = row_dynamic_error(gnss_res["t"], trajectory,
+                                                       s.aiding)
 
     min_epochs_s = 2.0 / gnss_rate_hz
     seg_opts = dict(s.segment_options)

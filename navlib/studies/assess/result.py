@@ -61,7 +61,9 @@ class FlightAssessment(SegmentedAnalysis):
         Assumed values: ``preset``, ``gnss_rate_hz``, ``gnss_sigma_m``, fit and segmentation
         options, model options.
     gnss_residuals, imu_residuals : DataFrame
-        Fit residuals over time (:func:`fit_residuals`).
+        Fit residuals over time (:func:`fit_residuals`); a flight aided by its barometer
+        adds ``baro_dynamic_m`` to the GNSS frame, the static-pressure error expected of
+        each barometric row at the reference's speed (docs/assumptions.md B7).
     notes : tuple of str
         Assumptions and fallbacks taken (preset, initial attitude, levelling window, bridged
         holes, excluded samples, an assumed heading, a split record).

@@ -13,7 +13,7 @@ import pytest
 from support.flights import exact_records
 from support.locations import shared_file
 
-from navlib import io
+from navlib import earth, io
 from navlib.studies.assess import assess_flight
 from navlib.studies.assess.agreement import (
     AGREEMENT_COLUMNS,
@@ -268,6 +268,101 @@ def test_a_pad_must_stand_still_in_the_gnss_too():
     drifting = still + np.outer(t_g, [0.0, 1.0, 0.0])          # 1 m/s: a hover drifting
     assert not gnss_still(t_g, drifting, 9.5)
     assert gnss_still(t_g[:2], drifting[:2], 9.5)               # two fixes say nothing
+
+
+class _Boost(_Line):
+    """A reference accelerating at 10 g along x for its first 3 s, then coasting."""
+
+    def __init__(self, t):
+        super().__init__(t, 0.0)
+        a = np.where(t < 3.0, 10.0 * 9.80665, 0.0)
+        v = np.r_[0.0, np.cumsum(0.5 * (a[1:] + a[:-1]) * np.diff(t))]
+        self.velocity[:, 0] = v
+        self.position[:, 0] = 6.4e6 + np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]
+
+
+def test_gnss_receiver_beyond_its_dynamics_is_named():
+    """FIT8: fixes taken within receiver_recovery_s of the reference's acceleration beyond
+    receiver_accel_g carry most of the residual, the IMU agreeing: the receiver is named; the
+    same residual later in the flight, or with the IMU also off, is not its."""
+    t = np.arange(0.0, 20.0, 0.01)
+    t_g = np.arange(0.0, 20.0, 1.0)
+    ref = _Boost(t)
+    bounds = fit_bounds()
+    table = pd.DataFrame({"segment": [1, 2], "phase": ["powered", "coast"],
+                          "t_start": [0.0, 3.0], "t_end": [3.0, 20.0]})
+    d = np.zeros((t_g.size, 3))
+    d[(t_g >= 4.0) & (t_g <= 7.0), 0] = -40.0        # the fixes trail after burnout
+    imu, gnss = _residual_frames(t, t_g, d)
+    cols, _ = segment_agreement(table, ref, imu, gnss, bounds)
+    assert cols["represented"].tolist() == [True, False]
+    assert ("likely cause: GNSS receiver error at high dynamics (the fixes at 3-7 s, taken "
+            "while or within 5 s after the reference accelerated beyond 4 g, up to 10 g"
+            ) in cols["fit_reason"][1]
+    late = np.roll(d, 10, axis=0)                   # the same residual 10 s later
+    imu, gnss = _residual_frames(t, t_g, late)
+    cols, _ = segment_agreement(table, ref, imu, gnss, bounds)
+    assert not cols["represented"][1] and "receiver error" not in cols["fit_reason"][1]
+    imu, gnss = _residual_frames(t, t_g, d, df=0.8)  # the IMU disagrees too: not shown
+    cols, _ = segment_agreement(table, ref, imu, gnss, bounds)
+    assert "receiver error" not in cols["fit_reason"][1]
+
+
+def test_a_receiver_transient_after_burnout_is_named(hpr, hpr_records):
+    """FIT8 on a generated flight: fixes that sink 80 m below the motion at the end of the
+    boost (6 g) and recover with a 3 s time constant, as a receiver's filter beyond its
+    dynamic model does. The fit spreads them over the ascent (a lag takes part of them);
+    the segments they leave outside the bound name the receiver, not "not identified"."""
+    imu, gnss = hpr_records
+    burnout = hpr.events["burnout"]
+    lat, lon, _ = hpr.geodetic
+    up = -earth.ned_to_ecef_matrix(lat[0], lon[0])[:, 2]
+    t = gnss["t"].to_numpy()
+    sink = np.where(t >= burnout, 80.0 * np.exp(-np.maximum(t - burnout, 0.0) / 3.0), 0.0)
+    bad = gnss.copy()
+    bad[["x", "y", "z"]] -= np.outer(sink, up)
+    result, _ = _assess(imu, bad, t_max=40.0)
+    table = result.segment_table
+    missed = table[~table["represented"]]
+    assert len(missed) and set(missed["phase"]) <= {"boost", "coast"}
+    assert missed["fit_reason"].str.contains("GNSS receiver error at high dynamics").all()
+    assert not missed["fit_reason"].str.contains("not identified").any()
+
+
+def test_barometer_at_high_dynamic_pressure_is_named_for_its_height_residual_only():
+    """B7, FIT3: barometric rows expected to carry a static-pressure error beyond the
+    position bound are named when their height residual is most of the segment's; a
+    horizontal residual of the same rows is not the barometer's."""
+    t = np.arange(0.0, 20.0, 0.01)
+    t_g = np.arange(0.0, 20.0, 0.5)
+    ref = _Line(t, 0.0)                      # at (6.4e6, 0, 0): up is +x
+    q_err = np.where((t_g >= 10.0) & (t_g < 13.0), 60.0, 1.0)
+    d = np.zeros((t_g.size, 3))
+    d[q_err > 10.0, 0] = -50.0               # the rows read 50 m low there
+    imu, gnss = _residual_frames(t, t_g, d)
+    gnss["baro_dynamic_m"] = q_err
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert cols["represented"].tolist() == [True, False]
+    assert "likely cause: barometer at high dynamic pressure (the barometric rows at 10-12.5 s"\
+        in cols["fit_reason"][1]
+    assert "up to 60 m expected" in cols["fit_reason"][1]
+    d = np.roll(d, 1, axis=1)                # the same residual across the track: not it
+    imu, gnss = _residual_frames(t, t_g, d)
+    gnss["baro_dynamic_m"] = q_err
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert not cols["represented"][1] and "barometer" not in cols["fit_reason"][1]
+    gnss = gnss.drop(columns="baro_dynamic_m")   # GNSS rows: never the barometer
+    cols, _ = segment_agreement(TABLE, ref, imu, gnss, fit_bounds())
+    assert "barometer" not in cols["fit_reason"][1]
+    # rows trailing the motion: a lag of the rows, not of a GNSS receiver they do not have
+    moving = _Line(t, 200.0)
+    d = np.zeros((t_g.size, 3))
+    d[:, 0] = -0.3 * 200.0
+    imu, gnss = _residual_frames(t, t_g, d)
+    gnss["baro_dynamic_m"] = 1.0
+    cols, _ = segment_agreement(TABLE, moving, imu, gnss, fit_bounds())
+    assert cols["fit_reason"].str.contains(r"a lag of the position rows \(0.3 s").all()
+    assert not cols["fit_reason"].str.contains("GNSS lag").any()
 
 
 def _with_baro(imu, truth, lag_s=0.0):

@@ -4,15 +4,19 @@ rocket's IMU with a barometer made from its heights, and the shared FIRM and CAT
 
 from __future__ import annotations
 
+import warnings
+
+import numpy as np
 import pandas as pd
 import pytest
-from support.flights import records
+from support.flights import exact_records, records
 from support.locations import REPO
 
 from navlib.__main__ import main
 from navlib.earth import ecef_to_geodetic
 from navlib.io import write_imu_csv
 from navlib.io.baro import ISA_EXPONENT, ISA_LAPSE_K_M, ISA_P0_PA, ISA_T0_K
+from navlib.studies.assess import assess_flight
 from navlib.trajectory.mission import from_mission
 
 ROCKETS = next((p for p in (REPO.parent / "shared", REPO.parents[1] / "shared")
@@ -84,3 +88,31 @@ def test_pre_launch_buffer_before_a_long_gap_is_split_off_with_a_note(tmp_path, 
                               "the record the barometer aiding could not level") == len(gaps)
     assert row.phases.startswith("pad ")          # on the clock since ignition
     assert row.t_ignition > shift
+
+
+def test_barometer_rows_are_weighed_at_the_reference_speed():
+    """B7: a barometer whose static-pressure error jumps on at the highest speed (a port 5
+    times worse than the declared coefficient, up to 96 m low for 4 s) also reads a climb
+    rate 90 m/s too low there, so weighing its rows by its own climb rate trusted them most
+    where they were worst and bent the reference 15 m off the truth. Weighed at the
+    reference's climb rate the reference stays within 5 m, and the segments the rows miss
+    name the barometer at high dynamic pressure."""
+    truth = from_mission("hpr_rocket")
+    imu, _ = exact_records(truth, sigma_f=0.05, sigma_w=0.002, seed=1)
+    imu = imu[imu["t"] <= 40.0].reset_index(drop=True)
+    _, _, h = ecef_to_geodetic(truth.position)
+    v = np.linalg.norm(truth.velocity, axis=1)
+    fast = (truth.t >= truth.t[np.argmax(v)]) & (v > 0.6 * v.max())
+    fault = np.where(fast, -0.1 * v**2 / (2.0 * 9.80665), 0.0)
+    imu.attrs = {"baro": pd.DataFrame({"t": truth.t, "alt_m": h + fault})}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = assess_flight(imu, None, preset="pixhawk_mems", vehicle="rocket")
+    traj = result.trajectory
+    k = np.searchsorted(truth.t, traj.t + result.options["t_zero"])
+    _, _, h_ref = ecef_to_geodetic(traj.position)
+    assert np.abs(h_ref - h[k]).max() < 5.0
+    assert "baro_dynamic_m" in result.gnss_residuals
+    missed = result.segment_table[~result.segment_table["represented"]]
+    assert len(missed) and missed["fit_reason"].str.contains(
+        "barometer at high dynamic pressure").all()
