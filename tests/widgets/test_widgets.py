@@ -96,6 +96,31 @@ def test_panel_shows_parts_counts_updates_and_keeps_last_view_on_refusal():
     assert panel.parts["table"].layout.display is None
 
 
+def test_the_collector_waits_until_an_update_has_been_sent(monkeypatch):
+    """Python's garbage collector is off while a panel computes, draws and sends (the
+    status is set last), on again after an update, a refusal and a crash; a collector the
+    user turned off stays off."""
+    import gc
+
+    seen = []
+    panel = _LinePanel(dpi=40)
+    monkeypatch.setattr(panel, "_done", lambda *a: seen.append(gc.isenabled()))
+    assert gc.isenabled()
+    panel.controls["slope"].value = 2.0
+    assert gc.isenabled()
+    panel.controls["kind"].value = "refuse"
+    assert gc.isenabled()
+    with pytest.raises(ZeroDivisionError):
+        panel.controls["kind"].value = "crash"
+    assert gc.isenabled() and seen == [False, False, False]
+    gc.disable()
+    try:
+        panel.controls["kind"].value = "ok"
+        assert not gc.isenabled() and len(seen) == 4
+    finally:
+        gc.enable()
+
+
 def test_blitted_png_matches_a_fresh_render_of_the_same_state():
     panel = _LinePanel(dpi=40)
     panel.controls["slope"].value = 3.0
