@@ -4,9 +4,10 @@ Dropdowns for the solution, the bias set and the bias model rebuild the model
 (:func:`navlib.models.launcher`) and recompute the 1 Hz rank / condition curve
 (:func:`navlib.observability.local_observability`); the rank-tolerance slider re-ranks the
 stored singular values (:meth:`LocalObservability.with_rtol`, no new SVDs) and re-analyses the
-kept local matrix of the inspected step, redrawing only the rank curve and the threshold by Agg
-blitting while the ranks' axis range and the step's rank stay (:class:`~navlib.widgets.base.
-Blitter`); the time slider analyses the local matrix at that step
+kept local matrix of the inspected step, giving the kept figures their new rank curve and
+threshold in place while the ranks' axis range and the step's rank stay (drawn over their kept
+frames, :meth:`~navlib.widgets.base.KeptFigures.redrawn`); the time slider analyses the local
+matrix at that step
 (:func:`navlib.observability.analyze`: singular values, unobservable groups, least observable
 direction). Invalid combinations (a bias model without
 biases, ...) show the NavlibInputError message instead of a figure. Figures go through the
@@ -31,7 +32,7 @@ from navlib.models.launcher import (
 from navlib.observability import analyze, local_matrix, local_observability
 from navlib.plots.observability import mission_figure, singular_values_figure
 from navlib.studies.launcher import describe_direction
-from navlib.widgets.base import Blitter, Panel, look
+from navlib.widgets.base import Panel, look
 
 __all__ = ["ObservabilityPanel", "observability_panel"]
 
@@ -88,9 +89,8 @@ class ObservabilityPanel(Panel):
         self.model = None
         self._raw = None
         self.result = None
-        self._curve = None    # Blitter of the kept curve figure: its rank line redrawn
         self._kept_curve = False  # whether the kept curve figure is this model's
-        self._step = None     # (step, O(k), analysis, Blitter of its spectrum or None)
+        self._step = None     # (step, O(k), analysis) of the kept spectrum
         super().__init__(controls, dpi=dpi)
 
     @property
@@ -103,10 +103,8 @@ class ObservabilityPanel(Panel):
             self.rebuild(rebuild_model=bool(changed & set(_MODEL[:3])))
         if self.model is None:
             return  # a refused configuration stays on show until a model control changes
-        if changed & set(_MODEL):
-            self._curve, self._kept_curve = _released(self._curve), False
-            if self._step is not None:  # another model or reading: another O(k)
-                self._step = _released(self._step[3])
+        if changed & set(_MODEL):  # another model or reading: another curve and O(k)
+            self._kept_curve, self._step = False, None
         if changed & {*_MODEL, "log10_rtol"}:
             self.rerank()
         self.inspect()
@@ -140,12 +138,9 @@ class ObservabilityPanel(Panel):
         kept = self.figures.figure("curve") if self._kept_curve else None
         if kept is not None and kept.axes[0].get_ylim() == (min(r.rank.min(), r.n) - 1.5,
                                                              r.n + 1.5):
-            if self._curve is None:  # first re-rank of this curve: draw its background
-                self._curve = Blitter(kept, kept.axes[0].lines[:1], self.dpi)
-            self._curve.dynamic[0].set_ydata(r.rank)
-            self.show("curve", self._curve)
+            kept.axes[0].lines[0].set_ydata(r.rank)
+            self.show("curve", self.figures.redrawn("curve"))
             return
-        self._curve = _released(self._curve)
         self.show("curve", mission_figure(
             r, self.trajectory.events,
             title=f"{self.model.name}; eq. (6) {self.controls['variant'].value}"))
@@ -165,21 +160,14 @@ class ObservabilityPanel(Panel):
         fig = self.figures.figure("step")
         if kept is not None and fig is not None and kept[2].rank == a.rank \
                 and _threshold_in_view(fig, a):
-            blitter = kept[3]
-            if blitter is None:  # first re-rank at this step: draw the spectrum's background
-                blitter = Blitter(fig, [fig.axes[0].lines[0], fig.axes[0].get_legend()],
-                                  self.dpi)
-                self._step = (*kept[:3], blitter)
-            _move_threshold(blitter, a)
-            self.show("step", blitter)
+            _move_threshold(fig, a)
+            self.show("step", self.figures.redrawn("step"))
         else:
-            if self._step is not None:
-                _released(self._step[3])
             self.show("step", singular_values_figure(
                 a, title=f"t = {self.trajectory.t[k]:.2f} s "
                          f"({self.controls['variant'].value}): rank {a.rank}/{a.n}, "
                          f"cond {a.cond:.2e}"))
-            self._step = (k, O, a, None)
+            self._step = (k, O, a)
         groups = "; ".join("{" + ", ".join(g) + "}" for g in a.unobservable_groups)
         self.show("step_notes", f"<b>unobservable groups:</b> {html.escape(groups or 'none')}"
                                 f"<br><b>least observable direction:</b> "
@@ -193,25 +181,17 @@ def _threshold_in_view(fig, analysis) -> bool:
     return bool(low < np.log10(analysis.rtol * analysis.singular_values[0]) < high)
 
 
-def _move_threshold(blitter: Blitter, analysis) -> None:
+def _move_threshold(fig, analysis) -> None:
     """Put the kept spectrum's threshold line and its legend label at the new rtol (the
     rank, hence bars and title, unchanged), as :func:`singular_values_figure` draws them."""
-    line, legend = blitter.dynamic
+    ax = fig.axes[0]
+    line, legend = ax.lines[0], ax.get_legend()
     line.set_ydata([np.log10(analysis.rtol * analysis.singular_values[0])] * 2)
     label = f"rtol × σ1 (rtol {analysis.rtol:.1e})"
     for text in legend.get_texts():
         if text.get_text() == line.get_label():
             text.set_text(label)
     line.set_label(label)
-
-
-def _released(blitter: Blitter | None) -> None:
-    """Give a blitted kept figure's dynamic artists back to the normal draw (the next
-    figure of the part is drawn in full into it, :class:`~navlib.widgets.base.KeptFigures`);
-    returns None, the panel's "no blitter"."""
-    if blitter is not None:
-        for artist in blitter.dynamic:
-            artist.set_animated(False)
 
 
 def observability_panel(trajectory, stride: int = 200) -> ObservabilityPanel:
