@@ -129,6 +129,24 @@ def test_epoch_model_steps_equal_the_numpy_steps(rocket, hold, max_step_s, monke
     assert rel(model.Q, reference.Q) < STEP_RTOL
 
 
+def test_epoch_model_does_not_depend_on_its_blocks(rocket, monkeypatch):
+    """The streamed build gives the same model, bit for bit, whatever the block size
+    (docs/performance.md "Model blocks"): each step is discretised on its own (the sparse
+    pattern of a block only skips exact zeros) and epochs are chained within a block."""
+    from navlib.models import ecef
+
+    monkeypatch.setenv("NAVLIB_NO_CACHE", "1")
+    built = []
+    for samples in (20_000, 1_000, 333):
+        monkeypatch.setattr(ecef, "STREAM_SAMPLES", samples)
+        ecef._cached_chain.cache_clear()
+        built.append(ecef.ecef21_at_epochs(rocket, 1.0, max_step_s=0.02))
+    ecef._cached_chain.cache_clear()
+    for model in built[1:]:
+        np.testing.assert_array_equal(model.F, built[0].F)
+        np.testing.assert_array_equal(model.Q, built[0].Q)
+
+
 @pytest.mark.parametrize("scale", [1.0, 10.0 * TAYLOR_THETA])
 @pytest.mark.parametrize("decay", [True, False])
 def test_block_model_steps_equal_discretize_steps(scale, decay):

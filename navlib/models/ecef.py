@@ -436,8 +436,8 @@ def epoch_samples(t, rate_hz: float) -> np.ndarray:
     return np.unique(k)
 
 
-STREAM_SAMPLES = 20_000
-"""Trajectory samples per block of the streamed model build of :func:`ecef21_at_epochs`."""
+STREAM_SAMPLES = 1_000
+"""Samples per block of :func:`ecef21_at_epochs` (docs/performance.md, "Model blocks")."""
 
 
 @cache.memoized(maxsize=32)
