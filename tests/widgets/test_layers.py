@@ -77,6 +77,22 @@ def test_data_within_the_ticks_draws_no_frame_and_new_limits_draw_only_their_axe
         assert layered.full_draws == 2
 
 
+def test_a_frame_redrawn_for_its_x_axis_keeps_its_y_label_as_a_full_draw_places_it():
+    """New x limits alone redraw every frame; the y labels stay where the last draw put them
+    (their tick labels are the same), and the image is a full draw's, pixel for pixel."""
+    with detached():
+        fig = _figure()
+        layered = LayeredFigure(fig, dpi=50)
+        layered.png()
+        places = [ax.yaxis.label.get_position() for ax in fig.axes]
+        _move(fig, 1.0, 2.0)  # x stretched, y as it was
+        got = pixels(layered.png())
+        assert layered.frame_draws == len(fig.axes) and layered.full_draws == 1
+        assert [ax.yaxis.label.get_position() for ax in fig.axes] == places
+        assert all(ax.yaxis._autolabelpos for ax in fig.axes)
+        assert np.array_equal(got, pixels(render_png(fig, 50)))
+
+
 def test_a_secondary_axis_is_kept_with_its_parent_frame():
     """A secondary y axis (panel 01's rev/s scale) is part of its parent's frame, keyed by
     its labels and tickers (its limits follow the parent's): new data inside the limits
