@@ -65,14 +65,12 @@ def expm_taylor(X) -> np.ndarray:
     most 14 products a matrix, about 20x faster than :func:`scipy.linalg.expm` on the stack.
     """
     X = np.asarray(X, dtype=float)
-    if X.ndim == 2 or X.size == 0:
-        return _expm_scaled(X, _scaling(_one_norm(X)))
-    norms = _one_norm(X).ravel()
     stack = X.reshape(-1, *X.shape[-2:])
+    norms = _one_norm(stack)
     squarings = _scaling(norms)
     degrees = _taylor_degree(norms / 2.0**squarings)
     groups = np.unique(np.stack([squarings, degrees], axis=1), axis=0)
-    if len(groups) == 1:
+    if len(groups) == 1:  # one scaling and degree: no gathering
         return _expm_scaled(X, int(groups[0, 0]), int(groups[0, 1]))
     E = np.empty_like(stack)
     for s, degree in groups:
@@ -82,8 +80,8 @@ def expm_taylor(X) -> np.ndarray:
 
 
 def _one_norm(X) -> np.ndarray:
-    """1-norm (largest column sum) of each matrix of ``X``."""
-    return np.max(np.sum(np.abs(X), axis=-2), axis=-1) if X.size else np.zeros(X.shape[:-2])
+    """1-norm (largest column sum) of each matrix of the stack ``X`` (K, n, n)."""
+    return np.max(np.sum(np.abs(X), axis=-2), axis=-1) if X.size else np.zeros(len(X))
 
 
 def _scaling(norm):
@@ -94,13 +92,10 @@ def _scaling(norm):
     return np.where(norm > 0, np.maximum(s, 0), 0).astype(int)
 
 
-def _expm_scaled(X, squarings, degree=None) -> np.ndarray:
-    """``expm(X)`` by the Taylor polynomial of ``X / 2^squarings`` (Horner) and
-    ``squarings`` squarings: one scaling and degree for the whole stack."""
-    squarings = int(np.max(squarings)) if np.ndim(squarings) else int(squarings)
+def _expm_scaled(X, squarings: int, degree: int) -> np.ndarray:
+    """``expm(X)`` by the degree-``degree`` Taylor polynomial of ``X / 2^squarings``
+    (Horner) and ``squarings`` squarings: one scaling and degree for the whole stack."""
     X = X / 2.0**squarings
-    if degree is None:
-        degree = int(_taylor_degree(float(np.max(_one_norm(X))) if X.size else 0.0))
     diag = np.arange(X.shape[-1])
     E = X / degree
     E[..., diag, diag] += 1.0

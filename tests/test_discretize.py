@@ -128,6 +128,8 @@ def test_taylor_expm_of_a_stack_is_each_matrix_on_its_own():
     E = expm_taylor(X)
     for k in range(scales.size):
         np.testing.assert_array_equal(E[k], expm_taylor(X[k:k + 1])[0])
+        np.testing.assert_array_equal(E[k], expm_taylor(X[k]))
+    assert expm_taylor(np.zeros((0, 9, 9))).shape == (0, 9, 9)
     for norm in np.geomspace(1e-8, 0.5, 400):
         loop = next((m for m in range(1, 12)
                      if norm ** (m + 1) / math.factorial(m + 1) <= _TAYLOR_BOUND), 12)
