@@ -228,11 +228,9 @@ def row_dynamic_error(t, trajectory, aiding: str) -> np.ndarray:
     -------
     numpy.ndarray
     """
-    t = np.asarray(t, dtype=float)
-    P = np.column_stack([np.interp(t, trajectory.t, trajectory.position[:, i])
-                         for i in range(3)])
-    _, _, h = earth.ecef_to_geodetic(P)
-    return static_pressure_error_m(reference_speed(t, trajectory, aiding), h)
+    inside, P, V = _reference_at(t, trajectory)
+    lat, lon, h = earth.ecef_to_geodetic(P)
+    return static_pressure_error_m(_airspeed(inside, lat, lon, V, aiding), h)
 
 
 def reference_speed(t, trajectory, aiding: str) -> np.ndarray:
@@ -254,14 +252,26 @@ def reference_speed(t, trajectory, aiding: str) -> np.ndarray:
     -------
     numpy.ndarray
     """
+    inside, P, V = _reference_at(t, trajectory)
+    lat, lon, _ = earth.ecef_to_geodetic(P)
+    return _airspeed(inside, lat, lon, V, aiding)
+
+
+def _reference_at(t, trajectory):
+    """Whether the times ``t`` lie in ``trajectory``'s span, and its position and velocity
+    there (ECEF, interpolated linearly)."""
     t = np.asarray(t, dtype=float)
     inside = (t >= trajectory.t[0]) & (t <= trajectory.t[-1])
     P, V = (np.column_stack([np.interp(t, trajectory.t, x[:, i]) for i in range(3)])
             for x in (trajectory.position, trajectory.velocity))
+    return inside, P, V
+
+
+def _airspeed(inside, lat, lon, V, aiding: str) -> np.ndarray:
+    """:func:`reference_speed` of the reference velocity ``V`` at ``lat``, ``lon``."""
     if aiding == "gnss+baro":
         speed = np.linalg.norm(V, axis=1)
     else:
-        lat, lon, _ = earth.ecef_to_geodetic(P)
         up = -earth.ned_to_ecef_matrix(lat, lon)[..., 2]
         speed = np.abs(np.einsum("ki,ki->k", V, up.reshape(-1, 3)))
     return np.where(inside, speed, 0.0)
