@@ -9,9 +9,8 @@ spines, texts, legends: everything from the lines' z-order up) and, per update, 
 only the frames of axes whose :func:`frame_key` changed, then the data of every axes on
 top, in the z-order a full draw uses: the image equals a full draw of the figure.
 
-:func:`snap_limits` rounds an autoscaled axis outward to its ticks (matplotlib's
-``round_numbers`` autolimit mode) in kept panel figures, so a small data change keeps the
-frame (docs/assumptions.md, "Panel figures").
+Before each update a kept figure's limits are snapped to its ticks and its "best" legends
+placed (:mod:`navlib.widgets.panel_layout`).
 """
 
 from __future__ import annotations
@@ -25,6 +24,7 @@ from matplotlib.axis import Axis
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import Collection
 from matplotlib.figure import Figure
+from matplotlib.font_manager import fontManager, get_font
 from matplotlib.image import AxesImage
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
@@ -32,8 +32,9 @@ from matplotlib.text import Text
 from matplotlib.ticker import FixedFormatter, FixedLocator
 from matplotlib.transforms import Bbox
 
-__all__ = ["LayeredFigure", "agg_canvas", "data_artists", "encode_png", "frame_key",
-           "freeze_decorations", "place_legend", "snap_limits"]
+from navlib.widgets.panel_layout import EDGE_ROOM_PT, freeze_decorations, place_legend, snap_limits
+
+__all__ = ["FontHeights", "LayeredFigure", "agg_canvas", "data_artists", "encode_png", "frame_key"]
 
 
 def encode_png(rgba) -> bytes:
@@ -69,43 +70,6 @@ def agg_canvas(fig: Figure) -> FigureCanvasAgg:
     matplotlib.backends.backend_agg.FigureCanvasAgg
     """
     return fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
-
-
-EDGE_ROOM_PT = 1.2
-"""Room for a drawn edge's width and antialiasing, in points: around a legend's box, where
-no line may pass and no spine lie for the legend to be drawn with the frame, and around a
-plot area, which no other axes' frame may enter for the figure to be drawn in layers."""
-
-
-def snap_limits(fig: Figure) -> None:
-    """Set each autoscaled axis of ``fig`` to its data's span rounded outward to the
-    nearest ticks of its locator (no margins).
-
-    Axes whose limits were set by their builder (``set_xlim`` turns autoscaling off) keep
-    them. Data spanning 0.0200-0.0287 with ticks every 0.002 get 0.020-0.030; a log axis
-    snaps to its (decade) ticks. Call it before the figure's data move into a kept one:
-    it reads the data limits of the figure's own artists.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-    """
-    for ax in fig.axes:
-        for axis, auto, set_lim in ((ax.xaxis, ax.get_autoscalex_on(), ax.set_xlim),
-                                    (ax.yaxis, ax.get_autoscaley_on(), ax.set_ylim)):
-            if not auto:
-                continue
-            low, high = sorted(axis.get_data_interval())
-            if not (np.isfinite(low) and np.isfinite(high) and high > low):
-                continue
-            if axis.get_scale() == "log" and low <= 0:
-                low = axis.get_minpos()
-            ticks = np.asarray(axis.get_major_locator().tick_values(low, high), float)
-            below, above = ticks[ticks <= low], ticks[ticks >= high]
-            if below.size and above.size and below.max() < above.min():
-                lo, hi = below.max(), above.min()
-                if axis.get_scale() != "log" or lo > 0:
-                    set_lim(*((hi, lo) if axis.get_inverted() else (lo, hi)), auto=True)
 
 
 def _digest(*arrays) -> str:
@@ -224,16 +188,54 @@ def frame_key(ax, framed=()) -> tuple:
             (str(legend._get_loc()), tuple(t.get_text() for t in legend.get_texts())))
 
 
-def _y_key(ax) -> tuple:
-    """What the place of the y label of ``ax`` depends on (matplotlib puts it beside the
-    extents of the y tick labels and the spine): equal keys, equal places. A frame redrawn
-    because only its x axis changed then keeps its y label where it was instead of measuring
-    the y tick labels again (about 6 ms an axes)."""
-    axis = ax.yaxis
-    return (tuple(ax.get_position().bounds), ax.get_ylim(), ax.get_yscale(), ax.get_ylabel(),
-            axis.get_label_position(), axis.get_ticks_position(),
+SIDES = ("x", "y", "title")
+"""The parts of a frame outside its plot area: the x and y axes' tick labels, offset texts
+and labels, and the titles."""
+
+
+def _axis_key(ax, axis) -> tuple:
+    """What the tick labels, offset text and label of ``axis`` (of ``ax``) look like and
+    where they are: equal keys, equal texts in equal places."""
+    return (tuple(ax.get_position().bounds), tuple(axis.get_view_interval()),
+            axis.get_scale(), axis.label.get_text(), axis.get_label_position(),
+            axis.get_ticks_position(),
             *(_ticker(t) for t in (axis.get_major_locator(), axis.get_major_formatter(),
                                    axis.get_minor_locator(), axis.get_minor_formatter())))
+
+
+def _side_keys(ax) -> dict:
+    """The key of each of the :data:`SIDES` of the frame of ``ax``, and under ``"base"``
+    what all of them depend on (place, visibility)."""
+    return {"base": (tuple(ax.get_position().bounds), ax.get_visible(), ax.axison),
+            "x": _axis_key(ax, ax.xaxis), "y": _axis_key(ax, ax.yaxis),
+            "title": tuple(ax.get_title(loc) for loc in ("left", "center", "right"))}
+
+
+def _side_texts(ax, side: str) -> list:
+    """The texts one of the :data:`SIDES` of ``ax`` draws: the tick labels in view, the
+    axis label and offset text, or the titles (visible, not empty)."""
+    if side == "title":
+        texts = [ax.title, ax._left_title, ax._right_title]
+    elif not ax.axison:
+        texts = []
+    else:
+        texts = _axis_texts(ax.xaxis if side == "x" else ax.yaxis)
+    return [t for t in texts if t.get_visible() and t.get_text()]
+
+
+def _keeps_clear_of_its_sides(ax) -> bool:
+    """Whether every frame artist of ``ax`` is clipped to its plot area, so that redrawing
+    the plot area and some of its sides touches nothing outside them."""
+    return not ax.child_axes and all(
+        a.get_clip_on() and (a.get_clip_box() is not None or a.get_clip_path() is not None)
+        for a in _frame_artists(ax))
+
+
+def _meet(rects, others) -> bool:
+    """Whether any of the pixel rectangles ``(x0, top, x1, bottom)`` in ``rects`` shares a
+    pixel with any in ``others``."""
+    return any(a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+               for a in rects for b in others)
 
 
 def _figure_key(fig: Figure) -> tuple:
@@ -244,77 +246,9 @@ def _figure_key(fig: Figure) -> tuple:
                                            *fig.images, *fig.legends)))
 
 
-def _data_points(ax) -> np.ndarray:
-    """Display coordinates of the vertices of the lines, patches and collections of
-    ``ax`` (what ``loc="best"`` keeps a legend off)."""
-    points = [np.empty((0, 2))]
-    for artist in (*ax.lines, *ax.patches, *ax.collections):
-        if not artist.get_visible():
-            continue
-        if isinstance(artist, Line2D):
-            points.append(artist.get_transform().transform(artist.get_xydata()))
-        elif isinstance(artist, Patch):
-            points.append(artist.get_transform().transform_path(artist.get_path()).vertices)
-        else:
-            transform = artist.get_transform()
-            points += [transform.transform_path(path).vertices for path in artist.get_paths()]
-            if len(artist.get_offsets()):
-                points.append(artist.get_offset_transform().transform(artist.get_offsets()))
-    found = np.concatenate(points)
-    return found[np.isfinite(found).all(axis=1)]
-
-
-def place_legend(legend, renderer) -> bool:
-    """Put an axes legend at the standard location (``loc`` codes 1-10, as "best" tries
-    them) that covers the fewest data points, the first one on a tie; True when no data
-    lies under it there (no vertex, no line crossing it, no patch or collection in its
-    axes).
-
-    matplotlib's "best" also tests each line's segments against each candidate, which
-    takes 45 of 112 ms of the SSAC eigenvalue figure (15 lines of 3601 points); counting
-    the vertices costs a few milliseconds, and only the chosen place is tested for
-    crossing lines.
-
-    Parameters
-    ----------
-    legend : matplotlib.legend.Legend
-        A legend of an axes.
-    renderer : matplotlib.backend_bases.RendererBase
-
-    Returns
-    -------
-    bool
-    """
-    ax = legend.axes
-    points = _data_points(ax)
-    box = legend.get_window_extent(renderer)
-    size = Bbox.from_bounds(0, 0, box.width, box.height)
-    anchor = legend.get_bbox_to_anchor()
-    best = None
-    for code in range(1, len(legend.codes)):
-        left, bottom = legend._get_anchored_bbox(code, size, anchor, renderer)
-        inside = int(np.count_nonzero((points[:, 0] >= left) & (points[:, 0] <= left + box.width)
-                                      & (points[:, 1] >= bottom)
-                                      & (points[:, 1] <= bottom + box.height)))
-        if best is None or inside < best[0]:
-            best = (inside, code, Bbox.from_bounds(left, bottom, box.width, box.height))
-        if inside == 0:
-            break
-    inside, code, place = best
-    legend.set_loc(code)
-    if inside or ax.patches or ax.collections:
-        return False
-    room = renderer.points_to_pixels(EDGE_ROOM_PT)
-    place, inner = place.padded(room), ax.bbox.padded(-room)
-    if not (inner.contains(place.x0, place.y0) and inner.contains(place.x1, place.y1)):
-        return False  # it would meet the spines, drawn over the frame
-    return not any(line.get_visible() and line.get_transform().transform_path(
-        line.get_path()).intersects_bbox(place, filled=False) for line in ax.lines)
-
-
-def _axis_boxes(axis, renderer) -> list:
-    """Extents of the tick labels an axis drew last, its label and offset text (what
-    ``Axis.get_tightbbox`` measures, without placing the ticks again)."""
+def _axis_texts(axis) -> list:
+    """The tick labels in view of an axis as it drew them last, its label and offset text
+    (what ``Axis.get_tightbbox`` measures, without placing the ticks again)."""
     if not axis.get_visible():
         return []
     scale = axis.get_transform()
@@ -326,31 +260,49 @@ def _axis_boxes(axis, renderer) -> list:
         for tick, loc in zip(ticks, locs, strict=False):
             if low - room <= scale.transform(loc) <= high + room:
                 texts += [tick.label1, tick.label2]
-    return [t.get_window_extent(renderer) for t in texts if t.get_visible() and t.get_text()]
+    return texts
 
 
-def freeze_decorations(fig: Figure) -> None:
-    """Keep the titles and x-axis labels of a drawn figure where they are.
+class FontHeights:
+    """A font's line metrics (ascent, descent, line gap in pixels), as matplotlib 3.11's
+    ``Text._get_layout`` computes them from the font's OS/2 or hhea table, once per font
+    and size.
 
-    matplotlib places them at every draw from the tick labels' extents (the x label under
-    the tallest, the title over any top decoration): about a quarter of the time to draw
-    the SSAC sigma figure (38 of 161 ms). In a kept figure (frozen layout, same fonts)
-    their places do not change, unless an axes has its x ticks or label on top (then left
-    to matplotlib). The y labels stay automatic: tick labels change width with the limits.
+    ``Text._get_layout`` reads them again for every text it lays out (a font lookup and
+    two table reads: a fifth of the SSAC sigma frame's text layout) unless the renderer
+    offers ``_get_font_height_metrics``, as matplotlib's PDF and PS renderers do.
+    :class:`LayeredFigure` gives its Agg renderer an instance. Earlier versions of
+    matplotlib do not ask for it, and the images are the same either way (test).
 
     Parameters
     ----------
-    fig : matplotlib.figure.Figure
-        A figure drawn at least once.
+    dpi : float
+        The renderer's (and figure's) resolution.
     """
-    for ax in fig.axes:
-        label = ax.xaxis.label
-        if ax.xaxis.get_label_position() == "top" or \
-                ax.xaxis.get_ticks_position() in ("top", "unknown"):
-            continue
-        ax._autotitlepos = False
-        where = label.get_transform().transform(label.get_position())
-        ax.xaxis.set_label_coords(*ax.transAxes.inverted().transform(where))
+
+    def __init__(self, dpi: float):
+        self.dpi = dpi
+        self.known: dict = {}
+
+    def __call__(self, prop) -> tuple:
+        """(ascent, descent, line gap) of the font of ``prop``, or Nones when it has neither
+        table (matplotlib then measures a sample text)."""
+        found = self.known.get(hash(prop))
+        if found is not None and found[0] == prop:
+            return found[1]
+        font = get_font(fontManager._find_fonts_by_props(prop))
+        metrics = (None, None, None)
+        for name, gap, ascent, descent in (("OS/2", "sTypoLineGap", "sTypoAscender",
+                                            "sTypoDescender"),
+                                           ("hhea", "lineGap", "ascent", "descent")):
+            table = font.get_sfnt_table(name)
+            if table is not None:  # the same operations, in the same order, as matplotlib
+                scale = 1 / font.get_sfnt_table("head")["unitsPerEm"] \
+                    * prop.get_size_in_points() * self.dpi / 72
+                metrics = (table[ascent] * scale, -table[descent] * scale, table[gap] * scale)
+                break
+        self.known[hash(prop)] = (prop.copy(), metrics)
+        return metrics
 
 
 class LayeredFigure:
@@ -378,37 +330,57 @@ class LayeredFigure:
         self.background = None
         self.blank = None
         self.keys: list = []
-        self.y_keys: list = []
+        self.side_keys: list = []
+        self.boxes: list = []
         self.figure_key = None
         self.regions: list = []
         self.full_draws = 0
         self.frame_draws = 0
+        self.partial_draws = 0
         self.best_legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None
                              and ax.get_legend()._get_loc() == 0]  # 0: "best"
-        self.framed: set = set()
+        self.framed: dict = {}
 
     def _hide_data(self, hidden: bool) -> None:
         for ax in self.fig.axes:
             for artist in data_artists(ax, self.framed):
                 artist.set_animated(hidden)
 
-    def _region(self, ax, renderer) -> Bbox:
-        ticks = [t for axis in (ax.xaxis, ax.yaxis) for t in (*axis.majorTicks[:1],
-                                                              *axis.minorTicks[:1])]
-        outside = max((t.get_tick_padding() for t in ticks), default=0.0)  # outward marks
-        boxes = [ax.bbox.padded(renderer.points_to_pixels(outside))]
-        if ax.axison:
-            boxes += [box for axis in (ax.xaxis, ax.yaxis) for box in _axis_boxes(axis, renderer)]
-        for child in ax.child_axes:  # a secondary axis' ticks and labels (part of the frame)
-            if child.get_visible() and child.axison:
-                boxes += [box for axis in (child.xaxis, child.yaxis)
-                          for box in _axis_boxes(axis, renderer)]
-        boxes += [t.get_window_extent(renderer) for t in (ax.title, ax._left_title,
-                                                          ax._right_title) if t.get_text()]
+    @staticmethod
+    def _plot_box(ax, renderer) -> Bbox:
+        """The plot area of ``ax`` with its outward tick marks, on the edges they are on."""
+        out = dict.fromkeys(("left", "bottom", "right", "top"), 0.0)
+        for axis, edges in ((ax.xaxis, ("bottom", "top")), (ax.yaxis, ("left", "right"))):
+            for tick in (*axis.majorTicks[:1], *axis.minorTicks[:1]):
+                for line, edge in zip((tick.tick1line, tick.tick2line), edges, strict=True):
+                    if line.get_visible():
+                        out[edge] = max(out[edge], tick.get_tick_padding())
+        px = {edge: renderer.points_to_pixels(v) for edge, v in out.items()}
+        box = ax.bbox
+        return Bbox.from_extents(box.x0 - px["left"], box.y0 - px["bottom"],
+                                 box.x1 + px["right"], box.y1 + px["top"])
+
+    def _boxes(self, ax, renderer, sides=SIDES, known=None) -> dict:
+        """The extent of each text of ``sides`` of ``ax`` as its last draw put it
+        (side -> {text: Bbox}; those in ``known`` as given), and under ``"other"`` those of
+        a framed legend and of a secondary axis' ticks and labels (a list)."""
+        known = known or {}
+        boxes = {side: {t: known[t] if t in known else t.get_window_extent(renderer)
+                        for t in _side_texts(ax, side)} for side in sides}
+        texts = [t for child in ax.child_axes if child.get_visible() and child.axison
+                 for axis in (child.xaxis, child.yaxis) for t in _axis_texts(axis)
+                 if t.get_visible() and t.get_text()]
+        boxes["other"] = [t.get_window_extent(renderer) for t in texts]
         if ax.get_legend() in self.framed:
-            boxes.append(ax.get_legend().get_window_extent(renderer))
-        # the spines' half width and the antialiasing of edges and glyphs
-        return Bbox.union([b for b in boxes if b is not None and b.width > 0]).padded(
+            boxes["other"].append(self.framed[ax.get_legend()])
+        return boxes
+
+    def _region(self, ax, boxes: dict, renderer) -> Bbox:
+        """Everything the frame of ``ax`` draws: its plot area, ticks and ``boxes``, with
+        room for the spines' half width and the antialiasing of edges and glyphs."""
+        found = [self._plot_box(ax, renderer), *boxes["other"],
+                 *(b for side in SIDES for b in boxes[side].values())]
+        return Bbox.union([b for b in found if b is not None and b.width > 0]).padded(
             renderer.points_to_pixels(EDGE_ROOM_PT))
 
     def _layered(self) -> bool:
@@ -435,7 +407,9 @@ class LayeredFigure:
         if self.background is None:
             freeze_decorations(self.fig)
         self.background = self.canvas.copy_from_bbox(self.fig.bbox)
-        self.regions = [self._region(ax, renderer) for ax in self.fig.axes]
+        self.boxes = [self._boxes(ax, renderer) for ax in self.fig.axes]
+        self.regions = [self._region(ax, b, renderer) for ax, b in zip(self.fig.axes, self.boxes,
+                                                                        strict=True)]
         self.full_draws += 1
 
     def _figure_boxes(self, renderer) -> list:
@@ -449,58 +423,143 @@ class LayeredFigure:
         top, bottom = int(np.floor(height - box.y1)), int(np.ceil(height - box.y0))
         return x0, top, x1, bottom
 
-    def _draw_changed_frames(self, changed: list) -> bool:
-        """Clear and draw again the frames of the axes in ``changed`` (and of those whose
-        regions meet theirs) on the kept background; False when a frame grew into another
-        one or a figure text (the caller then draws everything)."""
-        axes = self.fig.axes
+    def _group(self, changed: list) -> set:
+        """``changed`` and the axes whose regions meet theirs, until none is added."""
         group = set(changed)
         grown = True
-        while grown:  # the axes whose regions meet a redrawn one are redrawn with it
+        while grown:
             grown = False
-            for i in range(len(axes)):
+            for i in range(len(self.fig.axes)):
                 if i not in group and any(self.regions[i].overlaps(self.regions[j])
                                           for j in group):
                     group.add(i)
                     grown = True
-        renderer = self.canvas.get_renderer()
-        self.canvas.restore_region(self.background)
+        return group
+
+    def _kept_sides(self, group: set, keys: dict) -> dict:
+        """Per axes of ``group``, the :data:`SIDES` whose keys did not change, when the
+        rest of its frame can be redrawn without their texts."""
+        return {i: tuple(side for side in SIDES if keys[i][side] == self.side_keys[i][side])
+                if keys[i]["base"] == self.side_keys[i]["base"]
+                and _keeps_clear_of_its_sides(self.fig.axes[i]) else () for i in group}
+
+    def _ink(self, box: Bbox) -> tuple:
+        """The pixels a text whose box is ``box`` may colour: its box rounded out to whole
+        pixels and one more on each side (a descender or a superscript of DejaVu reaches one
+        pixel past its layout box)."""
+        x0, top, x1, bottom = self._pixels(box)
+        return x0 - 1, top - 1, x1 + 1, bottom + 1
+
+    def _coming(self, ax, sides, renderer) -> dict:
+        """Where the tick labels of the x and y axes among ``sides`` will be ({text: Bbox}),
+        their ticks placed for the new limits as the axes' draw places them."""
+        return {t: t.get_window_extent(renderer)
+                for side, axis in (("x", ax.xaxis), ("y", ax.yaxis))
+                if side in sides and axis.get_visible() and ax.axison
+                for tick in axis._update_ticks() for t in (tick.label1, tick.label2)
+                if t.get_visible() and t.get_text()}
+
+    def _plan(self, group: set, keys: dict, coming: dict, renderer) -> tuple:
+        """(pixel rectangles to clear, {kept text: its pixels}) of the axes in ``group``,
+        whose changed tick labels will be at ``coming`` (axes -> {text: Bbox}).
+
+        An axes whose side keys all changed, or which cannot be redrawn in parts, clears
+        its whole region. The others clear their plot area (with room for antialiased
+        edges) and the old and coming places of their changed sides' texts, and keep the
+        texts of their unchanged sides, but for those that meet a cleared place: these are
+        cleared and drawn again too."""
+        room = renderer.points_to_pixels(EDGE_ROOM_PT)
+        kept = self._kept_sides(group, keys)
+        zones, keep = [], {}
         for i in group:
-            x0, top, x1, bottom = self._pixels(self.regions[i])
-            # xy is Agg's offset of the copy, not its place
-            self.canvas.restore_region(self.blank, bbox=(x0, top, x1, bottom), xy=(0, 0))
+            ax, boxes = self.fig.axes[i], self.boxes[i]
+            zones += [self._ink(b) for b in coming[i].values()]
+            if not kept[i]:
+                zones.append(self._pixels(self.regions[i]))
+                continue
+            zones.append(self._pixels(self._plot_box(ax, renderer).padded(room)))
+            zones += [self._ink(b) for b in boxes["other"]]
+            for side in SIDES:
+                rects = {t: self._ink(b) for t, b in boxes[side].items()}
+                if side in kept[i]:
+                    keep.update(rects)
+                else:
+                    zones += rects.values()
+        crowded = True
+        while crowded:
+            crowded = [t for t, rect in keep.items() if _meet(zones, [rect])]
+            zones += [keep.pop(t) for t in crowded]
+        return zones, keep
+
+    def _draw_changed_frames(self, changed: list) -> bool:
+        """Clear and draw again the frames of the axes in ``changed`` (and of those whose
+        regions meet theirs) on the kept background; False when a frame grew into another
+        one, a kept text or a figure text (the caller then draws everything).
+
+        The texts of a frame's unchanged sides (x axis, y axis, titles) are kept where no
+        cleared place meets them (:meth:`_plan`): about half of a frame's drawing when new
+        x limits leave the y tick labels as they were."""
+        axes = self.fig.axes
+        group = self._group(changed)
+        renderer = self.canvas.get_renderer()
+        keys = {i: _side_keys(axes[i]) for i in group}
+        coming = {i: self._coming(axes[i], [s for s in ("x", "y")
+                                            if keys[i][s] != self.side_keys[i][s]], renderer)
+                  for i in group}
+        zones, keep = self._plan(group, keys, coming, renderer)
+        self.canvas.restore_region(self.background)
+        for rect in zones:  # xy is Agg's offset of the copy, not its place
+            self.canvas.restore_region(self.blank, bbox=rect, xy=(0, 0))
+        # an axis label stays where the last draw put it when its tick labels are the same
+        fixed = [axis for i in group for side, axis in (("x", axes[i].xaxis),
+                                                        ("y", axes[i].yaxis))
+                 if axis._autolabelpos and keys[i][side] == self.side_keys[i][side]]
         self._hide_data(True)
-        kept = [axes[i].yaxis for i in group if axes[i].yaxis._autolabelpos
-                and self.y_keys[i] == _y_key(axes[i])]
-        for axis in kept:  # the y label where the last draw put it (same tick labels)
+        for text in keep:
+            text.set_visible(False)
+        for axis in fixed:
             axis._autolabelpos = False
         try:
             for i in sorted(group, key=lambda i: axes[i].get_zorder()):
                 axes[i].draw(renderer)
         finally:
             self._hide_data(False)
-            for axis in kept:
+            for text in keep:
+                text.set_visible(True)
+            for axis in fixed:
                 axis._autolabelpos = True
         others = [self.regions[i] for i in range(len(axes)) if i not in group]
         others += self._figure_boxes(renderer)
+        room = renderer.points_to_pixels(EDGE_ROOM_PT)
         for i in group:
-            region = self._region(axes[i], renderer)
-            if any(region.overlaps(b) for b in others):
+            boxes = self._boxes(axes[i], renderer, [s for s in SIDES if not any(
+                t in keep for t in self.boxes[i][s])], coming[i])
+            boxes = {**{s: self.boxes[i][s] for s in SIDES}, **boxes}
+            region = self._region(axes[i], boxes, renderer)
+            drawn = [self._ink(b) for side in SIDES for t, b in boxes[side].items()
+                     if t not in keep] + [self._ink(b) for b in boxes["other"]]
+            drawn.append(self._pixels(self._plot_box(axes[i], renderer).padded(room)))
+            if any(region.overlaps(b) for b in others) or _meet(drawn, keep.values()):
                 return False
-            self.regions[i] = region
+            self.boxes[i], self.regions[i] = boxes, region
         self.background = self.canvas.copy_from_bbox(self.fig.bbox)
         self.frame_draws += len(group)
+        self.partial_draws += sum(any(t in keep for s in SIDES for t in self.boxes[i][s])
+                                  for i in group)
         return True
 
     def png(self) -> bytes:
         """The figure as PNG bytes, its frames drawn again only where their keys changed."""
         renderer = self.canvas.get_renderer()
+        if not hasattr(renderer, "_get_font_height_metrics"):
+            renderer._get_font_height_metrics = FontHeights(renderer.dpi)
         engine = self.fig.get_layout_engine()
         if engine is not None:  # the first time: lay out, then keep the layout
             engine.execute(self.fig)
             self.fig.set_layout_engine("none")
         snap_limits(self.fig)  # with the ticks of the laid-out axes
-        self.framed = {legend for legend in self.best_legends if place_legend(legend, renderer)}
+        places = {legend: place_legend(legend, renderer) for legend in self.best_legends}
+        self.framed = {legend: place for legend, place in places.items() if place is not None}
         keys = [frame_key(ax, self.framed) for ax in self.fig.axes]
         figure_key = _figure_key(self.fig)
         if (self.background is None or figure_key != self.figure_key
@@ -511,7 +570,7 @@ class LayeredFigure:
             if changed and not self._draw_changed_frames(changed):
                 self._draw_all_frames()
         self.keys, self.figure_key = keys, figure_key
-        self.y_keys = [_y_key(ax) for ax in self.fig.axes]
+        self.side_keys = [_side_keys(ax) for ax in self.fig.axes]
         if not self._layered():  # a full draw interleaves the axes' frames and data
             self.canvas.draw()
             return encode_png(self.canvas.buffer_rgba())

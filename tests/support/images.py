@@ -6,7 +6,7 @@ import numpy as np
 from PIL import Image
 
 from navlib.widgets.base import render_png
-from navlib.widgets.layers import snap_limits
+from navlib.widgets.panel_layout import snap_limits
 
 
 def pixels(png: bytes) -> np.ndarray:

@@ -10,7 +10,8 @@ from support.images import pixels
 
 from navlib.plots.figure import detached, subplots
 from navlib.widgets.base import render_png
-from navlib.widgets.layers import LayeredFigure, place_legend, snap_limits
+from navlib.widgets.layers import LayeredFigure
+from navlib.widgets.panel_layout import place_legend, snap_limits
 
 
 def _figure():
@@ -88,6 +89,7 @@ def test_a_frame_redrawn_for_its_x_axis_keeps_its_y_label_as_a_full_draw_places_
         _move(fig, 1.0, 2.0)  # x stretched, y as it was
         got = pixels(layered.png())
         assert layered.frame_draws == len(fig.axes) and layered.full_draws == 1
+        assert layered.partial_draws == len(fig.axes)  # y tick labels and titles kept
         assert [ax.yaxis.label.get_position() for ax in fig.axes] == places
         assert all(ax.yaxis._autolabelpos for ax in fig.axes)
         assert np.array_equal(got, pixels(render_png(fig, 50)))
@@ -141,11 +143,56 @@ def test_a_legend_goes_where_no_data_is_and_says_whether_it_is_clear():
         ax.plot(t, 1.0 - t, label="down")  # the lower left and upper right corners are free
         legend = ax.legend(fontsize=7)
         renderer = LayeredFigure(fig).canvas.get_renderer()
-        assert place_legend(legend, renderer)
+        place = place_legend(legend, renderer)
+        assert place is not None
         assert legend._get_loc() in (1, 3)  # upper right (first), lower left
+        assert np.allclose(place.bounds, legend.get_window_extent(renderer).bounds)
         ax.plot(t, np.full_like(t, 0.95), label="top")
         ax.plot(t, np.full_like(t, 0.05), label="bottom")
         ax.plot(np.full_like(t, 0.5), t, label="middle")
         ax.plot(t, np.full_like(t, 0.5), label="level")
         legend = ax.legend(fontsize=7)
-        assert not place_legend(legend, renderer)  # no place without data
+        assert place_legend(legend, renderer) is None  # no place without data
+
+
+def test_kept_tick_labels_that_new_ones_would_touch_are_drawn_again():
+    """New x limits whose first tick label is wide reach the kept bottom y tick label at
+    the corner: that label is cleared and drawn again with them, the other y tick labels
+    and the title stay, and the image equals a full draw, going there and back."""
+    with detached():
+        fig, ax = subplots(figsize=(4, 3), constrained_layout=True)
+        line, = ax.plot([0.0, 1.0], [0.0, 1.0])
+        ax.set_ylim(0.0, 1.0)
+        ax.set_title("corner")
+        layered = LayeredFigure(fig, dpi=72)
+        layered.png()
+        for low, high in ((-123456.0, 1.0), (0.0, 1.0), (-123456.0, 2.0)):
+            ax.set_xlim(low, high)
+            assert np.array_equal(pixels(layered.png()), pixels(render_png(fig, 72)))
+        assert layered.full_draws == 1 and layered.partial_draws == 3
+
+
+def test_font_heights_give_the_layout_matplotlib_computes():
+    """The cached line metrics lay out every text as matplotlib's own reading of the font
+    tables does: equal extents for several families, sizes, rotations and mathtext."""
+    from matplotlib.backends.backend_agg import RendererAgg
+
+    from navlib.widgets.layers import FontHeights
+
+    with detached():
+        fig, ax = subplots(figsize=(4, 3), dpi=72)
+        plain = RendererAgg(288, 216, 72)
+        cached = RendererAgg(288, 216, 72)
+        heights = FontHeights(72)
+        asked = []
+        cached._get_font_height_metrics = lambda prop: asked.append(prop) or heights(prop)
+        for family in ("DejaVu Sans", "DejaVu Serif", "DejaVu Sans Mono"):
+            for size, rotation in ((7, 0), (10, 90), (13.5, 30)):
+                for text in ("t [min]", "jg\nWy", r"$10^{-3}$", "eq. (44) 0.0203"):
+                    label = ax.text(0.3, 0.4, text, family=family, size=size,
+                                    rotation=rotation)
+                    assert label.get_window_extent(plain).bounds == \
+                        label.get_window_extent(cached).bounds
+                    label.remove()
+        if not asked:
+            pytest.skip("this matplotlib does not ask the renderer for font heights")
