@@ -360,13 +360,12 @@ class LayeredFigure:
         return Bbox.from_extents(box.x0 - px["left"], box.y0 - px["bottom"],
                                  box.x1 + px["right"], box.y1 + px["top"])
 
-    def _boxes(self, ax, renderer, sides=SIDES, known=None) -> dict:
+    def _boxes(self, ax, renderer, sides=SIDES) -> dict:
         """The extent of each text of ``sides`` of ``ax`` as its last draw put it
-        (side -> {text: Bbox}; those in ``known`` as given), and under ``"other"`` those of
-        a framed legend and of a secondary axis' ticks and labels (a list)."""
-        known = known or {}
-        boxes = {side: {t: known[t] if t in known else t.get_window_extent(renderer)
-                        for t in _side_texts(ax, side)} for side in sides}
+        (side -> {text: Bbox}), and under ``"other"`` those of a framed legend and of a
+        secondary axis' ticks and labels (a list)."""
+        boxes = {side: {t: t.get_window_extent(renderer) for t in _side_texts(ax, side)}
+                 for side in sides}
         texts = [t for child in ax.child_axes if child.get_visible() and child.axison
                  for axis in (child.xaxis, child.yaxis) for t in _axis_texts(axis)
                  if t.get_visible() and t.get_text()]
@@ -450,30 +449,35 @@ class LayeredFigure:
         x0, top, x1, bottom = self._pixels(box)
         return x0 - 1, top - 1, x1 + 1, bottom + 1
 
-    def _coming(self, ax, sides, renderer) -> dict:
-        """Where the tick labels of the x and y axes among ``sides`` will be ({text: Bbox}),
-        their ticks placed for the new limits as the axes' draw places them."""
-        return {t: t.get_window_extent(renderer)
-                for side, axis in (("x", ax.xaxis), ("y", ax.yaxis))
-                if side in sides and axis.get_visible() and ax.axison
-                for tick in axis._update_ticks() for t in (tick.label1, tick.label2)
-                if t.get_visible() and t.get_text()}
+    def _bands(self, i: int, sides) -> list:
+        """Pixel rectangles that the new texts of the x and y axes among ``sides`` of axes
+        ``i`` are expected in: the rows (x) or columns (y) of the old ones, across the axes'
+        region. New limits move tick labels along their axis, not across it; the check
+        after the draw catches a text outside."""
+        x0, top, x1, bottom = self._pixels(self.regions[i])
+        bands = []
+        for side in sides:
+            rects = [self._ink(b) for b in self.boxes[i][side].values()]
+            if rects and side == "x":
+                bands.append((x0, min(r[1] for r in rects), x1, max(r[3] for r in rects)))
+            elif rects:
+                bands.append((min(r[0] for r in rects), top, max(r[2] for r in rects), bottom))
+        return bands
 
-    def _plan(self, group: set, keys: dict, coming: dict, renderer) -> tuple:
-        """(pixel rectangles to clear, {kept text: its pixels}) of the axes in ``group``,
-        whose changed tick labels will be at ``coming`` (axes -> {text: Bbox}).
+    def _plan(self, group: set, keys: dict, renderer) -> tuple:
+        """(pixel rectangles to clear, {kept text: its pixels}) of the axes in ``group``.
 
         An axes whose side keys all changed, or which cannot be redrawn in parts, clears
         its whole region. The others clear their plot area (with room for antialiased
-        edges) and the old and coming places of their changed sides' texts, and keep the
-        texts of their unchanged sides, but for those that meet a cleared place: these are
-        cleared and drawn again too."""
+        edges), the old places of their changed sides' texts and the bands of the new ones
+        (:meth:`_bands`), and keep the texts of their unchanged sides, but for those that
+        meet a cleared place: these are cleared and drawn again too."""
         room = renderer.points_to_pixels(EDGE_ROOM_PT)
         kept = self._kept_sides(group, keys)
         zones, keep = [], {}
         for i in group:
             ax, boxes = self.fig.axes[i], self.boxes[i]
-            zones += [self._ink(b) for b in coming[i].values()]
+            zones += self._bands(i, [s for s in ("x", "y") if keys[i][s] != self.side_keys[i][s]])
             if not kept[i]:
                 zones.append(self._pixels(self.regions[i]))
                 continue
@@ -503,10 +507,7 @@ class LayeredFigure:
         group = self._group(changed)
         renderer = self.canvas.get_renderer()
         keys = {i: _side_keys(axes[i]) for i in group}
-        coming = {i: self._coming(axes[i], [s for s in ("x", "y")
-                                            if keys[i][s] != self.side_keys[i][s]], renderer)
-                  for i in group}
-        zones, keep = self._plan(group, keys, coming, renderer)
+        zones, keep = self._plan(group, keys, renderer)
         self.canvas.restore_region(self.background)
         for rect in zones:  # xy is Agg's offset of the copy, not its place
             self.canvas.restore_region(self.blank, bbox=rect, xy=(0, 0))
@@ -533,7 +534,7 @@ class LayeredFigure:
         room = renderer.points_to_pixels(EDGE_ROOM_PT)
         for i in group:
             boxes = self._boxes(axes[i], renderer, [s for s in SIDES if not any(
-                t in keep for t in self.boxes[i][s])], coming[i])
+                t in keep for t in self.boxes[i][s])])
             boxes = {**{s: self.boxes[i][s] for s in SIDES}, **boxes}
             region = self._region(axes[i], boxes, renderer)
             drawn = [self._ink(b) for side in SIDES for t, b in boxes[side].items()
