@@ -105,8 +105,9 @@ def _eq44_label(value: float) -> str:
 
 
 def ssac_eigenvalues_figure(study: SSACStudy):
-    """Normalised eigenvalues over time (Fig. 7 analogue), sorted, log scale."""
-    return eigenvalues_figure(study.eigen, title="Ham–Brown normalised eigenvalues "
+    """Normalised eigenvalues over time (Fig. 7 analogue), sorted, log scale (of
+    :attr:`~navlib.studies.ssac.SSACStudy.spectrum`)."""
+    return eigenvalues_figure(study.spectrum, title="Ham–Brown normalised eigenvalues "
                               "(sorted, descending)")
 
 
@@ -120,7 +121,7 @@ def update_ssac_eigenvalues_figure(fig, study: SSACStudy) -> None:
     study : SSACStudy
         The new covariance run.
     """
-    update_eigenvalues_figure(fig, study.eigen)
+    update_eigenvalues_figure(fig, study.spectrum)
 
 
 def ssac_eigenvectors_figure(study: SSACStudy, tracked: bool = False):

@@ -69,7 +69,7 @@ class SSACPanel(Panel):
         """Rerun the study with the current controls and redraw."""
         study = covariance_run(**self.keywords())
         self.study = study
-        lam = study.eigen.eigenvalues[-1]
+        lam = study.spectrum.eigenvalues[-1]
         self.status.value = (f"ok: {study.t.size} epochs; six largest normalised eigenvalues "
                              f"sum to {lam[:6].sum():.3f}, 7th = {lam[6]:.1e}")
         limits = closed_form_limits(study)
@@ -82,7 +82,7 @@ class SSACPanel(Panel):
             update_ssac_eigenvalues_figure(kept[1], study)
             self.show("sigma", self.figures.redrawn("sigma"))
             self.show("eigenvalues", self.figures.redrawn("eigenvalues"))
-        self.show("pairs", table_html(pair_structure(study.eigen).round(4), index=True))
+        self.show("pairs", table_html(pair_structure(study.final_eigen).round(4), index=True))
         self.show("limits", table_html(limits.round(5), index=True))
 
 

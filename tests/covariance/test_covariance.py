@@ -166,6 +166,9 @@ def test_ham_brown_eigenvalues_sum_to_order_and_lie_in_range(n, seed):
     assert res.eigenvalues.min() >= -1e-9 and res.eigenvalues.max() <= n + 1e-9
     assert np.all(np.diff(res.eigenvalues, axis=1) <= 1e-12)
     np.testing.assert_allclose(res.tracked_values.sum(axis=1), n, rtol=1e-10)
+    alone = normalized_eigen(P, P0, vectors=False)  # the eigenvalue-only driver
+    np.testing.assert_allclose(alone.eigenvalues, res.eigenvalues, rtol=0, atol=1e-12 * n)
+    assert alone.eigenvectors is None and alone.tracked_vectors is None
 
 
 def _crossing_example(N=201):

@@ -88,16 +88,19 @@ class SSACStudy:
 
     @cached_property
     def eigen(self) -> NormalizedEigenResult:
-        """Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n), computed when first
-        read (the claims read only the sigmas of the 12- and 10-state runs)."""
+        """Ham–Brown analysis of ``P+`` normalised by ``P0`` (``o`` = n), when first read."""
         return normalized_eigen(self.covariance, self.model.P0, track=self.track)
+
+    @cached_property
+    def spectrum(self) -> NormalizedEigenResult:
+        """:attr:`eigen`'s eigenvalues alone (half the time): a panel's figure and status."""
+        return normalized_eigen(self.covariance, self.model.P0, vectors=False)
 
     @cached_property
     def final_eigen(self) -> NormalizedEigenResult:
         """:attr:`eigen` of the last epoch alone: the same modes up to their signs (which
-        :attr:`eigen` chains over the run), for readers of the end's pair projector and
-        shares only (:func:`pair_structure`, which no sign changes: the P0 sensitivity and
-        the orientation table)."""
+        :attr:`eigen` chains over the run), for readers of the end's pair projector and shares
+        only (:func:`pair_structure`: the P0 sensitivity, the orientation table, a panel)."""
         return normalized_eigen(self.covariance.P_post[-1:], self.model.P0, track=False,
                                 t=self.t[-1:], state_names=self.state_names)
 
