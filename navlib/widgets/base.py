@@ -44,6 +44,7 @@ from matplotlib.patches import Rectangle
 from navlib.errors import NavlibInputError
 from navlib.plots.figure import detached
 from navlib.widgets.layers import LayeredFigure, agg_canvas, encode_png
+from navlib.widgets.memory import keep_pages
 
 __all__ = ["LOOK", "Blitter", "KeptFigures", "Panel", "collector_after", "error_html",
            "layout_key", "look", "render_png", "table_html"]
@@ -396,12 +397,18 @@ class Panel(widgets.VBox):
         layout key is unchanged.
     error_prefix : str
         Class attribute: the status prefix of a refused input.
+
+    Notes
+    -----
+    The first panel of a process calls :func:`navlib.widgets.memory.keep_pages`: numpy and
+    glibc then keep a move's large arrays on pages the process already has.
     """
 
     error_prefix = "Invalid input"
 
     def __init__(self, controls: Mapping, *, extras: Iterable = (), dpi: float = 72.0,
                  update_now: bool = True):
+        keep_pages()  # numpy and glibc keep a move's arrays on the process' pages
         self.controls = dict(controls)
         self.dpi = float(dpi)
         self.status = widgets.HTML()

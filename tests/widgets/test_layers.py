@@ -161,7 +161,7 @@ def test_kept_tick_labels_that_new_ones_would_touch_are_drawn_again():
     and the title stay, and the image equals a full draw, going there and back."""
     with detached():
         fig, ax = subplots(figsize=(4, 3), constrained_layout=True)
-        line, = ax.plot([0.0, 1.0], [0.0, 1.0])
+        ax.plot([0.0, 1.0], [0.0, 1.0])
         ax.set_ylim(0.0, 1.0)
         ax.set_title("corner")
         layered = LayeredFigure(fig, dpi=72)
@@ -180,7 +180,7 @@ def test_font_heights_give_the_layout_matplotlib_computes():
     from navlib.widgets.layers import FontHeights
 
     with detached():
-        fig, ax = subplots(figsize=(4, 3), dpi=72)
+        _, ax = subplots(figsize=(4, 3), dpi=72)
         plain = RendererAgg(288, 216, 72)
         cached = RendererAgg(288, 216, 72)
         heights = FontHeights(72)

@@ -283,3 +283,18 @@ def test_kept_figure_with_markers_lends_its_layout_and_a_new_label_relayouts():
     assert kept._kept["part"][1] is relabelled
     assert not np.allclose(relabelled.axes[0].get_position().bounds,
                            first.axes[0].get_position().bounds)
+
+
+def test_a_panel_keeps_large_arrays_on_the_process_pages():
+    """Building a panel turns numpy's huge-page advice off and, with glibc, raises its mmap
+    and trim thresholds (navlib.widgets.memory), once."""
+    import sys
+
+    from navlib.widgets import memory
+
+    panel = Panel({"x": widgets.FloatSlider(value=1.0)}, update_now=False)
+    assert panel.updates == 0
+    advise = np._core.multiarray._set_madvise_hugepage
+    assert advise(False) is False  # it was off already
+    if sys.platform.startswith("linux"):
+        assert memory.keep_pages() is True
