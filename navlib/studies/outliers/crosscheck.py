@@ -111,21 +111,21 @@ def monte_carlo_outlier(solution: str, outlier: Outlier, watch: str = "roll", *,
                            sigma=sigma[:, 0] if scalar else sigma,
                            nominal_error=nominal[:, :, 0] if scalar else nominal)
     return MonteCarloOutlier(sim.t, err, induced, sigma, score, sim.consistency(),
-                             _without(sim, resp, prepared).consistency())
+                             _nominal_consistency(sim, resp, prepared))
 
 
-def _without(sim, resp, prepared):
-    """The nominal runs: the faulty runs minus the exact outlier response (linearity), with
-    their NEES and their NIS at the recorded update epochs."""
-    truth = sim.truth - resp.truth
-    est = sim.estimate - resp.estimate
-    nees, dof = nees_values(est - truth, sim.P, basis=prepared.nees_basis(sim.index))
+def _nominal_consistency(sim, resp, prepared) -> dict:
+    """NEES and NIS consistency of the nominal runs: the faulty runs minus the exact outlier
+    response (linearity), the NIS at the recorded update epochs."""
+    error = sim.estimate - sim.truth
+    error -= resp.estimate - resp.truth
+    nees, dof = nees_values(error, sim.P, basis=prepared.nees_basis(sim.index))
     upd = prepared.measured[sim.index]
     innov = (sim.innovation - resp.innovation)[upd]
     S_pinv = prepared.gains.S_pinv[sim.index[upd]]
     nis = np.einsum("kri,kij,krj->kr", innov, S_pinv, innov)
-    return replace(sim, truth=truth, estimate=est, nees=nees, nees_dof=dof,
-                   nis_t=sim.t[upd], nis=nis, nis_dof=prepared.gains.dof[sim.index[upd]])
+    return replace(sim, nees=nees, nees_dof=dof, nis_t=sim.t[upd], nis=nis,
+                   nis_dof=prepared.gains.dof[sim.index[upd]]).consistency()
 
 
 @dataclass(frozen=True, eq=False)
