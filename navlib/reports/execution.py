@@ -26,8 +26,8 @@ from navlib.reports.kernel_watch import KernelWatch, NotebookAborted, execute_no
 from navlib.reports.results import CellFailure, NotebookRun
 
 __all__ = ["BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "HIDE_OUTPUT_TAG", "HIDE_TAG",
-           "MALLOC_VARIABLES", "PAGE_CSS", "Kernels", "Settings", "available_cpus", "execute",
-           "kernel_environment"]
+           "MALLOC_VARIABLES", "NUMPY_VARIABLES", "PAGE_CSS", "Kernels", "Settings",
+           "available_cpus", "execute", "kernel_environment"]
 
 DEFAULT_CELL_TIMEOUT_S = 600.0
 """Per-cell time limit of a report run, s: the heaviest full-mode cell takes about a minute
@@ -137,6 +137,14 @@ kernel (system time) by default and 10 of 82 s with these, for about 0.2 GB more
 memory (1.98 GB in the report kernel). Other C libraries ignore them."""
 
 
+NUMPY_VARIABLES = {"NUMPY_MADVISE_HUGEPAGE": "0"}
+"""numpy setting :func:`kernel_environment` gives each kernel: no transparent huge pages asked
+for its arrays. Where the system compacts memory for a huge page when it is first written
+(defrag ``madvise``, as on the 2-core reference machine), that wait is system time in the
+notebook: notebook 05 alone took 5.4-5.9 s of system time and 29.6-31.7 s of kernel time
+with numpy's default, 1.4 s and 26.3-27.0 s without (runs alternated, load 3)."""
+
+
 def available_cpus() -> int:
     """CPUs this process may run on (its affinity mask where the platform has one)."""
     try:
@@ -150,11 +158,13 @@ def kernel_environment(jobs: int, cache: bool = True) -> dict[str, str]:
 
     Each BLAS/OpenMP pool gets ``max(1, cpus // jobs)`` threads so the kernels together do
     not oversubscribe the cores, and the allocator keeps freed arrays for reuse
-    (:data:`MALLOC_VARIABLES`); a variable already set in this process's environment is
-    left to the user. ``cache=False`` adds ``NAVLIB_NO_CACHE=1`` (:mod:`navlib.cache`).
+    (:data:`MALLOC_VARIABLES`) without huge pages (:data:`NUMPY_VARIABLES`); a variable
+    already set in this process's environment is left to the user. ``cache=False`` adds
+    ``NAVLIB_NO_CACHE=1`` (:mod:`navlib.cache`).
     """
     threads = str(max(1, available_cpus() // max(1, jobs)))
-    wanted = {**dict.fromkeys(BLAS_THREAD_VARIABLES, threads), **MALLOC_VARIABLES}
+    wanted = {**dict.fromkeys(BLAS_THREAD_VARIABLES, threads), **MALLOC_VARIABLES,
+              **NUMPY_VARIABLES}
     env = {name: value for name, value in wanted.items() if not os.environ.get(name)}
     if not cache:
         env["NAVLIB_NO_CACHE"] = "1"

@@ -11,10 +11,11 @@ the kernel (system time), and its first of 100 runs 550 of 820 ms.
 
 :func:`keep_pages` turns numpy's huge-page advice off and raises glibc's mmap and trim
 thresholds, once per process, when the first panel is built: the same Monte Carlo then
-takes 245-255 ms at its first 62 runs, 380-400 at its first 100 and 195-210 ms at later
-ones (was 227). The process keeps up to :data:`TRIM_THRESHOLD_BYTES` of freed memory for
+takes 230-235 ms at its first 62 runs, 290 at its first 100 and 180-190 ms at later ones
+(was 227). The process keeps up to :data:`TRIM_THRESHOLD_BYTES` of freed memory for
 its next arrays instead of returning it. Elsewhere (no glibc, or a numpy without the
-setting) nothing changes.
+setting) nothing changes. The kernels of a report get the same settings through their
+environment (``navlib.reports.execution.MALLOC_VARIABLES`` and ``NUMPY_VARIABLES``).
 """
 
 from __future__ import annotations
@@ -26,11 +27,11 @@ import numpy as np
 
 __all__ = ["MMAP_THRESHOLD_BYTES", "TRIM_THRESHOLD_BYTES", "keep_pages"]
 
-MMAP_THRESHOLD_BYTES = 32 * 2**20
-"""glibc's mmap threshold: blocks up to this size come from the heap (32 MB, the largest
-glibc accepts on a 64-bit machine)."""
-TRIM_THRESHOLD_BYTES = 512 * 2**20
-"""Free memory at the top of glibc's heap kept for later allocations."""
+MMAP_THRESHOLD_BYTES = 2**30
+"""glibc's mmap threshold: blocks below it come from the heap (1 GiB, as in a report's
+kernels)."""
+TRIM_THRESHOLD_BYTES = 2**30
+"""Free memory at the top of glibc's heap kept for later allocations (1 GiB)."""
 
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # glibc's malloc.h
 _kept = None
