@@ -11,7 +11,7 @@ the kernel (system time), and its first of 100 runs 550 of 820 ms.
 
 :func:`keep_pages` turns numpy's huge-page advice off and raises glibc's mmap and trim
 thresholds, once per process, when the first panel is built: the same Monte Carlo then
-takes 230-235 ms at its first 62 runs, 290 at its first 100 and 180-190 ms at later ones
+takes 230-245 ms at its first 62 runs, 290-340 at its first 100 and 180-200 ms at later ones
 (was 227). The process keeps up to :data:`TRIM_THRESHOLD_BYTES` of freed memory for
 its next arrays instead of returning it. Elsewhere (no glibc, or a numpy without the
 setting) nothing changes. The kernels of a report get the same settings through their
