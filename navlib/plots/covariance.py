@@ -84,9 +84,12 @@ def sigma_figure(result, groups: Mapping[str, Sequence[str]], units: Mapping | N
     nrows = int(np.ceil(n / ncols))
     fig, axes = subplots(nrows, ncols, figsize=(4.2 * ncols, 3.0 * nrows), squeeze=False,
                          constrained_layout=True)
-    for ax, (name, states) in zip(axes.flat, groups.items(), strict=False):
+    for k, (ax, (name, states)) in enumerate(zip(axes.flat, groups.items(), strict=False)):
         sigma_axes(ax, result, states, units, time_unit, log=name in log_groups)
         ax.set_title(name)
+        if k + ncols < n:  # the panel below it shows the common time axis
+            ax.tick_params(labelbottom=False)
+            ax.set_xlabel("")
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     if title:

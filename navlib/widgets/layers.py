@@ -437,10 +437,14 @@ class LayeredFigure:
 
     def _kept_sides(self, group: set, keys: dict) -> dict:
         """Per axes of ``group``, the :data:`SIDES` whose keys did not change, when the
-        rest of its frame can be redrawn without their texts."""
-        return {i: tuple(side for side in SIDES if keys[i][side] == self.side_keys[i][side])
+        rest of its frame can be redrawn without their texts; titles only where they stay
+        put (:func:`~navlib.widgets.panel_layout.freeze_decorations`: matplotlib places
+        the others at each draw, from decorations of the other sides)."""
+        axes = self.fig.axes
+        return {i: tuple(side for side in SIDES if keys[i][side] == self.side_keys[i][side]
+                         and (side != "title" or axes[i]._autotitlepos is False))
                 if keys[i]["base"] == self.side_keys[i]["base"]
-                and _keeps_clear_of_its_sides(self.fig.axes[i]) else () for i in group}
+                and _keeps_clear_of_its_sides(axes[i]) else () for i in group}
 
     def _ink(self, box: Bbox) -> tuple:
         """The pixels a text whose box is ``box`` may colour: its box rounded out to whole

@@ -196,3 +196,26 @@ def test_font_heights_give_the_layout_matplotlib_computes():
                     label.remove()
         if not asked:
             pytest.skip("this matplotlib does not ask the renderer for font heights")
+
+
+def test_a_title_matplotlib_places_at_each_draw_is_drawn_again_with_its_frame():
+    """An axes with x tick labels on top keeps its automatic title place (freeze_decorations
+    leaves it to matplotlib), so a partial redraw draws its title again: the image equals a
+    full draw after new x limits, new y limits (the top tick labels kept; new y tick labels
+    wider than the bands of the old ones send that move to a full draw) and a new x scale,
+    whose taller tick labels move the title."""
+    with detached():
+        fig, ax = subplots(figsize=(4, 3), constrained_layout=True)
+        ax.plot([0.0, 1.0], [0.0, 1.0])
+        ax.xaxis.tick_top()
+        ax.set_title("over the tick labels")
+        layered = LayeredFigure(fig, dpi=72)
+        layered.png()
+        for xlim, ylim in (((0.0, 1.0), (0.0, 2.0)), ((0.0, 30.0), (0.0, 2.0)),
+                           ((0.0, 30.0), (-5.0, 2.0)), ((1.0, 1e3), (-5.0, 2.0))):
+            ax.set_xscale("log" if xlim[0] > 0 else "linear")
+            ax.set_xlim(*xlim)
+            ax.set_ylim(*ylim)
+            assert np.array_equal(pixels(layered.png()), pixels(render_png(fig, 72)))
+            assert ax._autotitlepos
+        assert layered.partial_draws >= 2
