@@ -450,8 +450,6 @@ def _orientation_table(ypr_deg: tuple, duration_s: float) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-
-
 def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     """Actual estimation error of a noise-free run of the study's filter (Part I, Fig. 3).
 
@@ -483,7 +481,6 @@ def actual_error(study: SSACStudy, x0=None) -> np.ndarray:
     if x0.shape != (model.n,):
         raise NavlibInputError(f"x0: expected {model.n} values, got shape {x0.shape}")
     return closed_loop_error(*study.closed_loop, x0)
-
 
 
 @cache.memoized(maxsize=4)
@@ -529,10 +526,7 @@ def actual_sigmas(study: SSACStudy, reduced: SSACStudy) -> np.ndarray:
     prior = reduced.covariance.P_prior
     K = np.linalg.solve(Hr @ prior @ Hr.T + R, Hr @ prior).transpose(0, 2, 1)  # (N, r, m)
     KH = K @ H
-    # diag(E P E') of the last posterior as the sum of each noise's share: the rows
-    # W_k = E M_last A ... M_(k+1) A_k carried backwards, r rows through each step instead of
-    # the (n + r)-square covariance forwards (the same sum, of squares: no cancellation
-    # between the truth and the estimate), with the steps T_k = M_k A_(k-1) formed at once
+    # the rows W_k = E M_last A ... M_(k+1) A_k carried backwards through T_k = M_k A_(k-1)
     T = np.zeros((t.size - 1, n + r, n + r))
     T[:, :n, :n] = discrete.F
     T[:, n:, :n] = KH[1:] @ discrete.F
