@@ -32,6 +32,7 @@ from navlib.reports.discovery import (
 from navlib.reports.execution import (
     BLAS_THREAD_VARIABLES,
     DEFAULT_CELL_TIMEOUT_S,
+    HUGEPAGE_VARIABLES,
     MALLOC_VARIABLES,
     available_cpus,
     kernel_environment,
@@ -42,7 +43,8 @@ from navlib.reports.runner import run_reports
 from navlib.reports.signals import ReportInterrupted
 
 __all__ = [
-    "BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "INDEX", "MALLOC_VARIABLES", "MANIFEST",
+    "BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "HUGEPAGE_VARIABLES", "INDEX",
+    "MALLOC_VARIABLES", "MANIFEST",
     "NOTEBOOK_PATTERN", "CellFailure", "NotebookInfo", "NotebookRun", "Progress",
     "ReportError", "ReportInterrupted", "available_cpus", "default_notebooks_dir",
     "default_output_dir", "kernel_environment", "list_notebooks", "parse_parameter_value",

@@ -26,8 +26,8 @@ from navlib.reports.kernel_watch import KernelWatch, NotebookAborted, execute_no
 from navlib.reports.results import CellFailure, NotebookRun
 
 __all__ = ["BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "HIDE_OUTPUT_TAG", "HIDE_TAG",
-           "MALLOC_VARIABLES", "PAGE_CSS", "Kernels", "Settings", "available_cpus", "execute",
-           "kernel_environment"]
+           "HUGEPAGE_VARIABLES", "MALLOC_VARIABLES", "PAGE_CSS", "Kernels", "Settings",
+           "available_cpus", "execute", "kernel_environment"]
 
 DEFAULT_CELL_TIMEOUT_S = 600.0
 """Per-cell time limit of a report run, s: the heaviest full-mode cell takes about a minute
@@ -136,6 +136,15 @@ page fault of a fresh array cost about 0.2 ms: notebook 05 spent 33 of its 108 s
 kernel (system time) by default and 10 of 82 s with these, for about 0.2 GB more peak
 memory (1.98 GB in the report kernel). Other C libraries ignore them."""
 
+HUGEPAGE_VARIABLES = {"NUMPY_MADVISE_HUGEPAGE": "0"}
+"""NumPy setting :func:`kernel_environment` gives each kernel: no ``madvise(MADV_HUGEPAGE)``
+on large arrays, so their memory comes in 4 KiB pages. On the 2-core reference machine (a
+virtual machine that hands freed memory back to its host) the first touch of fresh huge
+pages cost 2.5-4.4 s per GB in the kernel against 0.4 s for 4 KiB pages: with the report's
+environment, notebook 05 took 21.3-21.5 CPU-s (system 1.7-2.0) without huge pages and
+23.8-24.8 (system 5.0-5.7) with them, notebook 02 54.1 against 55.5, notebook 00 the same
+(2026-12-05, load 2-3). The results do not depend on it."""
+
 
 def available_cpus() -> int:
     """CPUs this process may run on (its affinity mask where the platform has one)."""
@@ -150,11 +159,13 @@ def kernel_environment(jobs: int, cache: bool = True) -> dict[str, str]:
 
     Each BLAS/OpenMP pool gets ``max(1, cpus // jobs)`` threads so the kernels together do
     not oversubscribe the cores, and the allocator keeps freed arrays for reuse
-    (:data:`MALLOC_VARIABLES`); a variable already set in this process's environment is
-    left to the user. ``cache=False`` adds ``NAVLIB_NO_CACHE=1`` (:mod:`navlib.cache`).
+    (:data:`MALLOC_VARIABLES`) in small pages (:data:`HUGEPAGE_VARIABLES`); a variable already
+    set in this process's environment is left to the user. ``cache=False`` adds
+    ``NAVLIB_NO_CACHE=1`` (:mod:`navlib.cache`).
     """
     threads = str(max(1, available_cpus() // max(1, jobs)))
-    wanted = {**dict.fromkeys(BLAS_THREAD_VARIABLES, threads), **MALLOC_VARIABLES}
+    wanted = {**dict.fromkeys(BLAS_THREAD_VARIABLES, threads), **MALLOC_VARIABLES,
+              **HUGEPAGE_VARIABLES}
     env = {name: value for name, value in wanted.items() if not os.environ.get(name)}
     if not cache:
         env["NAVLIB_NO_CACHE"] = "1"
