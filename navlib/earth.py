@@ -150,7 +150,18 @@ def normal_gravity_point(x: float, y: float, z: float) -> tuple[float, float, fl
     """:func:`normal_gravity_ecef` at one ECEF position ``(x, y, z)`` (m), in scalar
     arithmetic: the same operations in the same order, so bitwise the same three components
     (tests/test_earth.py), without the array calls (an ODE right-hand side calls it ~50 000
-    times per trajectory: about 4 instead of 20 us a call)."""
+    times per trajectory: about 4 instead of 20 us a call).
+
+    Parameters
+    ----------
+    x, y, z : float
+        ECEF position, m.
+
+    Returns
+    -------
+    tuple of float
+        Normal gravity (x, y, z), m/s^2.
+    """
     r2 = (x * x + y * y) + z * z       # the order of np.sum over three entries
     r = np.array([math.sqrt(r2)])
     r3, r5 = float((r**3)[0]), float((r**5)[0])    # NumPy's power (not libm's pow)
