@@ -11,11 +11,14 @@ on the first axis, ``(..., 3)``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["E2", "EARTH_RATE_ECEF", "FLATTENING", "GM", "J2", "OMEGA_E", "A", "B",
            "ecef_to_geodetic", "geodetic_to_ecef", "gravitation_ecef", "gravity_jacobian_ecef",
-           "gravity_magnitude", "ned_to_ecef_matrix", "normal_gravity_ecef", "radii_of_curvature"]
+           "gravity_magnitude", "ned_to_ecef_matrix", "normal_gravity_ecef", "normal_gravity_point",
+           "radii_of_curvature"]
 
 A = 6378137.0
 """WGS-84 semi-major axis, m."""
@@ -141,6 +144,33 @@ def normal_gravity_ecef(r_e):
     r_e = np.asarray(r_e, dtype=float)
     centrifugal = OMEGA_E**2 * r_e * np.array([1.0, 1.0, 0.0])
     return gravitation_ecef(r_e) + centrifugal
+
+
+def normal_gravity_point(x: float, y: float, z: float) -> tuple[float, float, float]:
+    """:func:`normal_gravity_ecef` at one ECEF position ``(x, y, z)`` (m), in scalar
+    arithmetic: the same operations in the same order, so bitwise the same three components
+    (tests/test_earth.py), without the array calls (an ODE right-hand side calls it ~50 000
+    times per trajectory: about 4 instead of 20 us a call).
+
+    Parameters
+    ----------
+    x, y, z : float
+        ECEF position, m.
+
+    Returns
+    -------
+    tuple of float
+        Normal gravity (x, y, z), m/s^2.
+    """
+    r2 = (x * x + y * y) + z * z       # the order of np.sum over three entries
+    r = np.array([math.sqrt(r2)])
+    r3, r5 = float((r**3)[0]), float((r**5)[0])    # NumPy's power (not libm's pow)
+    j2 = -1.5 * J2 * GM * A**2
+    s5 = 5.0 * (z * z / r2)
+    w2 = OMEGA_E**2
+    return ((-GM * x / r3 + j2 * x * (1.0 - s5) / r5) + w2 * x * 1.0,
+            (-GM * y / r3 + j2 * y * (1.0 - s5) / r5) + w2 * y * 1.0,
+            (-GM * z / r3 + j2 * z * (3.0 - s5) / r5) + w2 * z * 0.0)
 
 
 def gravity_jacobian_ecef(r_e):

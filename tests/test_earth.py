@@ -220,3 +220,16 @@ def test_gravity_jacobian_structure_far_away():
     expected = -earth.GM / rn**3 * (np.eye(3) - 3.0 * np.outer(r, r) / rn**2)
     expected += earth.OMEGA_E**2 * np.diag([1.0, 1.0, 0.0])
     np.testing.assert_allclose(earth.gravity_jacobian_ecef(r), expected, rtol=0, atol=1e-16)
+
+
+def test_normal_gravity_point_is_bitwise_the_array_form():
+    """The scalar form of the launcher ascent's right-hand side gives the array form's
+    three components to the bit, on the ground, in orbit and at the poles."""
+    rng = np.random.default_rng(7)
+    points = rng.normal(size=(3000, 3))
+    points *= rng.uniform(6.35e6, 7.5e6, size=(3000, 1)) / np.linalg.norm(points, axis=1,
+                                                                         keepdims=True)
+    points[:2] = [[0.0, 0.0, 6356752.3], [0.0, 0.0, -6356752.3]]
+    for r in points:
+        got = earth.normal_gravity_point(*(float(c) for c in r))
+        np.testing.assert_array_equal(np.array(got), earth.normal_gravity_ecef(r))

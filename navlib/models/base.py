@@ -28,7 +28,7 @@ from navlib.errors import NavlibInputError
 from navlib.rotations import exp_so3, skew
 
 __all__ = ["HOLDS", "DiscreteModel", "ErrorState", "ErrorStateModel", "LinearModel",
-           "MeasurementRows", "Nominal", "state_indices"]
+           "MeasurementRows", "Nominal", "VaryingBlock", "state_indices"]
 
 HOLDS = ("left", "mean")
 """How a trajectory model's matrices are held over one step (see LinearModel.discretize)."""
@@ -482,3 +482,42 @@ class ErrorState:
         att = self.groups["attitude"]
         J[np.ix_(att, att)] += (-0.5 if self.attitude_frame == "body" else 0.5) * skew(dx[att])
         return J
+
+
+class VaryingBlock:
+    """A stack of ``N`` matrices equal to ``fixed`` (r, c) except the block
+    ``fixed[rows, cols]``, which is ``blocks[k]`` in matrix ``k``, formed for the indices
+    asked for (``stack[idx]``: an int, a slice or an integer array; ``numpy.asarray`` forms
+    it whole). A reader of a few steps of a long mission (the observability test at every
+    200th step) then never allocates the (N, r, c) stack: the launcher's RT measurement
+    matrices (:func:`navlib.models.launcher.launcher_steps`) are 80 MB at 200 Hz over 150 s.
+
+    Parameters
+    ----------
+    fixed : ndarray (r, c)
+        The matrix outside the varying block.
+    rows, cols : slice
+        The varying block's place.
+    blocks : ndarray (N, p, q)
+        The block of each matrix.
+    """
+
+    def __init__(self, fixed, rows: slice, cols: slice, blocks):
+        self.fixed, self.rows, self.cols = np.asarray(fixed, dtype=float), rows, cols
+        self.blocks = np.asarray(blocks, dtype=float)
+        self.shape = (self.blocks.shape[0], *self.fixed.shape)
+        self.ndim, self.dtype = 3, self.fixed.dtype
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def __getitem__(self, idx) -> np.ndarray:
+        blocks = self.blocks[idx]
+        out = np.empty((*blocks.shape[:-2], *self.fixed.shape))
+        out[...] = self.fixed
+        out[..., self.rows, self.cols] = blocks
+        return out
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        out = self[:]
+        return out if dtype is None else out.astype(dtype)

@@ -12,7 +12,7 @@ import numpy as np
 from navlib._validation import finite_scalar, reject_unknown
 from navlib.earth import EARTH_RATE_ECEF
 from navlib.errors import NavlibInputError
-from navlib.models.base import ErrorState, LinearModel, MeasurementRows
+from navlib.models.base import ErrorState, LinearModel, MeasurementRows, VaryingBlock
 from navlib.rotations import skew
 from navlib.sensors import SensorSpec, load_preset
 from navlib.trajectory import launcher_ascent
@@ -439,8 +439,9 @@ class LauncherSteps:
     state_names : tuple of str
     t : ndarray (N,)
         Trajectory sample times, s.
-    H : ndarray (m, n) or (N, m, n)
-        As :func:`launcher`'s.
+    H : ndarray (m, n) or VaryingBlock (N, m, n)
+        As :func:`launcher`'s; the RT solutions' formed for the steps read
+        (:class:`navlib.models.base.VaryingBlock`).
     method : str
         ``"euler"``: the discretisation these transitions are.
     name : str
@@ -493,7 +494,10 @@ def launcher_steps(solution: str = "ins_gps", biases: str = "GAP",
     letters = _parse(solution, biases, bias_model)
     t, C_b_e, f_b = _samples(trajectory)
     p = _values(sensors, kw, float(np.median(np.diff(t))))
-    H = _measurement_matrix(solution, letters, _measurements(solution, p), C_b_e)
+    H = _measurement_matrix(solution, letters, _measurements(solution, p), C_b_e[:1])
+    if solution.endswith("_rt"):      # the RT rows' attitude block varies: formed on demand
+        H = VaryingBlock(H[0], slice(H.shape[1] - 3, None), _slicer(_starts(solution, letters))(
+            "psi"), np.swapaxes(C_b_e, 1, 2))
     return LauncherSteps(state_names=state_names(solution, letters, bias_model), t=t, H=H,
                          method="euler", name=_model_name(solution, letters, bias_model),
                          _C_b_e=C_b_e, _f_b=f_b, _configuration=(solution, letters, bias_model),

@@ -130,9 +130,9 @@ def _model_arrays(model, method: str):
         if method != model.method:
             raise NavlibInputError(f"method: the model's transitions are {model.method!r} "
                                    f"steps, got method={method!r}")
-        t, H = np.asarray(model.t), np.asarray(model.H)
-        if H.ndim == 2:
-            H = np.broadcast_to(H, (t.size, *H.shape))
+        t, H = np.asarray(model.t), model.H    # H may form its matrices on demand
+        if np.ndim(H) == 2:
+            H = np.broadcast_to(np.asarray(H), (t.size, *np.shape(H)))
         return t, model.transitions, H
     if isinstance(model, LinearModel):
         if not model.time_varying:

@@ -32,8 +32,8 @@ from navlib.reports.discovery import (
 from navlib.reports.execution import (
     BLAS_THREAD_VARIABLES,
     DEFAULT_CELL_TIMEOUT_S,
+    HUGEPAGE_VARIABLES,
     MALLOC_VARIABLES,
-    NUMPY_VARIABLES,
     available_cpus,
     kernel_environment,
 )
@@ -43,8 +43,9 @@ from navlib.reports.runner import run_reports
 from navlib.reports.signals import ReportInterrupted
 
 __all__ = [
-    "BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "INDEX", "MALLOC_VARIABLES", "MANIFEST",
-    "NOTEBOOK_PATTERN", "NUMPY_VARIABLES", "CellFailure", "NotebookInfo", "NotebookRun", "Progress",
+    "BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "HUGEPAGE_VARIABLES", "INDEX",
+    "MALLOC_VARIABLES", "MANIFEST",
+    "NOTEBOOK_PATTERN", "CellFailure", "NotebookInfo", "NotebookRun", "Progress",
     "ReportError", "ReportInterrupted", "available_cpus", "default_notebooks_dir",
     "default_output_dir", "kernel_environment", "list_notebooks", "parse_parameter_value",
     "parse_parameters", "run_reports", "select_notebooks",

@@ -26,7 +26,7 @@ from navlib.reports.kernel_watch import KernelWatch, NotebookAborted, execute_no
 from navlib.reports.results import CellFailure, NotebookRun
 
 __all__ = ["BLAS_THREAD_VARIABLES", "DEFAULT_CELL_TIMEOUT_S", "HIDE_OUTPUT_TAG", "HIDE_TAG",
-           "MALLOC_VARIABLES", "NUMPY_VARIABLES", "PAGE_CSS", "Kernels", "Settings",
+           "HUGEPAGE_VARIABLES", "MALLOC_VARIABLES", "PAGE_CSS", "Kernels", "Settings",
            "available_cpus", "execute", "kernel_environment"]
 
 DEFAULT_CELL_TIMEOUT_S = 600.0
@@ -136,13 +136,17 @@ page fault of a fresh array cost about 0.2 ms: notebook 05 spent 33 of its 108 s
 kernel (system time) by default and 10 of 82 s with these, for about 0.2 GB more peak
 memory (1.98 GB in the report kernel). Other C libraries ignore them."""
 
-
-NUMPY_VARIABLES = {"NUMPY_MADVISE_HUGEPAGE": "0"}
-"""numpy setting :func:`kernel_environment` gives each kernel: no transparent huge pages asked
-for its arrays. Where the system compacts memory for a huge page when it is first written
-(defrag ``madvise``, as on the 2-core reference machine), that wait is system time in the
-notebook: notebook 05 alone took 5.4-5.9 s of system time and 29.6-31.7 s of kernel time
-with numpy's default, 1.4 s and 26.3-27.0 s without (runs alternated, load 3)."""
+HUGEPAGE_VARIABLES = {"NUMPY_MADVISE_HUGEPAGE": "0"}
+"""NumPy setting :func:`kernel_environment` gives each kernel: no ``madvise(MADV_HUGEPAGE)``
+on large arrays, so their memory comes in 4 KiB pages. On the 2-core reference machine (a
+virtual machine that hands freed memory back to its host) the first touch of fresh huge
+pages cost 2.5-4.4 s per GB in the kernel against 0.4 s for 4 KiB pages: with the report's
+environment, notebook 05 took 21.3-21.5 CPU-s (system 1.7-2.0) without huge pages and
+23.8-24.8 (system 5.0-5.7) with them, notebook 02 54.1 against 55.5, notebook 00 the same
+(2026-12-05, load 2-3); run by ``navlib report --only 05``, 26.3-27.0 s of kernel time
+(system 1.4 s) against 29.6-31.7 (system 5.4-5.9), runs alternated. The results do not
+depend on it. Panels do the same in their own process
+(:func:`navlib.widgets.memory.keep_pages`)."""
 
 
 def available_cpus() -> int:
@@ -158,13 +162,13 @@ def kernel_environment(jobs: int, cache: bool = True) -> dict[str, str]:
 
     Each BLAS/OpenMP pool gets ``max(1, cpus // jobs)`` threads so the kernels together do
     not oversubscribe the cores, and the allocator keeps freed arrays for reuse
-    (:data:`MALLOC_VARIABLES`) without huge pages (:data:`NUMPY_VARIABLES`); a variable
-    already set in this process's environment is left to the user. ``cache=False`` adds
+    (:data:`MALLOC_VARIABLES`) in small pages (:data:`HUGEPAGE_VARIABLES`); a variable already
+    set in this process's environment is left to the user. ``cache=False`` adds
     ``NAVLIB_NO_CACHE=1`` (:mod:`navlib.cache`).
     """
     threads = str(max(1, available_cpus() // max(1, jobs)))
     wanted = {**dict.fromkeys(BLAS_THREAD_VARIABLES, threads), **MALLOC_VARIABLES,
-              **NUMPY_VARIABLES}
+              **HUGEPAGE_VARIABLES}
     env = {name: value for name, value in wanted.items() if not os.environ.get(name)}
     if not cache:
         env["NAVLIB_NO_CACHE"] = "1"

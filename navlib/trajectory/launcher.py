@@ -320,43 +320,58 @@ def launcher_ascent(**overrides) -> Trajectory:
         dk = ddelta[:, None] * (-np.sin(delta)[:, None] * up + np.cos(delta)[:, None] * downrange)
         return k, dk
 
-    def thrust_direction(t, V):
+    up_x, up_y, up_z = (float(c) for c in up)
+    dn_x, dn_y, dn_z = (float(c) for c in downrange)
+
+    def thrust_direction(t, V, speed):
+        """Unit thrust direction (x, y, z) at ``t`` for the velocity ``V`` of norm ``speed``
+        (scalar arithmetic: the operations of the 3-vector expressions, entry by entry)."""
         b = step(t, t_blend, tau_blend)
         x = (t - t_po) / tau_kick
         delta = kick * (1.0 if x >= 1.0 else step(t, t_po, tau_kick))
-        k = math.cos(delta) * up + math.sin(delta) * downrange
+        c, s = math.cos(delta), math.sin(delta)
+        k = (c * up_x + s * dn_x, c * up_y + s * dn_y, c * up_z + s * dn_z)
         if b == 0.0:
             return k
-        u = (1.0 - b) * k + b * V / math.sqrt(V @ V)
-        return u / math.sqrt(u @ u)
+        u = np.array([(1.0 - b) * k[i] + b * V[i] / speed for i in range(3)])
+        norm = math.sqrt(u @ u)
+        return u[0] / norm, u[1] / norm, u[2] / norm
 
     cd_a, scale_h, rho0 = p["drag_area_m2"], p["scale_height_m"], p["density_sea_level"]
     crossrange = np.cross(up, downrange)
     gust = _gust_field(p["gust_mps"], p["gust_gradient_m"], downrange, crossrange)
     cn_a = p["normal_force_slope_m2"]
 
-    def accel(t, P, V, m):
+    def forces(t, P, V, m):
+        """``(a_x, a_y, a_z, mdot)``: acceleration (ECEF, m/s^2) and mass flow (kg/s)."""
         thrust1, thrust2 = thrusts(t)
         speed = math.sqrt(V @ V)
         h = math.sqrt(P @ P) - r_surface
         half_rho = 0.5 * rho0 * math.exp(-max(h, 0.0) / scale_h)
-        acc = ((thrust1 + thrust2) * thrust_direction(t, V) - half_rho * speed * cd_a * V) / m
+        thrust, drag = thrust1 + thrust2, half_rho * speed * cd_a
+        direction = thrust_direction(t, V, speed)
+        acc = [(thrust * direction[i] - drag * V[i]) / m for i in range(3)]
         if speed > 0.0 and gust is not None:
             w = gust(h)
-            w_perp = w - V * ((V @ w) / (speed * speed))
-            acc = acc + (half_rho * speed * cn_a / m) * w_perp   # q C_Na S (w / V) / m
-        acc = acc + earth.normal_gravity_ecef(P)
+            along = (V @ w) / (speed * speed)
+            lift = half_rho * speed * cn_a / m                    # q C_Na S (w / V) / m
+            acc = [acc[i] + lift * (w[i] - V[i] * along) for i in range(3)]
+        g = earth.normal_gravity_point(P[0], P[1], P[2])
+        acc = [acc[i] + g[i] for i in range(3)]
         acc[0] += 2.0 * w_e * V[1]     # - 2 Omega x V, Omega = [0, 0, w_e]
         acc[1] -= 2.0 * w_e * V[0]
         mdot = -thrust1 / ve1 - thrust2 / ve2
         x = (t - t_sep) / tau_sep
         if 0.0 < x < 1.0:
             mdot -= m_dry1 * 140.0 * x**3 * (1.0 - x) ** 3 / tau_sep
-        return acc, mdot
+        return acc[0], acc[1], acc[2], mdot
+
+    def accel(t, P, V, m):
+        *acc, mdot = forces(t, P, V, m)
+        return np.array(acc), mdot
 
     def rhs(t, y):
-        acc, mdot = accel(t, y[:3], y[3:6], y[6])
-        return np.array([y[3], y[4], y[5], acc[0], acc[1], acc[2], mdot])
+        return np.array([y[3], y[4], y[5], *forces(t, y[:3], y[3:6], y[6])])
 
     t_end = p["duration_s"] + _MARGIN_S
     grid = np.linspace(0.0, t_end, int(np.ceil(t_end / p["grid_step_s"])) + 1)

@@ -15,7 +15,7 @@ takes 230-245 ms at its first 62 runs, 290-340 at its first 100 and 180-200 ms a
 (was 227). The process keeps up to :data:`TRIM_THRESHOLD_BYTES` of freed memory for
 its next arrays instead of returning it. Elsewhere (no glibc, or a numpy without the
 setting) nothing changes. The kernels of a report get the same settings through their
-environment (``navlib.reports.execution.MALLOC_VARIABLES`` and ``NUMPY_VARIABLES``).
+environment (``navlib.reports.execution.MALLOC_VARIABLES`` and ``HUGEPAGE_VARIABLES``).
 """
 
 from __future__ import annotations

@@ -102,6 +102,12 @@ def test_launcher_steps_are_the_models_euler_steps(ascent, config):
     idx = np.array([[0, 1, 2], [150, 7, ascent.t.size - 2]])
     F = model.discretize(method="euler").F
     np.testing.assert_array_equal(steps.transitions(idx), F[idx])
+    H = np.asarray(model.H)
+    np.testing.assert_array_equal(np.asarray(steps.H), H)     # formed on demand (RT) or not
+    if H.ndim == 3:
+        np.testing.assert_array_equal(steps.H[idx], H[idx])
+        np.testing.assert_array_equal(steps.H[5:9], H[5:9])
+        np.testing.assert_array_equal(steps.H[7], H[7])
     a, b = local_observability(model), local_observability(steps)
     np.testing.assert_array_equal(a.singular_values, b.singular_values)
     np.testing.assert_array_equal(local_matrix(model, 40), local_matrix(steps, 40))

@@ -432,12 +432,12 @@ def test_queue_puts_what_a_waiting_notebook_needs_first(good, tmp_path, monkeypa
 
 def test_kernel_environment_shares_the_cores(monkeypatch):
     for name in (*reports.BLAS_THREAD_VARIABLES, *reports.MALLOC_VARIABLES,
-                 *reports.NUMPY_VARIABLES):
+                 *reports.HUGEPAGE_VARIABLES):
         monkeypatch.delenv(name, raising=False)
     monkeypatch.setattr(execution, "available_cpus", lambda: 4)
     assert reports.kernel_environment(2) == {
         **dict.fromkeys(reports.BLAS_THREAD_VARIABLES, "2"), **reports.MALLOC_VARIABLES,
-        **reports.NUMPY_VARIABLES}
+        "NUMPY_MADVISE_HUGEPAGE": "0"}
     monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "0")
     assert "MALLOC_TRIM_THRESHOLD_" not in reports.kernel_environment(2)
     assert reports.kernel_environment(8)["OMP_NUM_THREADS"] == "1"
