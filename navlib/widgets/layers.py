@@ -163,7 +163,8 @@ def data_artists(ax, framed=()) -> list:
 def frame_key(ax, framed=()) -> tuple:
     """What the frame of ``ax`` (patch, grid, ticks and their labels, axis labels, titles,
     the artists under the grid, a legend in ``framed``) depends on: equal keys draw equal
-    frames.
+    frames. Its first entry holds the keys of the x axis, the y axis and the titles, and
+    of what they all depend on (place, visibility).
 
     Parameters
     ----------
@@ -176,14 +177,7 @@ def frame_key(ax, framed=()) -> tuple:
     tuple
     """
     legend = ax.get_legend()
-    return (tuple(ax.get_position().bounds), ax.get_visible(), ax.axison,
-            ax.get_xlim(), ax.get_ylim(), ax.get_xscale(), ax.get_yscale(),
-            ax.get_xlabel(), ax.get_ylabel(),
-            tuple(ax.get_title(loc) for loc in ("left", "center", "right")),
-            tuple(_ticker(t) for axis in (ax.xaxis, ax.yaxis)
-                  for t in (axis.get_major_locator(), axis.get_major_formatter(),
-                            axis.get_minor_locator(), axis.get_minor_formatter())),
-            tuple(_artist_key(a) for a in _frame_artists(ax)),
+    return (_side_keys(ax), tuple(_artist_key(a) for a in _frame_artists(ax)),
             None if legend not in framed else
             (str(legend._get_loc()), tuple(t.get_text() for t in legend.get_texts())))
 
@@ -330,7 +324,6 @@ class LayeredFigure:
         self.background = None
         self.blank = None
         self.keys: list = []
-        self.side_keys: list = []
         self.boxes: list = []
         self.figure_key = None
         self.regions: list = []
@@ -435,15 +428,15 @@ class LayeredFigure:
                     grown = True
         return group
 
-    def _kept_sides(self, group: set, keys: dict) -> dict:
+    def _kept_sides(self, group: set, sides: dict) -> dict:
         """Per axes of ``group``, the :data:`SIDES` whose keys did not change, when the
         rest of its frame can be redrawn without their texts; titles only where they stay
         put (:func:`~navlib.widgets.panel_layout.freeze_decorations`: matplotlib places
         the others at each draw, from decorations of the other sides)."""
-        axes = self.fig.axes
-        return {i: tuple(side for side in SIDES if keys[i][side] == self.side_keys[i][side]
+        axes, old = self.fig.axes, [key[0] for key in self.keys]
+        return {i: tuple(side for side in SIDES if sides[i][side] == old[i][side]
                          and (side != "title" or axes[i]._autotitlepos is False))
-                if keys[i]["base"] == self.side_keys[i]["base"]
+                if sides[i]["base"] == old[i]["base"]
                 and _keeps_clear_of_its_sides(axes[i]) else () for i in group}
 
     def _ink(self, box: Bbox) -> tuple:
@@ -468,8 +461,9 @@ class LayeredFigure:
                 bands.append((min(r[0] for r in rects), top, max(r[2] for r in rects), bottom))
         return bands
 
-    def _plan(self, group: set, keys: dict, renderer) -> tuple:
-        """(pixel rectangles to clear, {kept text: its pixels}) of the axes in ``group``.
+    def _plan(self, group: set, sides: dict, renderer) -> tuple:
+        """(pixel rectangles to clear, {kept text: its pixels}) of the axes in ``group``,
+        whose sides' keys are now ``sides``.
 
         An axes whose side keys all changed, or which cannot be redrawn in parts, clears
         its whole region. The others clear their plot area (with room for antialiased
@@ -477,11 +471,11 @@ class LayeredFigure:
         (:meth:`_bands`), and keep the texts of their unchanged sides, but for those that
         meet a cleared place: these are cleared and drawn again too."""
         room = renderer.points_to_pixels(EDGE_ROOM_PT)
-        kept = self._kept_sides(group, keys)
+        kept = self._kept_sides(group, sides)
         zones, keep = [], {}
         for i in group:
             ax, boxes = self.fig.axes[i], self.boxes[i]
-            zones += self._bands(i, [s for s in ("x", "y") if keys[i][s] != self.side_keys[i][s]])
+            zones += self._bands(i, [s for s in ("x", "y") if sides[i][s] != self.keys[i][0][s]])
             if not kept[i]:
                 zones.append(self._pixels(self.regions[i]))
                 continue
@@ -499,10 +493,11 @@ class LayeredFigure:
             zones += [keep.pop(t) for t in crowded]
         return zones, keep
 
-    def _draw_changed_frames(self, changed: list) -> bool:
+    def _draw_changed_frames(self, changed: list, keys: list) -> bool:
         """Clear and draw again the frames of the axes in ``changed`` (and of those whose
-        regions meet theirs) on the kept background; False when a frame grew into another
-        one, a kept text or a figure text (the caller then draws everything).
+        regions meet theirs), whose frame keys are now ``keys``, on the kept background;
+        False when a frame grew into another one, a kept text or a figure text (the caller
+        then draws everything).
 
         The texts of a frame's unchanged sides (x axis, y axis, titles) are kept where no
         cleared place meets them (:meth:`_plan`): about half of a frame's drawing when new
@@ -510,15 +505,15 @@ class LayeredFigure:
         axes = self.fig.axes
         group = self._group(changed)
         renderer = self.canvas.get_renderer()
-        keys = {i: _side_keys(axes[i]) for i in group}
-        zones, keep = self._plan(group, keys, renderer)
+        sides = {i: keys[i][0] for i in group}
+        zones, keep = self._plan(group, sides, renderer)
         self.canvas.restore_region(self.background)
         for rect in zones:  # xy is Agg's offset of the copy, not its place
             self.canvas.restore_region(self.blank, bbox=rect, xy=(0, 0))
         # an axis label stays where the last draw put it when its tick labels are the same
         fixed = [axis for i in group for side, axis in (("x", axes[i].xaxis),
                                                         ("y", axes[i].yaxis))
-                 if axis._autolabelpos and keys[i][side] == self.side_keys[i][side]]
+                 if axis._autolabelpos and sides[i][side] == self.keys[i][0][side]]
         self._hide_data(True)
         for text in keep:
             text.set_visible(False)
@@ -572,10 +567,9 @@ class LayeredFigure:
             self._draw_all_frames()
         else:
             changed = [i for i, (a, b) in enumerate(zip(keys, self.keys, strict=True)) if a != b]
-            if changed and not self._draw_changed_frames(changed):
+            if changed and not self._draw_changed_frames(changed, keys):
                 self._draw_all_frames()
         self.keys, self.figure_key = keys, figure_key
-        self.side_keys = [_side_keys(ax) for ax in self.fig.axes]
         if not self._layered():  # a full draw interleaves the axes' frames and data
             self.canvas.draw()
             return encode_png(self.canvas.buffer_rgba())
