@@ -46,7 +46,15 @@ from navlib.trajectory.initial_attitude import (
     logged_attitude,
     start_attitude,
 )
-from navlib.trajectory.liftoff import find_liftoff, gnss_still, liftoff_knots, pad_start
+from navlib.trajectory.liftoff import (
+    LIFTOFF_KNOTS_S,
+    find_liftoff,
+    gnss_still,
+    liftoff_knots,
+    pad_fix_times,
+    pad_start,
+    thrust_change_knots,
+)
 from navlib.trajectory.position_spline import (
     ATTITUDE_SAMPLES_PER_KNOT,
     MAX_KNOT_SPACING_S,
@@ -390,11 +398,11 @@ def _fit(imu, gnss, p) -> Trajectory:
     f_b = np.column_stack([imu_cols[c][keep] for c in ("f_x", "f_y", "f_z")])
     w_b = np.column_stack([imu_cols[c][keep] for c in ("w_x", "w_y", "w_z")])
     rate, holes = rate_and_holes(t, p["max_bridge_s"])
-    g_keep = (gnss_cols["t"] >= t[0]) & (gnss_cols["t"] <= t[-1])
+    pad, t_fix, g_keep = _pad_and_fixes(t, f_b, w_b, gnss_cols, p)
     if g_keep.sum() < _MIN_GNSS:
         raise NavlibInputError(
             f"gnss: need at least {_MIN_GNSS} epochs inside the IMU span, got {g_keep.sum()}")
-    t_g = gnss_cols["t"][g_keep]
+    t_g, t_stamp = t_fix[g_keep], gnss_cols["t"][g_keep]
     P_g = np.column_stack([gnss_cols[c][g_keep] for c in GNSS_COLUMNS[1:]])
     V_g = (np.column_stack([gnss_cols[c][g_keep] for c in GNSS_VELOCITY_COLUMNS])
            if "vx" in gnss_cols else None)
@@ -410,10 +418,6 @@ def _fit(imu, gnss, p) -> Trajectory:
     # Earth rotation since t[0] (ECEF mechanisation: C(t) = E(t) C0 B(t), E = exp(-S(Omega) t))
     earth_turn = Rotation.from_rotvec(np.outer(-(t - t[0]), earth.EARTH_RATE_ECEF))
     relative = earth_turn * strapdown.body_attitude(t, w_b)   # E(t) B(t): the start taken as I
-    pad = find_liftoff(t, f_b, w_b, float(np.linalg.norm(gamma0)), p["level_tolerance"]) \
-        if p["hold_pad"] else None
-    if pad is not None and not gnss_still(t_g, P_g, pad[0]):
-        pad = None                 # an IMU at rest over a moving vehicle: a hover, not a pad
     pad_end = None if pad is None else pad[1]
     user = p["initial_attitude"] is not None or p["initial_attitude_deg"] is not None
     logged = logged_attitude(imu, t[0], C_n_e) if (
@@ -471,8 +475,11 @@ def _fit(imu, gnss, p) -> Trajectory:
 
     # 3: position spline and attitude correction --------------------------------------
     knots = place_knots(t, p["knot_spacing_s"])
+    keep_out = None
     if pad is not None:
         knots = liftoff_knots(knots, t, pad_end)
+        keep_out = (float(t[pad_end]), float(t[pad_end]) + LIFTOFF_KNOTS_S)
+    knots = thrust_change_knots(knots, t, f_b, keep_out)
     resolved = resolved_samples(t, w_b)
     sigma_sa, scale_note = np.full(3, accel_scale_sigma(p)), ""
     while True:
@@ -510,7 +517,7 @@ def _fit(imu, gnss, p) -> Trajectory:
     traj = build_trajectory(t, P, V, a, C_b_e, w_eb_b, events=events, name=str(p["name"]))
     residuals = _residuals(traj, f_b, w_b, rows, coef, t_g, P_g, V_g)
     if p["estimate_gnss_lag"]:
-        lags, rms = lag_profile(rows, f_e, coef, t_g, P_g, V_g, sigma)
+        lags, rms = lag_profile(rows, f_e, coef, t_stamp, P_g, V_g, sigma)
         residuals["gnss_lag_profile"] = {"lag_s": lags.tolist(), "rms_m": rms.tolist()}
     residuals.update({
         "heading_deg": float(np.degrees(heading_of(attitude_fit[0], C_n_e))),
@@ -556,6 +563,26 @@ def _correct(rows, attitude, f_b, t, p, sigma_sa):
         rows.robust_weights(coef, f_e, eps)
         attitude = Rotation.from_rotvec(eps) * attitude
     return correction, attitude, coef
+
+
+def _pad_and_fixes(t, f_b, w_b, gnss_cols, p):
+    """The pad (:func:`find_liftoff`, None without one or when the fixes before lift-off
+    move: a hover), the fix times (fixes stamped just before a pad record at its first
+    sample, :func:`pad_fix_times`) and which fixes lie inside the IMU span."""
+    t_stamp = gnss_cols["t"]
+    pad = None
+    if p["hold_pad"]:
+        first = np.array([gnss_cols[c][0] for c in GNSS_COLUMNS[1:]])
+        g = float(np.linalg.norm(earth.normal_gravity_ecef(first)))
+        pad = find_liftoff(t, f_b, w_b, g, p["level_tolerance"])
+    t_fix = pad_fix_times(t_stamp, t[0], pad is not None)
+    inside = (t_fix >= t[0]) & (t_fix <= t[-1])
+    P = np.column_stack([gnss_cols[c] for c in GNSS_COLUMNS[1:]])
+    if pad is not None and not gnss_still(t_fix[inside], P[inside], pad[0]):
+        pad = None                 # an IMU at rest over a moving vehicle: a hover, not a pad
+        t_fix = t_stamp
+        inside = (t_fix >= t[0]) & (t_fix <= t[-1])
+    return pad, t_fix, inside
 
 
 def _hold_pad(attitude, pad_end):

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from navlib.io.gnss_faults import grid_minimum
+from navlib.trajectory.liftoff import pad_fix_times
 
 __all__ = ["LAG_MIN_GAIN", "LAG_ROUNDS", "LAG_STEP_S", "MAX_GNSS_LAG_S", "MIN_GNSS_LAG_S",
            "best_lag", "lag_displacement", "lag_profile"]
@@ -43,9 +44,10 @@ def lag_profile(rows, f_e, coef, t_g, P_g, V_g, sigma):
     Each lag refits the position spline of ``rows`` (its IMU rows and weights, the specific
     force ``f_e`` of the first fit's attitude, gravity and Coriolis at the first fit's motion:
     a lag moves the positions by metres, gravity by a millionth) with the fixes at
-    ``t_g - lag``; the residual
-    is taken over the fixes that stay inside the spline's span at every lag, so every lag is
-    judged on the same fixes.
+    ``t_g - lag`` (those moved just before the first sample of a record that starts on a pad
+    at that sample: :func:`~navlib.trajectory.liftoff.pad_fix_times`); the residual is taken
+    over the fixes that stay inside the spline's span at every lag, so every lag is judged on
+    the same fixes.
 
     Parameters
     ----------
@@ -74,14 +76,16 @@ def lag_profile(rows, f_e, coef, t_g, P_g, V_g, sigma):
     n_steps = round(MAX_GNSS_LAG_S / LAG_STEP_S)
     lags = LAG_STEP_S * np.arange(-n_steps, n_steps + 1)
     t0, t1 = rows.knots[0], rows.knots[-1]
-    common = (t_g - lags.max() >= t0) & (t_g - lags.min() <= t1)
+    on_pad = rows.N_pad is not None
+    t_lag = [pad_fix_times(t_g - lag, t0, on_pad) for lag in lags]
+    common = np.logical_and.reduce([(t_k >= t0) & (t_k <= t1) for t_k in t_lag])
     rms = np.full(lags.size, np.nan)
     if common.sum() < 4:
         return lags, rms
     imu_rhs = rows.imu_rhs(f_e, coef)      # gravity and Coriolis at the first fit's motion
-    for k, lag in enumerate(lags):
-        inside = (t_g - lag >= t0) & (t_g - lag <= t1)
-        moved = rows.with_gnss_times(t_g[inside] - lag, P_g[inside],
+    for k, t_k in enumerate(t_lag):
+        inside = (t_k >= t0) & (t_k <= t1)
+        moved = rows.with_gnss_times(t_k[inside], P_g[inside],
                                      None if V_g is None else V_g[inside], sigma[inside])
         c = moved.solve_rhs(imu_rhs)
         judged = common[inside]

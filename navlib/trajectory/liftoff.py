@@ -13,9 +13,26 @@ from navlib import earth
 from navlib.trajectory.position_spline import SAMPLES_PER_KNOT, SPLINE_DEGREE
 from navlib.units import DEG
 
-__all__ = ["LIFTOFF_ACCEL_MPS2", "LIFTOFF_HOLD_S", "LIFTOFF_KNOTS_S", "LIFTOFF_SMOOTH_S",
-           "MIN_PAD_SAMPLES", "PAD_ACCEL_MPS2", "PAD_GNSS_SPEED_MPS", "PAD_RATE_DEG_S",
-           "find_liftoff", "gnss_still", "liftoff_knots", "moving_average", "pad_start"]
+__all__ = [
+    "LIFTOFF_ACCEL_MPS2",
+    "LIFTOFF_HOLD_S",
+    "LIFTOFF_KNOTS_S",
+    "LIFTOFF_SMOOTH_S",
+    "MIN_PAD_SAMPLES",
+    "PAD_ACCEL_MPS2",
+    "PAD_FIX_BEFORE_S",
+    "PAD_GNSS_SPEED_MPS",
+    "PAD_RATE_DEG_S",
+    "THRUST_CHANGE_MPS2",
+    "THRUST_CHANGE_S",
+    "find_liftoff",
+    "gnss_still",
+    "liftoff_knots",
+    "moving_average",
+    "pad_fix_times",
+    "pad_start",
+    "thrust_change_knots",
+]
 
 LIFTOFF_ACCEL_MPS2 = 2.0
 """Specific force above gravity that marks a powered lift-off when it lasts
@@ -34,9 +51,22 @@ MIN_PAD_SAMPLES = 3
 PAD_GNSS_SPEED_MPS = 0.5
 """Largest speed of the straight line through the fixes before lift-off, m/s (the
 segmentation's rest acceleration scale: a pad does not travel)."""
+PAD_FIX_BEFORE_S = 2.0
+"""How long before a record's first sample a fix may be stamped and still be taken as the
+pad's position when the record starts on the pad, s (:func:`pad_fix_times`): a flight
+computer keeps a short pre-launch buffer (0.3 s in AltOS exports) whose first row carries the
+last fix before it, and a GNSS lag moves the fixes back by up to
+:data:`navlib.trajectory.gnss_lag.MAX_GNSS_LAG_S`."""
 LIFTOFF_KNOTS_S = 0.4
 """Span after lift-off with knots every ``SAMPLES_PER_KNOT`` samples, s: twice
 ``LIFTOFF_HOLD_S``, time for the thrust to build up."""
+THRUST_CHANGE_MPS2 = 20.0
+"""Change of the specific force averaged over ``LIFTOFF_HOLD_S`` that marks an abrupt, lasting
+change of thrust (a burnout, a staging; :func:`thrust_change_knots`), m/s^2: 2 g, ten times
+the lift-off threshold, so motor vibration does not reach it."""
+THRUST_CHANGE_S = 0.1
+"""Half-width of the stretch with dense knots about an abrupt change of thrust, s: the spread
+of a burnout's tail-off (:func:`thrust_change_knots`)."""
 
 
 def moving_average(t, x, window_s):
@@ -170,6 +200,99 @@ def gnss_still(t_g, P_g, t_liftoff):
     noise = float(np.sqrt(np.mean((P_g[sel] - offset - np.outer(x, slope)) ** 2)))
     limit = PAD_GNSS_SPEED_MPS + 3.0 * noise * np.sqrt(3.0 / np.sum(x**2))
     return bool(np.linalg.norm(slope) <= limit)
+
+
+def _step(t, f_avg, gap):
+    """Norm of the change of the averaged specific force from ``gap`` before to ``gap``
+    after each sample, m/s^2."""
+    return np.linalg.norm(np.column_stack([np.interp(t + gap, t, f_avg[:, i])
+                                           - np.interp(t - gap, t, f_avg[:, i])
+                                           for i in range(3)]), axis=1)
+
+
+def thrust_change_knots(knots, t, f_b, keep_out=None):
+    """``knots`` with knots every ``SAMPLES_PER_KNOT`` samples where the thrust changes
+    abruptly and stays changed (docs/assumptions.md FIT4): a burnout turns a rocket's specific
+    force from several g forward to a drag backward within a tenth of a second, which a 0.1 s
+    knot interval of the quintic position spline cannot follow; the misfit it leaves has the
+    same sign at every burnout and is otherwise taken up by the accelerometer scale the fit
+    estimates, bending the whole ascent.
+
+    The specific force is averaged over ``LIFTOFF_HOLD_S``; a sample is marked where that
+    average changes by more than ``THRUST_CHANGE_MPS2`` from ``THRUST_CHANGE_S +
+    LIFTOFF_HOLD_S / 2`` before to as long after it, and again over twice those spans (a
+    change that lasts: an ejection charge's shock of a few hundredths of a second is none).
+    The samples within ``THRUST_CHANGE_S`` of a marked one get dense knots, replacing those
+    of ``knots``. A record sampled too sparsely for denser knots keeps its own.
+
+    Parameters
+    ----------
+    knots : numpy.ndarray
+        Knot vector.
+    t : numpy.ndarray
+        Sample times, s.
+    f_b : numpy.ndarray
+        Specific force, m/s^2, (N, 3).
+    keep_out : tuple of float, optional
+        A time span whose knots stay as they are (the lift-off's, :func:`liftoff_knots`), s.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    f_avg = moving_average(t, f_b, LIFTOFF_HOLD_S)
+    gap = THRUST_CHANGE_S + 0.5 * LIFTOFF_HOLD_S
+    marked = (_step(t, f_avg, gap) > THRUST_CHANGE_MPS2) & (
+        _step(t, f_avg, 2.0 * gap) > THRUST_CHANGE_MPS2)
+    margin = SAMPLES_PER_KNOT
+    near = np.zeros(t.size + 1, dtype=int)
+    np.add.at(near, np.searchsorted(t, t[marked] - THRUST_CHANGE_S), 1)
+    np.add.at(near, np.searchsorted(t, t[marked] + THRUST_CHANGE_S, side="right"), -1)
+    near = np.cumsum(near[:-1]) > 0
+    near[:margin] = near[t.size - margin:] = False
+    if keep_out is not None:
+        lo, hi = np.searchsorted(t, keep_out[0]), np.searchsorted(t, keep_out[1], side="right")
+        near[max(lo - margin, 0):hi + margin] = False
+    idx = np.flatnonzero(near)
+    inner = knots[SPLINE_DEGREE + 1:-SPLINE_DEGREE - 1]
+    dense = []
+    for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []:
+        span = (t[run[0] - margin], t[run[-1] + margin])
+        stretch = t[run[::SAMPLES_PER_KNOT]]
+        if stretch.size <= np.count_nonzero((inner > span[0]) & (inner < span[1])):
+            continue                     # no denser than the knots already there
+        inner = inner[(inner < span[0]) | (inner > span[1])]
+        dense.append(stretch)
+    if not dense:
+        return knots
+    return np.r_[knots[:SPLINE_DEGREE + 1], np.sort(np.r_[inner, *dense]),
+                 knots[-SPLINE_DEGREE - 1:]]
+
+
+def pad_fix_times(t_g, t_first, on_pad: bool) -> np.ndarray:
+    """Fix times with the fixes stamped up to :data:`PAD_FIX_BEFORE_S` before the record's
+    first sample moved to that sample, when the record starts on a pad (docs/assumptions.md
+    FIT4): the vehicle stood still there before the record began, so such a fix is the pad's
+    position. Without a pad, or for earlier fixes, the times are unchanged.
+
+    Parameters
+    ----------
+    t_g : numpy.ndarray
+        Fix times, s.
+    t_first : float
+        The record's first sample, s.
+    on_pad : bool
+        Whether the record starts on a pad (:func:`find_liftoff`).
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    t_g = np.asarray(t_g, dtype=float)
+    if not on_pad:
+        return t_g
+    early = (t_g < t_first) & (t_g >= t_first - PAD_FIX_BEFORE_S)
+    return np.where(early, t_first, t_g)
 
 
 def pad_start(t, imu, P0, t_start, tolerance) -> float:

@@ -19,7 +19,7 @@ NEW_HEAD = ("serial,flight,call,time,state,state_name,acceleration,pressure,alti
 OLD_HEAD = ("time,acceleration,pressure,altitude,height,speed,temperature,accel_x,accel_y,"
             "accel_z,gyro_roll,gyro_pitch,gyro_yaw,mag_x,mag_y,mag_z,tilt,latitude,longitude,"
             "altitude").split(",")
-STATES = {"boost": 3, "coast": 5, "drogue": 6, "landed": 8}
+STATES = {"boost": 3, "coast": 5, "drogue": 6, "main": 7, "landed": 8}
 IMU = ("accel_x", "accel_y", "accel_z", "gyro_roll", "gyro_pitch", "gyro_yaw")
 GPS = ("nsat", "latitude", "longitude", "altitude", "hour", "minute", "second", "pdop",
        "hdop", "vdop")

@@ -20,6 +20,7 @@ from navlib.studies.assess.agreement import (
 )
 from navlib.studies.assess.inputs import GNSS_KEYS, IMU_KEYS, check_frame
 from navlib.trajectory import fit_flight_data
+from navlib.trajectory.liftoff import pad_fix_times
 from navlib.trajectory.position_spline import coning_per_sample, resolved_samples
 
 __all__ = ["fit_notes", "fit_records", "fit_report", "fit_residuals"]
@@ -94,10 +95,11 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
     -------
     gnss_residuals : DataFrame
         At the GNSS epochs inside the trajectory span (moved back by the lag the fit found,
-        ``parameters["fit_residuals"]["gnss_lag_s"]``): ``t``, ``dx, dy, dz`` (recorded minus
-        fitted ECEF position, m), ``d3`` (their norm) and, with GNSS velocity, ``dvx, dvy,
-        dvz`` (m/s). The fit is interpolated linearly between its samples (error below
-        ``|a| dt^2 / 8``: 1.4 mm at 110 m/s^2 and 100 Hz).
+        ``parameters["fit_residuals"]["gnss_lag_s"]``; a fix just before a record that
+        starts on a pad at its first sample, :func:`~navlib.trajectory.liftoff.pad_fix_times`):
+        ``t``, ``dx, dy, dz`` (recorded minus fitted ECEF position, m), ``d3`` (their norm)
+        and, with GNSS velocity, ``dvx, dvy, dvz`` (m/s). The fit is interpolated linearly
+        between its samples (error below ``|a| dt^2 / 8``: 1.4 mm at 110 m/s^2 and 100 Hz).
     imu_residuals : DataFrame
         At the trajectory samples (the IMU times of the fit): ``t``, ``df_x, df_y, df_z``
         (recorded minus the fit's exact specific force, m/s^2), ``dw_x, dw_y, dw_z``
@@ -114,7 +116,9 @@ def fit_residuals(trajectory, imu: pd.DataFrame, gnss: pd.DataFrame, bounds: dic
     check_frame(gnss, "gnss", GNSS_KEYS)
     t = np.asarray(trajectory.t, dtype=float)
     lag = trajectory.parameters.get("fit_residuals", {}).get("gnss_lag_s", 0.0)
-    t_g = gnss["t"].to_numpy(dtype=float) - lag     # the fixes where the fit put them
+    # the fixes where the fit put them: moved back by the lag, those just before a pad at it
+    t_g = pad_fix_times(gnss["t"].to_numpy(dtype=float) - lag, t[0],
+                        "liftoff" in trajectory.events)
     keep = (t_g >= t[0]) & (t_g <= t[-1])
     out = {"t": t_g[keep]}
     for i, axis in enumerate("xyz"):
