@@ -48,10 +48,8 @@ from navlib.trajectory.initial_attitude import (
 )
 from navlib.trajectory.liftoff import (
     LIFTOFF_KNOTS_S,
-    find_liftoff,
-    gnss_still,
     liftoff_knots,
-    pad_fix_times,
+    pad_and_fixes,
     pad_start,
     thrust_change_knots,
 )
@@ -398,7 +396,10 @@ def _fit(imu, gnss, p) -> Trajectory:
     f_b = np.column_stack([imu_cols[c][keep] for c in ("f_x", "f_y", "f_z")])
     w_b = np.column_stack([imu_cols[c][keep] for c in ("w_x", "w_y", "w_z")])
     rate, holes = rate_and_holes(t, p["max_bridge_s"])
-    pad, t_fix, g_keep = _pad_and_fixes(t, f_b, w_b, gnss_cols, p)
+    P_all = np.column_stack([gnss_cols[c] for c in GNSS_COLUMNS[1:]])
+    pad, t_fix, g_keep = (pad_and_fixes(t, f_b, w_b, gnss_cols["t"], P_all, p["level_tolerance"])
+                          if p["hold_pad"] else (None, gnss_cols["t"], (gnss_cols["t"] >= t[0])
+                                                 & (gnss_cols["t"] <= t[-1])))
     if g_keep.sum() < _MIN_GNSS:
         raise NavlibInputError(
             f"gnss: need at least {_MIN_GNSS} epochs inside the IMU span, got {g_keep.sum()}")
@@ -479,8 +480,8 @@ def _fit(imu, gnss, p) -> Trajectory:
     if pad is not None:
         knots = liftoff_knots(knots, t, pad_end)
         keep_out = (float(t[pad_end]), float(t[pad_end]) + LIFTOFF_KNOTS_S)
-    knots = thrust_change_knots(knots, t, f_b, keep_out)
     resolved = resolved_samples(t, w_b)
+    knots = thrust_change_knots(knots, t, f_b, resolved, keep_out)
     sigma_sa, scale_note = np.full(3, accel_scale_sigma(p)), ""
     while True:
         rows = PositionRows(knots, t, t_g, P_g, V_g, sigma, p, P_start, pad_end, resolved)
@@ -563,26 +564,6 @@ def _correct(rows, attitude, f_b, t, p, sigma_sa):
         rows.robust_weights(coef, f_e, eps)
         attitude = Rotation.from_rotvec(eps) * attitude
     return correction, attitude, coef
-
-
-def _pad_and_fixes(t, f_b, w_b, gnss_cols, p):
-    """The pad (:func:`find_liftoff`, None without one or when the fixes before lift-off
-    move: a hover), the fix times (fixes stamped just before a pad record at its first
-    sample, :func:`pad_fix_times`) and which fixes lie inside the IMU span."""
-    t_stamp = gnss_cols["t"]
-    pad = None
-    if p["hold_pad"]:
-        first = np.array([gnss_cols[c][0] for c in GNSS_COLUMNS[1:]])
-        g = float(np.linalg.norm(earth.normal_gravity_ecef(first)))
-        pad = find_liftoff(t, f_b, w_b, g, p["level_tolerance"])
-    t_fix = pad_fix_times(t_stamp, t[0], pad is not None)
-    inside = (t_fix >= t[0]) & (t_fix <= t[-1])
-    P = np.column_stack([gnss_cols[c] for c in GNSS_COLUMNS[1:]])
-    if pad is not None and not gnss_still(t_fix[inside], P[inside], pad[0]):
-        pad = None                 # an IMU at rest over a moving vehicle: a hover, not a pad
-        t_fix = t_stamp
-        inside = (t_fix >= t[0]) & (t_fix <= t[-1])
-    return pad, t_fix, inside
 
 
 def _hold_pad(attitude, pad_end):

@@ -29,6 +29,7 @@ __all__ = [
     "gnss_still",
     "liftoff_knots",
     "moving_average",
+    "pad_and_fixes",
     "pad_fix_times",
     "pad_start",
     "thrust_change_knots",
@@ -210,7 +211,7 @@ def _step(t, f_avg, gap):
                                            for i in range(3)]), axis=1)
 
 
-def thrust_change_knots(knots, t, f_b, keep_out=None):
+def thrust_change_knots(knots, t, f_b, resolved, keep_out=None):
     """``knots`` with knots every ``SAMPLES_PER_KNOT`` samples where the thrust changes
     abruptly and stays changed (docs/assumptions.md FIT4): a burnout turns a rocket's specific
     force from several g forward to a drag backward within a tenth of a second, which a 0.1 s
@@ -222,8 +223,10 @@ def thrust_change_knots(knots, t, f_b, keep_out=None):
     average changes by more than ``THRUST_CHANGE_MPS2`` from ``THRUST_CHANGE_S +
     LIFTOFF_HOLD_S / 2`` before to as long after it, and again over twice those spans (a
     change that lasts: an ejection charge's shock of a few hundredths of a second is none).
-    The samples within ``THRUST_CHANGE_S`` of a marked one get dense knots, replacing those
-    of ``knots``. A record sampled too sparsely for denser knots keeps its own.
+    Only samples whose rotation the sample rate resolves are marked (a tumbling burst shakes
+    the average as much, and inside a GNSS gap dense knots would let the spline swing). The
+    samples within ``THRUST_CHANGE_S`` of a marked one get dense knots, replacing those of
+    ``knots``. A record sampled too sparsely for denser knots keeps its own.
 
     Parameters
     ----------
@@ -233,6 +236,9 @@ def thrust_change_knots(knots, t, f_b, keep_out=None):
         Sample times, s.
     f_b : numpy.ndarray
         Specific force, m/s^2, (N, 3).
+    resolved : numpy.ndarray of bool
+        Samples whose rotation is resolved
+        (:func:`navlib.trajectory.position_spline.resolved_samples`).
     keep_out : tuple of float, optional
         A time span whose knots stay as they are (the lift-off's, :func:`liftoff_knots`), s.
 
@@ -243,7 +249,7 @@ def thrust_change_knots(knots, t, f_b, keep_out=None):
     f_avg = moving_average(t, f_b, LIFTOFF_HOLD_S)
     gap = THRUST_CHANGE_S + 0.5 * LIFTOFF_HOLD_S
     marked = (_step(t, f_avg, gap) > THRUST_CHANGE_MPS2) & (
-        _step(t, f_avg, 2.0 * gap) > THRUST_CHANGE_MPS2)
+        _step(t, f_avg, 2.0 * gap) > THRUST_CHANGE_MPS2) & resolved
     margin = SAMPLES_PER_KNOT
     near = np.zeros(t.size + 1, dtype=int)
     np.add.at(near, np.searchsorted(t, t[marked] - THRUST_CHANGE_S), 1)
@@ -270,15 +276,17 @@ def thrust_change_knots(knots, t, f_b, keep_out=None):
 
 
 def pad_fix_times(t_g, t_first, on_pad: bool) -> np.ndarray:
-    """Fix times with the fixes stamped up to :data:`PAD_FIX_BEFORE_S` before the record's
+    """Fix times with the last fix stamped up to :data:`PAD_FIX_BEFORE_S` before the record's
     first sample moved to that sample, when the record starts on a pad (docs/assumptions.md
-    FIT4): the vehicle stood still there before the record began, so such a fix is the pad's
-    position. Without a pad, or for earlier fixes, the times are unchanged.
+    FIT4): the vehicle stood still there before the record began, so that fix is the pad's
+    position. Earlier fixes of that span (older fixes of the same pad), and all of them when a
+    fix already lies at the first sample, become NaN: outside every span. Without a pad, or
+    for fixes stamped earlier, the times are unchanged.
 
     Parameters
     ----------
     t_g : numpy.ndarray
-        Fix times, s.
+        Fix times, s, increasing.
     t_first : float
         The record's first sample, s.
     on_pad : bool
@@ -289,10 +297,48 @@ def pad_fix_times(t_g, t_first, on_pad: bool) -> np.ndarray:
     numpy.ndarray
     """
     t_g = np.asarray(t_g, dtype=float)
-    if not on_pad:
+    early = np.flatnonzero((t_g < t_first) & (t_g >= t_first - PAD_FIX_BEFORE_S))
+    if not on_pad or early.size == 0:
         return t_g
-    early = (t_g < t_first) & (t_g >= t_first - PAD_FIX_BEFORE_S)
-    return np.where(early, t_first, t_g)
+    out = t_g.copy()
+    out[early] = np.nan
+    if not np.any(t_g == t_first):
+        out[early[-1]] = t_first
+    return out
+
+
+def pad_and_fixes(t, f_b, w_b, t_stamp, P_g, tolerance):
+    """The pad of a record (:func:`find_liftoff`; None without one, or when the fixes before
+    lift-off move: a hover, :func:`gnss_still`), the fix times (:func:`pad_fix_times`) and
+    which fixes lie inside the record.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        IMU times, s.
+    f_b, w_b : numpy.ndarray
+        Specific force (m/s^2) and angular rate (rad/s), (N, 3).
+    t_stamp : numpy.ndarray
+        Fix times as given, s.
+    P_g : numpy.ndarray
+        ECEF fix positions, m, (M, 3); the first sets local gravity.
+    tolerance : float
+        Levelling tolerance, a fraction of gravity.
+
+    Returns
+    -------
+    pad : tuple or None
+    t_fix : numpy.ndarray
+    inside : numpy.ndarray of bool
+    """
+    g = float(np.linalg.norm(earth.normal_gravity_ecef(P_g[0])))
+    pad = find_liftoff(t, f_b, w_b, g, tolerance)
+    t_fix = pad_fix_times(t_stamp, t[0], pad is not None)
+    inside = (t_fix >= t[0]) & (t_fix <= t[-1])
+    if pad is not None and not gnss_still(t_fix[inside], P_g[inside], pad[0]):
+        pad, t_fix = None, np.asarray(t_stamp, dtype=float)
+        inside = (t_fix >= t[0]) & (t_fix <= t[-1])
+    return pad, t_fix, inside
 
 
 def pad_start(t, imu, P0, t_start, tolerance) -> float:

@@ -16,13 +16,20 @@ from navlib.trajectory.position_spline import SPLINE_DEGREE, place_knots
 G = 9.80665
 
 
-@given(st.floats(-10.0, 10.0), st.lists(st.floats(-5.0, 5.0), min_size=1, max_size=8))
-def test_only_fixes_just_before_a_pad_record_move_to_its_first_sample(t_first, offsets):
-    t_g = t_first + np.array(offsets)
+@given(st.floats(-10.0, 10.0), st.lists(st.floats(-5.0, 5.0), min_size=1, max_size=8,
+                                        unique=True))
+def test_the_last_fix_just_before_a_pad_record_moves_to_its_first_sample(t_first, offsets):
+    t_g = np.unique(t_first + np.array(offsets))
     moved = pad_fix_times(t_g, t_first, True)
-    early = (t_g < t_first) & (t_g >= t_first - PAD_FIX_BEFORE_S)
-    assert np.all(moved[early] == t_first)
-    assert np.array_equal(moved[~early], t_g[~early])
+    early = np.flatnonzero((t_g < t_first) & (t_g >= t_first - PAD_FIX_BEFORE_S))
+    rest = np.setdiff1d(np.arange(t_g.size), early)
+    assert np.array_equal(moved[rest], t_g[rest])
+    if early.size:
+        at_first = np.any(t_g == t_first)
+        assert moved[early[-1]] == t_first or (at_first and np.isnan(moved[early[-1]]))
+        assert np.isnan(moved[early[:-1]]).all()
+        inside = moved[np.isfinite(moved)]
+        assert np.unique(inside).size == inside.size      # no two fixes at one time
     assert np.array_equal(pad_fix_times(t_g, t_first, False), t_g)
 
 
@@ -42,7 +49,8 @@ def _inner(knots):
 def test_a_burnout_gets_dense_knots_and_a_shock_does_not():
     t = np.round(np.arange(-0.3, 6.0, 0.01), 2)
     knots = place_knots(t, 0.1)
-    out = thrust_change_knots(knots, t, _burn(t, shock_at=4.0), keep_out=(-0.05, 0.4))
+    out = thrust_change_knots(knots, t, _burn(t, shock_at=4.0), np.ones(t.size, bool),
+                              keep_out=(-0.05, 0.4))
     near = lambda k, at: k[np.abs(k - at) <= THRUST_CHANGE_S]  # noqa: E731
     assert near(_inner(out), 2.0).size > 2 * near(_inner(knots), 2.0).size
     for at in (0.2, 4.0):      # inside the lift-off's span; the shock lasts under 0.2 s
@@ -51,7 +59,13 @@ def test_a_burnout_gets_dense_knots_and_a_shock_does_not():
     assert counts.min() >= 2                   # every interval keeps its samples
 
 
+def test_an_unresolved_change_gets_no_knots():
+    t = np.round(np.arange(-0.3, 6.0, 0.01), 2)
+    knots = place_knots(t, 0.1)
+    assert np.array_equal(thrust_change_knots(knots, t, _burn(t), t > 3.0), knots)
+
+
 def test_a_record_too_sparse_for_denser_knots_keeps_its_own():
     t = np.round(np.arange(-0.3, 6.0, 0.1), 1)
     knots = place_knots(t, 0.1)
-    assert np.array_equal(thrust_change_knots(knots, t, _burn(t)), knots)
+    assert np.array_equal(thrust_change_knots(knots, t, _burn(t), np.ones(t.size, bool)), knots)
