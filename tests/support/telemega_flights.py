@@ -55,8 +55,11 @@ def _fix_positions(truth, t_fix, rng, sigma_h_m, sigma_v_m, offset_m, tau_s):
 
 def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.97,
                     sigma_h_m=2.0, sigma_v_m=3.0, offset_m=2.0, tau_s=60.0,
-                    mission="hpr_rocket", **imu_overrides):
-    """Fly ``mission`` with ``changes`` (:func:`with_values`) and write its TeleMega export.
+                    mission="hpr_rocket", generation="version", gnss_gap=None,
+                    **imu_overrides):
+    """Fly ``mission`` with ``changes`` (:func:`with_values`) and write its TeleMega export
+    (``generation`` of :func:`write_altos`; ``gnss_gap``: ``(start, end)`` on the export's
+    clock with no new fix, a receiver that lost lock).
 
     Returns
     -------
@@ -92,6 +95,9 @@ def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.9
     t_fix = np.arange(t[0] + phase, t[-1] - latency_s - 0.1, 1.0)
     lat, lon, alt = _fix_positions(truth, t_fix, rng, sigma_h_m, sigma_v_m, offset_m, tau_s)
     arrival = t_fix + latency_s + rng.uniform(-0.03, 0.03, t_fix.size)
+    if gnss_gap is not None:
+        lost = (t_fix - t_detect >= gnss_gap[0]) & (t_fix - t_detect <= gnss_gap[1])
+        t_fix, lat, lon, alt, arrival = (x[~lost] for x in (t_fix, lat, lon, alt, arrival))
     t_log = t[keep]
     fix_of_row = np.searchsorted(arrival, t_log, side="right") - 1
     if np.any(fix_of_row < 0):
@@ -111,5 +117,5 @@ def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.9
         "gps_altitude": np.round(alt)[fix_of_row],
         "gps_second": fix_of_row,
     })
-    write_altos(path, rows)
+    write_altos(path, rows, generation=generation)
     return truth, t_detect

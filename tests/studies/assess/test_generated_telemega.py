@@ -1,10 +1,10 @@
-"""A generated TeleMega flight through the whole assessment (AltOS export, reader, fit,
+"""Generated TeleMega flights through the whole assessment (AltOS export, reader, fit,
 agreement): the motion flown is known, so the reference is checked against it, not only
 against the records (docs/assumptions.md FIT4; tests/support/telemega_flights.py).
 
-Before the pad's last fix was kept and the burnout got dense knots, this flight's fit put the
-pad 16-18 m from where it stood and its boost segment was flagged with a GNSS residual of
-15 m on fixes whose errors are 3-5 m."""
+Before the pad's last fix was kept and the burnout got dense knots, the first flight's fit was
+off the motion flown by up to 17.7 m over the ascent and its boost segment was flagged with a
+GNSS residual of 15.4 m on fixes whose errors are 3-5 m."""
 
 import warnings
 
@@ -22,11 +22,22 @@ STATED_IMU = {"accel_scale_factor": np.array([0.02, -0.015, 0.03]),
               "gyro_scale_factor": np.array([0.01, -0.02, 0.015])}
 """Turn-on errors within the MPU-6000's datasheet tolerances (+-3 % sensitivity), stated."""
 
+FLIGHTS = {
+    "K motor": ({}, {}),
+    "fast boost, older export": ({"phase.1.acceleration_m_s2": 150.0, "phase.1.burn_time_s": 2.0,
+                                  "rocket.drag_area_m2": 0.002}, {"generation": "legacy"}),
+    "rail at 75 deg": ({"phase.0.elevation_deg": 75.0, "phase.0.azimuth_deg": 250.0}, {}),
+    "no fix in the boost": ({}, {"gnss_gap": (0.0, 4.0)}),
+}
+"""Mission changes (:func:`navlib.trajectory.mission.with_values` of ``hpr_rocket``) and export
+options of each flight; the ascent error measured when these tests were written: 8.7, 4.4,
+4.8 and 12.5 m (the last carried 4 s by the IMU alone); before the two rules of FIT4 above,
+17.7, 16.1, 12.9 and 35.3 m."""
 
-@pytest.fixture(scope="module")
-def flight(tmp_path_factory):
-    path = tmp_path_factory.mktemp("telemega") / "generated.csv"
-    truth, t_detect = telemega_export(path, seed=11, **STATED_IMU)
+
+def _assessed(tmp_path, changes, options, seed):
+    path = tmp_path / "generated.csv"
+    truth, t_detect = telemega_export(path, changes, seed=seed, **options, **STATED_IMU)
     imu, gnss = read_log(str(path))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -34,14 +45,23 @@ def flight(tmp_path_factory):
     return truth, t_detect, result
 
 
-def test_the_pad_stands_still_and_the_ascent_is_the_one_flown(flight):
-    truth, t_detect, result = flight
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory):
+    return _assessed(tmp_path_factory.mktemp("telemega"), {}, {}, 11)
+
+
+def _ascent_error(truth, t_detect, result):
     ref = result.trajectory
     t_truth = ref.t + result.options["t_zero"] + t_detect
     P = np.column_stack([np.interp(t_truth, truth.t, truth.position[:, i]) for i in range(3)])
     ascent = t_truth < truth.events["apogee"]
-    error = np.linalg.norm(ref.position - P, axis=1)[ascent]
-    assert error.max() < 12.0, error.max()      # 8.7 m; 17.7 m before
+    return np.linalg.norm(ref.position - P, axis=1)[ascent].max()
+
+
+def test_the_pad_stands_still_and_the_ascent_is_the_one_flown(flight):
+    truth, t_detect, result = flight
+    assert _ascent_error(truth, t_detect, result) < 12.0      # 8.7 m; 17.7 m before
+    ref = result.trajectory
     pad = ref.t < ref.events["liftoff"]
     assert pad.any() and np.linalg.norm(ref.velocity[pad], axis=1).max() < 3.0
 
@@ -51,3 +71,13 @@ def test_boost_and_coast_are_represented(flight):
     for phase in ("boost", "coast"):
         assert table.loc[phase, "represented"], table.loc[phase, "fit_reason"]
     assert table.loc["boost", "fit_gnss_rms"] < 10.0    # 7.0 m; 15.4 m before
+
+
+@pytest.mark.parametrize("name", [n for n in FLIGHTS if n != "K motor"])
+def test_other_telemega_flights_ascend_as_flown(tmp_path, name):
+    changes, options = FLIGHTS[name]
+    truth, t_detect, result = _assessed(tmp_path, changes, options, 31)
+    assert _ascent_error(truth, t_detect, result) < 14.0
+    table = result.segment_table
+    ascent = table[table.phase.str.contains("boost|coast")]
+    assert len(ascent) and ascent.represented.all(), ascent.fit_reason.tolist()
