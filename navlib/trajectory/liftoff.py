@@ -23,6 +23,7 @@ __all__ = [
     "PAD_FIX_BEFORE_S",
     "PAD_GNSS_SPEED_MPS",
     "PAD_RATE_DEG_S",
+    "PAD_SCALE_TOLERANCE",
     "THRUST_CHANGE_MPS2",
     "THRUST_CHANGE_S",
     "find_liftoff",
@@ -46,6 +47,11 @@ PAD_ACCEL_MPS2 = 0.5
 """Lift-off is the last sample before the thrust onset whose averaged ``|f|`` is within this
 of gravity (the thrust ramp starts there; the rest acceleration of
 :data:`navlib.trajectory.initial_attitude.REST_ACCEL_MPS2`)."""
+PAD_SCALE_TOLERANCE = 0.1
+"""Largest relative difference between a pad's ``|f|`` reading and gravity, when the
+levelling tolerance is smaller: three times a consumer MEMS accelerometer's +-3 %
+sensitivity tolerance, so a board whose along axis reads 9.1 m/s^2 at rest still stands on a
+pad."""
 PAD_RATE_DEG_S = 3.0
 """Largest mean angular rate on the pad, deg/s (the segmentation's rest rate)."""
 MIN_PAD_SAMPLES = 3
@@ -100,9 +106,11 @@ def find_liftoff(t, f_b, w_b, g, tolerance):
     The thrust onset is the first sample from which the specific force, averaged over
     ``LIFTOFF_SMOOTH_S``, stays more than ``LIFTOFF_ACCEL_MPS2`` above gravity ``g`` for
     ``LIFTOFF_HOLD_S``; lift-off is the last sample before it within ``PAD_ACCEL_MPS2`` of
-    ``g``. The samples before must be a pad: at least ``MIN_PAD_SAMPLES``, their median
-    ``|f|`` within ``tolerance * g`` of gravity (the levelling tolerance) and their mean
-    rate below ``PAD_RATE_DEG_S``. Returns ``(t_liftoff, index)``: the pad is
+    the pad's own reading (the median averaged ``|f|`` before the onset: an accelerometer
+    whose scale or offset is off reads gravity a few percent off, steadily). The samples
+    before must be a pad: at least ``MIN_PAD_SAMPLES``, that reading within the larger of
+    ``tolerance * g`` (the levelling tolerance) and ``PAD_SCALE_TOLERANCE * g`` of gravity,
+    and their mean rate below ``PAD_RATE_DEG_S``. Returns ``(t_liftoff, index)``: the pad is
     ``t[:index + 1]``.
 
     Parameters
@@ -128,7 +136,10 @@ def find_liftoff(t, f_b, w_b, g, tolerance):
     if not sustained.any():
         return None
     onset = int(np.argmax(sustained))
-    calm = np.flatnonzero(np.abs(a[:onset]) <= PAD_ACCEL_MPS2)
+    if onset < MIN_PAD_SAMPLES:
+        return None
+    reading = float(np.median(a[:onset]))
+    calm = np.flatnonzero(np.abs(a[:onset] - reading) <= PAD_ACCEL_MPS2)
     if calm.size == 0:
         return None
     k = int(calm[-1])
@@ -136,7 +147,8 @@ def find_liftoff(t, f_b, w_b, g, tolerance):
         return None
     norm = np.linalg.norm(f_b[:k + 1], axis=1)
     rate = np.linalg.norm(np.mean(w_b[:k + 1], axis=0))
-    if abs(np.median(norm) - g) > tolerance * g or rate > PAD_RATE_DEG_S * DEG:
+    if (abs(np.median(norm) - g) > max(tolerance, PAD_SCALE_TOLERANCE) * g
+            or rate > PAD_RATE_DEG_S * DEG):
         return None
     return float(t[k]), k
 

@@ -1,5 +1,5 @@
-"""The pad's fixes and the knots of thrust changes (navlib.trajectory.liftoff,
-docs/assumptions.md FIT4)."""
+"""The pad (its own reading, its fixes) and the knots of thrust changes
+(navlib.trajectory.liftoff, docs/assumptions.md FIT4)."""
 
 import numpy as np
 from hypothesis import given
@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 from navlib.trajectory.liftoff import (
     PAD_FIX_BEFORE_S,
     THRUST_CHANGE_S,
+    find_liftoff,
     pad_fix_times,
     thrust_change_knots,
 )
@@ -69,3 +70,15 @@ def test_a_record_too_sparse_for_denser_knots_keeps_its_own():
     t = np.round(np.arange(-0.3, 6.0, 0.1), 1)
     knots = place_knots(t, 0.1)
     assert np.array_equal(thrust_change_knots(knots, t, _burn(t), np.ones(t.size, bool)), knots)
+
+
+def test_a_pad_is_found_from_its_own_reading_within_the_scale_tolerance():
+    t = np.round(np.arange(-0.3, 3.0, 0.01), 2)
+    w = np.zeros((t.size, 3))
+    for scale, found in ((0.93, True), (1.07, True), (0.85, False)):
+        f = _burn(t)
+        f[t < 0.0, 0] *= scale                  # an accelerometer off on the pad
+        pad = find_liftoff(t, f, w, G, 0.05)
+        assert (pad is not None) == found, scale
+        if found:
+            assert -0.05 < pad[0] <= 0.0
