@@ -25,6 +25,9 @@ from support.altos_writer import write_altos
 
 BOOST_DETECT_MPS2 = 3.0 * 9.80665
 """Specific force along the body at which the log clock starts (AltOS boost detection)."""
+ACCEL_RANGE_MPS2 = 16.0 * 9.80665
+GYRO_RANGE_DEG_S = 2000.0
+"""The MPU-6000 ranges the export clips to (``data/sensors/altus_telemega.toml``)."""
 
 
 def _states(t_truth, events):
@@ -78,10 +81,9 @@ def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.9
     keep &= (t <= t_fast_end) | (np.rint((t - t_fast_end) * 100.0) % 10 == 0)
     spec = sensors.load_preset("altus_telemega")
     imu = sensors.simulate_imu(truth, spec, seed=seed, **imu_overrides).to_frame()
-    accel_max = spec.imu.accel_range_g * 9.80665 if hasattr(spec.imu, "accel_range_g") \
-        else 16 * 9.80665
-    f = np.clip(imu[["f_x", "f_y", "f_z"]].to_numpy(), -accel_max, accel_max)
-    w = np.clip(np.degrees(imu[["w_x", "w_y", "w_z"]].to_numpy()), -2000.0, 2000.0)
+    f = np.clip(imu[["f_x", "f_y", "f_z"]].to_numpy(), -ACCEL_RANGE_MPS2, ACCEL_RANGE_MPS2)
+    w = np.clip(np.degrees(imu[["w_x", "w_y", "w_z"]].to_numpy()), -GYRO_RANGE_DEG_S,
+                GYRO_RANGE_DEG_S)
 
     lat0, lon0, h0 = earth.ecef_to_geodetic(truth.position[0])
     _, _, h = earth.ecef_to_geodetic(truth.position)
