@@ -396,13 +396,9 @@ def _fit(imu, gnss, p) -> Trajectory:
     f_b = np.column_stack([imu_cols[c][keep] for c in ("f_x", "f_y", "f_z")])
     w_b = np.column_stack([imu_cols[c][keep] for c in ("w_x", "w_y", "w_z")])
     rate, holes = rate_and_holes(t, p["max_bridge_s"])
-    if p["hold_pad"]:
-        P_all = np.column_stack([gnss_cols[c] for c in GNSS_COLUMNS[1:]])
-        pad, t_fix, g_keep = pad_and_fixes(t, f_b, w_b, gnss_cols["t"], P_all,
-                                           p["level_tolerance"])
-    else:
-        pad, t_fix = None, gnss_cols["t"]
-        g_keep = (t_fix >= t[0]) & (t_fix <= t[-1])
+    pad, t_fix, g_keep = pad_and_fixes(
+        t, f_b, w_b, gnss_cols["t"], np.column_stack([gnss_cols[c] for c in GNSS_COLUMNS[1:]]),
+        p["level_tolerance"], p["hold_pad"])
     if g_keep.sum() < _MIN_GNSS:
         raise NavlibInputError(
             f"gnss: need at least {_MIN_GNSS} epochs inside the IMU span, got {g_keep.sum()}")

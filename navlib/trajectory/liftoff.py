@@ -4,7 +4,9 @@
 the pad feels gravity and nothing else; a powered lift-off adds a sustained thrust
 acceleration (docs/assumptions.md FIT4). :func:`navlib.trajectory.fit_flight_data` then holds
 the reference still (zero velocity, constant attitude) from the first sample until that
-time.
+time, takes the pad's last fix before the record there (:func:`pad_fix_times`), and gives the
+position spline dense knots at lift-off (:func:`liftoff_knots`) and wherever the thrust
+changes abruptly (:func:`thrust_change_knots`).
 """
 
 import numpy as np
@@ -319,10 +321,10 @@ def pad_fix_times(t_g, t_first, on_pad: bool) -> np.ndarray:
     return out
 
 
-def pad_and_fixes(t, f_b, w_b, t_stamp, P_g, tolerance):
-    """The pad of a record (:func:`find_liftoff`; None without one, or when the fixes before
-    lift-off move: a hover, :func:`gnss_still`), the fix times (:func:`pad_fix_times`) and
-    which fixes lie inside the record.
+def pad_and_fixes(t, f_b, w_b, t_stamp, P_g, tolerance, hold: bool = True):
+    """The pad of a record (:func:`find_liftoff`; None without one, when ``hold`` is False,
+    or when the fixes before lift-off move: a hover, :func:`gnss_still`), the fix times
+    (:func:`pad_fix_times`) and which fixes lie inside the record.
 
     Parameters
     ----------
@@ -336,6 +338,8 @@ def pad_and_fixes(t, f_b, w_b, t_stamp, P_g, tolerance):
         ECEF fix positions, m, (M, 3); the first sets local gravity.
     tolerance : float
         Levelling tolerance, a fraction of gravity.
+    hold : bool, optional
+        Whether a pad is looked for (the fit's ``hold_pad``).
 
     Returns
     -------
@@ -343,14 +347,17 @@ def pad_and_fixes(t, f_b, w_b, t_stamp, P_g, tolerance):
     t_fix : numpy.ndarray
     inside : numpy.ndarray of bool
     """
-    g = float(np.linalg.norm(earth.normal_gravity_ecef(P_g[0])))
-    pad = find_liftoff(t, f_b, w_b, g, tolerance)
+    t_stamp = np.asarray(t_stamp, dtype=float)
+    pad = None
+    if hold:
+        g = float(np.linalg.norm(earth.normal_gravity_ecef(P_g[0])))
+        pad = find_liftoff(t, f_b, w_b, g, tolerance)
     t_fix = pad_fix_times(t_stamp, t[0], pad is not None)
-    inside = (t_fix >= t[0]) & (t_fix <= t[-1])
-    if pad is not None and not gnss_still(t_fix[inside], P_g[inside], pad[0]):
-        pad, t_fix = None, np.asarray(t_stamp, dtype=float)
+    if pad is not None:
         inside = (t_fix >= t[0]) & (t_fix <= t[-1])
-    return pad, t_fix, inside
+        if not gnss_still(t_fix[inside], P_g[inside], pad[0]):
+            pad, t_fix = None, t_stamp
+    return pad, t_fix, (t_fix >= t[0]) & (t_fix <= t[-1])
 
 
 def pad_start(t, imu, P0, t_start, tolerance) -> float:

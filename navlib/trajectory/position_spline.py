@@ -191,13 +191,10 @@ class PositionRows:
         self._set_gnss(t_g, P_g, V_g, sigma)
         self.resolved = np.ones(t.size, bool) if resolved is None else resolved
         self.set_weights(np.ones(t.size))
-        # first linearisation point: GNSS positions interpolated to the IMU times (one fix
-        # per time: pad fixes may share the first sample, navlib.trajectory.liftoff)
-        t_u, first = np.unique(t_g, return_index=True)
-        P_u = P_g[first]
-        self.P0 = np.column_stack([np.interp(t, t_u, P_u[:, i]) for i in range(3)])
-        self.V0 = np.column_stack([np.interp(t, t_u, np.gradient(P_u[:, i], t_u))
-                                   if t_u.size > 1 else np.zeros(t.size) for i in range(3)])
+        # first linearisation point: GNSS positions interpolated to the IMU times
+        self.P0 = np.column_stack([np.interp(t, t_g, P_g[:, i]) for i in range(3)])
+        self.V0 = np.column_stack([np.interp(t, t_g, np.gradient(P_g[:, i], t_g))
+                                   for i in range(3)])
 
     def _set_gnss(self, t_g, P_g, V_g, sigma):
         """The GNSS rows (positions, velocities when given) and the pad rows' normal
