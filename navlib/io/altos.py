@@ -264,7 +264,10 @@ max_outlier_fraction, require_overlap
         (``"altos"``), ``body_frame`` (``"along-across-through"``), ``attitude`` (None),
         ``flight_states`` (``t, state`` at each change of the logger's state, or None in the
         older export), ``tilt`` (``t, tilt``: angle of body x from vertical, rad), ``baro``
-        (``t, alt_m``: barometric altitude, m above mean sea level), ``repeated_rows``,
+        (``t, alt_m``: barometric altitude, m above mean sea level), ``high_g`` (``t, f_x``:
+        the high-g accelerometer along body x, the export's ``acceleration``, m/s^2 with its
+        pad reading removed; it stands in for clipped ``f_x`` samples, assumption Q1),
+        ``repeated_rows``,
         ``gaps``, ``outliers``. ``gnss.attrs``: ``source``, ``altitude_reference``
         (``"msl"``), ``dropped_no_fix``, ``gaps``. ``gnss`` is None for an export without
         GPS columns but with the barometric ``altitude`` (EasyMega): the barometer aids it.
@@ -290,10 +293,10 @@ max_outlier_fraction, require_overlap
     has_gps = all(c in index for c in ("latitude", "longitude", "gps_altitude"))
     wanted = ["time", *ACCEL_COLUMNS, *GYRO_COLUMNS,
               *[c for c in ("latitude", "longitude", "gps_altitude", *FIX_COLUMNS, "locked",
-                            "tilt", "baro_altitude") if c in index]]
+                            "tilt", "baro_altitude", "acceleration") if c in index]]
     cols = {c: Column(c, table.header[index[c]], index[c]) for c in wanted}
     data = parse_columns(table, cols)
-    for optional in ("tilt", "baro_altitude"):       # an all-empty optional column: ignored
+    for optional in ("tilt", "baro_altitude", "acceleration"):  # all empty: ignored
         if optional in data and not np.isfinite(data[optional]).any():
             del data[optional], cols[optional]
     check_finite(data, cols, src)
@@ -326,13 +329,16 @@ max_outlier_fraction, require_overlap
     states = None
     if "state_name" in index:
         states = _transitions(t_all, _cells(table, index["state_name"]))
-    extras = {"tilt": None, "baro": None}
+    extras = {"tilt": None, "baro": None, "high_g": None}
     if "tilt" in data:
         extras["tilt"] = pd.DataFrame({"t": t_all[kept_rows],
                                        "tilt": data["tilt"][kept_rows] * units.DEG})
     if "baro_altitude" in data:
         extras["baro"] = pd.DataFrame({"t": t_all[kept_rows],
                                        "alt_m": data["baro_altitude"][kept_rows]})
+    if "acceleration" in data:
+        extras["high_g"] = pd.DataFrame({"t": t_all[kept_rows],
+                                         "f_x": data["acceleration"][kept_rows]})
     imu.attrs.update(source=str(path),
                      format="altos-version" if "version" in index else "altos-legacy",
                      hardware=hardware, range=sensor_range, autopilot="altos",

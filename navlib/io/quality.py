@@ -12,7 +12,10 @@ calls :func:`check_records`); their thresholds are data, in ``data/quality.toml`
   counts too. Rule (Q1): a saturated sample is dropped from the IMU record, all six axes of
   it, so the fit bridges it as a hole from its neighbours and the GNSS (holes longer than
   the fit's ``max_bridge_s`` split the flight into spans); a flight with more than
-  ``max_fraction`` of its samples saturated is refused.
+  ``max_fraction`` of its samples saturated is refused. Where the board has a second,
+  high-g accelerometer along body x (``imu.attrs["high_g"]``, an AltOS export's
+  ``acceleration``), its calibrated reading stands in for the clipped ``f_x`` samples instead
+  (:mod:`navlib.io.high_g`).
 * **GNSS faults** (:func:`gnss_faults` of :mod:`navlib.io.gnss_faults`, assumptions
   Q2-Q4): frozen (stale) fixes that repeat a position while the vehicle moves, altitudes
   that disagree with the barometer (``imu.attrs["baro"]``, DataFrame ``t, alt_m``), and
@@ -46,10 +49,11 @@ from navlib.io.findings import (
     load_thresholds,
 )
 from navlib.io.gnss_faults import baro_lag, faulty_time, gnss_faults, shifted
+from navlib.io.high_g import HighGStandIn, high_g_stand_in
 from navlib.units import DEG
 
-__all__ = ["FINDING_COLUMNS", "THRESHOLDS_FILE", "QualityCheck", "check_records",
-           "faulty_time", "gnss_faults", "imu_saturation", "load_thresholds"]
+__all__ = ["FINDING_COLUMNS", "THRESHOLDS_FILE", "QualityCheck", "along_axis_stand_in",
+           "check_records", "faulty_time", "gnss_faults", "imu_saturation", "load_thresholds"]
 
 _GYRO = ("w_x", "w_y", "w_z")
 _ACCEL = ("f_x", "f_y", "f_z")
@@ -94,8 +98,8 @@ def _flat_top(x: np.ndarray, floor: float, p: dict) -> tuple[np.ndarray, list[fl
     return (hit, values) if values else None
 
 
-def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = None
-                   ) -> tuple[np.ndarray, pd.DataFrame]:
+def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = None,
+                   stand_in: HighGStandIn | None = None) -> tuple[np.ndarray, pd.DataFrame]:
     """IMU samples at their sensor's range limit, or at a flat top (assumption Q1).
 
     Parameters
@@ -107,6 +111,9 @@ def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = No
         The preset; its triads' ``range`` is used where the log gives none.
     thresholds : mapping, optional
         The ``[saturation]`` section of :func:`load_thresholds` (default: the file's).
+    stand_in : HighGStandIn, optional
+        :func:`along_axis_stand_in`: its ``filled`` ``f_x`` samples are not judged against the
+        range, and why the others were not filled is said in their finding.
 
     Returns
     -------
@@ -133,6 +140,9 @@ def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = No
                 what = f"{sensor} {channel} at its +-{limit / factor:.4g} {unit} limit"
                 after = f" (range from {source})"
                 check = "saturation"
+                if stand_in is not None and channel == "f_x":
+                    hit &= ~stand_in.filled
+                    after += f"; {stand_in.refusal}" if stand_in.refusal else ""
             else:
                 flat = _flat_top(x, floor, p)
                 if flat is None:
@@ -147,6 +157,22 @@ def imu_saturation(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = No
                 rows.append(finding(check, channel, t[hit], t.size, p["span_join_s"], what,
                                      "samples", after + "; dropped, the fit bridges them"))
     return saturated, findings_frame(rows)
+
+
+def along_axis_stand_in(imu: pd.DataFrame, spec=None, thresholds: Mapping | None = None
+                        ) -> HighGStandIn | None:
+    """The high-g accelerometer's stand-in for the ``f_x`` samples at the accelerometer's
+    range limit (:func:`navlib.io.high_g.high_g_stand_in`; assumption Q1).
+
+    None when the record has no high-g reading (``imu.attrs["high_g"]``) or the range is
+    not known (a flat top is not a limit the high-g reading can be checked against).
+    """
+    p = dict(thresholds or load_thresholds()["saturation"])
+    limit = _ranges(imu, spec)["accel"][0]
+    if limit is None or imu.attrs.get("high_g") is None:
+        return None
+    clipped = np.abs(imu["f_x"].to_numpy(dtype=float)) >= limit * (1.0 - p["limit_tolerance"])
+    return high_g_stand_in(imu, clipped, limit, p)
 
 
 # --------------------------------------------------------------------------- both
@@ -214,7 +240,19 @@ def check_records(imu: pd.DataFrame, gnss: pd.DataFrame, spec=None, sigma_m: flo
     check_record(imu, "imu", (*_ACCEL, *_GYRO))
     check_record(gnss, "gnss", _XYZ)
     p = load_thresholds(thresholds)
-    saturated, sat = imu_saturation(imu, spec, p["saturation"])
+    stand_in = along_axis_stand_in(imu, spec, p["saturation"])
+    high_g, checked_attrs = [], imu.attrs
+    if stand_in is not None and stand_in.filled.any():
+        t = imu["t"].to_numpy(dtype=float)
+        limit = _ranges(imu, spec)["accel"][0]
+        high_g = [finding("high-g", "f_x", t[stand_in.filled], t.size,
+                          p["saturation"]["span_join_s"],
+                          f"accel f_x beyond its +-{limit:.4g} m/s^2 limit", "samples",
+                          f"; {stand_in.note}")]
+        imu = imu.assign(f_x=stand_in.f_x)
+        imu.attrs = dict(checked_attrs)
+    saturated, sat = imu_saturation(imu, spec, p["saturation"], stand_in)
+    sat = pd.concat([findings_frame(high_g), sat], ignore_index=True) if high_g else sat
     _refuse_share(saturated, "imu: {} % of the samples are saturated",
                   p["saturation"], "saturation", "max_fraction", sat["message"])
     clean_imu = _drop(imu, saturated)

@@ -68,13 +68,18 @@ def rocket_rows(t_drogue=6.0, t_end=12.0, *, duplicates=(0.5, 2.0), low_sat_seco
 def _new_row(r) -> list[str]:
     second = int(r.gps_second)
     return ["1257", " 18", "KB0G", f"{r.time:9.2f}", f"{STATES[r.state_name]:2d}",
-            f"{r.state_name:>8s}", f"{r.accel_x:8.2f}", "73957.00", f"{r.baro_altitude:8.2f}",
+            f"{r.state_name:>8s}", f"{_high_g(r):8.2f}", "73957.00", f"{r.baro_altitude:8.2f}",
             f"{r.baro_altitude - ALT0:8.2f}", "0.00", "27.0", f"{r.accel_x:7.2f}",
             f"{r.accel_y:7.2f}", f"{r.accel_z:7.2f}", f"{r.gyro_roll:8.2f}",
             f"{r.gyro_pitch:8.2f}", f"{r.gyro_yaw:8.2f}", *_mag(r, (" -0.08", " -0.22", " -0.20")),
             f"{r.tilt:7.2f}", "4.36", "1", "1", f"{int(r.nsat):3d}", f"{r.latitude:12.7f}",
             f"{r.longitude:12.7f}", f"{r.gps_altitude:8.1f}", "2019", " 5", "26", "16",
             f"{33 + (11 + second) // 60:3d}", f"{(11 + second) % 60:3d}", "1.6", "0.8", "1.4"]
+
+
+def _high_g(r) -> float:
+    """The ``acceleration`` cell: the rows' ``high_g`` when given, else ``accel_x``."""
+    return getattr(r, "high_g", r.accel_x)
 
 
 def _mag(r, default) -> tuple[str, ...]:
@@ -85,7 +90,7 @@ def _mag(r, default) -> tuple[str, ...]:
 
 
 def _old_row(r) -> list[str]:
-    return [f"{r.time:g}", f"{r.accel_x:g}", "96945", f"{r.baro_altitude:g}",
+    return [f"{r.time:g}", f"{_high_g(r):g}", "96945", f"{r.baro_altitude:g}",
             f"{r.baro_altitude - ALT0:g}", "0", "20.4", f"{r.accel_x:g}", f"{r.accel_y:g}",
             f"{r.accel_z:g}", f"{r.gyro_roll:g}", f"{r.gyro_pitch:g}", f"{r.gyro_yaw:g}",
             "-0.62", "-0.06", "-0.17", f"{r.tilt:g}", f"{r.latitude:.7f}", f"{r.longitude:.7f}",

@@ -6,7 +6,9 @@ and writes what a TeleMega would have exported of it (the newer header generatio
 :mod:`support.altos_writer`): the log clock starts at boost detection (specific force
 along the body beyond 3 g) with 0.3 s of pad before it; 100 Hz rows to the drogue and 10 Hz
 rows after; the IMU with the ``altus_telemega`` preset's errors (turn-on biases, +-3 %
-scale factors, noise), rounded to the export's 0.01 and clipped to its ranges; 1 Hz fixes
+scale factors, noise), rounded to the export's 0.01 and clipped to its ranges; the high-g
+accelerometer along the body (``acceleration``: its own scale error, 0.3 m/s^2 noise, steps
+of 0.53 m/s^2, its pad reading removed, not clipped); 1 Hz fixes
 taken at whole receiver seconds with white noise, a slow Markov offset and integer-metre
 altitude, each appearing on the first row after it arrived ``latency_s`` (plus jitter)
 later; a barometric altitude off by a temperature scale; the flight states from the
@@ -28,6 +30,9 @@ BOOST_DETECT_MPS2 = 3.0 * 9.80665
 ACCEL_RANGE_MPS2 = 16.0 * 9.80665
 GYRO_RANGE_DEG_S = 2000.0
 """The MPU-6000 ranges the export clips to (``data/sensors/altus_telemega.toml``)."""
+HIGH_G_STEP_MPS2 = 0.53
+"""Step of the export's ``acceleration`` column (the shared TeleMega flights' high-g reading
+changes by multiples of it)."""
 
 
 def _states(t_truth, events):
@@ -59,10 +64,12 @@ def _fix_positions(truth, t_fix, rng, sigma_h_m, sigma_v_m, offset_m, tau_s):
 def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.97,
                     sigma_h_m=2.0, sigma_v_m=3.0, offset_m=2.0, tau_s=60.0,
                     mission="hpr_rocket", generation="version", gnss_gap=None,
-                    **imu_overrides):
+                    high_g_scale=-0.025, **imu_overrides):
     """Fly ``mission`` with ``changes`` (:func:`with_values`) and write its TeleMega export
     (``generation`` of :func:`write_altos`; ``gnss_gap``: ``(start, end)`` on the export's
-    clock with no new fix, a receiver that lost lock).
+    clock with no new fix, a receiver that lost lock; ``high_g_scale``: the high-g
+    accelerometer's scale error, the shared flights' reads 2.5-2.9 % below the IMU's in
+    boost).
 
     Returns
     -------
@@ -84,6 +91,10 @@ def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.9
     f = np.clip(imu[["f_x", "f_y", "f_z"]].to_numpy(), -ACCEL_RANGE_MPS2, ACCEL_RANGE_MPS2)
     w = np.clip(np.degrees(imu[["w_x", "w_y", "w_z"]].to_numpy()), -GYRO_RANGE_DEG_S,
                 GYRO_RANGE_DEG_S)
+
+    noise = np.random.default_rng([seed, 1]).standard_normal(t.size)   # rng's draws kept
+    high_g = (1.0 + high_g_scale) * f_along + 0.3 * noise
+    high_g = HIGH_G_STEP_MPS2 * np.round((high_g - high_g[0]) / HIGH_G_STEP_MPS2)
 
     lat0, lon0, h0 = earth.ecef_to_geodetic(truth.position[0])
     _, _, h = earth.ecef_to_geodetic(truth.position)
@@ -108,7 +119,7 @@ def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.9
         "time": np.round(t_log - t_detect, 2),
         "state_name": _states(t_log, truth.events),
         "accel_x": np.round(f[keep, 0], 2), "accel_y": np.round(f[keep, 1], 2),
-        "accel_z": np.round(f[keep, 2], 2),
+        "accel_z": np.round(f[keep, 2], 2), "high_g": np.round(high_g[keep], 2),
         "gyro_roll": np.round(w[keep, 0], 2), "gyro_pitch": np.round(w[keep, 1], 2),
         "gyro_yaw": np.round(w[keep, 2], 2),
         "tilt": np.round(tilt[keep], 2),
