@@ -75,6 +75,19 @@ def _steady(x: np.ndarray, window: int, tolerance: float) -> np.ndarray:
     return np.isfinite(x) & (np.abs(x - median) <= tolerance)
 
 
+def _held_extreme(h: np.ndarray, run: int) -> np.ndarray:
+    """Samples in runs of at least ``run`` consecutive readings at ``h``'s largest magnitude."""
+    finite = np.isfinite(h)
+    if not finite.any():
+        return np.zeros(h.size, dtype=bool)
+    at = finite & (np.abs(np.where(finite, h, 0.0)) == np.nanmax(np.abs(h)))
+    edges = np.flatnonzero(np.diff(np.r_[0, at.astype(np.int8), 0]))
+    out = np.zeros(h.size, dtype=bool)
+    for start, end in zip(edges[::2], edges[1::2], strict=True):
+        out[start:end] = end - start >= run
+    return out
+
+
 def _line(h: np.ndarray, f: np.ndarray, rounds: int = 3):
     """Straight line ``f = scale h + offset`` by least squares, leaving out the samples
     beyond 4 robust sigmas (1.4826 MAD, at least the high-g's step) of the previous round."""
@@ -103,8 +116,8 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
         The ``f_x`` range, m/s^2.
     p : dict
         The ``[saturation]`` thresholds (``high_g_window_samples``, ``high_g_steady_mps2``,
-        ``high_g_min_fraction``, ``high_g_min_samples``, ``high_g_agreement``,
-        ``flat_top_min_samples``).
+        ``high_g_min_fraction``, ``high_g_min_samples``, ``high_g_min_span_mps2``,
+        ``high_g_agreement``, ``high_g_clip_run_samples``).
 
     Returns
     -------
@@ -112,8 +125,10 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
         Calibrated on the unclipped samples where both accelerometers are steady and
         ``|f_x|`` is at least ``high_g_min_fraction`` of the range (the thrust's regime, not
         the pad's offset); a clipped sample is filled when the high-g reading is steady there,
-        not at its own repeated extreme, and calibrated to at least ``1 - high_g_agreement``
-        of the range (the IMU says at least the range; the filled value is never less).
+        not at its own extreme held for ``high_g_clip_run_samples`` samples in a row (it
+        clipped too; a quantised peak repeats its top step only briefly), and calibrated to
+        at least ``1 - high_g_agreement`` of the range (the IMU says at least the range; the
+        filled value is never less).
     """
     f_x = imu["f_x"].to_numpy(dtype=float).copy()
     none = np.zeros(f_x.size, dtype=bool)
@@ -141,9 +156,7 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
             f"its calibration scale {scale:.3g} is outside {SCALE_BOUNDS[0]:g}-"
             f"{SCALE_BOUNDS[1]:g} (not the same axis)"))
     calibrated = scale * h + offset
-    top = np.nanmax(np.abs(h)) if np.isfinite(h).any() else np.inf
-    at_top = np.isfinite(h) & (np.abs(h) == top)
-    own_clip = at_top if at_top.sum() >= p["flat_top_min_samples"] else none
+    own_clip = _held_extreme(h, int(p["high_g_clip_run_samples"]))
     sign = np.sign(f_x)
     agrees = sign * calibrated >= (1.0 - p["high_g_agreement"]) * limit
     filled = clipped & _steady(h, window, p["high_g_steady_mps2"]) & ~own_clip & agrees

@@ -6,6 +6,7 @@ Before the pad's last fix was kept and the burnout got dense knots, the first fl
 off the motion flown by up to 17.7 m over the ascent and its boost segment was flagged with a
 GNSS residual of 15.4 m on fixes whose errors are 3-5 m."""
 
+import re
 import warnings
 
 import numpy as np
@@ -21,6 +22,8 @@ STATED_IMU = {"accel_scale_factor": np.array([0.02, -0.015, 0.03]),
               "gyro_bias": np.array([0.3, -0.2, 0.25]) * DEG,
               "gyro_scale_factor": np.array([0.01, -0.02, 0.015])}
 """Turn-on errors within the MPU-6000's datasheet tolerances (+-3 % sensitivity), stated."""
+STATED_IMU_X_SCALE_RATIO = 1.02 / 0.975
+"""The IMU's x sensitivity (+2 %) over the generated high-g's (-2.5 %, the export default)."""
 
 FLIGHTS = {
     "K motor": ({}, {}),
@@ -30,12 +33,16 @@ FLIGHTS = {
     "no fix in the boost": ({}, {"gnss_gap": (0.0, 4.0)}),
     "along axis 7 % low": ({}, {"accel_scale_factor": np.array([-0.06, -0.015, 0.03]),
                                 "accel_bias": np.array([-0.15, -0.1, 0.2])}),
+    "20 g boost, the IMU clipped": ({"phase.1.acceleration_m_s2": 200.0,
+                                     "phase.1.burn_time_s": 1.6}, {}),
 }
 """Mission changes (:func:`navlib.trajectory.mission.with_values` of ``hpr_rocket``) and export
 options of each flight (IMU errors replacing the stated ones); the ascent error measured when
 these tests were written: 8.7, 4.4, 4.8 and 12.5 m (the fourth carried 4 s by the IMU alone);
-before the two rules of FIT4 above, 17.7, 16.1, 12.9 and 35.3 m. The last flight's pad reads
-9.06 m/s^2: its pad was not found before the pad's own reading counted (FIT4)."""
+before the two rules of FIT4 above, 17.7, 16.1, 12.9 and 35.3 m. The fifth flight's pad reads
+9.06 m/s^2: its pad was not found before the pad's own reading counted (FIT4). The last one's
+IMU clips at 16 g for 1.4 s of its boost: before the high-g accelerometer stood in (Q1), the
+record split there and neither pad nor boost was assessed."""
 
 
 def _assessed(tmp_path, changes, options, seed):
@@ -92,3 +99,15 @@ def test_other_telemega_flights_ascend_as_flown(tmp_path, name):
     table = result.segment_table
     ascent = table[table.phase.str.contains("boost|coast")]
     assert len(ascent) and ascent.represented.all(), ascent.fit_reason.tolist()
+
+
+def test_a_boost_beyond_the_imu_range_is_assessed_from_the_high_g_accelerometer(tmp_path):
+    """The 20 g boost's clipped f_x samples are taken from the export's high-g column, with
+    its calibration scale (the generated sensors' ratio, 1.02 / 0.975) in the finding."""
+    changes, options = FLIGHTS["20 g boost, the IMU clipped"]
+    result = _assessed(tmp_path, changes, options, 31)[2]
+    found = result.quality.set_index("check")
+    assert "high-g" in found.index and found.loc["high-g", "n"] > 100
+    scale = float(re.search(r"f_x = ([0-9.]+) a", found.loc["high-g", "message"]).group(1))
+    assert abs(scale - STATED_IMU_X_SCALE_RATIO) < 0.01
+    assert result.segment_table.phase.iloc[0] == "boost"
