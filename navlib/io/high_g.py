@@ -124,8 +124,11 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
     HighGStandIn
         Calibrated on the unclipped samples where both accelerometers are steady and
         ``|f_x|`` is at least ``high_g_min_fraction`` of the range (the thrust's regime, not
-        the pad's offset); a clipped sample is filled when the high-g reading is steady there,
-        not at its own extreme held for ``high_g_clip_run_samples`` samples in a row (it
+        the pad's offset) when there are ``high_g_min_samples`` of them, else on all the
+        steady ones (the line extrapolated); at least ``high_g_min_samples`` spanning
+        ``high_g_min_span_mps2`` and a scale within :data:`SCALE_BOUNDS`, or none is filled
+        and ``refusal`` says why. A clipped sample is filled when the high-g reading is steady
+        there, not at its own extreme held for ``high_g_clip_run_samples`` samples in a row (it
         clipped too; a quantised peak repeats its top step only briefly), and calibrated to
         at least ``1 - high_g_agreement`` of the range (the IMU says at least the range; the
         filled value is never less).
