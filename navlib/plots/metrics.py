@@ -279,28 +279,62 @@ def sensability_figure(analysis, states: Sequence[str], k: float = 2.0, title: s
         Band half-width in sigmas (paper: 2).
     """
     states = list(states)
-    se = analysis.sensability
-    idx = [analysis.state_names.index(s) for s in states]
     fig, axes = subplots(len(states), 1, figsize=(9, 2.1 * len(states) + 0.4),
                          sharex=True, squeeze=False, layout="constrained")
-    for ax, state, j in zip(axes[:, 0], states, idx, strict=True):
-        ax.plot(se.t, se.s[:, j], color="tab:blue", linewidth=1.5, label="sensability")
+    for row, ax in enumerate(axes[:, 0]):
+        ax.plot([], [], color="tab:blue", linewidth=1.5, label="sensability",
+                gid=f"sensability:{row}")
         ax.axhline(analysis.settings["s_threshold"], color="tab:blue", linestyle=":",
                    linewidth=0.8)
         ax.set_ylim(-0.03, 1.05)
-        ax.set_ylabel(f"s({state})", color="tab:blue")
         _shade_segments(ax, analysis)
-        scale, unit = display_unit(state)
         twin = ax.twinx()
-        band = k * se.sigma[:, j] / scale
-        twin.fill_between(se.t, -band, band, color="tab:red", alpha=0.15, linewidth=0)
-        twin.plot(se.t, band, color="tab:red", linewidth=0.8)
-        twin.plot(se.t, -band, color="tab:red", linewidth=0.8)
-        twin.set_ylabel(f"±{k:g}σ [{unit}]", color="tab:red")
+        twin.set_gid(f"band:{row}")
+        twin.fill_between([], [], [], color="tab:red", alpha=0.15, linewidth=0)
+        twin.plot([], [], color="tab:red", linewidth=0.8)
+        twin.plot([], [], color="tab:red", linewidth=0.8)
+    restate_sensability(fig, analysis, states, k)
     axes[-1, 0].set_xlabel("t [s]")
     s = analysis.settings
     fig.suptitle(title or f"Sensability (ν = {s['nu']:.3f}) and {k:g}σ bands", fontsize=10)
     return fig
+
+
+def restate_sensability(fig, analysis, states: Sequence[str], k: float = 2.0) -> list:
+    """Put ``states`` (as many as the figure's rows) on a :func:`sensability_figure` in
+    place: the sensability curves, the bands with their limits, the axis labels. A panel
+    changes the state group this way without building and laying out a new figure.
+
+    Returns
+    -------
+    list of Line2D
+        The sensability curves, one per row.
+    """
+    se = analysis.sensability
+    rows = {a.get_gid(): a for a in fig.axes if a.get_gid()}
+    lines = {ln.get_gid(): ln for ax in fig.axes for ln in ax.get_lines() if ln.get_gid()}
+    if len(lines) != len(states):
+        raise ValueError(f"the figure has {len(lines)} rows, not {len(states)} states")
+    out = []
+    for row, state in enumerate(states):
+        j = analysis.state_names.index(state)
+        line = lines[f"sensability:{row}"]
+        line.set_data(se.t, se.s[:, j])
+        line.axes.set_ylabel(f"s({state})", color="tab:blue")
+        line.axes.relim()
+        line.axes.autoscale_view(scaley=False)
+        scale, unit = display_unit(state)
+        band = k * se.sigma[:, j] / scale
+        twin = rows[f"band:{row}"]
+        twin.collections[0].set_data(se.t, -band, band)
+        upper, lower = twin.get_lines()
+        upper.set_data(se.t, band)
+        lower.set_data(se.t, -band)
+        twin.relim()
+        twin.autoscale_view()
+        twin.set_ylabel(f"±{k:g}σ [{unit}]", color="tab:red")
+        out.append(line)
+    return out
 
 
 def measures_figure(analysis, states: Sequence[str]):

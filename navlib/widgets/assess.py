@@ -12,7 +12,8 @@ Each figure is kept and redrawn by Agg blitting (:class:`navlib.widgets.base.Bli
 when a control it depends on changed: eta redraws the excitability bars and spectrum in
 place, nu the sensability curves, new boundaries the segment shading of the phases and
 sensability figures (and the excitability figure, rebuilt when the number of segments
-changes); the state group rebuilds the sensability figure.
+changes); the state group puts its states on the sensability figure in place and lays it out
+again (:func:`navlib.plots.metrics.restate_sensability`).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from navlib.plots.metrics import (
     excitability_dynamic_artists,
     excitability_figure,
     reshade_segments,
+    restate_sensability,
     sensability_figure,
 )
 from navlib.widgets.base import Blitter, Panel, look
@@ -138,17 +140,21 @@ class AssessPanel(Panel):
     def _draw_sensability(self, result, new_group: bool, new_segments: bool) -> None:
         blitter = self._figures.get("sensability")
         states = list(STATE_GROUPS[self.controls["group"].value])
-        if blitter is None or new_group:
+        if blitter is None:
             fig = sensability_figure(result, states,
                                      title="Sensability (ν on the slider) and ±2σ bands")
             self._sens_lines = [ln for ax in fig.axes for ln in ax.get_lines()
                                 if ln.get_label() == "sensability"]
-            shading = reshade_segments(fig, result)
-            blitter = Blitter(fig, [*shading, *self._sens_lines], self.dpi)
-        elif new_segments:
+            blitter = Blitter(fig, [*reshade_segments(fig, result), *self._sens_lines],
+                              self.dpi)
+        elif new_group or new_segments:
             shading = reshade_segments(blitter.fig, result)
-            blitter.set_dynamic([*shading, *self._sens_lines],
-                                redraw_background=False)
+            if new_group:     # other labels and units: laid out again, not rebuilt
+                self._sens_lines = restate_sensability(blitter.fig, result, states)
+                blitter.relayout([*shading, *self._sens_lines],
+                                 key=self.controls["group"].value)
+            else:
+                blitter.set_dynamic([*shading, *self._sens_lines], redraw_background=False)
         se = result.sensability
         for line, state in zip(self._sens_lines, states, strict=True):
             line.set_ydata(se.s[:, result.state_names.index(state)])

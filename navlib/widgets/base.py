@@ -101,6 +101,7 @@ class Blitter:
     def __init__(self, fig: Figure, dynamic: Iterable, dpi: float = 72.0):
         self.fig = fig
         self.dynamic: list = []
+        self._layouts: dict = {}
         fig.set_dpi(dpi)
         self.canvas = agg_canvas(fig)
         self.set_dynamic(dynamic, redraw_background=False)
@@ -126,6 +127,31 @@ class Blitter:
         if redraw_background:
             self.canvas.draw()
             self.background = self.canvas.copy_from_bbox(self.fig.bbox)
+
+    def relayout(self, dynamic: Iterable, key=None) -> None:
+        """Replace the dynamic artists and lay the figure out again before drawing its
+        background (after labels or tick labels changed width), then freeze the layout.
+
+        Parameters
+        ----------
+        dynamic : iterable of matplotlib.artist.Artist
+            The new dynamic artists.
+        key : hashable, optional
+            What the layout depends on (e.g. the states shown): a layout computed under
+            the same key is put back instead of computed again.
+        """
+        kept = self._layouts.get(key) if key is not None else None
+        if kept is not None:
+            for ax, position in zip(self.fig.axes, kept, strict=True):
+                ax.set_position(position, which="both")
+            self.set_dynamic(dynamic)
+            return
+        self.fig.set_layout_engine("constrained")
+        self.set_dynamic(dynamic)
+        self.fig.set_layout_engine("none")
+        if key is not None:
+            self._layouts[key] = [ax.get_position(original=True).frozen()
+                                  for ax in self.fig.axes]
 
     def png(self) -> bytes:
         """The figure with the dynamic artists' current state, as PNG bytes."""

@@ -14,9 +14,10 @@ from navlib import io, sensors
 from navlib.errors import NavlibInputError
 from navlib.io import FlightDataWarning
 from navlib.metrics import excitability_segment, sensability_model
-from navlib.models.ecef import STATE_NAMES
+from navlib.models.ecef import STATE_GROUPS, STATE_NAMES
 from navlib.plots import assess as plots
-from navlib.plots.metrics import excitability_figure, sensability_figure
+from navlib.plots.figure import detached
+from navlib.plots.metrics import excitability_figure, restate_sensability, sensability_figure
 from navlib.studies.assess import (
     E_THRESHOLD,
     assess_flight,
@@ -27,6 +28,7 @@ from navlib.studies.assess import (
 from navlib.trajectory import stationary
 from navlib.vehicles import VEHICLE_PHASES
 from navlib.widgets.assess import AssessPanel, boundaries_text, parse_boundaries
+from navlib.widgets.layers import agg_canvas
 
 ROOT = REPO
 SAMPLE = ROOT / "data" / "sample_flight"
@@ -313,6 +315,46 @@ def test_panel_updates_and_reports_errors(sample):
     assert panel.assessment.thresholds["eta"] == pytest.approx(1e-2)
     panel.controls["boundaries"].value = "auto"
     assert panel.assessment.segments == sample.segments
+    plt.close("all")
+
+
+def _rgba(fig) -> np.ndarray:
+    canvas = agg_canvas(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba()).copy()
+
+
+def test_restated_sensability_figure_draws_as_a_new_one(sample):
+    """Another state group put on a sensability figure in place, laid out again, draws
+    pixel for pixel as a figure built for it (curves, bands, their limits, labels)."""
+    states = STATE_GROUPS["gyro_scale"]
+    with detached():
+        fig = sensability_figure(sample, STATE_GROUPS["attitude"], title="t")
+        built = sensability_figure(sample, states, title="t")
+    _rgba(fig)
+    lines = restate_sensability(fig, sample, states)
+    assert [ln.axes.get_ylabel() for ln in lines] == [f"s({s})" for s in states]
+    np.testing.assert_array_equal(_rgba(fig), _rgba(built))
+    with pytest.raises(ValueError, match="3 rows, not 2"):
+        restate_sensability(fig, sample, states[:2])
+
+
+def test_panel_group_change_relabels_in_place_and_keeps_each_layout(sample):
+    """The state group changes the kept sensability figure (no new figure): its labels and
+    units follow the group, and a group shown before gets its own layout back."""
+    panel = AssessPanel(sample)
+    fig = panel._figures["sensability"].fig
+    positions = [ax.get_position().bounds for ax in fig.axes]
+    panel.controls["group"].value = "gyro_scale"
+    assert panel._figures["sensability"].fig is fig
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels[:3] == ["s(sg_x)", "s(sg_y)", "s(sg_z)"] and "ppm" in labels[3]
+    scale_positions = [ax.get_position().bounds for ax in fig.axes]
+    assert scale_positions != positions           # wider tick labels: laid out again
+    panel.controls["group"].value = "attitude"
+    np.testing.assert_allclose([ax.get_position().bounds for ax in fig.axes], positions)
+    panel.controls["group"].value = "gyro_scale"
+    np.testing.assert_allclose([ax.get_position().bounds for ax in fig.axes], scale_positions)
     plt.close("all")
 
 
