@@ -76,11 +76,13 @@ def _steady(x: np.ndarray, window: int, tolerance: float) -> np.ndarray:
 
 
 def _held_extreme(h: np.ndarray, run: int) -> np.ndarray:
-    """Samples in runs of at least ``run`` consecutive readings at ``h``'s largest magnitude."""
+    """Samples in runs of at least ``run`` consecutive readings at ``h``'s largest or at its
+    smallest value (each end separately: with the pad reading removed, the sensor's two
+    limits lie at different distances from zero)."""
     finite = np.isfinite(h)
     if not finite.any():
         return np.zeros(h.size, dtype=bool)
-    at = finite & (np.abs(np.where(finite, h, 0.0)) == np.nanmax(np.abs(h)))
+    at = finite & ((h == np.nanmax(h)) | (h == np.nanmin(h)))
     edges = np.flatnonzero(np.diff(np.r_[0, at.astype(np.int8), 0]))
     out = np.zeros(h.size, dtype=bool)
     for start, end in zip(edges[::2], edges[1::2], strict=True):
@@ -130,8 +132,8 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
         and ``refusal`` says why. A clipped sample is filled when the high-g reading is steady
         there, not at its own extreme held for ``high_g_clip_run_samples`` samples in a row (it
         clipped too; a quantised peak repeats its top step only briefly), and calibrated to
-        at least ``1 - high_g_agreement`` of the range (the IMU says at least the range; the
-        filled value is never less).
+        at least ``1 - high_g_agreement`` of the range (the IMU says at least its clipped
+        reading, so the filled value is never less than that reading).
     """
     f_x = imu["f_x"].to_numpy(dtype=float).copy()
     none = np.zeros(f_x.size, dtype=bool)

@@ -63,6 +63,23 @@ def test_imu_units_axes_and_repeated_rows(export, rows):
     np.testing.assert_allclose(tilt["t"], imu["t"])
     np.testing.assert_allclose(tilt["tilt"], np.radians(want["tilt"]), atol=1e-12)
     np.testing.assert_allclose(baro["alt_m"], want["baro_altitude"])
+    high_g = imu.attrs["high_g"]           # the writer's `acceleration` column: accel_x here
+    np.testing.assert_allclose(high_g["t"], imu["t"])
+    np.testing.assert_allclose(high_g["f_x"], want["accel_x"])
+
+
+@pytest.mark.parametrize("name", SHARED)
+def test_shared_high_g_column_is_along_x(name):
+    """The shared exports' `acceleration` (high-g, pad reading removed) reads about 0 on the
+    pad and tracks accel_x in the boost within the sensors' 5 %: the same axis, same sign."""
+    imu, _ = _read(shared_file("altos", name))
+    high_g = imu.attrs["high_g"].set_index("t")["f_x"].reindex(imu["t"]).to_numpy()
+    pad = imu["t"].to_numpy() < -0.1
+    assert abs(np.median(high_g[pad])) < 0.6
+    boost = (imu["f_x"].to_numpy() > 60.0) & (imu["f_x"].to_numpy() < 150.0) & \
+        (imu["t"].to_numpy() < 4.0)
+    ratio = (high_g[boost] + 9.8) / imu["f_x"].to_numpy()[boost]
+    assert boost.sum() > 50 and 0.95 < np.median(ratio) < 1.0
 
 
 def test_gps_fixes_are_changes_not_rows(export, rows):
