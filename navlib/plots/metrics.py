@@ -31,8 +31,8 @@ from navlib.units import DEG, PPM
 
 __all__ = ["SEGMENT_COLOURS", "SPECTRUM_FLOOR", "display_unit", "energy_spectrum",
            "excitability_bars", "excitability_dynamic_artists", "excitability_figure",
-           "measures_figure", "reshade_segments", "segment_colours", "segment_legend",
-           "sensability_figure", "short_name", "sweep_figure", "tension_figure"]
+           "measures_figure", "reshade_segments", "restate_sensability", "segment_colours",
+           "segment_legend", "sensability_figure", "short_name", "sweep_figure", "tension_figure"]
 
 SEGMENT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
 """Colours of the segments of an analysis without phases (the papers' τ1, τ2, ...); the
