@@ -6,11 +6,10 @@ Kinds (:data:`navlib.io.LOG_KINDS`): an ``imu.csv,gnss.csv`` pair, an ``imu.csv,
 pair (no GNSS: the barometric altitude of the GNSS heights) and a DataFlash ``.bin`` of a
 simulated 24 s multicopter flight (``tests/support/flights.py``,
 ``tests/support/dataflash_writer.py``), AltOS exports of both header generations and an
-EasyMega export without GPS (1 s on the pad: a flight without GNSS is levelled on at least
-0.5 s; ``tests/support/altos_writer.py``) and, when the shared logs are present
-(``tests/support/locations.py``), a PX4 ULog cut from a public sample log to its first
-seconds. :func:`real_originals` adds the shared logs themselves (read at run time, never
-copied into the repository).
+EasyMega export without GPS (the exports' 0.3 s on the pad; ``tests/support/altos_writer.py``)
+and, when the shared logs are present (``tests/support/locations.py``), a PX4 ULog cut from a
+public sample log to its first seconds. :func:`real_originals` adds the shared logs
+themselves (read at run time, never copied into the repository).
 
 A mutant is one seeded damage of one file: cut, flipped or zeroed bytes, a deleted,
 duplicated or moved block; for text files also deleted, duplicated or swapped rows, a
@@ -101,7 +100,7 @@ def generated_originals(folder: Path) -> list[Original]:
         path = folder / f"altos-{generation}.csv"
         write_altos(path, rows, generation=generation)
         out.append(Original(f"altos {generation}", "altos", (path,)))
-    write_altos(folder / "easymega.csv", rocket_rows(pad_s=1.0), board="easymega")
+    write_altos(folder / "easymega.csv", rocket_rows(), board="easymega")
     out.append(Original("altos easymega", "altos", (folder / "easymega.csv",)))
     source = SHARED_DATA / "px4" / "sample_log_small.ulg"
     if source.is_file():

@@ -64,12 +64,12 @@ def _fix_positions(truth, t_fix, rng, sigma_h_m, sigma_v_m, offset_m, tau_s):
 def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.97,
                     sigma_h_m=2.0, sigma_v_m=3.0, offset_m=2.0, tau_s=60.0,
                     mission="hpr_rocket", generation="version", gnss_gap=None,
-                    high_g_scale=-0.025, **imu_overrides):
+                    high_g_scale=-0.025, board="telemega", **imu_overrides):
     """Fly ``mission`` with ``changes`` (:func:`with_values`) and write its TeleMega export
     (``generation`` of :func:`write_altos`; ``gnss_gap``: ``(start, end)`` on the export's
     clock with no new fix, a receiver that lost lock; ``high_g_scale``: the high-g
     accelerometer's scale error, the shared flights' reads 2.5-2.9 % below the IMU's in
-    boost).
+    boost; ``board``: ``"easymega"`` writes no GPS columns).
 
     Returns
     -------
@@ -130,5 +130,5 @@ def telemega_export(path, changes=None, *, seed=0, latency_s=0.5, baro_scale=0.9
         "gps_altitude": np.round(alt)[fix_of_row],
         "gps_second": fix_of_row,
     })
-    write_altos(path, rows, generation=generation)
+    write_altos(path, rows, generation=generation, board=board)
     return truth, t_detect

@@ -38,8 +38,11 @@ spline's knots are 0.1 s apart)."""
 LAUNCH_ACCEL_M_S2 = 3.0
 """Specific-force change from the pad's mean that ends the levelling window, m/s^2 (by
 construction: above a rail's vibration, well below any motor's thrust)."""
-MIN_LEVEL_S = 0.5
-"""Shortest rest before launch to level the IMU on, s."""
+MIN_LEVEL_S = 0.2
+"""Shortest rest before launch to level the IMU on, s: an AltOS export keeps 0.3 s before
+boost detection, of which 0.25-0.29 s precede the first 3 m/s^2 change. 20 samples at 100 Hz
+level to 0.03 deg against 0.1 m/s^2 of noise, below the 0.6 deg a 0.1 m/s^2 bias gives
+whatever the window (these rows only seed the fit, which levels again)."""
 GAP_S = FIT_DEFAULTS["max_bridge_s"]
 """IMU holes longer than this (the fit's longest bridged hole, s) start a new piece whose
 reference rows are built on their own: a pre-launch buffer logged long before the flight."""

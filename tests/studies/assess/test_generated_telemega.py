@@ -111,3 +111,23 @@ def test_a_boost_beyond_the_imu_range_is_assessed_from_the_high_g_accelerometer(
     scale = float(re.search(r"f_x = ([0-9.]+) a", found.loc["high-g", "message"]).group(1))
     assert abs(scale - STATED_IMU_X_SCALE_RATIO) < 0.01
     assert result.segment_table.phase.iloc[0] == "boost"
+
+
+def test_an_easymega_boost_beyond_the_imu_range_is_assessed_on_its_barometer(tmp_path):
+    """The same 20 g flight on an EasyMega (no GPS; the export's 0.3 s of pad, of which 0.29 s
+    precede the lift-off): levelled on that pad, aided by the barometer, the clipped boost
+    from the high-g accelerometer. Before, a flight without GNSS needed 0.5 s of pad and
+    every such export was refused."""
+    changes, _ = FLIGHTS["20 g boost, the IMU clipped"]
+    path = tmp_path / "easymega.csv"
+    truth, t_detect = telemega_export(path, changes, seed=31, board="easymega", **STATED_IMU)
+    imu, gnss = read_log(str(path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = assess_flight(imu, gnss)
+    assert gnss is None and result.options["aiding"] == "baro"
+    assert "high-g" in set(result.quality["check"])
+    assert _pad_speed(truth, t_detect, result) < 3.0
+    table = result.segment_table.set_index("phase")
+    for phase in ("boost", "coast"):
+        assert table.loc[phase, "represented"], table.loc[phase, "fit_reason"]
