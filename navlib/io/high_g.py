@@ -94,7 +94,8 @@ def _line(h: np.ndarray, f: np.ndarray, rounds: int = 3):
     """Straight line ``f = scale h + offset`` by least squares, leaving out the samples
     beyond 4 robust sigmas (1.4826 MAD, at least the high-g's step) of the previous round."""
     use = np.ones(h.size, dtype=bool)
-    step = np.min(np.diff(np.unique(h))) if np.unique(h).size > 1 else 0.0
+    levels = np.unique(h)
+    step = float(np.min(np.diff(levels))) if levels.size > 1 else 0.0
     for _ in range(rounds):
         scale, offset = np.polyfit(h[use], f[use], 1)
         res = f - (scale * h + offset)
@@ -142,9 +143,8 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
         return HighGStandIn(f_x, none)
     h = _matched(imu, high_g)
     window = int(p["high_g_window_samples"]) | 1
-    steady = _steady(h, window, p["high_g_steady_mps2"]) & _steady(
-        f_x, window, p["high_g_steady_mps2"])
-    usable = steady & ~clipped
+    h_steady = _steady(h, window, p["high_g_steady_mps2"])
+    usable = h_steady & _steady(f_x, window, p["high_g_steady_mps2"]) & ~clipped
     thrust = usable & (np.abs(f_x) >= p["high_g_min_fraction"] * limit)
     n_min = int(p["high_g_min_samples"])
     if thrust.sum() >= n_min:
@@ -164,7 +164,7 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
     own_clip = _held_extreme(h, int(p["high_g_clip_run_samples"]))
     sign = np.sign(f_x)
     agrees = sign * calibrated >= (1.0 - p["high_g_agreement"]) * limit
-    filled = clipped & _steady(h, window, p["high_g_steady_mps2"]) & ~own_clip & agrees
+    filled = clipped & h_steady & ~own_clip & agrees
     f_x[filled] = sign[filled] * np.maximum(sign[filled] * calibrated[filled],
                                             np.abs(f_x[filled]))
     cal = {"scale": scale, "offset": offset, "rms": rms, "n": int(used.sum())}
