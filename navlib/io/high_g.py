@@ -165,10 +165,10 @@ def high_g_stand_in(imu: pd.DataFrame, clipped: np.ndarray, limit: float,
     sign = np.sign(f_x)
     agrees = sign * calibrated >= (1.0 - p["high_g_agreement"]) * limit
     filled = clipped & h_steady & ~own_clip & agrees
+    cal = {"scale": scale, "offset": offset, "rms": rms, "n": int(used.sum())}
+    lo, hi = f_x[usable][used].min(), f_x[usable][used].max()    # before any sample is filled
     f_x[filled] = sign[filled] * np.maximum(sign[filled] * calibrated[filled],
                                             np.abs(f_x[filled]))
-    cal = {"scale": scale, "offset": offset, "rms": rms, "n": int(used.sum())}
-    lo, hi = f_x[usable][used].min(), f_x[usable][used].max()
     regime = "" if usable is thrust else (
         f" (fewer than {n_min} in the thrust's regime: the line is extrapolated)")
     note = (f"taken from the high-g accelerometer along x (the export's `acceleration`), "
